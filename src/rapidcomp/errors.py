@@ -1,0 +1,38 @@
+"""Domain errors. The CLI maps these to exit codes in one place (cli.py)."""
+
+from __future__ import annotations
+
+
+class RapidcompError(Exception):
+    """Base class of every error rapidcomp reports to a user."""
+
+
+class InputError(RapidcompError):
+    """Bad input (exit code 2): a file that is not what it should be.
+
+    Carries a location so the message can say `path:line:col: ...` and show
+    the offending source line with a caret under the column.
+    """
+
+    def __init__(self, path: str, message: str, line: int | None = None,
+                 col: int | None = None, source_line: str | None = None):
+        self.path = path
+        self.message = message
+        self.line = line
+        self.col = col
+        self.source_line = source_line
+        super().__init__(self.format())
+
+    def format(self) -> str:
+        where = self.path
+        if self.line is not None:
+            where += f":{self.line}"
+            if self.col is not None:
+                where += f":{self.col}"
+        text = f"{where}: {self.message}"
+        if self.source_line is not None:
+            shown = self.source_line.rstrip("\r\n").replace("\t", " ")
+            text += f"\n    {shown}"
+            if self.col is not None:
+                text += "\n    " + " " * (self.col - 1) + "^"
+        return text

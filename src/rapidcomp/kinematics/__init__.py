@@ -1,0 +1,1 @@
+"""Robot kinematics: model, thermal profile, confdata, inverse kinematics."""

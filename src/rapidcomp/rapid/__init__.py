@@ -1,0 +1,1 @@
+"""RAPID language: grammar, parser, frozen model, typed values."""

@@ -1,0 +1,307 @@
+"""Frozen syntax nodes of a RAPID module, each with its character span.
+
+These are produced by the transformer while Lark parses (no parse tree is
+built). Spans are half-open character offsets into SourceText.text.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import NamedTuple, Union
+
+
+class Span(NamedTuple):
+    start: int
+    end: int
+
+
+# ----------------------------------------------------------------- expressions
+
+@dataclass(frozen=True, slots=True)
+class Num:
+    value: float
+    text: str
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Str:
+    value: str
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Bool:
+    value: bool
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Agg:
+    items: tuple["Expr", ...]
+    span: Span
+
+
+NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_GROUP_RE = re.compile(r"\[([^\[\]]*)\]")
+_TOKEN_RE = re.compile(r"\[|\]|" + NUMBER_RE.pattern)
+
+
+@dataclass(frozen=True)
+class NumAgg:
+    """An aggregate made only of number literals, lexed as one token.
+
+    Its items are decoded on demand: most CAM targets are only ever read
+    through `groups()` by the typed-record decoder, which is much cheaper.
+    """
+
+    text: str
+    span: Span
+
+    def groups(self) -> list[list[tuple[str, int, int]]]:
+        """Innermost bracket groups as lists of (number text, start, end)."""
+        base = self.span.start
+        out = []
+        for g in _GROUP_RE.finditer(self.text):
+            off = base + g.start(1)
+            out.append([(m.group(), off + m.start(), off + m.end())
+                        for m in NUMBER_RE.finditer(g.group(1))])
+        return out
+
+    @cached_property
+    def items(self) -> tuple["Expr", ...]:
+        """The general view (Agg/Num nodes), for code that walks expressions."""
+        base = self.span.start
+        stack: list[tuple[int, list]] = []
+        top: list = []
+        for m in _TOKEN_RE.finditer(self.text):
+            tok = m.group()
+            if tok == "[":
+                stack.append((m.start(), top))
+                top = []
+            elif tok == "]":
+                opened, parent = stack.pop()
+                node = Agg(tuple(top), Span(base + opened, base + m.end()))
+                parent.append(node)
+                top = parent
+            else:
+                top.append(Num(float(tok), tok, Span(base + m.start(), base + m.end())))
+        return top[0].items
+
+
+@dataclass(frozen=True, slots=True)
+class Component:
+    name: str
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Index:
+    indices: tuple["Expr", ...]
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Ref:
+    """A data reference: name with optional components and array indices."""
+
+    name: str
+    selectors: tuple[Union[Component, Index], ...]
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Arg:
+    """One argument of a call.
+
+    kind: "pos" (required), "named" (Param:=value), "opt" (\\Name),
+    "optval" (\\Name:=value) or "cond" (\\Name?var).
+    """
+
+    kind: str
+    name: str | None
+    value: "Expr | None"
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Call:
+    name: str
+    args: tuple[Arg, ...]
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Unary:
+    op: str
+    operand: "Expr"
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Binary:
+    op: str
+    left: "Expr"
+    right: "Expr"
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Paren:
+    expr: "Expr"
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Placeholder:
+    text: str
+    span: Span
+
+
+Expr = Union[Num, Str, Bool, Agg, NumAgg, Ref, Call, Unary, Binary, Paren, Placeholder]
+
+
+# ----------------------------------------------------------------- statements
+
+@dataclass(frozen=True, slots=True)
+class Assign:
+    target: Ref
+    value: Expr
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class ProcCall:
+    name: str
+    name_span: Span
+    args: tuple[Arg, ...]
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class LateCall:
+    proc: Expr
+    args: tuple[Arg, ...]
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class If:
+    branches: tuple[tuple[Expr, tuple["Stmt", ...]], ...]
+    orelse: tuple["Stmt", ...]
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class CompactIf:
+    cond: Expr
+    stmt: "Stmt"
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class For:
+    var: str
+    start: Expr
+    stop: Expr
+    step: Expr | None
+    body: tuple["Stmt", ...]
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class While:
+    cond: Expr
+    body: tuple["Stmt", ...]
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Test:
+    expr: Expr
+    cases: tuple[tuple[tuple[Expr, ...], tuple["Stmt", ...]], ...]
+    default: tuple["Stmt", ...] | None
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Simple:
+    """GOTO, label, RETURN, RAISE, RETRY, TRYNEXT, EXIT, CONNECT, <SMT>."""
+
+    kind: str
+    name: str | None
+    expr: Expr | None
+    span: Span
+
+
+Stmt = Union[Assign, ProcCall, LateCall, If, CompactIf, For, While, Test, Simple]
+
+
+# ----------------------------------------------------------------- declarations
+
+@dataclass(frozen=True, slots=True)
+class DataDecl:
+    scope: str | None      # "LOCAL", "TASK" or None
+    storage: str           # "CONST", "PERS" or "VAR"
+    type_name: str         # as written
+    name: str
+    name_span: Span
+    dims: tuple[Expr, ...]
+    init: Expr | None
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class RecordDecl:
+    scope: str | None
+    name: str
+    components: tuple[tuple[str, str], ...]
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class AliasDecl:
+    scope: str | None
+    type_name: str
+    name: str
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class Param:
+    access: str | None
+    type_name: str
+    name: str
+    optional: bool
+    array: int  # number of {*} dimensions
+
+
+@dataclass(frozen=True, slots=True)
+class Handler:
+    kind: str  # "BACKWARD", "ERROR" or "UNDO"
+    errors: tuple[Expr, ...]
+    body: tuple[Stmt, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Routine:
+    kind: str  # "PROC", "FUNC" or "TRAP"
+    scope: str | None
+    name: str
+    return_type: str | None
+    params: tuple[Param, ...]
+    decls: tuple[DataDecl, ...]
+    body: tuple[Stmt, ...]
+    handlers: tuple[Handler, ...]
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class ModuleNode:
+    name: str
+    name_span: Span
+    attributes: tuple[str, ...]
+    items: tuple[Union[DataDecl, RecordDecl, AliasDecl, Routine, Placeholder], ...]
+    span: Span

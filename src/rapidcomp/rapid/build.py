@@ -1,0 +1,401 @@
+"""Lark transformer that builds frozen syntax nodes while the LALR parser runs.
+
+No parse tree is built: each grammar rule's callback receives its children
+(tokens and nodes already built) and returns a node with an exact span.
+Anonymous punctuation is filtered by Lark, so rules keep named terminals
+(SEMI, RPAR, RBRACK, ...) wherever a span has to end on one.
+"""
+
+from __future__ import annotations
+
+import re
+
+
+from . import ast as A
+from .ast import Span
+from .lalr import Tok
+
+
+_FAST_HEAD = re.compile(r"([A-Za-z][A-Za-z0-9_]*)[ \t]+")
+_NUMAGG = re.compile(r"\[(?:[^\[\]]|\[[^\[\]]*\])*\]")
+_FAST_ITEM = re.compile(
+    r"\\([A-Za-z][A-Za-z0-9_]*)(?::=([A-Za-z][A-Za-z0-9_]*|\d+(?:\.\d*)?))?"
+    r"|([A-Za-z][A-Za-z0-9_]*)")
+
+
+def number_value(text: str) -> float:
+    """Value of a RAPID num literal in any spelling the kernel allows."""
+    if len(text) > 2 and text[0] == "0" and text[1] in "xXoObB":
+        return float(int(text, 0))
+    return float(text)
+
+
+def _start(x) -> int:
+    return x.start_pos if isinstance(x, Tok) else x.span.start
+
+
+def _end(x) -> int:
+    return x.end_pos if isinstance(x, Tok) else x.span.end
+
+
+class _Tag(tuple):
+    """A tagged intermediate value (scope, storage, dims...) between rules."""
+
+
+def _tag(name, *values):
+    return _Tag((name, *values))
+
+
+class NodeBuilder:
+    # ------------------------------------------------------------ module level
+    def start(self, c):
+        header = c[0] if c and isinstance(c[0], Tok) else None
+        modules = [m for m in c if isinstance(m, A.ModuleNode)]
+        return header, modules
+
+    def module(self, c):
+        name = c[1]
+        attrs: tuple[str, ...] = ()
+        items = []
+        for x in c[2:-1]:
+            if isinstance(x, _Tag) and x[0] == "attrs":
+                attrs = x[1]
+            else:
+                items.append(x)
+        return A.ModuleNode(name.value, Span(name.start_pos, name.end_pos), attrs,
+                            tuple(items), Span(c[0].start_pos, c[-1].end_pos))
+
+    def module_attrs(self, c):
+        return _tag("attrs", tuple(t.value.upper() for t in c))
+
+    def placeholder_item(self, c):
+        t = c[0]
+        return A.Placeholder(t.value, Span(t.start_pos, t.end_pos))
+
+    # ------------------------------------------------------------ data
+    def scope(self, c):
+        return _tag("scope", c[0].value.upper(), c[0].start_pos)
+
+    def storage(self, c):
+        return _tag("storage", c[0].value.upper(), c[0].start_pos)
+
+    def dims(self, c):
+        return _tag("dims", tuple(c))
+
+    def init(self, c):
+        return _tag("init", c[0])
+
+    def data_decl(self, c):
+        scope = None
+        i = 0
+        start = None
+        if c[0][0] == "scope":
+            scope, start = c[0][1], c[0][2]
+            i = 1
+        storage = c[i][1]
+        if start is None:
+            start = c[i][2]
+        type_tok, name_tok = c[i + 1], c[i + 2]
+        dims: tuple = ()
+        init = None
+        for x in c[i + 3:-1]:
+            if x[0] == "dims":
+                dims = x[1]
+            else:
+                init = x[1]
+        return A.DataDecl(scope, storage, type_tok.value, name_tok.value,
+                          Span(name_tok.start_pos, name_tok.end_pos), dims, init,
+                          Span(start, c[-1].end_pos))
+
+    def record_comp(self, c):
+        return (c[0].value, c[1].value)
+
+    def record_decl(self, c):
+        scope = c[0][1] if isinstance(c[0], _Tag) else None
+        rest = c[1:] if scope else c
+        start = c[0][2] if scope else rest[0].start_pos
+        return A.RecordDecl(scope, rest[1].value, tuple(rest[2:-1]),
+                            Span(start, rest[-1].end_pos))
+
+    def alias_decl(self, c):
+        scope = c[0][1] if isinstance(c[0], _Tag) else None
+        rest = c[1:] if scope else c
+        start = c[0][2] if scope else rest[0].start_pos
+        return A.AliasDecl(scope, rest[1].value, rest[2].value, Span(start, rest[-1].end_pos))
+
+    # ------------------------------------------------------------ routines
+    def access(self, c):
+        return _tag("access", c[0].value.upper())
+
+    def dims_star(self, c):
+        return _tag("star", len(c))
+
+    def param(self, c):
+        access = None
+        if isinstance(c[0], _Tag):
+            access = c[0][1]
+            c = c[1:]
+        array = c[2][1] if len(c) > 2 else 0
+        return A.Param(access, c[0].value, c[1].value, False, array)
+
+    def opt_params(self, c):
+        return [A.Param(p.access, p.type_name, p.name, True, p.array) for p in c]
+
+    def params(self, c):
+        out = []
+        for x in c:
+            if isinstance(x, list):
+                out.extend(x)
+            else:
+                out.append(x)
+        return _tag("params", tuple(out))
+
+    def body(self, c):
+        decls = tuple(x for x in c if isinstance(x, A.DataDecl))
+        stmts = next(x for x in c if isinstance(x, _Tag) and x[0] == "stmts")[1]
+        handlers = tuple(x for x in c if isinstance(x, A.Handler))
+        return _tag("body", decls, stmts, handlers)
+
+    def stmt_list(self, c):
+        return _tag("stmts", tuple(c))
+
+    def backward(self, c):
+        return A.Handler("BACKWARD", (), c[1][1])
+
+    def undo(self, c):
+        return A.Handler("UNDO", (), c[1][1])
+
+    def error_handler(self, c):
+        errors = c[1][1] if len(c) == 3 else ()
+        return A.Handler("ERROR", errors, c[-1][1])
+
+    def error_list(self, c):
+        return _tag("errors", tuple(c[:-1]))
+
+    def _routine(self, kind, c, return_type_at=None):
+        scope = None
+        start = None
+        if isinstance(c[0], _Tag):
+            scope, start = c[0][1], c[0][2]
+            c = c[1:]
+        if start is None:
+            start = c[0].start_pos
+        return_type = c[1].value if return_type_at else None
+        name = c[2] if return_type_at else c[1]
+        params: tuple = ()
+        body = None
+        for x in c:
+            if isinstance(x, _Tag):
+                if x[0] == "params":
+                    params = x[1]
+                elif x[0] == "body":
+                    body = x
+        return A.Routine(kind, scope, name.value, return_type, params, body[1], body[2],
+                         body[3], Span(start, c[-1].end_pos))
+
+    def proc(self, c):
+        return self._routine("PROC", c)
+
+    def func(self, c):
+        return self._routine("FUNC", c, return_type_at=1)
+
+    def trap(self, c):
+        return self._routine("TRAP", c)
+
+    # ------------------------------------------------------------ statements
+    def assign(self, c):
+        return A.Assign(c[0], c[1], Span(c[0].span.start, c[2].end_pos))
+
+    def call(self, c):
+        name = c[0]
+        args = c[1] if len(c) == 3 else ()
+        return A.ProcCall(name.value, Span(name.start_pos, name.end_pos), args,
+                          Span(name.start_pos, c[-1].end_pos))
+
+    def fast_call(self, c):
+        """A FAST_CALL token: split it into name and arguments (see grammar)."""
+        tok = c[0]
+        text = tok.value
+        base = tok.start_pos
+        head = _FAST_HEAD.match(text)
+        name = head.group(1)
+        args = []
+        pos = head.end()
+        if text[pos] == "[":
+            m = _NUMAGG.match(text, pos)
+            args.append(A.Arg("pos", None, A.NumAgg(m.group(), Span(base + pos, base + m.end())),
+                              Span(base + pos, base + m.end())))
+            pos = m.end()
+        for m in _FAST_ITEM.finditer(text, pos):
+            opt, val, word = m.group(1, 2, 3)
+            if word is not None:
+                span = Span(base + m.start(3), base + m.end(3))
+                args.append(A.Arg("pos", None, A.Ref(word, (), span), span))
+            elif val is None:
+                args.append(A.Arg("opt", opt, None, Span(base + m.start(), base + m.end())))
+            else:
+                vspan = Span(base + m.start(2), base + m.end(2))
+                if val[0].isdigit():
+                    value = A.Num(number_value(val), val, vspan)
+                else:
+                    value = A.Ref(val, (), vspan)
+                args.append(A.Arg("optval", opt, value, Span(base + m.start(), base + m.end())))
+        return A.ProcCall(name, Span(base, base + len(name)), tuple(args),
+                          Span(base, base + len(text)))
+
+    def late_call(self, c):
+        args = c[3] if len(c) == 5 else ()
+        return A.LateCall(c[1], args, Span(c[0].start_pos, c[-1].end_pos))
+
+    def _simple(self, kind, c, name=None, expr=None):
+        return A.Simple(kind, name, expr, Span(_start(c[0]), _end(c[-1])))
+
+    def goto_stmt(self, c):
+        return self._simple("GOTO", c, name=c[1].value)
+
+    def label(self, c):
+        return self._simple("LABEL", c, name=c[0].value)
+
+    def return_stmt(self, c):
+        return self._simple("RETURN", c, expr=c[1] if len(c) == 3 else None)
+
+    def raise_stmt(self, c):
+        return self._simple("RAISE", c, expr=c[1] if len(c) == 3 else None)
+
+    def retry_stmt(self, c):
+        return self._simple("RETRY", c)
+
+    def trynext_stmt(self, c):
+        return self._simple("TRYNEXT", c)
+
+    def exit_stmt(self, c):
+        return self._simple("EXIT", c)
+
+    def connect_stmt(self, c):
+        return self._simple("CONNECT", c, name=c[3].value, expr=c[1])
+
+    def placeholder_stmt(self, c):
+        return self._simple("PLACEHOLDER", c, name=c[0].value)
+
+    def elseif(self, c):
+        return _tag("elseif", c[1], c[3][1])
+
+    def else_part(self, c):
+        return _tag("else", c[1][1])
+
+    def if_stmt(self, c):
+        branches = [(c[1], c[3][1])]
+        orelse: tuple = ()
+        for x in c[4:-1]:
+            if x[0] == "elseif":
+                branches.append((x[1], x[2]))
+            else:
+                orelse = x[1]
+        return A.If(tuple(branches), orelse, Span(c[0].start_pos, c[-1].end_pos))
+
+    def compact_if(self, c):
+        return A.CompactIf(c[1], c[2], Span(c[0].start_pos, c[2].span.end))
+
+    def step(self, c):
+        return _tag("step", c[1])
+
+    def for_stmt(self, c):
+        step = c[6][1] if isinstance(c[6], _Tag) and c[6][0] == "step" else None
+        body = c[-2][1]
+        return A.For(c[1].value, c[3], c[5], step, body, Span(c[0].start_pos, c[-1].end_pos))
+
+    def while_stmt(self, c):
+        return A.While(c[1], c[3][1], Span(c[0].start_pos, c[-1].end_pos))
+
+    def case(self, c):
+        return _tag("case", tuple(c[1:-1]), c[-1][1])
+
+    def default(self, c):
+        return _tag("default", c[1][1])
+
+    def test_stmt(self, c):
+        cases = []
+        default = None
+        for x in c[2:-1]:
+            if x[0] == "case":
+                cases.append((x[1], x[2]))
+            else:
+                default = x[1]
+        return A.Test(c[1], tuple(cases), default, Span(c[0].start_pos, c[-1].end_pos))
+
+    # ------------------------------------------------------------ arguments
+    def args(self, c):
+        Arg = A.Arg
+        return tuple(x if type(x) is Arg else Arg("pos", None, x, x.span) for x in c)
+
+    def named_arg(self, c):
+        return A.Arg("named", c[0].value, c[1], Span(c[0].start_pos, c[1].span.end))
+
+    def opt_arg(self, c):
+        return A.Arg("opt", c[1].value, None, Span(c[0].start_pos, c[1].end_pos))
+
+    def opt_arg_value(self, c):
+        return A.Arg("optval", c[1].value, c[2], Span(c[0].start_pos, c[2].span.end))
+
+    def opt_arg_cond(self, c):
+        return A.Arg("cond", c[1].value, c[2], Span(c[0].start_pos, c[2].span.end))
+
+    # ------------------------------------------------------------ expressions
+    def binop(self, c):
+        left, op, right = c
+        return A.Binary(op.value.upper(), left, right, Span(left.span.start, right.span.end))
+
+    def unop(self, c):
+        op, operand = c
+        sign = op.value.upper()
+        # "-5" is one number to a user: fold it so its span covers the sign.
+        if sign in "+-" and isinstance(operand, A.Num) and op.end_pos == operand.span.start:
+            value = -operand.value if sign == "-" else operand.value
+            return A.Num(value, sign + operand.text, Span(op.start_pos, operand.span.end))
+        return A.Unary(sign, operand, Span(op.start_pos, operand.span.end))
+
+    def num(self, c):
+        t = c[0]
+        return A.Num(number_value(t.value), t.value, Span(t.start_pos, t.end_pos))
+
+    def string(self, c):
+        t = c[0]
+        return A.Str(t.value[1:-1].replace('""', '"'), Span(t.start_pos, t.end_pos))
+
+    def true(self, c):
+        t = c[0]
+        return A.Bool(True, Span(t.start_pos, t.end_pos))
+
+    def false(self, c):
+        t = c[0]
+        return A.Bool(False, Span(t.start_pos, t.end_pos))
+
+    def numagg(self, c):
+        t = c[0]
+        return A.NumAgg(t.value, Span(t.start_pos, t.end_pos))
+
+    def aggregate(self, c):
+        return A.Agg(tuple(c[1:-1]), Span(c[0].start_pos, c[-1].end_pos))
+
+    def func_call(self, c):
+        name = c[0]
+        args = c[2] if len(c) == 4 else ()
+        return A.Call(name.value, args, Span(name.start_pos, c[-1].end_pos))
+
+    def paren(self, c):
+        return A.Paren(c[1], Span(c[0].start_pos, c[2].end_pos))
+
+    def placeholder(self, c):
+        t = c[0]
+        return A.Placeholder(t.value, Span(t.start_pos, t.end_pos))
+
+    def ref(self, c):
+        name = c[0]
+        return A.Ref(name.value, tuple(c[1:]), Span(name.start_pos, _end(c[-1])))
+
+    def component(self, c):
+        t = c[0]
+        return A.Component(t.value, Span(t.start_pos, t.end_pos))
+
+    def index(self, c):
+        return A.Index(tuple(c[:-1]), Span(c[0].span.start, c[-1].end_pos))

@@ -1,0 +1,247 @@
+"""Table-driven LALR(1) parsing of RAPID with Lark's compiled grammar.
+
+Lark compiles grammars/rapid.lark into terminals, rules and an LALR parse
+table. This module drives that table with a tight loop of its own, because
+Lark's generic driver (Token objects, per-token asserts, wrapper chains per
+reduction) spends ~14 us per token, and CAM programs have hundreds of
+thousands of tokens. The semantics are Lark's: anonymous punctuation is
+dropped, `_rule`/EBNF helper rules are spliced into their parent, `?rule`
+with one child is replaced by that child, `-> alias` names the callback.
+
+The lexer is one regex alternation built from the grammar's own terminals
+(ordered as Lark orders them: priority, then longest pattern); keywords are
+recognised by a dict lookup on the upper-cased identifier, which is also what
+makes them case-insensitive.
+"""
+
+from __future__ import annotations
+
+import re
+
+from lark.lexer import PatternStr
+
+_IDENT = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+# Identifiers not inside a number (the E of 9E+09 is no word).
+_WORD = re.compile(r"(?<![\w.])[A-Za-z][A-Za-z0-9_]*")
+
+
+class Tok:
+    """A token: terminal name, text and half-open character span."""
+
+    __slots__ = ("type", "value", "start_pos", "end_pos")
+
+    def __init__(self, type_: str, value: str, start: int, end: int):
+        self.type = type_
+        self.value = value
+        self.start_pos = start
+        self.end_pos = end
+
+    def __repr__(self) -> str:
+        return f"Tok({self.type}, {self.value!r}, {self.start_pos})"
+
+
+class LexFailure(Exception):
+    def __init__(self, pos: int):
+        super().__init__(pos)
+        self.pos = pos
+
+
+class ParseFailure(Exception):
+    def __init__(self, token: Tok, expected: frozenset[str], previous: Tok | None):
+        super().__init__(token)
+        self.token = token
+        self.expected = expected
+        self.previous = previous
+
+
+class _Splice(list):
+    """Children of an EBNF helper rule, to be spliced into the parent."""
+
+
+def _as_splice(children):
+    # The list grown in place by left recursion is returned as is (no copy).
+    return children if type(children) is _Splice else _Splice(children)
+
+
+def _single_child_only(name):
+    def fail(children):
+        raise TypeError(f"?{name} reduced with {len(children)} children and no callback")
+    return fail
+
+
+class Engine:
+    def __init__(self, lark, builder):
+        terms = lark.lexer_conf.terminals
+        ignore = set(lark.lexer_conf.ignore)
+        keywords: dict[str, str] = {}
+        regular = []
+        for term in terms:
+            pattern = term.pattern
+            if isinstance(pattern, PatternStr) and _IDENT.fullmatch(pattern.value):
+                keywords[pattern.value.upper()] = term.name
+            else:
+                regular.append(term)
+        regular.sort(key=lambda t: (-t.priority, -t.pattern.max_width,
+                                    -len(t.pattern.value), t.name))
+        self._master = re.compile("|".join(
+            f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in regular))
+        # Same alternation without the one-token call, for when a FAST_CALL
+        # match contains a reserved word and must be lexed token by token.
+        self._master_plain = re.compile("|".join(
+            f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in regular if t.name != "FAST_CALL"))
+        self._keywords = keywords
+        self._ignore = frozenset(ignore)
+        self.terminal_names = frozenset(t.name for t in terms)
+
+        table = lark.parser.parser.parser.parse_table
+        self._start = table.start_states["start"]
+        self._end = table.end_states["start"]
+        reduce_info = {}
+        for rule in lark.rules:
+            reduce_info[rule] = self._compile_rule(rule, builder)
+        states = {}
+        for state, actions in table.states.items():
+            row = {}
+            for symbol, (action, arg) in actions.items():
+                if action.name == "Shift":
+                    row[symbol] = (True, arg)
+                else:
+                    row[symbol] = (False, reduce_info[arg])
+            states[state] = row
+        self._states = states
+
+    @staticmethod
+    def _compile_rule(rule, builder):
+        plan = []
+        for sym in rule.expansion:
+            if sym.is_term:
+                plan.append("drop" if sym.filter_out else "keep")
+            elif sym.name.startswith("_"):
+                plan.append("splice")
+            else:
+                plan.append("keep")
+        simple = all(p == "keep" for p in plan)
+        origin = rule.origin.name
+        if origin.startswith("_"):
+            fn = _as_splice
+            expand1 = False
+        else:
+            name = rule.alias or origin
+            expand1 = bool(rule.options.expand1 and not rule.alias)
+            fn = getattr(builder, name, None)
+            if fn is None:
+                if not expand1:
+                    raise TypeError(f"node builder has no callback for grammar rule {name!r}")
+                fn = _single_child_only(name)
+        return (len(plan), origin, None if simple else tuple(plan), fn, expand1)
+
+    # ------------------------------------------------------------------ lexer
+    def tokens(self, text: str):
+        match = self._master.match
+        keywords = self._keywords
+        ignore = self._ignore
+        pos = 0
+        end = len(text)
+        while pos < end:
+            m = match(text, pos)
+            if m is None:
+                raise LexFailure(pos)
+            kind = m.lastgroup
+            if kind == "FAST_CALL" and any(
+                    w.upper() in keywords for w in _WORD.findall(m.group())):
+                m = self._master_plain.match(text, pos)
+                kind = m.lastgroup
+            stop = m.end()
+            if kind not in ignore:
+                value = m.group()
+                if kind == "NAME":
+                    kind = keywords.get(value.upper(), "NAME")
+                yield Tok(kind, value, pos, stop)
+            pos = stop
+        yield Tok("$END", "", end, end)
+
+    # ------------------------------------------------------------------ parser
+    def _viable(self, state_stack: list) -> frozenset[str]:
+        """Terminals that could really come next.
+
+        An LALR row also lists lookaheads merged in from other contexts
+        (after `x := 1`, ']' is in the row because an aggregate could end
+        there elsewhere). Simulating the reductions for each candidate keeps
+        only those that lead to a shift, so messages say what fits here.
+        """
+        states = self._states
+        out = set()
+        for term in states[state_stack[-1]]:
+            if not term.isupper() and term != "$END":
+                continue
+            stack = list(state_stack)
+            while True:
+                action = states[stack[-1]].get(term)
+                if action is None:
+                    break
+                is_shift, arg = action
+                if is_shift:
+                    out.add(term)
+                    break
+                size, origin = arg[0], arg[1]
+                if size:
+                    del stack[-size:]
+                goto = states[stack[-1]].get(origin)
+                if goto is None:
+                    break
+                stack.append(goto[1])
+                if term == "$END" and stack[-1] == self._end:
+                    out.add(term)
+                    break
+        return frozenset(out)
+
+    def parse(self, text: str):
+        states = self._states
+        end_state = self._end
+        state_stack = [self._start]
+        value_stack: list = []
+        previous = None
+        for tok in self.tokens(text):
+            ttype = tok.type
+            while True:
+                try:
+                    is_shift, arg = states[state_stack[-1]][ttype]
+                except KeyError:
+                    raise ParseFailure(tok, self._viable(state_stack), previous) from None
+                if is_shift:
+                    state_stack.append(arg)
+                    value_stack.append(tok)
+                    break
+                size, origin, plan, fn, expand1 = arg
+                if size:
+                    children = value_stack[-size:]
+                    del state_stack[-size:]
+                    del value_stack[-size:]
+                else:
+                    children = []
+                if plan is not None:
+                    assembled = None
+                    for child, how in zip(children, plan):
+                        if how == "keep":
+                            if assembled is None:
+                                assembled = []
+                            assembled.append(child)
+                        elif how == "splice":
+                            if assembled is None:
+                                # Left recursion (item* lists): grow the helper's
+                                # own list in place instead of copying it, or
+                                # long statement lists would be quadratic.
+                                assembled = child
+                            else:
+                                assembled.extend(child)
+                    children = assembled if assembled is not None else []
+                if expand1 and len(children) == 1:
+                    value = children[0]
+                else:
+                    value = fn(children)
+                state_stack.append(states[state_stack[-1]][origin][1])
+                value_stack.append(value)
+                if ttype == "$END" and state_stack[-1] == end_state:
+                    return value_stack[-1]
+            previous = tok
+        raise AssertionError("parser ended without accepting")  # pragma: no cover

@@ -1,0 +1,126 @@
+"""The frozen model of a parsed RAPID file: declarations, routines, motions.
+
+Built from the syntax nodes after parsing. Line numbers are derived from
+spans through the SourceText, so the model never goes stale against it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..source import SourceText
+from . import ast as A
+from .ast import Span
+from .motions import MotionSpec
+from .values import Record
+
+
+@dataclass(frozen=True, slots=True)
+class Loop:
+    """An enclosing FOR loop (WHILE loops are recorded with var=None)."""
+
+    var: str | None
+    start: A.Expr | None
+    stop: A.Expr | None
+    step: A.Expr | None
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class TargetArg:
+    role: str               # "to", "cir" or "search"
+    expr: A.Expr
+    value: Record | None    # decoded inline literal, if it is one
+    issue: str | None       # why an inline aggregate could not be decoded
+
+
+@dataclass(frozen=True, slots=True)
+class Motion:
+    instruction: str        # as written
+    spec: MotionSpec
+    span: Span
+    name_span: Span
+    routine: str
+    loops: tuple[Loop, ...]
+    args: tuple[A.Arg, ...]
+    targets: tuple[TargetArg, ...]
+    speed: A.Expr | None
+    zone: A.Expr | None
+    tool: A.Expr | None
+    wobj: A.Expr | None
+    optional: tuple[A.Arg, ...]  # optional arguments other than \WObj
+
+
+@dataclass(frozen=True, slots=True)
+class Declaration:
+    node: A.DataDecl
+    routine: str | None            # None at module level
+    type: str                      # lower-case type name
+    dims: tuple[int | None, ...]   # None: a dimension that is not a literal
+    value: Record | tuple[Record, ...] | None  # tuple for arrays (row-major)
+    issue: str | None              # why a value of a decoded type is not known
+
+    @property
+    def name(self) -> str:
+        return self.node.name
+
+    @property
+    def storage(self) -> str:
+        return self.node.storage
+
+    @property
+    def scope(self) -> str | None:
+        return self.node.scope
+
+    @property
+    def span(self) -> Span:
+        return self.node.span
+
+
+@dataclass(frozen=True, slots=True)
+class RoutineInfo:
+    node: A.Routine
+
+    @property
+    def name(self) -> str:
+        return self.node.name
+
+    @property
+    def kind(self) -> str:
+        return self.node.kind
+
+
+@dataclass(frozen=True)
+class Module:
+    node: A.ModuleNode
+    declarations: tuple[Declaration, ...]
+    routines: tuple[RoutineInfo, ...]
+    motions: tuple[Motion, ...]
+    records: tuple[A.RecordDecl, ...]
+    aliases: tuple[A.AliasDecl, ...]
+
+    @property
+    def name(self) -> str:
+        return self.node.name
+
+    @property
+    def attributes(self) -> tuple[str, ...]:
+        return self.node.attributes
+
+
+@dataclass(frozen=True)
+class ParsedFile:
+    source: SourceText
+    header: str | None
+    modules: tuple[Module, ...]
+
+    @property
+    def module(self) -> Module:
+        return self.modules[0]
+
+    def line(self, span: Span) -> int:
+        return self.source.position(span.start)[0]
+
+    def text(self, node) -> str:
+        span = node.span if hasattr(node, "span") else node
+        return self.source.text[span.start:span.end]

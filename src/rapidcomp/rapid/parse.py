@@ -1,0 +1,259 @@
+"""Parse RAPID source into the frozen model; translate failures to messages."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import InputError
+from ..source import SourceText, read_source
+from . import ast as A
+from .grammar import compiled, engine
+from .lalr import LexFailure, ParseFailure
+from .model import Declaration, Loop, Module, Motion, ParsedFile, RoutineInfo, TargetArg
+from .motions import motion_spec
+from .values import DECODED_TYPES, DecodeIssue, decode, decode_array
+
+
+def parse_file(path: str | Path, display_path: str | None = None) -> ParsedFile:
+    return parse_source(read_source(path, display_path))
+
+
+def parse_text(text: str, display_path: str = "<text>") -> ParsedFile:
+    return parse_source(SourceText.from_text(text, display_path))
+
+
+def parse_source(source: SourceText) -> ParsedFile:
+    import gc
+    # Parsing allocates millions of small acyclic objects; the cyclic GC
+    # would rescan them over and over for nothing (~30% of the time).
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        try:
+            header, nodes = engine().parse(source.text)
+        except LexFailure as exc:
+            ch = source.text[exc.pos]
+            raise source.error(exc.pos, f"unexpected character {ch!r}: not part of RAPID") from None
+        except ParseFailure as exc:
+            raise _syntax_error(source, exc) from None
+        modules = tuple(_build_module(source, node) for node in nodes)
+    finally:
+        if was_enabled:
+            gc.enable()
+    return ParsedFile(source, header.value if header else None, modules)
+
+
+# ---------------------------------------------------------------- model building
+
+def _const_ints(node: A.ModuleNode) -> dict[str, int]:
+    """Module-level CONST num with literal integer values (array sizes)."""
+    out = {}
+    for item in node.items:
+        if (isinstance(item, A.DataDecl) and item.storage == "CONST"
+                and item.type_name.lower() == "num" and isinstance(item.init, A.Num)
+                and float(item.init.value).is_integer()):
+            out[item.name.lower()] = int(item.init.value)
+    return out
+
+
+def _dims(dims, consts) -> tuple[int | None, ...]:
+    out = []
+    for d in dims:
+        if isinstance(d, A.Num) and float(d.value).is_integer():
+            out.append(int(d.value))
+        elif isinstance(d, A.Ref) and not d.selectors and d.name.lower() in consts:
+            out.append(consts[d.name.lower()])
+        else:
+            out.append(None)
+    return tuple(out)
+
+
+def _declaration(decl: A.DataDecl, routine: str | None, consts) -> Declaration:
+    type_ = decl.type_name.lower()
+    dims = _dims(decl.dims, consts)
+    value = None
+    issue = None
+    if type_ in DECODED_TYPES:
+        if decl.init is None:
+            issue = "declared without a value"
+        elif None in dims:
+            issue = "array size is not a literal or a CONST num of this module"
+        else:
+            try:
+                if dims:
+                    value = decode_array(type_, decl.init, dims, decl.name)
+                else:
+                    value = decode(type_, decl.init, decl.name)
+            except DecodeIssue as exc:
+                issue = exc.reason
+    return Declaration(decl, routine, type_, dims, value, issue)
+
+
+def _motion(call: A.ProcCall, spec, routine: str, loops) -> Motion:
+    positional = [a for a in call.args if a.kind in ("pos", "named")]
+    slots = dict(zip(spec.roles, (a.value for a in positional)))  # first of each role
+    targets = []
+    for role, arg in zip(spec.roles, positional):
+        if role in ("to", "cir", "search"):
+            value = issue = None
+            if isinstance(arg.value, (A.Agg, A.NumAgg)) and role != "search":
+                kind = "jointtarget" if spec.joint_space else "robtarget"
+                try:
+                    value = decode(kind, arg.value, f"inline {kind}")
+                except DecodeIssue as exc:
+                    issue = exc.reason
+            targets.append(TargetArg(role, arg.value, value, issue))
+    wobj = None
+    optional = []
+    for a in call.args:
+        if a.kind in ("optval", "cond") and a.name.lower() == "wobj":
+            wobj = a.value
+        elif a.kind not in ("pos", "named"):
+            optional.append(a)
+    return Motion(call.name, spec, call.span, call.name_span, routine, tuple(loops),
+                  call.args, tuple(targets), slots.get("speed"), slots.get("zone"),
+                  slots.get("tool"), wobj, tuple(optional))
+
+
+def _walk(stmts, routine: str, loops: list, out: list) -> None:
+    for s in stmts:
+        t = type(s)
+        if t is A.ProcCall:
+            spec = motion_spec(s.name)
+            if spec is not None:
+                out.append(_motion(s, spec, routine, loops))
+        elif t is A.For:
+            loops.append(Loop(s.var, s.start, s.stop, s.step, s.span))
+            _walk(s.body, routine, loops, out)
+            loops.pop()
+        elif t is A.While:
+            loops.append(Loop(None, None, None, None, s.span))
+            _walk(s.body, routine, loops, out)
+            loops.pop()
+        elif t is A.If:
+            for _, body in s.branches:
+                _walk(body, routine, loops, out)
+            _walk(s.orelse, routine, loops, out)
+        elif t is A.CompactIf:
+            _walk((s.stmt,), routine, loops, out)
+        elif t is A.Test:
+            for _, body in s.cases:
+                _walk(body, routine, loops, out)
+            if s.default:
+                _walk(s.default, routine, loops, out)
+
+
+def _build_module(source: SourceText, node: A.ModuleNode) -> Module:
+    consts = _const_ints(node)
+    decls = []
+    routines = []
+    motions: list[Motion] = []
+    records = []
+    aliases = []
+    for item in node.items:
+        if isinstance(item, A.DataDecl):
+            decls.append(_declaration(item, None, consts))
+        elif isinstance(item, A.Routine):
+            routines.append(RoutineInfo(item))
+            for d in item.decls:
+                decls.append(_declaration(d, item.name, consts))
+            _walk(item.body, item.name, [], motions)
+            for h in item.handlers:
+                _walk(h.body, item.name, [], motions)
+        elif isinstance(item, A.RecordDecl):
+            records.append(item)
+        elif isinstance(item, A.AliasDecl):
+            aliases.append(item)
+    return Module(node, tuple(decls), tuple(routines), tuple(motions), tuple(records),
+                  tuple(aliases))
+
+
+# ---------------------------------------------------------------- error messages
+
+_STATEMENT_STARTS = {"NAME", "FAST_CALL", "IF", "FOR", "WHILE", "TEST", "GOTO", "RETURN",
+                     "RAISE", "RETRY", "TRYNEXT", "EXIT", "CONNECT", "LATE", "PLACEHOLDER"}
+_EXPR_STARTS = {"NAME", "NUMBER", "STRING", "NUMAGG", "LBRACK", "LPAR", "TRUE", "FALSE",
+                "NOT", "ADDOP", "PLACEHOLDER"}
+_OPERATORS = {"ADDOP", "STAR", "SLASH", "DIV", "MOD", "RELOP", "EQ", "AND", "OR", "XOR"}
+_NAMES = {
+    "NAME": "an identifier", "NUMBER": "a number", "STRING": "a string",
+    "NUMAGG": "'['", "FAST_CALL": "a statement", "$END": "end of file",
+    "HEADER": "a %%% header", "PLACEHOLDER": "a placeholder such as <SMT>",
+    "RELOP": "a comparison", "ADDOP": "'+' or '-'", "BACKSLASH": "an optional argument '\\'",
+}
+
+
+def _describe_terminal(name: str) -> str:
+    if name in _NAMES:
+        return _NAMES[name]
+    term = _terminals().get(name)
+    if term is not None and term.pattern.type == "str":
+        value = term.pattern.value
+        return value.upper() if value.isalpha() else f"'{value}'"
+    return name
+
+
+_TERMS = None
+
+
+def _terminals():
+    global _TERMS
+    if _TERMS is None:
+        _TERMS = {t.name: t for t in compiled().lexer_conf.terminals}
+    return _TERMS
+
+
+def describe_expected(expected: frozenset[str]) -> str:
+    rest = set(expected)
+    parts = []
+    if {"IF", "FOR", "WHILE"} <= rest:
+        parts.append("a statement")
+        rest -= _STATEMENT_STARTS
+    if {"NUMBER", "STRING", "NAME"} <= rest:
+        parts.append("an expression")
+        rest -= _EXPR_STARTS
+    if len(rest & _OPERATORS) >= 4:
+        parts.append("an operator")
+        rest -= _OPERATORS
+    if {"VAR", "PERS", "CONST"} <= rest:
+        parts.insert(0, "a declaration")
+        rest -= {"VAR", "PERS", "CONST", "LOCAL", "TASK"}
+    parts.extend(sorted(_describe_terminal(t) for t in rest))
+    if len(parts) > 8:
+        parts = parts[:8] + ["..."]
+    if len(parts) == 1:
+        return parts[0]
+    return ", ".join(parts[:-1]) + " or " + parts[-1]
+
+
+def _describe_token(tok) -> str:
+    if tok.type == "$END":
+        return "end of file"
+    if tok.type == "NAME":
+        return f"identifier '{tok.value}'"
+    if tok.type == "FAST_CALL":
+        return f"'{tok.value.split()[0]}'"
+    if tok.type == "NUMBER":
+        return f"number {tok.value}"
+    shown = tok.value if len(tok.value) <= 20 else tok.value[:17] + "..."
+    return f"'{shown}'"
+
+
+def _syntax_error(source: SourceText, exc: ParseFailure) -> InputError:
+    tok, expected, prev = exc.token, exc.expected, exc.previous
+    if prev is not None and prev.type == "ENDMODULE" and tok.type != "MODULE":
+        msg = f"text after ENDMODULE: {_describe_token(tok)}; expected end of file"
+    elif prev is not None and prev.type == "MODULE" and tok.type == "NUMBER":
+        msg = (f"module name must start with a letter, found {_describe_token(tok)}; "
+               "expected an identifier")
+    elif tok.type == "$END":
+        msg = f"unexpected end of file; expected {describe_expected(expected)}"
+        if "ENDMODULE" in expected:
+            msg += " (is ENDMODULE missing?)"
+    else:
+        msg = f"unexpected {_describe_token(tok)}; expected {describe_expected(expected)}"
+        if "RBRACK" in expected:
+            msg += " (an aggregate '[' is not closed)"
+        elif tok.type == "LPAR" and prev is not None and prev.type == "NAME":
+            msg += f" ('{prev.value}' cannot be followed by parentheses here)"
+    return source.error(tok.start_pos, msg)

@@ -1,0 +1,234 @@
+"""Typed RAPID data values decoded from literal aggregates.
+
+Each numeric field keeps its source text and span, so a rewrite replaces
+exactly those characters. A value that is not fully literal (a named
+constant inside, an expression) is not guessed at: decoding raises
+DecodeIssue with the reason and where.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple, Union
+
+from . import ast as A
+from .ast import Span
+
+
+class Field(NamedTuple):
+    value: float | bool | str
+    text: str
+    span: Span
+
+
+class DecodeIssue(Exception):
+    def __init__(self, reason: str, span: Span):
+        super().__init__(reason)
+        self.reason = reason
+        self.span = span
+
+
+@dataclass(frozen=True, slots=True)
+class Pose:
+    trans: tuple[Field, Field, Field]
+    rot: tuple[Field, Field, Field, Field]  # quaternion, RAPID order q1..q4 = w, x, y, z
+    span: Span
+
+    @property
+    def xyz(self) -> tuple[float, float, float]:
+        return tuple(f.value for f in self.trans)
+
+    @property
+    def quat_wxyz(self) -> tuple[float, float, float, float]:
+        return tuple(f.value for f in self.rot)
+
+
+@dataclass(frozen=True, slots=True)
+class RobTarget:
+    trans: tuple[Field, Field, Field]
+    rot: tuple[Field, Field, Field, Field]
+    robconf: tuple[Field, Field, Field, Field]  # cf1, cf4, cf6, cfx
+    extax: tuple[Field, ...]  # eax_a .. eax_f
+    span: Span
+
+    @property
+    def xyz(self) -> tuple[float, float, float]:
+        return tuple(f.value for f in self.trans)
+
+    @property
+    def quat_wxyz(self) -> tuple[float, float, float, float]:
+        return tuple(f.value for f in self.rot)
+
+    @property
+    def conf(self) -> tuple[int, int, int, int]:
+        return tuple(int(f.value) for f in self.robconf)
+
+    @property
+    def ext(self) -> tuple[float, ...]:
+        return tuple(f.value for f in self.extax)
+
+
+@dataclass(frozen=True, slots=True)
+class JointTarget:
+    robax: tuple[Field, ...]  # rax_1 .. rax_6, degrees
+    extax: tuple[Field, ...]
+    span: Span
+
+    @property
+    def joints(self) -> tuple[float, ...]:
+        return tuple(f.value for f in self.robax)
+
+    @property
+    def ext(self) -> tuple[float, ...]:
+        return tuple(f.value for f in self.extax)
+
+
+@dataclass(frozen=True, slots=True)
+class LoadData:
+    mass: Field
+    cog: tuple[Field, Field, Field]
+    aom: tuple[Field, Field, Field, Field]
+    inertia: tuple[Field, Field, Field]
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class ToolData:
+    robhold: Field
+    tframe: Pose
+    tload: LoadData
+    span: Span
+
+
+@dataclass(frozen=True, slots=True)
+class WobjData:
+    robhold: Field
+    ufprog: Field
+    ufmec: Field
+    uframe: Pose
+    oframe: Pose
+    span: Span
+
+
+Record = Union[Pose, RobTarget, JointTarget, LoadData, ToolData, WobjData]
+
+# Shapes: "n" number, "b" bool, "s" string, a tuple is an aggregate.
+_POS = ("n",) * 3
+_ORIENT = ("n",) * 4
+_POSE = (_POS, _ORIENT)
+_LOAD = ("n", _POS, _ORIENT, "n", "n", "n")
+SHAPES: dict[str, tuple] = {
+    "pos": _POS,
+    "orient": _ORIENT,
+    "confdata": ("n",) * 4,
+    "extjoint": ("n",) * 6,
+    "robjoint": ("n",) * 6,
+    "pose": _POSE,
+    "robtarget": (_POS, _ORIENT, ("n",) * 4, ("n",) * 6),
+    "jointtarget": (("n",) * 6, ("n",) * 6),
+    "loaddata": _LOAD,
+    "tooldata": ("b", _POSE, _LOAD),
+    "wobjdata": ("b", "b", "s", _POSE, _POSE),
+}
+DECODED_TYPES = frozenset(("robtarget", "jointtarget", "tooldata", "wobjdata", "loaddata", "pose"))
+_LEAF_NAMES = {"n": "a number", "b": "TRUE or FALSE", "s": "a string"}
+
+
+def _items(expr) -> tuple | None:
+    if isinstance(expr, (A.Agg, A.NumAgg)):
+        return expr.items
+    return None
+
+
+def _leaf(kind: str, expr, where: str) -> Field:
+    if kind == "n":
+        if isinstance(expr, A.Num):
+            return Field(expr.value, expr.text, expr.span)
+        if (isinstance(expr, A.Unary) and expr.op in "+-" and isinstance(expr.operand, A.Num)):
+            value = -expr.operand.value if expr.op == "-" else expr.operand.value
+            return Field(value, expr.op + expr.operand.text, expr.span)
+    elif kind == "b" and isinstance(expr, A.Bool):
+        return Field(expr.value, "TRUE" if expr.value else "FALSE", expr.span)
+    elif kind == "s" and isinstance(expr, A.Str):
+        return Field(expr.value, expr.value, expr.span)
+    raise DecodeIssue(f"{where} is not a literal ({_LEAF_NAMES[kind]} expected)", expr.span)
+
+
+def _walk(shape, expr, where: str):
+    if isinstance(shape, str):
+        return _leaf(shape, expr, where)
+    items = _items(expr)
+    if items is None:
+        raise DecodeIssue(f"{where} is not a literal aggregate", expr.span)
+    if len(items) != len(shape):
+        raise DecodeIssue(f"{where} has {len(items)} components, expected {len(shape)}",
+                          expr.span)
+    return tuple(_walk(s, e, f"{where}.{i + 1}") for i, (s, e) in enumerate(zip(shape, items)))
+
+
+def _fast_numeric(expr: A.NumAgg, counts: tuple[int, ...]):
+    """Groups of Fields for an all-numeric two-level value, or None."""
+    groups = expr.groups()
+    if len(groups) != len(counts) or expr.text.count("[") != len(counts) + 1:
+        return None
+    if tuple(len(g) for g in groups) != counts:
+        return None
+    # No bare numbers between the groups: the top level has len-1 commas.
+    inner_commas = sum(c - 1 for c in counts)
+    if expr.text.count(",") - inner_commas != len(counts) - 1:
+        return None
+    return [tuple(Field(float(t), t, Span(s, e)) for t, s, e in g) for g in groups]
+
+
+def decode(type_name: str, expr, where: str | None = None) -> Record:
+    """Decode a literal value of a supported type. Raises DecodeIssue."""
+    t = type_name.lower()
+    where = where or t
+    if t == "robtarget":
+        if isinstance(expr, A.NumAgg):
+            g = _fast_numeric(expr, (3, 4, 4, 6))
+            if g is not None:
+                return RobTarget(g[0], g[1], g[2], g[3], expr.span)
+        v = _walk(SHAPES[t], expr, where)
+        return RobTarget(v[0], v[1], v[2], v[3], expr.span)
+    if t == "jointtarget":
+        if isinstance(expr, A.NumAgg):
+            g = _fast_numeric(expr, (6, 6))
+            if g is not None:
+                return JointTarget(g[0], g[1], expr.span)
+        v = _walk(SHAPES[t], expr, where)
+        return JointTarget(v[0], v[1], expr.span)
+    if t == "pose":
+        v = _walk(SHAPES[t], expr, where)
+        return Pose(v[0], v[1], expr.span)
+    if t == "loaddata":
+        return _load(_walk(SHAPES[t], expr, where), expr.span)
+    if t == "tooldata":
+        v = _walk(SHAPES[t], expr, where)
+        return ToolData(v[0], Pose(v[1][0], v[1][1], expr.items[1].span),
+                        _load(v[2], expr.items[2].span), expr.span)
+    if t == "wobjdata":
+        v = _walk(SHAPES[t], expr, where)
+        items = expr.items
+        return WobjData(v[0], v[1], v[2], Pose(v[3][0], v[3][1], items[3].span),
+                        Pose(v[4][0], v[4][1], items[4].span), expr.span)
+    raise DecodeIssue(f"values of type {type_name} are not decoded", expr.span)
+
+
+def _load(v, span: Span) -> LoadData:
+    return LoadData(v[0], v[1], v[2], (v[3], v[4], v[5]), span)
+
+
+def decode_array(type_name: str, expr, dims: tuple[int, ...], where: str):
+    """Decode an array initializer into a flat row-major tuple of records."""
+    if not dims:
+        return (decode(type_name, expr, where),)
+    items = _items(expr)
+    if items is None:
+        raise DecodeIssue(f"{where} is not a literal array aggregate", expr.span)
+    if len(items) != dims[0]:
+        raise DecodeIssue(f"{where} has {len(items)} elements, declared {dims[0]}", expr.span)
+    out: list = []
+    for i, item in enumerate(items):
+        out.extend(decode_array(type_name, item, dims[1:], f"{where}{{{i + 1}}}"))
+    return tuple(out)

@@ -1,0 +1,102 @@
+"""Lossless source text: bytes -> text with the original encoding and newlines.
+
+Everything downstream works on character offsets into `SourceText.text`; the
+rewriter splices edits into that text and `encode()` gives back bytes. Because
+no newline translation is done, CRLF, LF and mixed files survive unchanged.
+"""
+
+from __future__ import annotations
+
+import bisect
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .errors import InputError
+
+# Bytes that never occur in a RAPID text module. Encrypted or binary modules
+# are full of them; a cp1252 fallback would otherwise "decode" garbage.
+_BINARY_BYTES = set(range(0, 9)) | {11, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23,
+                                      24, 25, 26, 27, 28, 29, 30, 31, 127}
+
+
+@dataclass(frozen=True)
+class SourceText:
+    """A decoded source file. `display_path` is what messages show."""
+
+    display_path: str
+    text: str
+    encoding: str  # "utf-8" (BOM kept as U+FEFF in text), "cp1252" or "latin-1"
+    line_starts: tuple[int, ...] = field(repr=False, compare=False)
+
+    @classmethod
+    def from_text(cls, text: str, display_path: str = "<text>",
+                  encoding: str = "utf-8") -> "SourceText":
+        starts = [0]
+        find = text.find
+        pos = find("\n")
+        while pos != -1:
+            starts.append(pos + 1)
+            pos = find("\n", pos + 1)
+        return cls(display_path, text, encoding, tuple(starts))
+
+    @property
+    def has_bom(self) -> bool:
+        return self.text.startswith("\ufeff")
+
+    @property
+    def newline(self) -> str:
+        """'CRLF', 'LF', 'CR', 'mixed' or 'none' — reported by inspect."""
+        crlf = self.text.count("\r\n")
+        lf = self.text.count("\n") - crlf
+        cr = self.text.count("\r") - crlf
+        kinds = [name for name, n in (("CRLF", crlf), ("LF", lf), ("CR", cr)) if n]
+        if not kinds:
+            return "none"
+        return kinds[0] if len(kinds) == 1 else "mixed"
+
+    def position(self, offset: int) -> tuple[int, int]:
+        """1-based (line, column) of a character offset."""
+        line = bisect.bisect_right(self.line_starts, offset) - 1
+        return line + 1, offset - self.line_starts[line] + 1
+
+    def line_text(self, line: int) -> str:
+        start = self.line_starts[line - 1]
+        end = self.line_starts[line] if line < len(self.line_starts) else len(self.text)
+        return self.text[start:end]
+
+    def error(self, offset: int, message: str) -> InputError:
+        line, col = self.position(offset)
+        return InputError(self.display_path, message, line, col, self.line_text(line))
+
+    def encode(self, text: str | None = None) -> bytes:
+        return (self.text if text is None else text).encode(self.encoding)
+
+
+def decode_bytes(data: bytes, display_path: str) -> SourceText:
+    """Decode a module: UTF-8 first, then cp1252, then latin-1 (reported)."""
+    bad = next((i for i, b in enumerate(data[:65536]) if b in _BINARY_BYTES), None)
+    if bad is not None:
+        line = data.count(b"\n", 0, bad) + 1
+        col = bad - (data.rfind(b"\n", 0, bad) + 1) + 1
+        raise InputError(display_path,
+                         f"binary or encrypted module (byte 0x{data[bad]:02x} at offset {bad}); "
+                         "expected RAPID source text", line, col)
+    for encoding in ("utf-8", "cp1252", "latin-1"):
+        try:
+            text = data.decode(encoding)
+        except UnicodeDecodeError:
+            continue
+        # The round trip must be exact, or splicing could change untouched bytes.
+        if text.encode(encoding) == data:
+            return SourceText.from_text(text, display_path, encoding)
+    raise InputError(display_path, "cannot decode as UTF-8, cp1252 or latin-1")
+
+
+def read_source(path: str | Path, display_path: str | None = None) -> SourceText:
+    path = Path(path)
+    shown = display_path if display_path is not None else str(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InputError(shown, f"cannot read file: {exc.strerror or exc}") from None
+    return decode_bytes(data, shown)
