@@ -45,7 +45,6 @@ class Agg:
 
 
 NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
-_GROUP_RE = re.compile(r"\[([^\[\]]*)\]")
 _TOKEN_RE = re.compile(r"\[|\]|" + NUMBER_RE.pattern)
 
 
@@ -53,22 +52,12 @@ _TOKEN_RE = re.compile(r"\[|\]|" + NUMBER_RE.pattern)
 class NumAgg:
     """An aggregate made only of number literals, lexed as one token.
 
-    Its items are decoded on demand: most CAM targets are only ever read
-    through `groups()` by the typed-record decoder, which is much cheaper.
+    Its items are decoded on demand: most CAM targets are only ever read by
+    the typed-record decoder (values.py), which matches the text directly.
     """
 
     text: str
     span: Span
-
-    def groups(self) -> list[list[tuple[str, int, int]]]:
-        """Innermost bracket groups as lists of (number text, start, end)."""
-        base = self.span.start
-        out = []
-        for g in _GROUP_RE.finditer(self.text):
-            off = base + g.start(1)
-            out.append([(m.group(), off + m.start(), off + m.end())
-                        for m in NUMBER_RE.finditer(g.group(1))])
-        return out
 
     @cached_property
     def items(self) -> tuple["Expr", ...]:

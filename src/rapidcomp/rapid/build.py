@@ -17,6 +17,8 @@ from .lalr import Tok
 
 
 _FAST_HEAD = re.compile(r"([A-Za-z][A-Za-z0-9_]*)[ \t]+")
+_FAST_DECL = re.compile(r"(?:(LOCAL|TASK)[ \t]+)?(CONST|PERS|VAR)[ \t]+([A-Za-z][A-Za-z0-9_]*)"
+                        r"[ \t]+([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*", re.IGNORECASE)
 _NUMAGG = re.compile(r"\[(?:[^\[\]]|\[[^\[\]]*\])*\]")
 _FAST_ITEM = re.compile(
     r"\\([A-Za-z][A-Za-z0-9_]*)(?::=([A-Za-z][A-Za-z0-9_]*|\d+(?:\.\d*)?))?"
@@ -241,6 +243,19 @@ class NodeBuilder:
                     value = A.Ref(val, (), vspan)
                 args.append(A.Arg("optval", opt, value, Span(base + m.start(), base + m.end())))
         return A.ProcCall(name, Span(base, base + len(name)), tuple(args),
+                          Span(base, base + len(text)))
+
+    def fast_decl(self, c):
+        """A FAST_DECL token: one-line declaration with a numeric aggregate."""
+        tok = c[0]
+        text = tok.value
+        base = tok.start_pos
+        m = _FAST_DECL.match(text)
+        scope = m.group(1).upper() if m.group(1) else None
+        agg_end = text.rindex("]") + 1
+        init = A.NumAgg(text[m.end():agg_end], Span(base + m.end(), base + agg_end))
+        return A.DataDecl(scope, m.group(2).upper(), m.group(3), m.group(4),
+                          Span(base + m.start(4), base + m.end(4)), (), init,
                           Span(base, base + len(text)))
 
     def late_call(self, c):

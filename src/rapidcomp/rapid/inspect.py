@@ -124,7 +124,8 @@ def render_text(rep: dict) -> str:
                     if "expr" in t:
                         tg.append(t["expr"])
                     elif "conf" in t:
-                        tg.append("inline conf [" + ",".join(str(x) for x in t["conf"]) + "]")
+                        tg.append("inline [" + ",".join(_fmt(x) for x in t["trans"]) + "] conf ["
+                                  + ",".join(str(x) for x in t["conf"]) + "]")
                     elif "robax" in t:
                         tg.append("inline [" + ",".join(_fmt(x) for x in t["robax"]) + "]")
                     else:

@@ -85,10 +85,12 @@ class Engine:
                                     -len(t.pattern.value), t.name))
         self._master = re.compile("|".join(
             f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in regular))
-        # Same alternation without the one-token call, for when a FAST_CALL
-        # match contains a reserved word and must be lexed token by token.
+        # Same alternation without the one-token statements, for when a
+        # FAST_CALL/FAST_DECL match has a reserved word where an identifier
+        # must be, and must be lexed token by token.
         self._master_plain = re.compile("|".join(
-            f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in regular if t.name != "FAST_CALL"))
+            f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in regular
+            if t.name not in ("FAST_CALL", "FAST_DECL")))
         self._keywords = keywords
         self._ignore = frozenset(ignore)
         self.terminal_names = frozenset(t.name for t in terms)
@@ -147,10 +149,13 @@ class Engine:
             if m is None:
                 raise LexFailure(pos)
             kind = m.lastgroup
-            if kind == "FAST_CALL" and any(
-                    w.upper() in keywords for w in _WORD.findall(m.group())):
-                m = self._master_plain.match(text, pos)
-                kind = m.lastgroup
+            if kind == "FAST_CALL" or kind == "FAST_DECL":
+                words = _WORD.findall(m.group())
+                if kind == "FAST_DECL":  # only type and name must be identifiers
+                    words = words[-2:]
+                if any(w.upper() in keywords for w in words):
+                    m = self._master_plain.match(text, pos)
+                    kind = m.lastgroup
             stop = m.end()
             if kind not in ignore:
                 value = m.group()

@@ -9,6 +9,7 @@ DecodeIssue with the reason and where.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import re
 from typing import NamedTuple, Union
 
 from . import ast as A
@@ -43,44 +44,98 @@ class Pose:
         return tuple(f.value for f in self.rot)
 
 
+class _Numeric:
+    """Shared storage of all-numeric records: values, texts, relative spans.
+
+    Fields are materialised on access; CAM programs hold 1e5+ targets and
+    most are only ever read as float tuples.
+    """
+
+    __slots__ = ()
+
+    def _field(self, i: int) -> Field:
+        s, e = self.regs[i]
+        base = self.span.start
+        return Field(self.values[i], self.texts[i], Span(base + s, base + e))
+
+    def _fields(self, lo: int, hi: int) -> tuple[Field, ...]:
+        return tuple(self._field(i) for i in range(lo, hi))
+
+    @property
+    def fields(self) -> tuple[Field, ...]:
+        return self._fields(0, len(self.values))
+
+
 @dataclass(frozen=True, slots=True)
-class RobTarget:
-    trans: tuple[Field, Field, Field]
-    rot: tuple[Field, Field, Field, Field]
-    robconf: tuple[Field, Field, Field, Field]  # cf1, cf4, cf6, cfx
-    extax: tuple[Field, ...]  # eax_a .. eax_f
+class RobTarget(_Numeric):
+    """robtarget: trans (mm), rot (quaternion w,x,y,z), robconf, extax.
+
+    values/texts hold the 17 numbers in declaration order; regs their spans
+    relative to span.start.
+    """
+
+    values: tuple[float, ...]
+    texts: tuple[str, ...]
+    regs: tuple[tuple[int, int], ...]
     span: Span
+
+    @property
+    def trans(self) -> tuple[Field, ...]:
+        return self._fields(0, 3)
+
+    @property
+    def rot(self) -> tuple[Field, ...]:
+        return self._fields(3, 7)
+
+    @property
+    def robconf(self) -> tuple[Field, ...]:
+        return self._fields(7, 11)
+
+    @property
+    def extax(self) -> tuple[Field, ...]:
+        return self._fields(11, 17)
 
     @property
     def xyz(self) -> tuple[float, float, float]:
-        return tuple(f.value for f in self.trans)
+        return self.values[0:3]
 
     @property
     def quat_wxyz(self) -> tuple[float, float, float, float]:
-        return tuple(f.value for f in self.rot)
+        return self.values[3:7]
 
     @property
     def conf(self) -> tuple[int, int, int, int]:
-        return tuple(int(f.value) for f in self.robconf)
+        return tuple(int(v) for v in self.values[7:11])
 
     @property
     def ext(self) -> tuple[float, ...]:
-        return tuple(f.value for f in self.extax)
+        return self.values[11:17]
 
 
 @dataclass(frozen=True, slots=True)
-class JointTarget:
-    robax: tuple[Field, ...]  # rax_1 .. rax_6, degrees
-    extax: tuple[Field, ...]
+class JointTarget(_Numeric):
+    """jointtarget: robax (deg, 6 axes) and extax; storage as in RobTarget."""
+
+    values: tuple[float, ...]
+    texts: tuple[str, ...]
+    regs: tuple[tuple[int, int], ...]
     span: Span
 
     @property
+    def robax(self) -> tuple[Field, ...]:
+        return self._fields(0, 6)
+
+    @property
+    def extax(self) -> tuple[Field, ...]:
+        return self._fields(6, 12)
+
+    @property
     def joints(self) -> tuple[float, ...]:
-        return tuple(f.value for f in self.robax)
+        return self.values[0:6]
 
     @property
     def ext(self) -> tuple[float, ...]:
-        return tuple(f.value for f in self.extax)
+        return self.values[6:12]
 
 
 @dataclass(frozen=True, slots=True)
@@ -166,38 +221,41 @@ def _walk(shape, expr, where: str):
     return tuple(_walk(s, e, f"{where}.{i + 1}") for i, (s, e) in enumerate(zip(shape, items)))
 
 
-def _fast_numeric(expr: A.NumAgg, counts: tuple[int, ...]):
-    """Groups of Fields for an all-numeric two-level value, or None."""
-    groups = expr.groups()
-    if len(groups) != len(counts) or expr.text.count("[") != len(counts) + 1:
-        return None
-    if tuple(len(g) for g in groups) != counts:
-        return None
-    # No bare numbers between the groups: the top level has len-1 commas.
-    inner_commas = sum(c - 1 for c in counts)
-    if expr.text.count(",") - inner_commas != len(counts) - 1:
-        return None
-    return [tuple(Field(float(t), t, Span(s, e)) for t, s, e in g) for g in groups]
+def _shape_regex(counts: tuple[int, ...]) -> re.Pattern:
+    num = f"({A.NUMBER_RE.pattern})"
+    groups = [r"\[\s*" + r"\s*,\s*".join([num] * n) + r"\s*\]" for n in counts]
+    return re.compile(r"\[\s*" + r"\s*,\s*".join(groups) + r"\s*\]")
+
+
+_FAST = {"robtarget": _shape_regex((3, 4, 4, 6)), "jointtarget": _shape_regex((6, 6))}
+_COMPACT = {"robtarget": RobTarget, "jointtarget": JointTarget}
+
+
+def _compact(t: str, expr) -> Record:
+    """An all-numeric record, by one regex match when the value is a NumAgg."""
+    cls = _COMPACT[t]
+    if isinstance(expr, A.NumAgg):
+        m = _FAST[t].fullmatch(expr.text)
+        if m is not None:
+            texts = m.groups()
+            return cls(tuple(map(float, texts)), texts, m.regs[1:], expr.span)
+    nested = _walk(SHAPES[t], expr, t)
+    fields = [f for group in nested for f in group]
+    base = expr.span.start
+    return cls(tuple(f.value for f in fields), tuple(f.text for f in fields),
+               tuple((f.span.start - base, f.span.end - base) for f in fields), expr.span)
 
 
 def decode(type_name: str, expr, where: str | None = None) -> Record:
     """Decode a literal value of a supported type. Raises DecodeIssue."""
     t = type_name.lower()
     where = where or t
-    if t == "robtarget":
-        if isinstance(expr, A.NumAgg):
-            g = _fast_numeric(expr, (3, 4, 4, 6))
-            if g is not None:
-                return RobTarget(g[0], g[1], g[2], g[3], expr.span)
-        v = _walk(SHAPES[t], expr, where)
-        return RobTarget(v[0], v[1], v[2], v[3], expr.span)
-    if t == "jointtarget":
-        if isinstance(expr, A.NumAgg):
-            g = _fast_numeric(expr, (6, 6))
-            if g is not None:
-                return JointTarget(g[0], g[1], expr.span)
-        v = _walk(SHAPES[t], expr, where)
-        return JointTarget(v[0], v[1], expr.span)
+    if t in _COMPACT:
+        try:
+            return _compact(t, expr)
+        except DecodeIssue as exc:
+            # Name the value being decoded (declaration, inline target).
+            raise DecodeIssue(exc.reason.replace(t, where, 1), exc.span) from None
     if t == "pose":
         v = _walk(SHAPES[t], expr, where)
         return Pose(v[0], v[1], expr.span)

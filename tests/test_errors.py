@@ -1,0 +1,73 @@
+"""Invalid input: path:line:col, what was expected in RAPID terms, exit 2, no output."""
+
+import subprocess
+import sys
+
+import pytest
+from click.testing import CliRunner
+
+from rapidcomp.cli import main
+from rapidcomp.errors import InputError
+from rapidcomp.rapid.parse import parse_text
+
+from conftest import FIXTURES
+
+CASES = {
+    "text_after_endmodule.mod": ("6:1", "text after ENDMODULE"),
+    "module_name_digit.mod": ("1:8", "module name must start with a letter"),
+    "identifier_parentheses.mod": ("2:20", "'speed' cannot be followed by parentheses"),
+    "unclosed_aggregate.mod": ("2:98", "an aggregate '[' is not closed"),
+    "encrypted.mod": ("2:", "binary or encrypted module"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_invalid_fixture_cli(name):
+    path = FIXTURES / "invalid" / name
+    where, phrase = CASES[name]
+    before = path.read_bytes()
+    result = CliRunner().invoke(main, ["inspect", str(path)])
+    assert result.exit_code == 2
+    assert result.stdout == ""
+    first = result.stderr.splitlines()[0]
+    assert first.startswith(f"{path}:{where}")
+    assert phrase in first
+    assert path.read_bytes() == before  # input never modified
+
+
+def test_caret_points_at_column():
+    with pytest.raises(InputError) as exc:
+        parse_text("MODULE m\nPROC p()\n  MoveL p1, v100 z10;\nENDPROC\nENDMODULE\n", "x.mod")
+    lines = exc.value.format().splitlines()
+    assert lines[0].startswith("x.mod:3:18: unexpected identifier 'z10'; expected ")
+    assert "','" in lines[0] and "';'" in lines[0]
+    assert lines[1] == "      MoveL p1, v100 z10;"
+    assert lines[2] == "    " + " " * 17 + "^"
+
+
+@pytest.mark.parametrize("text,where,phrase", [
+    ("MODULE m\nPROC p()\n", "3:1", "unexpected end of file; expected a declaration, a statement"),
+    ("MODULE m\nPROC p()\n x := 1\nENDPROC\nENDMODULE\n", "4:1", "expected an operator or ';'"),
+    ("MODULE m\nPROC p()\n IF x THEN\n ENDPROC\nENDMODULE\n", "4:2", "ELSE, ELSEIF or ENDIF"),
+    ("MODULE m\n VAR num x := 1 @ 2;\nENDMODULE\n", "2:17", "unexpected character '@'"),
+    ("MODULE m\n VAR num if := 1;\nENDMODULE\n", "2:10", "unexpected 'if'; expected an identifier"),
+])
+def test_messages(text, where, phrase):
+    with pytest.raises(InputError) as exc:
+        parse_text(text, "m.mod")
+    first = exc.value.format().splitlines()[0]
+    assert first.startswith(f"m.mod:{where}: ")
+    assert phrase in first
+
+
+def test_missing_file_is_bad_input(tmp_path):
+    result = CliRunner().invoke(main, ["inspect", str(tmp_path / "nope.mod")])
+    assert result.exit_code == 2 and "cannot read file" in result.stderr
+
+
+def test_python_dash_m_entry_point():
+    proc = subprocess.run([sys.executable, "-m", "rapidcomp", "inspect",
+                           str(FIXTURES / "invalid" / "module_name_digit.mod")],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert "module_name_digit.mod:1:8:" in proc.stderr

@@ -1,0 +1,173 @@
+"""Grammar constructs, one snippet each, checked on the nodes they produce."""
+
+import pytest
+
+from rapidcomp.rapid import ast as A
+from rapidcomp.rapid.parse import parse_text
+
+
+def body(stmts: str, decls: str = ""):
+    pf = parse_text(f"MODULE m\n{decls}\nPROC p()\n{stmts}\nENDPROC\nENDMODULE\n")
+    return pf, pf.module.routines[0].node.body
+
+
+def expr_of(text: str):
+    pf, b = body(f"x := {text};")
+    return pf, b[0].value
+
+
+def shape(e):
+    """A compact view of an expression tree for precedence checks."""
+    if isinstance(e, A.Binary):
+        return (e.op, shape(e.left), shape(e.right))
+    if isinstance(e, A.Unary):
+        return (e.op, shape(e.operand))
+    if isinstance(e, A.Paren):
+        return shape(e.expr)
+    if isinstance(e, A.Ref):
+        return e.name
+    if isinstance(e, A.Num):
+        return e.value
+    return type(e).__name__
+
+
+@pytest.mark.parametrize("text,expected", [
+    ("a OR b AND c", ("OR", "a", ("AND", "b", "c"))),
+    ("a AND b OR c", ("OR", ("AND", "a", "b"), "c")),
+    ("a XOR b OR c", ("OR", ("XOR", "a", "b"), "c")),
+    ("NOT a AND b", ("AND", ("NOT", "a"), "b")),
+    ("a < b + 1", ("<", "a", ("+", "b", 1.0))),
+    ("a = b AND c <> d", ("AND", ("=", "a", "b"), ("<>", "c", "d"))),
+    ("a + b * c", ("+", "a", ("*", "b", "c"))),
+    ("a - b - c", ("-", ("-", "a", "b"), "c")),
+    ("a * b DIV c MOD d", ("MOD", ("DIV", ("*", "a", "b"), "c"), "d")),
+    ("-a * b", ("*", ("-", "a"), "b")),
+    ("(a + b) * c", ("*", ("+", "a", "b"), "c")),
+    ("a >= -5", (">=", "a", -5.0)),
+])
+def test_precedence(text, expected):
+    _, e = expr_of(text)
+    assert shape(e) == expected
+
+
+
+
+def test_component_on_call_is_rejected():
+    from rapidcomp.errors import InputError
+    with pytest.raises(InputError):
+        expr_of("Offs(p, 0, 0, 10).trans")
+
+
+def test_components_and_indexes():
+    pf, e = expr_of("p.trans.x + arr{i + 1, 2}.rot.q1")
+    left, right = e.left, e.right
+    assert left.name == "p" and [s.name for s in left.selectors] == ["trans", "x"]
+    assert right.name == "arr" and isinstance(right.selectors[0], A.Index)
+    assert shape(right.selectors[0].indices[0]) == ("+", "i", 1.0)
+    assert pf.text(right) == "arr{i + 1, 2}.rot.q1"
+
+
+def test_call_arguments_all_forms():
+    pf, b = body('Foo \\Opt, a \\B:=2 \\C?d, Param:=3, "s""q";')
+    args = b[0].args
+    assert [a.kind for a in args] == ["opt", "pos", "optval", "cond", "named", "pos"]
+    assert args[-1].value.value == 's"q'
+    assert args[3].name == "C" and pf.text(args[3].value) == "d"
+
+
+def test_statements():
+    pf, b = body("""
+    IF a THEN x:=1; ELSEIF b THEN x:=2; ELSEIF c THEN x:=3; ELSE x:=4; ENDIF
+    IF a x:=5;
+    FOR i FROM 1 TO 10 STEP 2 DO x:=i; ENDFOR
+    WHILE a DO x:=1; ENDWHILE
+    TEST x CASE 1,2,3: y:=1; CASE 4: y:=2; DEFAULT: y:=3; ENDTEST
+    GOTO lbl;
+    lbl:
+    RETURN;
+    RAISE ERR_MY;
+    RETRY; TRYNEXT; EXIT;
+    CONNECT intno WITH tr;
+    %"proc" + NumToStr(i,0)% a, b;
+    %procname%;
+    <SMT>
+    """)
+    kinds = [type(s).__name__ if not isinstance(s, A.Simple) else s.kind for s in b]
+    assert kinds == ["If", "CompactIf", "For", "While", "Test", "GOTO", "LABEL", "RETURN",
+                     "RAISE", "RETRY", "TRYNEXT", "EXIT", "CONNECT", "LateCall", "LateCall",
+                     "PLACEHOLDER"]
+    assert len(b[0].branches) == 3 and len(b[0].orelse) == 1
+    assert pf.text(b[2].step) == "2"
+    assert [len(vals) for vals, _ in b[4].cases] == [3, 1]
+
+
+def test_routine_forms_and_parameters():
+    pf = parse_text("""MODULE m
+    LOCAL PROC a(num x \\num y | switch z, INOUT robtarget p, VAR num w, PERS tooldata t, num arr{*,*})
+    ERROR
+      RETRY;
+    UNDO
+      x := 0;
+    ENDPROC
+    PROC b()
+      Stop;
+    BACKWARD
+      Stop;
+    ENDPROC
+    FUNC bool f(num x)
+      RETURN x > 0;
+    ERROR (ERR_A, 41)
+      RETURN FALSE;
+    ENDFUNC
+    LOCAL TRAP t
+      Stop;
+    ERROR
+      RETURN;
+    ENDTRAP
+    ENDMODULE
+    """)
+    a, b, f, t = (r.node for r in pf.module.routines)
+    assert a.scope == "LOCAL" and [p.name for p in a.params] == ["x", "y", "z", "p", "w", "t", "arr"]
+    assert [p.optional for p in a.params] == [False, True, True, False, False, False, False]
+    assert [p.access for p in a.params][3:6] == ["INOUT", "VAR", "PERS"]
+    assert a.params[-1].array == 2
+    assert [h.kind for h in a.handlers] == ["ERROR", "UNDO"]
+    assert [h.kind for h in b.handlers] == ["BACKWARD"]
+    assert f.return_type == "bool" and len(f.handlers[0].errors) == 2
+    assert t.kind == "TRAP" and t.scope == "LOCAL"
+
+
+def test_declarations_and_module_items():
+    pf = parse_text("""MODULE m(SYSMODULE, NOSTEPIN, VIEWONLY, READONLY, NOVIEW)
+    RECORD r num a; string b; ENDRECORD
+    LOCAL ALIAS num lvl;
+    TASK PERS num n := 1;
+    LOCAL VAR num grid{2,4};
+    CONST num c{3} := [1, 2,
+        ! comment between
+        3];
+    VAR num e{2,2,2};
+    <DDN>
+    ENDMODULE""")
+    m = pf.module
+    assert m.attributes == ("SYSMODULE", "NOSTEPIN", "VIEWONLY", "READONLY", "NOVIEW")
+    assert m.records[0].components == (("num", "a"), ("string", "b"))
+    assert m.aliases[0].scope == "LOCAL" and m.aliases[0].name == "lvl"
+    d = {x.name: x for x in m.declarations}
+    assert (d["n"].scope, d["n"].storage) == ("TASK", "PERS")
+    assert d["grid"].dims == (2, 4) and d["e"].dims == (2, 2, 2)
+    assert [i.value for i in d["c"].node.init.items] == [1, 2, 3]
+
+
+def test_keywords_case_insensitive():
+    pf = parse_text("module m\nproc p()\nif a then x:=1; endif\nendproc\nendmodule\n")
+    assert isinstance(pf.module.routines[0].node.body[0], A.If)
+
+
+def test_fast_path_refuses_reserved_words():
+    # "a, TRUE" looks like a one-line call but TRUE is a keyword: lexed
+    # normally, the argument is a Bool, not a data reference named TRUE.
+    pf, b = body("Foo a, TRUE;")
+    assert isinstance(b[0].args[1].value, A.Bool)
+    pf, b = body("Foo a, b;")
+    assert [x.value.name for x in b[0].args] == ["a", "b"]

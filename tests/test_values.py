@@ -1,0 +1,116 @@
+"""Extracted values against what the fixtures say (read by eye)."""
+
+import pytest
+
+from rapidcomp.rapid import ast as A
+from rapidcomp.rapid.parse import parse_file, parse_text
+from rapidcomp.rapid.values import RobTarget, ToolData, WobjData
+
+
+@pytest.fixture(scope="module")
+def rs():
+    from conftest import FIXTURES
+    return parse_file(FIXTURES / "rapid" / "robotstudio_crlf.mod")
+
+
+def decl(pf, name):
+    return next(d for d in pf.module.declarations if d.name == name)
+
+
+def test_robtarget_fields(rs):
+    p = decl(rs, "pPlace")
+    assert p.scope == "LOCAL" and p.storage == "PERS" and p.type == "robtarget"
+    v = p.value
+    assert v.xyz == (550.0, -150.0, 400.0)
+    assert v.quat_wxyz == (0.707107, 0.0, 0.707107, 0.0)
+    assert v.conf == (-1, -1, 0, 0)
+    assert v.ext == (9e9,) * 6
+    assert [f.text for f in v.extax] == ["9E+09"] * 6
+
+
+def test_array_with_comment_inside(rs):
+    p = decl(rs, "pPath")
+    assert p.dims == (4,)
+    assert [v.xyz for v in p.value] == [(400, 300, 250), (400, 150, 250), (400, 0, 250),
+                                        (400, -150, 250)]
+    assert p.value[3].conf == (-1, -1, 0, 0)
+
+
+def test_tool_and_wobj(rs):
+    t = decl(rs, "tGripper").value
+    assert isinstance(t, ToolData) and t.robhold.value is True
+    assert t.tframe.xyz == (0, 0, 150) and t.tframe.quat_wxyz == (1, 0, 0, 0)
+    assert t.tload.mass.value == 1.5 and tuple(f.value for f in t.tload.cog) == (0, 0, 75)
+    assert decl(rs, "tGripper").scope == "TASK"
+    w = decl(rs, "wobjTable").value
+    assert isinstance(w, WobjData)
+    assert (w.robhold.value, w.ufprog.value, w.ufmec.value) == (False, True, "")
+    assert w.uframe.xyz == (600, -200, 100)
+    assert w.uframe.quat_wxyz == (0.9238795, 0, 0, 0.3826834)
+
+
+def test_declaration_without_value_and_record_typed_value(rs):
+    assert decl(rs, "pCurrent").value is None
+    assert decl(rs, "pCurrent").issue == "declared without a value"
+    assert decl(rs, "grid").dims == (2, 3)
+    assert decl(rs, "cube").dims == (2, 2, 2)
+    assert decl(rs, "i").routine == "main"
+
+
+def test_motions_roles_and_context(rs):
+    ms = rs.module.motions
+    assert [m.spec.name for m in ms][:6] == ["MoveAbsJ", "MoveJ", "MoveL", "MoveL", "MoveL", "MoveC"]
+    loop_move = ms[2]
+    assert [lp.var for lp in loop_move.loops] == ["i"]
+    assert rs.text(loop_move.targets[0].expr) == "pPath{i}"
+    assert rs.text(loop_move.wobj) == "wobjTable"
+    reltool = ms[4]
+    assert rs.text(reltool.speed) == "v50" and rs.text(reltool.zone) == "z5"
+    assert [rs.text(a) for a in reltool.optional] == ["\\V:=80", "\\Z:=3"]
+    call = reltool.targets[0].expr
+    assert isinstance(call, A.Call) and call.name == "RelTool"
+    assert [a.kind for a in call.args] == ["pos", "pos", "pos", "pos", "optval"]
+    movec = ms[5]
+    assert [t.role for t in movec.targets] == ["cir", "to"]
+    assert ms[0].optional[0].name == "NoEOffs" and ms[0].optional[0].kind == "opt"
+    inline = next(m for m in ms if m.routine == "routine1")
+    assert isinstance(inline.targets[0].value, RobTarget)
+    assert inline.targets[0].value.xyz == (550, 0, 550)
+    assert rs.line(inline.span) == 105
+
+
+def test_number_spellings(fixtures_dir):
+    pf = parse_file(fixtures_dir / "rapid" / "system_bom.sys")
+    vals = {d.name: d.node.init for d in pf.module.declarations if d.type == "num" and d.node.init}
+    assert vals["nBig"].value == 9e9 and vals["nBig2"].value == 9e9
+    assert vals["nFrac"].value == 1.0 and vals["nFrac"].text == "1.00000000"
+    assert vals["nHex"].value == 255 and vals["nOct"].value == 15 and vals["nBin"].value == 5
+    assert vals["nDot"].value == 5.0
+    assert vals["nNeg"].value == -1.5e-3 and vals["nNeg"].text == "-1.5E-3"
+    tool = next(d for d in pf.module.declarations if d.name == "tWeld").value
+    assert tool.tload.inertia[2].value == 0.005 and tool.tload.inertia[2].text == ".005"
+
+
+def test_lowercase_keywords_and_cp1252(fixtures_dir):
+    pf = parse_file(fixtures_dir / "rapid" / "handwritten_cp1252.mod")
+    m = pf.module
+    assert m.name == "handwork" and m.attributes == ("NOSTEPIN",)
+    assert [mo.spec.name for mo in m.motions] == ["MoveJ", "MoveL", "MoveL"]
+    assert decl(pf, "pAuf").value.xyz == (480, -60, 320)
+    assert decl(pf, "bFertig").scope == "LOCAL"
+
+
+def test_robodk_comma_before_optional_argument(fixtures_dir):
+    pf = parse_file(fixtures_dir / "rapid" / "robodk.mod")
+    moves = pf.module.motions
+    assert all(pf.text(mo.wobj) == "rdkWObj" for mo in moves)
+    assert moves[0].targets[0].value.joints == (41.85, 44.63, 25.88, 43.53, -75.61, -13.29)
+    assert moves[1].targets[0].value.conf == (0, 0, -1, 0)
+
+
+def test_non_literal_inline_target_is_reported_not_guessed():
+    pf = parse_text("MODULE m\nPROC p()\nMoveL [[x,0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tool0;\n"
+                    "MoveL [[0,0,0],[1,0,0,0],[0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tool0;\nENDPROC\nENDMODULE\n")
+    a, b = pf.module.motions
+    assert a.targets[0].value is None and "inline robtarget.1.1 is not a literal" in a.targets[0].issue
+    assert b.targets[0].value is None and "3 components, expected 4" in b.targets[0].issue
