@@ -1,0 +1,151 @@
+"""Units and rotations, in one place.
+
+User-facing units are millimetres and degrees (RAPID's). The kinematic model
+is built in millimetres, so lengths never need converting; angles are
+converted here and nowhere else. Quaternions at the edges are RAPID order
+(w, x, y, z); Pinocchio's own order is (x, y, z, w) and is only used via
+SE3/rotation matrices, never as raw coefficient arrays.
+
+All functions accept a single value or a batch (leading axes).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+DEG = np.pi / 180.0
+
+
+def deg2rad(x):
+    return np.asarray(x, dtype=float) * DEG
+
+
+def rad2deg(x):
+    return np.asarray(x, dtype=float) / DEG
+
+
+def quat_wxyz_to_matrix(q) -> np.ndarray:
+    """Rotation matrix of a (possibly unnormalised) RAPID quaternion w,x,y,z."""
+    q = np.asarray(q, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    out = np.empty(q.shape[:-1] + (3, 3))
+    out[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    out[..., 0, 1] = 2 * (x * y - w * z)
+    out[..., 0, 2] = 2 * (x * z + w * y)
+    out[..., 1, 0] = 2 * (x * y + w * z)
+    out[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    out[..., 1, 2] = 2 * (y * z - w * x)
+    out[..., 2, 0] = 2 * (x * z - w * y)
+    out[..., 2, 1] = 2 * (y * z + w * x)
+    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return out
+
+
+def matrix_to_quat_wxyz(R) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) with w >= 0 of a rotation matrix."""
+    R = np.asarray(R, dtype=float)
+    shape = R.shape[:-2]
+    R = R.reshape(-1, 3, 3)
+    q = np.empty((R.shape[0], 4))
+    tr = R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2]
+    # Shepperd's method: pick the largest of w, x, y, z for stability.
+    cand = np.stack([tr, R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]], axis=1)
+    k = np.argmax(cand, axis=1)
+    for idx in range(4):
+        m = k == idx
+        if not m.any():
+            continue
+        r = R[m]
+        if idx == 0:
+            s = np.sqrt(1.0 + tr[m]) * 2
+            q[m] = np.stack([0.25 * s, (r[:, 2, 1] - r[:, 1, 2]) / s,
+                             (r[:, 0, 2] - r[:, 2, 0]) / s, (r[:, 1, 0] - r[:, 0, 1]) / s], 1)
+        elif idx == 1:
+            s = np.sqrt(1.0 + r[:, 0, 0] - r[:, 1, 1] - r[:, 2, 2]) * 2
+            q[m] = np.stack([(r[:, 2, 1] - r[:, 1, 2]) / s, 0.25 * s,
+                             (r[:, 0, 1] + r[:, 1, 0]) / s, (r[:, 0, 2] + r[:, 2, 0]) / s], 1)
+        elif idx == 2:
+            s = np.sqrt(1.0 + r[:, 1, 1] - r[:, 0, 0] - r[:, 2, 2]) * 2
+            q[m] = np.stack([(r[:, 0, 2] - r[:, 2, 0]) / s, (r[:, 0, 1] + r[:, 1, 0]) / s,
+                             0.25 * s, (r[:, 1, 2] + r[:, 2, 1]) / s], 1)
+        else:
+            s = np.sqrt(1.0 + r[:, 2, 2] - r[:, 0, 0] - r[:, 1, 1]) * 2
+            q[m] = np.stack([(r[:, 1, 0] - r[:, 0, 1]) / s, (r[:, 0, 2] + r[:, 2, 0]) / s,
+                             (r[:, 1, 2] + r[:, 2, 1]) / s, 0.25 * s], 1)
+    q[q[:, 0] < 0] *= -1
+    return q.reshape(shape + (4,))
+
+
+def rot_x(a) -> np.ndarray:
+    a = np.asarray(a, dtype=float)
+    c, s = np.cos(a), np.sin(a)
+    out = np.zeros(a.shape + (3, 3))
+    out[..., 0, 0] = 1
+    out[..., 1, 1] = c
+    out[..., 1, 2] = -s
+    out[..., 2, 1] = s
+    out[..., 2, 2] = c
+    return out
+
+
+def rot_y(a) -> np.ndarray:
+    a = np.asarray(a, dtype=float)
+    c, s = np.cos(a), np.sin(a)
+    out = np.zeros(a.shape + (3, 3))
+    out[..., 1, 1] = 1
+    out[..., 0, 0] = c
+    out[..., 0, 2] = s
+    out[..., 2, 0] = -s
+    out[..., 2, 2] = c
+    return out
+
+
+def rot_z(a) -> np.ndarray:
+    a = np.asarray(a, dtype=float)
+    c, s = np.cos(a), np.sin(a)
+    out = np.zeros(a.shape + (3, 3))
+    out[..., 2, 2] = 1
+    out[..., 0, 0] = c
+    out[..., 0, 1] = -s
+    out[..., 1, 0] = s
+    out[..., 1, 1] = c
+    return out
+
+
+def rot_axis(axis, a) -> np.ndarray:
+    """Rotation by angle(s) a about a unit axis (Rodrigues)."""
+    axis = np.asarray(axis, dtype=float)
+    a = np.asarray(a, dtype=float)
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    s = np.sin(a)[..., None, None]
+    c = np.cos(a)[..., None, None]
+    return np.eye(3) + s * K + (1 - c) * (K @ K)
+
+
+def rotation_log(R) -> np.ndarray:
+    """Rotation vector (axis * angle, rad) of rotation matrices; robust near 0 and pi."""
+    R = np.asarray(R, dtype=float)
+    tr = np.clip((R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2] - 1) / 2, -1.0, 1.0)
+    angle = np.arccos(tr)
+    v = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
+                  R[..., 1, 0] - R[..., 0, 1]], axis=-1)
+    s = np.sin(angle)
+    small = angle < 1e-6
+    factor = np.where(small, 0.5 + angle ** 2 / 12, angle / (2 * np.where(small, 1, s)))
+    out = v * factor[..., None]
+    near_pi = angle > np.pi - 1e-6
+    if np.any(near_pi):
+        Rp = R[near_pi]
+        B = (Rp + np.eye(3)) / 2
+        axis = np.sqrt(np.clip(np.stack([B[:, 0, 0], B[:, 1, 1], B[:, 2, 2]], 1), 0, None))
+        i = np.argmax(axis, axis=1)
+        col = B[np.arange(len(i)), :, i]
+        axis = col / np.linalg.norm(col, axis=1, keepdims=True)
+        out[near_pi] = axis * angle[near_pi][:, None]
+    return out
+
+
+def rpy_matrix(rx, ry, rz) -> np.ndarray:
+    """R = Rz(rz) . Ry(ry) . Rx(rx), angles in radians (profile semantics)."""
+    return rot_z(rz) @ rot_y(ry) @ rot_x(rx)

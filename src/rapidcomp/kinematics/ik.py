@@ -1,0 +1,354 @@
+"""Inverse kinematics with result objects: nominal (closed form) and
+deformed (Newton on the deformed model, seeded from the nominal solution).
+
+Every target gets a status and, when it fails, a reason with "by how much".
+Nothing is silently put on another branch: the deformed solution must keep
+the target's cfx (a flip of a bit whose boundary lies within the
+singularity margin is reported as a warning, guarded by the joint-change
+bound), and cf1/cf4/cf6 are recomputed from the result and reported when
+they change.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum, IntFlag
+
+import numpy as np
+
+from .analytic import ArmGeometry, solve_branches
+from .chain import Chain
+from .conf import confdata, quadrant, wrap_pi
+from .frames import DEG, rotation_log
+from .robot import RobotModel
+
+
+class Status(IntEnum):
+    OK = 0
+    UNREACHABLE = 1
+    NO_CONFIGURATION = 2
+    JOINT_LIMIT = 3
+    NOT_CONVERGED = 4
+    JOINT_JUMP = 5
+    BRANCH_CHANGED = 6
+
+
+class Warn(IntFlag):
+    NONE = 0
+    WRIST_SINGULAR = 1      # J5 near 0
+    SHOULDER_SINGULAR = 2   # wrist centre near axis 1
+    ELBOW_SINGULAR = 4      # forearm stretched along the lower arm
+    QUADRANT_CHANGED = 8    # cf1/cf4/cf6 of the result differ from the target's
+    CFX_AT_SINGULARITY = 16  # cfx bit flipped across a singularity boundary
+
+
+_WARN_TEXT = {
+    Warn.WRIST_SINGULAR: "near wrist singularity (J5 ~ 0)",
+    Warn.SHOULDER_SINGULAR: "near shoulder singularity (wrist centre near axis 1)",
+    Warn.ELBOW_SINGULAR: "near elbow singularity (arm stretched)",
+    Warn.QUADRANT_CHANGED: "joint quadrant changed (cf1/cf4/cf6 recomputed)",
+    Warn.CFX_AT_SINGULARITY: "cfx changed across a singularity boundary",
+}
+
+
+@dataclass(frozen=True)
+class IKOptions:
+    singular_margin_deg: float = 0.5
+    max_joint_change_deg: float = 1.0
+    # A program's confdata may sit on a quadrant boundary; a solution this
+    # close to the programmed quadrant is accepted (and reported).
+    quadrant_tol_deg: float = 1e-6
+    tol_mm: float = 1e-9
+    tol_rad: float = 1e-9
+    max_iterations: int = 30
+
+
+@dataclass(frozen=True, slots=True)
+class IKResult:
+    success: bool
+    status: Status
+    reason: str | None
+    q_deg: tuple[float, ...] | None
+    conf: tuple[int, int, int, int] | None
+    residual_mm: float
+    residual_rad: float
+    iterations: int
+    joint_change_deg: tuple[float, ...] | None
+    warnings: tuple[str, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class IKBatch:
+    """Results of N targets as arrays; `result(i)` gives the i-th object."""
+
+    q_deg: np.ndarray          # (N, 6), NaN where no solution
+    status: np.ndarray         # (N,) Status
+    detail: np.ndarray         # (N,) how much (mm or deg, see reason())
+    detail_joint: np.ndarray   # (N,) joint index the detail refers to, -1 if none
+    conf: np.ndarray           # (N, 4) cf1, cf4, cf6, cfx
+    residual_mm: np.ndarray
+    residual_rad: np.ndarray
+    iterations: np.ndarray
+    warnings: np.ndarray       # (N,) Warn bits
+    joint_change_deg: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return len(self.status)
+
+    @property
+    def success(self) -> np.ndarray:
+        return self.status == Status.OK
+
+    def reason(self, i: int) -> str | None:
+        s = Status(int(self.status[i]))
+        d = float(self.detail[i])
+        j = int(self.detail_joint[i])
+        if s == Status.OK:
+            return None
+        if s == Status.UNREACHABLE:
+            return f"out of reach by {d:.3f} mm"
+        if s == Status.NO_CONFIGURATION:
+            return (f"confdata asks for a J{j + 1} quadrant no solution has "
+                    f"(nearest solution {d:.4f} deg outside it)")
+        if s == Status.JOINT_LIMIT:
+            return f"J{j + 1} beyond its limit by {d:.4f} deg"
+        if s == Status.NOT_CONVERGED:
+            return f"did not converge (residual {d:.3g} mm)"
+        if s == Status.JOINT_JUMP:
+            return f"J{j + 1} would move {d:.4f} deg, more than the allowed bound"
+        return "the solution is on another configuration branch (cfx changed)"
+
+    def result(self, i: int) -> IKResult:
+        ok = bool(self.status[i] == Status.OK)
+        q = self.q_deg[i]
+        warn = Warn(int(self.warnings[i]))
+        return IKResult(
+            ok, Status(int(self.status[i])), self.reason(i),
+            tuple(float(x) for x in q) if not np.isnan(q).any() else None,
+            tuple(int(x) for x in self.conf[i]) if not np.isnan(q).any() else None,
+            float(self.residual_mm[i]), float(self.residual_rad[i]), int(self.iterations[i]),
+            tuple(float(x) for x in self.joint_change_deg[i])
+            if self.joint_change_deg is not None and not np.isnan(q).any() else None,
+            tuple(text for flag, text in _WARN_TEXT.items() if flag in warn))
+
+
+def _turns(theta_deg: np.ndarray, cf: np.ndarray, tol: float):
+    """Shift angles by whole turns into quadrant cf. Returns angle, miss (deg)."""
+    lo = 90.0 * cf
+    k = np.ceil((lo - theta_deg) / 360.0)
+    t1 = theta_deg + 360.0 * k           # in [lo, lo + 360)
+    above = t1 - (lo + 90.0)             # > 0: outside, above the quadrant
+    below = lo - (t1 - 360.0)            # > 0: the turn below misses by this
+    exact = above < 0
+    use_below = ~exact & (below < above)
+    angle = np.where(use_below, t1 - 360.0, t1)
+    miss = np.where(exact, 0.0, np.minimum(above, below))
+    ok = miss <= tol
+    return angle, miss, ok
+
+
+class Solver:
+    """IK for one nominal robot and, optionally, its deformed copy."""
+
+    def __init__(self, nominal: RobotModel, deformed: RobotModel | None = None,
+                 options: IKOptions = IKOptions()):
+        self.nominal_robot = nominal
+        self.deformed_robot = deformed
+        self.options = options
+        self.nominal_chain = Chain.from_robot(nominal)
+        self.geometry = ArmGeometry.from_chain(self.nominal_chain)
+        self.deformed_chain = Chain.from_robot(deformed) if deformed is not None else None
+        self.lower = np.asarray(nominal.lower_deg)
+        self.upper = np.asarray(nominal.upper_deg)
+
+    # ------------------------------------------------------------ helpers
+    def _singularity_warnings(self, q: np.ndarray, wrist: np.ndarray) -> np.ndarray:
+        m = self.options.singular_margin_deg * DEG
+        w = np.zeros(len(q), dtype=int)
+        w |= np.where(np.abs(wrap_pi(q[:, 4])) < m, int(Warn.WRIST_SINGULAR), 0)
+        rho = np.hypot(wrist[:, 0], wrist[:, 1])
+        w |= np.where(rho < self.geometry.reach * np.sin(m), int(Warn.SHOULDER_SINGULAR), 0)
+        w |= np.where(np.abs(wrap_pi(q[:, 2] - self.geometry.phi)) < m,
+                      int(Warn.ELBOW_SINGULAR), 0)
+        return w
+
+    def _limits(self, q_deg: np.ndarray):
+        below = self.lower - q_deg
+        above = q_deg - self.upper
+        over = np.maximum(below, above)  # > 0 beyond a limit
+        j = np.argmax(over, axis=1)
+        return over[np.arange(len(q_deg)), j], j
+
+    # ------------------------------------------------------------ nominal
+    def solve_nominal(self, R: np.ndarray, p: np.ndarray, conf: np.ndarray) -> IKBatch:
+        """Closed-form IK of flange poses on the branch and turns of `conf`."""
+        R = np.asarray(R, float).reshape(-1, 3, 3)
+        p = np.asarray(p, float).reshape(-1, 3)
+        conf = np.asarray(conf, dtype=int).reshape(-1, 4)
+        N = len(p)
+        br = solve_branches(self.geometry, R, p)
+        cfx = conf[:, 3]
+        rows = np.arange(N)
+        # Branch index = cfx by construction in solve_branches (front/back,
+        # elbow, wrist); the computed cfx is checked rather than assumed.
+        q = br.q[rows, np.clip(cfx, 0, 7)]
+        status = np.zeros(N, dtype=int)
+        detail = np.zeros(N)
+        djoint = np.full(N, -1)
+        bad_cfx = (cfx < 0) | (cfx > 7)
+        unreachable = np.isnan(q).any(axis=1)
+        status[unreachable] = Status.UNREACHABLE
+        detail[unreachable] = br.reach_excess[rows, np.clip(cfx, 0, 7)][unreachable]
+        got = br.cfx[rows, np.clip(cfx, 0, 7)]
+        mismatch = ~unreachable & ((got != cfx) | bad_cfx)
+        status[mismatch] = Status.NO_CONFIGURATION
+        qd = np.nan_to_num(q) / DEG
+        warnings = self._singularity_warnings(np.nan_to_num(q), br.wrist)
+        # At the wrist singularity only q4 + q6 is defined: place q4 in the
+        # programmed quadrant (nearest 0) and keep the sum.
+        sing = (warnings & Warn.WRIST_SINGULAR).astype(bool)
+        if sing.any():
+            target4 = np.clip(0.0, 90.0 * conf[:, 1], 90.0 * conf[:, 1] + 89.999)
+            shift = np.where(sing, target4 - qd[:, 3], 0.0)
+            qd[:, 3] += shift
+            qd[:, 5] += shift
+        for col, cf_col in ((0, 0), (3, 1), (5, 2)):
+            angle, miss, ok = _turns(qd[:, col], conf[:, cf_col], self.options.quadrant_tol_deg)
+            qd[:, col] = angle
+            fail = ~ok & (status == Status.OK)
+            status[fail] = Status.NO_CONFIGURATION
+            detail[fail] = miss[fail]
+            djoint[fail] = col
+        over, j = self._limits(qd)
+        lim = (over > 1e-9) & (status == Status.OK)
+        status[lim] = Status.JOINT_LIMIT
+        detail[lim] = over[lim]
+        djoint[lim] = j[lim]
+        # Joint-limit failures keep their angles (the report shows them).
+        has_q = (status == Status.OK) | (status == Status.JOINT_LIMIT)
+        q_out = np.where(has_q[:, None], qd, np.nan)
+        conf_out = confdata(np.nan_to_num(q_out) * DEG, br.wrist, self.geometry.phi)
+        Rf, pf = self.nominal_chain.fk(np.nan_to_num(q_out) * DEG)
+        res_mm = np.where(has_q, np.linalg.norm(pf - p, axis=1), np.nan)
+        res_rad = np.where(has_q, np.linalg.norm(rotation_log(R @ np.swapaxes(Rf, 1, 2)),
+                                                 axis=1), np.nan)
+        warnings = np.where(has_q, warnings, 0)
+        return IKBatch(q_out, status, detail, djoint, conf_out, res_mm, res_rad,
+                       np.zeros(N, dtype=int), warnings)
+
+    # ------------------------------------------------------------ deformed
+    def solve_deformed(self, R: np.ndarray, p: np.ndarray, seed: IKBatch) -> IKBatch:
+        """Joint angles with which the deformed robot reaches R, p.
+
+        Newton's method on the deformed chain from the nominal solution,
+        which is continuous with it: no turn jumps are possible.
+        """
+        if self.deformed_chain is None:
+            raise ValueError("Solver was built without a deformed model")
+        opt = self.options
+        R = np.asarray(R, float).reshape(-1, 3, 3)
+        p = np.asarray(p, float).reshape(-1, 3)
+        N = len(p)
+        status = seed.status.copy()
+        active = status == Status.OK
+        q = np.where(active[:, None], np.nan_to_num(seed.q_deg) * DEG, 0.0)
+        iters = np.zeros(N, dtype=int)
+        res_mm = np.full(N, np.nan)
+        res_rad = np.full(N, np.nan)
+        idx = np.flatnonzero(active)
+        chain = self.deformed_chain
+        for it in range(opt.max_iterations + 1):
+            if idx.size == 0:
+                break
+            Rc, pc, J = chain.fk_jacobian(q[idx])
+            e_p = p[idx] - pc
+            e_w = rotation_log(R[idx] @ np.swapaxes(Rc, 1, 2))
+            n_p = np.linalg.norm(e_p, axis=1)
+            n_w = np.linalg.norm(e_w, axis=1)
+            res_mm[idx] = n_p
+            res_rad[idx] = n_w
+            # Stop below the acceptance tolerance: a step costs little and
+            # leaves float64 round-off (~1e-12 mm) as the only residual.
+            done = (n_p <= opt.tol_mm * 0.1) & (n_w <= opt.tol_rad * 0.1)
+            if it == opt.max_iterations:
+                break
+            idx_next = idx[~done]
+            if idx_next.size == 0:
+                break
+            e = np.concatenate([e_p, e_w], axis=1)[~done]
+            Jn = J[~done]
+            try:
+                dq = np.linalg.solve(Jn, e[..., None])[..., 0]
+            except np.linalg.LinAlgError:
+                dq = (np.linalg.pinv(Jn) @ e[..., None])[..., 0]
+            q[idx_next] += dq
+            iters[idx_next] += 1
+            idx = idx_next
+        qd = q / DEG
+        detail = seed.detail.copy()
+        djoint = seed.detail_joint.copy()
+        conv = active & (res_mm <= opt.tol_mm) & (res_rad <= opt.tol_rad)
+        nc = active & ~conv
+        status[nc] = Status.NOT_CONVERGED
+        detail[nc] = res_mm[nc]
+        change = np.where(active[:, None], qd - np.nan_to_num(seed.q_deg), np.nan)
+        big = np.nan_to_num(np.abs(change))
+        jmax = np.argmax(big, axis=1)
+        jump = (status == Status.OK) & (big[np.arange(N), jmax] > opt.max_joint_change_deg)
+        status[jump] = Status.JOINT_JUMP
+        detail[jump] = big[np.arange(N), jmax][jump]
+        djoint[jump] = jmax[jump]
+        # Configuration of the result, from the deformed robot's own wrist centre.
+        _, ps = chain.joint_frames(q)
+        conf = confdata(q, ps[:, 4], self.geometry.phi)
+        warnings = seed.warnings | self._singularity_warnings(q, ps[:, 4])
+        flipped = (conf[:, 3] ^ seed.conf[:, 3]) & 7
+        at_singularity = (
+            ((flipped & 1) == 0) | ((warnings & Warn.WRIST_SINGULAR) > 0)) & (
+            ((flipped & 2) == 0) | ((warnings & Warn.ELBOW_SINGULAR) > 0)) & (
+            ((flipped & 4) == 0) | ((warnings & Warn.SHOULDER_SINGULAR) > 0))
+        ok = status == Status.OK
+        branch = ok & (flipped != 0) & ~at_singularity
+        status[branch] = Status.BRANCH_CHANGED
+        warnings |= np.where(ok & (flipped != 0) & at_singularity,
+                             int(Warn.CFX_AT_SINGULARITY), 0)
+        quad = np.any(conf[:, :3] != seed.conf[:, :3], axis=1)
+        warnings |= np.where(ok & quad, int(Warn.QUADRANT_CHANGED), 0)
+        over, j = self._limits(qd)
+        lim = (over > 1e-9) & (status == Status.OK)
+        status[lim] = Status.JOINT_LIMIT
+        detail[lim] = over[lim]
+        djoint[lim] = j[lim]
+        q_out = np.where(active[:, None], qd, np.nan)
+        return IKBatch(q_out, status, detail, djoint, conf, res_mm, res_rad, iters,
+                       warnings, change)
+
+    def compensate(self, R: np.ndarray, p: np.ndarray, conf: np.ndarray):
+        """Nominal solution on the programmed branch, then the deformed one."""
+        nominal = self.solve_nominal(R, p, conf)
+        return nominal, self.solve_deformed(R, p, nominal)
+
+
+def solve_deformed_pinocchio(robot: RobotModel, R: np.ndarray, p: np.ndarray,
+                             q0_deg, options: IKOptions = IKOptions()):
+    """Per-target Newton with Pinocchio's FK and Jacobians (the reference
+    implementation for the batch kernel, and the benchmark's baseline).
+    Returns (q_deg, residual_mm, residual_rad, iterations)."""
+    import pinocchio as pin
+    model = robot.model
+    data = model.createData()
+    fid = robot.flange_frame
+    q = np.asarray(q0_deg, float) * DEG
+    target = pin.SE3(np.asarray(R, float), np.asarray(p, float))
+    it = 0
+    for it in range(options.max_iterations + 1):
+        pin.framesForwardKinematics(model, data, q)
+        M = data.oMf[fid]
+        e_p = target.translation - M.translation
+        e_w = pin.log3(target.rotation @ M.rotation.T)
+        if (np.linalg.norm(e_p) <= options.tol_mm * 0.1
+                and np.linalg.norm(e_w) <= options.tol_rad * 0.1) or it == options.max_iterations:
+            break
+        J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
+        q = q + np.linalg.solve(J, np.concatenate([e_p, e_w]))
+    return q / DEG, float(np.linalg.norm(e_p)), float(np.linalg.norm(e_w)), it

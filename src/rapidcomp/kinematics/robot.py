@@ -1,0 +1,138 @@
+"""Robot models on Pinocchio, the source of truth for kinematics.
+
+Geometry is in millimetres (RAPID's unit), so no length is ever converted;
+joint angles inside the model are radians, at the user edge degrees
+(frames.py converts). The nominal model is read-only by convention: nothing
+in rapidcomp mutates a RobotModel's pin.Model; a deformed model is a copy
+(profile.py).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import InputError
+from .frames import DEG, rot_y
+
+FLANGE_FRAME = "tool0"
+
+
+@dataclass(frozen=True, eq=False)
+class RobotModel:
+    """A 6-axis arm: Pinocchio model, flange frame, joint limits (deg)."""
+
+    name: str
+    model: pin.Model = field(repr=False)
+    flange_frame: int
+    lower_deg: tuple[float, ...]
+    upper_deg: tuple[float, ...]
+
+    @property
+    def nq(self) -> int:
+        return self.model.nq
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(self.model.names[1:])
+
+    def with_limits(self, lower_deg=None, upper_deg=None) -> "RobotModel":
+        """A copy with other joint limits (sources differ, e.g. J5 +-115 vs +-120)."""
+        return RobotModel(self.name, self.model, self.flange_frame,
+                          tuple(lower_deg) if lower_deg is not None else self.lower_deg,
+                          tuple(upper_deg) if upper_deg is not None else self.upper_deg)
+
+    def copy_model(self) -> pin.Model:
+        return pin.Model(self.model)
+
+    def base_M_flange(self, q_deg) -> pin.SE3:
+        """Forward kinematics with Pinocchio (one configuration, degrees)."""
+        data = self.model.createData()
+        q = np.asarray(q_deg, dtype=float) * DEG
+        pin.framesForwardKinematics(self.model, data, q)
+        return pin.SE3(data.oMf[self.flange_frame])
+
+    def within_limits(self, q_deg, tol_deg: float = 1e-9) -> np.ndarray:
+        q = np.asarray(q_deg, dtype=float)
+        return np.all((q >= np.asarray(self.lower_deg) - tol_deg)
+                      & (q <= np.asarray(self.upper_deg) + tol_deg), axis=-1)
+
+
+# The built-in ABB IRB 140. Joint origins in base coordinates at the zero pose,
+# every joint frame parallel to the base frame there (so the thermal profile's
+# per-joint displacements are in base axes). J3 is measured relative to the
+# lower arm (no parallel-link coupling).
+IRB140_ORIGINS = ((0, 0, 0), (70, 0, 352), (70, 0, 712), (70, 0, 712), (450, 0, 712),
+                  (450, 0, 712))
+IRB140_AXES = ("z", "y", "y", "x", "y", "x")
+IRB140_FLANGE = (515, 0, 712)  # rotated +90 deg about y at the zero pose
+IRB140_LOWER = (-180.0, -90.0, -230.0, -200.0, -115.0, -400.0)
+IRB140_UPPER = (180.0, 110.0, 50.0, 200.0, 115.0, 400.0)
+# Mass (kg) and centre of mass (base coordinates at the zero pose, mm) of the
+# body each joint moves; used for the gravity-compliance effect (discover).
+IRB140_BODIES = ((34.0, (30, 0, 250)), (16.0, (70, 0, 532)), (13.0, (150, 0, 712)),
+                 (4.0, (330, 0, 712)), (1.5, (470, 0, 712)), (0.3, (505, 0, 712)))
+GRAVITY_MM_S2 = 9810.0
+
+_JOINT_TYPES = {"x": pin.JointModelRX, "y": pin.JointModelRY, "z": pin.JointModelRZ}
+
+
+def _body_inertia(mass: float, com_local: np.ndarray) -> pin.Inertia:
+    # Only mass and centre of mass matter for the gravity term; a small
+    # sphere-like rotational inertia keeps the model physically valid.
+    radius = 50.0
+    return pin.Inertia(mass, com_local, np.eye(3) * 0.4 * mass * radius ** 2)
+
+
+def irb140() -> RobotModel:
+    model = pin.Model()
+    model.name = "IRB140"
+    model.gravity = pin.Motion(np.array([0.0, 0.0, -GRAVITY_MM_S2]), np.zeros(3))
+    parent = 0
+    prev = np.zeros(3)
+    for i, (origin, axis) in enumerate(zip(IRB140_ORIGINS, IRB140_AXES)):
+        origin = np.asarray(origin, dtype=float)
+        placement = pin.SE3(np.eye(3), origin - prev)
+        jid = model.addJoint(parent, _JOINT_TYPES[axis](), placement, f"J{i + 1}",
+                             np.array([1e9]), np.array([1e9]),
+                             np.array([IRB140_LOWER[i] * DEG]), np.array([IRB140_UPPER[i] * DEG]))
+        mass, com = IRB140_BODIES[i]
+        model.appendBodyToJoint(jid, _body_inertia(mass, np.asarray(com, float) - origin),
+                                pin.SE3.Identity())
+        model.addJointFrame(jid)
+        parent = jid
+        prev = origin
+    flange = pin.SE3(rot_y(np.pi / 2), np.asarray(IRB140_FLANGE, float) - prev)
+    fid = model.addFrame(pin.Frame(FLANGE_FRAME, parent, flange, pin.FrameType.OP_FRAME))
+    return RobotModel("IRB140", model, fid, IRB140_LOWER, IRB140_UPPER)
+
+
+def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
+    """A 6-axis arm from URDF (metres), converted to millimetres here."""
+    path = Path(path)
+    try:
+        model = pin.buildModelFromUrdf(str(path))
+    except Exception as exc:  # pinocchio raises ValueError/RuntimeError variants
+        raise InputError(str(path), f"cannot load URDF: {exc}") from None
+    if model.nq != 6 or model.njoints != 7 or any(j.nq != 1 for j in model.joints[1:]):
+        raise InputError(str(path), f"expected a serial arm of 6 revolute joints, "
+                                    f"found {model.njoints - 1} joints with nq={model.nq}")
+    for i in range(1, model.njoints):
+        p = model.jointPlacements[i]
+        model.jointPlacements[i] = pin.SE3(p.rotation, p.translation * 1000.0)
+        inert = model.inertias[i]
+        model.inertias[i] = pin.Inertia(inert.mass, inert.lever * 1000.0,
+                                        inert.inertia * 1e6)
+    for f in model.frames:
+        f.placement = pin.SE3(f.placement.rotation, f.placement.translation * 1000.0)
+    model.gravity = pin.Motion(np.array([0.0, 0.0, -GRAVITY_MM_S2]), np.zeros(3))
+    names = [flange] if flange else [FLANGE_FRAME, "flange", "tool_flange", "ee_link"]
+    fid = next((model.getFrameId(n) for n in names if model.existFrame(n)), None)
+    if fid is None:
+        raise InputError(str(path), f"no flange frame: expected one named {', '.join(names)}")
+    lower = tuple(float(x) / DEG for x in model.lowerPositionLimit)
+    upper = tuple(float(x) / DEG for x in model.upperPositionLimit)
+    return RobotModel(model.name or path.stem, model, fid, lower, upper)
