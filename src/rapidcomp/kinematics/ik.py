@@ -219,6 +219,14 @@ class Solver:
             status[fail] = Status.NO_CONFIGURATION
             detail[fail] = miss[fail]
             djoint[fail] = col
+        # Axes without a turn counter in confdata (J2, J3, J5) take the turn
+        # that lies within their limits (J3 of the IRB 140 spans -230..+50).
+        for col in (1, 2, 4):
+            for shift in (-360.0, 360.0):
+                moved = qd[:, col] + shift
+                better = ((qd[:, col] < self.lower[col]) | (qd[:, col] > self.upper[col])) & (
+                    moved >= self.lower[col]) & (moved <= self.upper[col])
+                qd[:, col] = np.where(better, moved, qd[:, col])
         over, j = self._limits(qd)
         lim = (over > 1e-9) & (status == Status.OK)
         status[lim] = Status.JOINT_LIMIT

@@ -1,0 +1,84 @@
+"""Thermal profile parsing and semantics (hand-computed displacements)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rapidcomp.errors import InputError
+from rapidcomp.kinematics.profile import deform, parse_profile, read_profile
+from rapidcomp.kinematics.robot import irb140
+
+from conftest import FIXTURES
+
+HEAD = "joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg\n"
+ROBOT = irb140()
+
+
+def test_paper_tables_1_and_2():
+    prof = read_profile(FIXTURES / "warm.csv")
+    assert prof.get("J1").d_mm == (-0.0200698, 0.000154, -0.05297)
+    assert prof.get("J1").r_deg == (0, -0.011, -0.0137)
+    assert prof.get("J3").d_mm == (0.1008636, 0.1148552, -0.001420766)
+    assert prof.get("J5").is_zero and prof.get("flange").is_zero
+
+
+def test_translation_of_last_joint_shifts_flange():
+    d = deform(ROBOT, parse_profile(HEAD + "J6,-0.0162926,0,0,0,0,0\n", "p.csv"))
+    assert np.allclose(d.base_M_flange([0] * 6).translation, (515 - 0.0162926, 0, 712), atol=1e-12)
+
+
+def test_rotation_about_joint_origin():
+    theta = 0.0108
+    d = deform(ROBOT, parse_profile(HEAD + f"J2,0,0,0,{theta},0,0\n", "p.csv"))
+    t = math.radians(theta)
+    # J2 at (70, 0, 352); the flange is (445, 0, 360) from it, rotated about x.
+    expected = (515, -360 * math.sin(t), 352 + 360 * math.cos(t))
+    assert np.allclose(d.base_M_flange([0] * 6).translation, expected, atol=1e-12)
+
+
+def test_rotate_then_translate():
+    theta = 0.01
+    d = deform(ROBOT, parse_profile(HEAD + f"J3,0.1,0.2,0,0,0,{theta}\n", "p.csv"))
+    t = math.radians(theta)
+    expected = (70 + 0.1 + 445 * math.cos(t), 0.2 + 445 * math.sin(t), 712)
+    assert np.allclose(d.base_M_flange([0] * 6).translation, expected, atol=1e-12)
+
+
+def test_flange_row_and_missing_rows():
+    d = deform(ROBOT, parse_profile(HEAD + "flange,0,0,0.05,0,0,0\n", "p.csv"))
+    # The flange frame's z is base x at the zero pose.
+    assert np.allclose(d.base_M_flange([0] * 6).translation, (515.05, 0, 712), atol=1e-12)
+
+
+def test_nominal_model_is_untouched():
+    before = [ROBOT.model.jointPlacements[i].copy() for i in range(1, 7)]
+    deform(ROBOT, read_profile(FIXTURES / "warm.csv"))
+    assert all(before[i - 1] == ROBOT.model.jointPlacements[i] for i in range(1, 7))
+
+
+@pytest.mark.parametrize("body,line,phrase", [
+    ("J7,0,0,0,0,0,0\n", 2, "unknown joint 'J7'"),
+    ("J1,0,0,0,0,0,0\nJ1,0,0,0,0,0,0\n", 3, "duplicate row for J1 (first on line 2)"),
+    ("J1,0,x,0,0,0,0\n", 2, "dy_mm is 'x', expected a number"),
+    ("J1,0,nan,0,0,0,0\n", 2, "dy_mm is nan, expected a finite number"),
+    ("J1,6,0,0,0,0,0\n", 2, "shift of 6.000 mm exceeds 5.0 mm"),
+    ("J1,0,0,0,0,1.5,0\n", 2, "rotation of 1.5 deg exceeds 1.0 deg"),
+    ("J1,0,0,0,0,0\n", 2, "6 values, expected 7"),
+])
+def test_profile_errors_name_file_and_line(body, line, phrase):
+    with pytest.raises(InputError) as exc:
+        parse_profile(HEAD + body, "warm.csv")
+    assert exc.value.format().startswith(f"warm.csv:{line}: ")
+    assert phrase in exc.value.format()
+
+
+def test_missing_column():
+    with pytest.raises(InputError) as exc:
+        parse_profile("joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg\nJ1,0,0,0,0,0\n", "w.csv")
+    assert exc.value.format().startswith("w.csv:1: missing column(s) rz_deg")
+
+
+def test_force_allows_large_values():
+    prof = parse_profile(HEAD + "J1,6,0,0,0,1.5,0\n", "w.csv", force=True)
+    assert prof.get("J1").d_mm[0] == 6
