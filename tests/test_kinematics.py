@@ -242,3 +242,28 @@ def test_deformation_pushing_past_a_limit_fails_with_the_amount():
     _, deformed = Solver(ROBOT, DEFORMED).compensate(R, p, [oracle_conf(q)])
     assert deformed.status[0] == Status.JOINT_LIMIT
     assert deformed.reason(0).startswith("J6 beyond its limit by 0.0")
+
+
+def test_urdf_arm_goes_through_the_same_code():
+    from rapidcomp.kinematics.robot import load_urdf
+    urdf = load_urdf(FIXTURES / "robots" / "irb140.urdf")
+    assert urdf.lower_deg == pytest.approx(ROBOT.lower_deg)
+    rng = np.random.default_rng(5)
+    q = np.array([x for x in random_q(rng, 300) if regular(x)])
+    for i in range(0, len(q), 17):
+        a, b = urdf.base_M_flange(q[i]), ROBOT.base_M_flange(q[i])
+        assert np.allclose(a.translation, b.translation, atol=1e-9)
+        assert np.allclose(a.rotation, b.rotation, atol=1e-12)
+    conf = np.array([oracle_conf(x) for x in q])
+    R, p = Chain.from_robot(urdf).fk(q * DEG)
+    nominal, deformed = Solver(urdf, deform(urdf, WARM)).compensate(R, p, conf)
+    assert np.max(np.abs(nominal.q_deg - q)) < 1e-7
+    assert deformed.success.all() or set(deformed.status[~deformed.success]) <= {
+        Status.JOINT_LIMIT, Status.JOINT_JUMP, Status.NOT_CONVERGED}
+
+
+def test_urdf_errors():
+    from rapidcomp.errors import InputError
+    from rapidcomp.kinematics.robot import load_urdf
+    with pytest.raises(InputError):
+        load_urdf(FIXTURES / "robots" / "missing.urdf")

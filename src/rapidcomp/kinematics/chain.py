@@ -19,6 +19,22 @@ _AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0),
          "JointModelRZ": (0.0, 0.0, 1.0)}
 
 
+def _rotate_columns(R: np.ndarray, axis_index: int, axis: np.ndarray, q: np.ndarray):
+    """R @ Rot(axis, q) for a batch. For x/y/z axes only two columns mix,
+    which is several times faster than a stacked 3x3 matrix product."""
+    if axis_index < 0:
+        return R @ rot_axis(axis, q)
+    c = np.cos(q)[:, None]
+    s = np.sin(q)[:, None]
+    out = np.empty(R.shape)
+    a, b = [(1, 2), (2, 0), (0, 1)][axis_index]
+    ca, cb = R[:, :, a], R[:, :, b]
+    out[:, :, axis_index] = R[:, :, axis_index]
+    out[:, :, a] = ca * c + cb * s
+    out[:, :, b] = cb * c - ca * s
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class Chain:
     rot: np.ndarray      # (n, 3, 3) joint placement rotations (parent_M_joint)
@@ -65,10 +81,25 @@ class Chain:
         ps = np.empty((N, n, 3))
         for i in range(n):
             p = p + R @ self.trans[i]
-            R = (R @ self.rot[i]) @ rot_axis(self.axes[i], q[:, i])
+            if not self._identity[i]:
+                R = R @ self.rot[i]
+            R = _rotate_columns(R, self._axis_index[i], self.axes[i], q[:, i])
             Rs[:, i] = R
             ps[:, i] = p
         return Rs, ps
+
+    @property
+    def _identity(self) -> tuple[bool, ...]:
+        return tuple(bool(np.array_equal(r, np.eye(3))) for r in self.rot)
+
+    @property
+    def _axis_index(self) -> tuple[int, ...]:
+        """0/1/2 for joints about x/y/z, -1 for other axes."""
+        out = []
+        for a in self.axes:
+            hits = [k for k in range(3) if np.array_equal(a, np.eye(3)[k])]
+            out.append(hits[0] if hits else -1)
+        return tuple(out)
 
     def fk(self, q: np.ndarray):
         """base_M_flange for q (N, n) radians: R (N, 3, 3), p (N, 3) mm."""

@@ -77,40 +77,30 @@ def matrix_to_quat_wxyz(R) -> np.ndarray:
     return q.reshape(shape + (4,))
 
 
-def rot_x(a) -> np.ndarray:
+def _principal_rotation(a, axis: int) -> np.ndarray:
+    """Rotation by angle(s) a about base axis 0 (x), 1 (y) or 2 (z)."""
     a = np.asarray(a, dtype=float)
     c, s = np.cos(a), np.sin(a)
+    i, j = ((1, 2), (2, 0), (0, 1))[axis]
     out = np.zeros(a.shape + (3, 3))
-    out[..., 0, 0] = 1
-    out[..., 1, 1] = c
-    out[..., 1, 2] = -s
-    out[..., 2, 1] = s
-    out[..., 2, 2] = c
+    out[..., axis, axis] = 1
+    out[..., i, i] = c
+    out[..., i, j] = -s
+    out[..., j, i] = s
+    out[..., j, j] = c
     return out
+
+
+def rot_x(a) -> np.ndarray:
+    return _principal_rotation(a, 0)
 
 
 def rot_y(a) -> np.ndarray:
-    a = np.asarray(a, dtype=float)
-    c, s = np.cos(a), np.sin(a)
-    out = np.zeros(a.shape + (3, 3))
-    out[..., 1, 1] = 1
-    out[..., 0, 0] = c
-    out[..., 0, 2] = s
-    out[..., 2, 0] = -s
-    out[..., 2, 2] = c
-    return out
+    return _principal_rotation(a, 1)
 
 
 def rot_z(a) -> np.ndarray:
-    a = np.asarray(a, dtype=float)
-    c, s = np.cos(a), np.sin(a)
-    out = np.zeros(a.shape + (3, 3))
-    out[..., 2, 2] = 1
-    out[..., 0, 0] = c
-    out[..., 0, 1] = -s
-    out[..., 1, 0] = s
-    out[..., 1, 1] = c
-    return out
+    return _principal_rotation(a, 2)
 
 
 def rot_axis(axis, a) -> np.ndarray:

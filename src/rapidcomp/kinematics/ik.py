@@ -60,7 +60,9 @@ class IKOptions:
     quadrant_tol_deg: float = 1e-6
     tol_mm: float = 1e-9
     tol_rad: float = 1e-9
-    max_iterations: int = 30
+    # Newton from the nominal seed converges in 2-4 steps; more means the
+    # warm robot cannot reach the pose (typically the arm fully stretched).
+    max_iterations: int = 12
 
 
 @dataclass(frozen=True, slots=True)
@@ -264,6 +266,7 @@ class Solver:
         res_mm = np.full(N, np.nan)
         res_rad = np.full(N, np.nan)
         idx = np.flatnonzero(active)
+        prev = np.full(N, np.inf)
         chain = self.deformed_chain
         for it in range(opt.max_iterations + 1):
             if idx.size == 0:
@@ -275,9 +278,12 @@ class Solver:
             n_w = np.linalg.norm(e_w, axis=1)
             res_mm[idx] = n_p
             res_rad[idx] = n_w
-            # Stop below the acceptance tolerance: a step costs little and
-            # leaves float64 round-off (~1e-12 mm) as the only residual.
-            done = (n_p <= opt.tol_mm * 0.1) & (n_w <= opt.tol_rad * 0.1)
+            # Stop below the acceptance tolerance, or once within it when a
+            # step no longer halves the error (float64 round-off reached).
+            within = (n_p <= opt.tol_mm) & (n_w <= opt.tol_rad)
+            stalled = within & (n_p + opt.tol_mm * 1e-3 * n_w > 0.5 * prev[idx])
+            done = ((n_p <= opt.tol_mm * 0.1) & (n_w <= opt.tol_rad * 0.1)) | stalled
+            prev[idx] = n_p + opt.tol_mm * 1e-3 * n_w
             if it == opt.max_iterations:
                 break
             idx_next = idx[~done]
