@@ -43,3 +43,51 @@ def inspect(program: str, as_json: bool) -> None:
         click.echo(json.dumps(rep, indent=2))
     else:
         click.echo(render_text(rep), nl=False)
+
+
+def _load_robot(robot: str | None):
+    from .kinematics.robot import irb140, load_urdf
+    if robot is None or robot.lower() == "irb140":
+        return irb140()
+    return load_urdf(robot)
+
+
+@main.command()
+@click.argument("program", type=click.Path(dir_okay=False))
+@click.option("--profile", required=True, type=click.Path(dir_okay=False),
+              help="Thermal profile CSV (joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg).")
+@click.option("--with", "with_modules", multiple=True, type=click.Path(dir_okay=False),
+              help="Other modules holding tool/work object/target data (repeatable).")
+@click.option("--robot", default=None, help="irb140 (default) or a URDF file.")
+@click.option("--force", is_flag=True, help="Accept profile values beyond 5 mm / 1 deg.")
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def check(program, profile, with_modules, robot, force, as_json) -> None:
+    """Predict each target's error on the warm robot; rewrite nothing.
+
+    Exit code 1 when some targets could not be compensated.
+    """
+    from dataclasses import asdict
+
+    from .compensate.check import check as run_check
+    from .compensate.check import render_text, summary
+    from .kinematics.analytic import UnsupportedGeometry
+    from .kinematics.ik import Solver
+    from .kinematics.profile import deform, read_profile
+    from .rapid.parse import parse_file
+    try:
+        files = [parse_file(program)] + [parse_file(m) for m in with_modules]
+        nominal = _load_robot(robot)
+        prof = read_profile(profile, force=force, joint_names=nominal.joint_names)
+        solver = Solver(nominal, deform(nominal, prof))
+    except RapidcompError as exc:
+        _fail(exc)
+    except UnsupportedGeometry as exc:
+        _fail(RapidcompError(f"{robot}: {exc}"))
+    rows = run_check(files, solver)
+    summ = summary(rows)
+    if as_json:
+        click.echo(json.dumps({"program": program, "summary": summ,
+                               "targets": [asdict(r) for r in rows]}, indent=2))
+    else:
+        click.echo(render_text(rows, summ, program), nl=False)
+    sys.exit(EXIT_PARTIAL if summ["not_compensable"] else EXIT_OK)

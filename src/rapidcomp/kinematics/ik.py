@@ -23,6 +23,9 @@ from .frames import DEG, rotation_log
 from .robot import RobotModel
 
 
+_DAMPING = 1e-12
+
+
 class Status(IntEnum):
     OK = 0
     UNREACHABLE = 1
@@ -291,10 +294,12 @@ class Solver:
                 break
             e = np.concatenate([e_p, e_w], axis=1)[~done]
             Jn = J[~done]
-            try:
-                dq = np.linalg.solve(Jn, e[..., None])[..., 0]
-            except np.linalg.LinAlgError:
-                dq = (np.linalg.pinv(Jn) @ e[..., None])[..., 0]
+            # Damped least squares: identical to Newton where J is well
+            # conditioned (the damping is 1e-12 of typical singular values
+            # squared), bounded steps where it is singular (J5 = 0 exactly).
+            Jt = np.swapaxes(Jn, 1, 2)
+            dq = np.linalg.solve(Jt @ Jn + _DAMPING * np.eye(Jn.shape[2]),
+                                 (Jt @ e[..., None]))[..., 0]
             q[idx_next] += dq
             iters[idx_next] += 1
             idx = idx_next
@@ -336,6 +341,26 @@ class Solver:
         q_out = np.where(active[:, None], qd, np.nan)
         return IKBatch(q_out, status, detail, djoint, conf, res_mm, res_rad, iters,
                        warnings, change)
+
+    def seed_from_joints(self, q_deg: np.ndarray):
+        """Nominal flange poses of joint vectors (MoveAbsJ targets) and a seed
+        IKBatch for solve_deformed: the intended pose is where the ideal
+        robot puts the flange with these joints."""
+        q_deg = np.asarray(q_deg, float).reshape(-1, 6)
+        N = len(q_deg)
+        q = q_deg * DEG
+        R, p = self.nominal_chain.fk(q)
+        _, ps = self.nominal_chain.joint_frames(q)
+        status = np.zeros(N, dtype=int)
+        detail = np.zeros(N)
+        over, j = self._limits(q_deg)
+        lim = over > 1e-9
+        status[lim] = Status.JOINT_LIMIT
+        detail[lim] = over[lim]
+        seed = IKBatch(q_deg.copy(), status, detail, np.where(lim, j, -1),
+                       confdata(q, ps[:, 4], self.geometry.phi), np.zeros(N), np.zeros(N),
+                       np.zeros(N, dtype=int), self._singularity_warnings(q, ps[:, 4]))
+        return R, p, seed
 
     def compensate(self, R: np.ndarray, p: np.ndarray, conf: np.ndarray):
         """Nominal solution on the programmed branch, then the deformed one."""

@@ -1,0 +1,1 @@
+"""Compensation of RAPID programs: resolve target poses, predict, rewrite."""
