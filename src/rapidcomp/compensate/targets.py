@@ -67,41 +67,43 @@ class Resolver:
         return self.routine_decls.get((routine.lower(), name.lower())) or self.decls.get(name.lower())
 
     # ------------------------------------------------------------ tool / wobj
+    def _data(self, expr, routine: str, builtin: str, cls, what: str):
+        """The literal value of a tool/work object argument, None for the
+        built-in one, or a reason string."""
+        if not (isinstance(expr, A.Ref) and not expr.selectors):
+            return f"the {what} is not a plain data name"
+        if expr.name.lower() == builtin:
+            return None
+        d = self._lookup(expr.name, routine)
+        if d is None:
+            return f"{what} {expr.name} is not declared in the given modules"
+        if not isinstance(d.value, cls):
+            return f"{what} {expr.name} has no literal value"
+        return d.value
+
     def tool(self, expr, routine: str):
-        """(tframe pose) or a reason string."""
+        """tframe as (R, p), or a reason string."""
         if expr is None:
             return "no tool argument"
-        if isinstance(expr, A.Ref) and not expr.selectors:
-            if expr.name.lower() == "tool0":
-                return IDENTITY_POSE
-            d = self._lookup(expr.name, routine)
-            if d is None:
-                return f"tool {expr.name} is not declared in the given modules"
-            if not isinstance(d.value, ToolData):
-                return f"tool {expr.name} has no literal value"
-            if d.value.robhold.value is not True:
-                return f"tool {expr.name} is a stationary tool (robhold FALSE)"
-            return _pose(d.value.tframe)
-        return "the tool is not a plain data name"
+        t = self._data(expr, routine, "tool0", ToolData, "tool")
+        if t is None or isinstance(t, str):
+            return IDENTITY_POSE if t is None else t
+        if t.robhold.value is not True:
+            return f"tool {expr.name} is a stationary tool (robhold FALSE)"
+        return _pose(t.tframe)
 
     def wobj(self, expr, routine: str):
+        """uframe . oframe as (R, p), or a reason string."""
         if expr is None:
             return IDENTITY_POSE
-        if isinstance(expr, A.Ref) and not expr.selectors:
-            if expr.name.lower() == "wobj0":
-                return IDENTITY_POSE
-            d = self._lookup(expr.name, routine)
-            if d is None:
-                return f"work object {expr.name} is not declared in the given modules"
-            if not isinstance(d.value, WobjData):
-                return f"work object {expr.name} has no literal value"
-            w = d.value
-            if w.robhold.value is not False:
-                return f"work object {expr.name} is held by the robot (stationary tool set-up)"
-            if w.ufprog.value is not True or w.ufmec.value != "":
-                return f"work object {expr.name} is coordinated with a mechanical unit"
-            return _compose(_pose(w.uframe), _pose(w.oframe))
-        return "the work object is not a plain data name"
+        w = self._data(expr, routine, "wobj0", WobjData, "work object")
+        if w is None or isinstance(w, str):
+            return IDENTITY_POSE if w is None else w
+        if w.robhold.value is not False:
+            return f"work object {expr.name} is held by the robot (stationary tool set-up)"
+        if w.ufprog.value is not True or w.ufmec.value != "":
+            return f"work object {expr.name} is coordinated with a mechanical unit"
+        return _compose(_pose(w.uframe), _pose(w.oframe))
 
     # ------------------------------------------------------------ targets
     def _value(self, expr, routine: str, loop_env: dict[str, int]):
