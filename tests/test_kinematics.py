@@ -267,3 +267,20 @@ def test_urdf_errors():
     from rapidcomp.kinematics.robot import load_urdf
     with pytest.raises(InputError):
         load_urdf(FIXTURES / "robots" / "missing.urdf")
+
+
+def test_quaternion_matrix_round_trip_rapid_order():
+    from rapidcomp.kinematics.frames import matrix_to_quat_wxyz, quat_wxyz_to_matrix
+    # RAPID's [0.707107,0,0.707107,0] is +90 deg about y.
+    assert np.allclose(quat_wxyz_to_matrix([0.707107, 0, 0.707107, 0]), RY90, atol=1e-6)
+    rng = np.random.default_rng(7)
+    q = rng.normal(size=(500, 4))
+    q[:5] = [[0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1], [1e-9, 1, 1, 0], [1, 0, 0, 0]]  # 180 deg cases
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q[q[:, 0] < 0] *= -1
+    back = matrix_to_quat_wxyz(quat_wxyz_to_matrix(q))
+    same = np.minimum(np.abs(back - q).max(axis=1), np.abs(back + q).max(axis=1))
+    assert same.max() < 1e-12
+    for i in range(0, 500, 50):  # against Pinocchio's own conversion (x,y,z,w order)
+        w, x, y, z = q[i]
+        assert np.allclose(pin.Quaternion(w, x, y, z).matrix(), quat_wxyz_to_matrix(q[i]), atol=1e-12)

@@ -16,14 +16,6 @@ import numpy as np
 DEG = np.pi / 180.0
 
 
-def deg2rad(x):
-    return np.asarray(x, dtype=float) * DEG
-
-
-def rad2deg(x):
-    return np.asarray(x, dtype=float) / DEG
-
-
 def quat_wxyz_to_matrix(q) -> np.ndarray:
     """Rotation matrix of a (possibly unnormalised) RAPID quaternion w,x,y,z."""
     q = np.asarray(q, dtype=float)

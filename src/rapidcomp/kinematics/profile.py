@@ -68,10 +68,6 @@ class ThermalProfile:
     def is_zero(self) -> bool:
         return all(d.is_zero for _, d in self.displacements)
 
-    @classmethod
-    def zero(cls) -> "ThermalProfile":
-        return cls((), "<zero>")
-
 
 def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "J5", "J6"),
                   force: bool = False) -> ThermalProfile:

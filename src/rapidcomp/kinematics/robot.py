@@ -55,11 +55,6 @@ class RobotModel:
         pin.framesForwardKinematics(self.model, data, q)
         return pin.SE3(data.oMf[self.flange_frame])
 
-    def within_limits(self, q_deg, tol_deg: float = 1e-9) -> np.ndarray:
-        q = np.asarray(q_deg, dtype=float)
-        return np.all((q >= np.asarray(self.lower_deg) - tol_deg)
-                      & (q <= np.asarray(self.upper_deg) + tol_deg), axis=-1)
-
 
 # The built-in ABB IRB 140. Joint origins in base coordinates at the zero pose,
 # every joint frame parallel to the base frame there (so the thermal profile's

@@ -61,10 +61,6 @@ class _Numeric:
     def _fields(self, lo: int, hi: int) -> tuple[Field, ...]:
         return tuple(self._field(i) for i in range(lo, hi))
 
-    @property
-    def fields(self) -> tuple[Field, ...]:
-        return self._fields(0, len(self.values))
-
 
 @dataclass(frozen=True, slots=True)
 class RobTarget(_Numeric):
