@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rapidcomp.kinematics.analytic import ArmGeometry
 from rapidcomp.kinematics.chain import Chain
 from rapidcomp.kinematics.conf import confdata
 from rapidcomp.kinematics.frames import DEG
@@ -34,6 +35,7 @@ def targets(n: int, seed: int = 0):
     q = rng.uniform(lo, hi, size=(n, 6))
     q[:, 4] = np.where(np.abs(q[:, 4]) < 10, 10 * np.sign(q[:, 4] + 1e-9), q[:, 4])
     chain = Chain.from_robot(robot)
+    phi = ArmGeometry.from_chain(chain).phi
     R = np.empty((n, 3, 3))
     p = np.empty((n, 3))
     conf = np.empty((n, 4), dtype=int)
@@ -41,7 +43,7 @@ def targets(n: int, seed: int = 0):
         qq = q[s:s + CHUNK] * DEG
         R[s:s + CHUNK], p[s:s + CHUNK] = chain.fk(qq)
         _, ps = chain.joint_frames(qq)
-        conf[s:s + CHUNK] = confdata(qq, ps[:, 4], -np.pi / 2)
+        conf[s:s + CHUNK] = confdata(qq, ps[:, 4], phi)
     return q, R, p, conf
 
 

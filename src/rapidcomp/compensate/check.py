@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics.chain import Chain
-from ..kinematics.frames import DEG, rotation_log
+from ..kinematics.frames import DEG
 from ..kinematics.ik import IKBatch, Solver
 from ..rapid.model import ParsedFile
 from .targets import TargetUse, target_uses
@@ -36,10 +36,8 @@ class CheckRow:
 
 
 def _errors(chain: Chain, q_deg: np.ndarray, R: np.ndarray, p: np.ndarray):
-    Rf, pf = chain.fk(np.nan_to_num(q_deg) * DEG)
-    pos = np.linalg.norm(pf - p, axis=1)
-    rot = np.linalg.norm(rotation_log(R @ np.swapaxes(Rf, 1, 2)), axis=1) / DEG
-    return pos, rot
+    pos, rot = chain.pose_error(np.nan_to_num(q_deg) * DEG, R, p)
+    return pos, rot / DEG
 
 
 def check(files: list[ParsedFile], solver: Solver) -> list[CheckRow]:

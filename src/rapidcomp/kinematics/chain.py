@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .frames import rot_axis
+from .frames import rot_axis, rotation_log
 from .robot import RobotModel
 
 _AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0),
@@ -117,3 +117,10 @@ class Chain:
         v = np.cross(z, pe[:, None, :] - ps)
         J = np.concatenate([v, z], axis=2).transpose(0, 2, 1)
         return R @ self.flange_rot, pe, J
+
+    def pose_error(self, q: np.ndarray, R: np.ndarray, p: np.ndarray):
+        """Distance (mm) and rotation angle (rad) from the flange at q
+        (N, n radians) to the poses R (N, 3, 3), p (N, 3)."""
+        Rf, pf = self.fk(q)
+        return (np.linalg.norm(pf - p, axis=1),
+                np.linalg.norm(rotation_log(R @ np.swapaxes(Rf, 1, 2)), axis=1))

@@ -177,12 +177,16 @@ class Solver:
                       int(Warn.ELBOW_SINGULAR), 0)
         return w
 
-    def _limits(self, q_deg: np.ndarray):
-        below = self.lower - q_deg
-        above = q_deg - self.upper
-        over = np.maximum(below, above)  # > 0 beyond a limit
-        j = np.argmax(over, axis=1)
-        return over[np.arange(len(q_deg)), j], j
+    def _mark_limits(self, q_deg, status, detail, djoint) -> None:
+        """Mark rows still OK whose joints lie beyond a limit (in place),
+        with the amount and the joint."""
+        over_all = np.maximum(self.lower - q_deg, q_deg - self.upper)  # > 0 beyond a limit
+        j = np.argmax(over_all, axis=1)
+        over = over_all[np.arange(len(q_deg)), j]
+        lim = (over > 1e-9) & (status == Status.OK)
+        status[lim] = Status.JOINT_LIMIT
+        detail[lim] = over[lim]
+        djoint[lim] = j[lim]
 
     # ------------------------------------------------------------ nominal
     def solve_nominal(self, R: np.ndarray, p: np.ndarray, conf: np.ndarray) -> IKBatch:
@@ -232,19 +236,14 @@ class Solver:
                 better = ((qd[:, col] < self.lower[col]) | (qd[:, col] > self.upper[col])) & (
                     moved >= self.lower[col]) & (moved <= self.upper[col])
                 qd[:, col] = np.where(better, moved, qd[:, col])
-        over, j = self._limits(qd)
-        lim = (over > 1e-9) & (status == Status.OK)
-        status[lim] = Status.JOINT_LIMIT
-        detail[lim] = over[lim]
-        djoint[lim] = j[lim]
+        self._mark_limits(qd, status, detail, djoint)
         # Joint-limit failures keep their angles (the report shows them).
         has_q = (status == Status.OK) | (status == Status.JOINT_LIMIT)
         q_out = np.where(has_q[:, None], qd, np.nan)
         conf_out = confdata(np.nan_to_num(q_out) * DEG, br.wrist, self.geometry.phi)
-        Rf, pf = self.nominal_chain.fk(np.nan_to_num(q_out) * DEG)
-        res_mm = np.where(has_q, np.linalg.norm(pf - p, axis=1), np.nan)
-        res_rad = np.where(has_q, np.linalg.norm(rotation_log(R @ np.swapaxes(Rf, 1, 2)),
-                                                 axis=1), np.nan)
+        err_mm, err_rad = self.nominal_chain.pose_error(np.nan_to_num(q_out) * DEG, R, p)
+        res_mm = np.where(has_q, err_mm, np.nan)
+        res_rad = np.where(has_q, err_rad, np.nan)
         warnings = np.where(has_q, warnings, 0)
         return IKBatch(q_out, status, detail, djoint, conf_out, res_mm, res_rad,
                        np.zeros(N, dtype=int), warnings)
@@ -333,11 +332,7 @@ class Solver:
                              int(Warn.CFX_AT_SINGULARITY), 0)
         quad = np.any(conf[:, :3] != seed.conf[:, :3], axis=1)
         warnings |= np.where(ok & quad, int(Warn.QUADRANT_CHANGED), 0)
-        over, j = self._limits(qd)
-        lim = (over > 1e-9) & (status == Status.OK)
-        status[lim] = Status.JOINT_LIMIT
-        detail[lim] = over[lim]
-        djoint[lim] = j[lim]
+        self._mark_limits(qd, status, detail, djoint)
         q_out = np.where(active[:, None], qd, np.nan)
         return IKBatch(q_out, status, detail, djoint, conf, res_mm, res_rad, iters,
                        warnings, change)
@@ -353,11 +348,9 @@ class Solver:
         _, ps = self.nominal_chain.joint_frames(q)
         status = np.zeros(N, dtype=int)
         detail = np.zeros(N)
-        over, j = self._limits(q_deg)
-        lim = over > 1e-9
-        status[lim] = Status.JOINT_LIMIT
-        detail[lim] = over[lim]
-        seed = IKBatch(q_deg.copy(), status, detail, np.where(lim, j, -1),
+        djoint = np.full(N, -1)
+        self._mark_limits(q_deg, status, detail, djoint)
+        seed = IKBatch(q_deg.copy(), status, detail, djoint,
                        confdata(q, ps[:, 4], self.geometry.phi), np.zeros(N), np.zeros(N),
                        np.zeros(N, dtype=int), self._singularity_warnings(q, ps[:, 4]))
         return R, p, seed

@@ -227,7 +227,7 @@ _FAST = {"robtarget": _shape_regex((3, 4, 4, 6)), "jointtarget": _shape_regex((6
 _COMPACT = {"robtarget": RobTarget, "jointtarget": JointTarget}
 
 
-def _compact(t: str, expr) -> Record:
+def _compact(t: str, expr, where: str) -> Record:
     """An all-numeric record, by one regex match when the value is a NumAgg."""
     cls = _COMPACT[t]
     if isinstance(expr, A.NumAgg):
@@ -235,7 +235,7 @@ def _compact(t: str, expr) -> Record:
         if m is not None:
             texts = m.groups()
             return cls(tuple(map(float, texts)), texts, m.regs[1:], expr.span)
-    nested = _walk(SHAPES[t], expr, t)
+    nested = _walk(SHAPES[t], expr, where)
     fields = [f for group in nested for f in group]
     base = expr.span.start
     return cls(tuple(f.value for f in fields), tuple(f.text for f in fields),
@@ -247,11 +247,7 @@ def decode(type_name: str, expr, where: str | None = None) -> Record:
     t = type_name.lower()
     where = where or t
     if t in _COMPACT:
-        try:
-            return _compact(t, expr)
-        except DecodeIssue as exc:
-            # Name the value being decoded (declaration, inline target).
-            raise DecodeIssue(exc.reason.replace(t, where, 1), exc.span) from None
+        return _compact(t, expr, where)
     if t == "pose":
         v = _walk(SHAPES[t], expr, where)
         return Pose(v[0], v[1], expr.span)
