@@ -1,21 +1,49 @@
 """Regenerate golden files. Run, then review the diff by eye before committing:
 
     python tests/regen_golden.py && git diff tests/golden
+
+inspect/: the parser's report of every fixture.
+fix/<case>/: before.mod (the input; copied from fixtures/ when the case
+names one, else written by hand), after.mod and report.md from
+`rapidcomp fix` with the case's options.
 """
 
+import shutil
 from pathlib import Path
 
-from rapidcomp.rapid.inspect import render_text, report
+from rapidcomp.compensate import report
+from rapidcomp.compensate.fix import fix
+from rapidcomp.compensate.job import load_solver
+from rapidcomp.rapid.inspect import render_text, report as inspect_report
 from rapidcomp.rapid.parse import parse_file
 
 ROOT = Path(__file__).resolve().parents[1]
 GOLDEN = ROOT / "tests" / "golden"
+PROFILE = ROOT / "fixtures" / "warm.csv"
+# case -> (fixture it copies or None, mode, joint limit overrides)
+FIX_CASES = {
+    "cubes_absj": ("cubes.mod", "absj", ("J5=-120:120",)),
+    "cubes_robtarget": ("cubes.mod", "robtarget", ("J5=-120:120",)),
+    "paper_front_absj": ("paper_front.mod", "absj", ()),
+    "paper_front_robtarget": ("paper_front.mod", "robtarget", ()),
+    "refusals": (None, "absj", ()),
+}
 
 
 def inspect_golden(path: Path) -> str:
     # Relative display path: goldens must not depend on where the repo lives.
     pf = parse_file(path, display_path=path.relative_to(ROOT).as_posix())
-    return render_text(report(pf))
+    return render_text(inspect_report(pf))
+
+
+def fix_golden(case: str) -> tuple[bytes, str]:
+    """(after.mod bytes, report.md text) of a case's before.mod."""
+    _, mode, limits = FIX_CASES[case]
+    pf = parse_file(GOLDEN / "fix" / case / "before.mod", "before.mod")
+    result = fix([pf], load_solver(str(PROFILE), None, False, limits), mode, "after.mod")
+    meta = {"output": "after.mod", "mode": mode, "profile": PROFILE.name, "robot": "irb140",
+            "with": "-", "joint limits": ", ".join(limits) or "robot defaults"}
+    return pf.source.encode(result.text), report.markdown(result, meta)
 
 
 def main() -> None:
@@ -23,6 +51,14 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     for path in sorted((ROOT / "fixtures" / "rapid").iterdir()):
         (out / f"{path.name}.txt").write_text(inspect_golden(path), encoding="utf-8")
+    for case, (fixture, _, _) in FIX_CASES.items():
+        folder = GOLDEN / "fix" / case
+        folder.mkdir(parents=True, exist_ok=True)
+        if fixture is not None:
+            shutil.copyfile(ROOT / "fixtures" / fixture, folder / "before.mod")
+        after, rep = fix_golden(case)
+        (folder / "after.mod").write_bytes(after)
+        (folder / "report.md").write_text(rep, encoding="utf-8", newline="\n")
 
 
 if __name__ == "__main__":

@@ -45,13 +45,6 @@ def inspect(program: str, as_json: bool) -> None:
         click.echo(render_text(rep), nl=False)
 
 
-def _load_robot(robot: str | None):
-    from .kinematics.robot import irb140, load_urdf
-    if robot is None or robot.lower() == "irb140":
-        return irb140()
-    return load_urdf(robot)
-
-
 @main.command()
 @click.argument("program", type=click.Path(dir_okay=False))
 @click.option("--profile", required=True, type=click.Path(dir_okay=False),
@@ -60,8 +53,10 @@ def _load_robot(robot: str | None):
               help="Other modules holding tool/work object/target data (repeatable).")
 @click.option("--robot", default=None, help="irb140 (default) or a URDF file.")
 @click.option("--force", is_flag=True, help="Accept profile values beyond 5 mm / 1 deg.")
+@click.option("--limit", "limits", multiple=True, metavar="JOINT=LO:HI",
+              help="Override a joint limit in degrees, e.g. J5=-120:120 (repeatable).")
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
-def check(program, profile, with_modules, robot, force, as_json) -> None:
+def check(program, profile, with_modules, robot, force, limits, as_json) -> None:
     """Predict each target's error on the warm robot; rewrite nothing.
 
     Exit code 1 when some targets could not be compensated.
@@ -70,19 +65,13 @@ def check(program, profile, with_modules, robot, force, as_json) -> None:
 
     from .compensate.check import check as run_check
     from .compensate.check import render_text, summary
-    from .kinematics.analytic import UnsupportedGeometry
-    from .kinematics.ik import Solver
-    from .kinematics.profile import deform, read_profile
+    from .compensate.job import load_solver
     from .rapid.parse import parse_file
     try:
         files = [parse_file(program)] + [parse_file(m) for m in with_modules]
-        nominal = _load_robot(robot)
-        prof = read_profile(profile, force=force, joint_names=nominal.joint_names)
-        solver = Solver(nominal, deform(nominal, prof))
+        solver = load_solver(profile, robot, force, limits)
     except RapidcompError as exc:
         _fail(exc)
-    except UnsupportedGeometry as exc:
-        _fail(RapidcompError(f"{robot}: {exc}"))
     rows = run_check(files, solver)
     summ = summary(rows)
     if as_json:
@@ -91,3 +80,104 @@ def check(program, profile, with_modules, robot, force, as_json) -> None:
     else:
         click.echo(render_text(rows, summ, program), nl=False)
     sys.exit(EXIT_PARTIAL if summ["not_compensable"] else EXIT_OK)
+
+
+@main.command()
+@click.argument("programs", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.option("--profile", required=True, type=click.Path(dir_okay=False),
+              help="Thermal profile CSV (joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg).")
+@click.option("-o", "--output", default=None, type=click.Path(),
+              help="Output module (default PROGRAM_comp.mod beside the input); a directory "
+                   "when several programs are given.")
+@click.option("--emit", type=click.Choice(["absj", "robtarget"]), default="absj",
+              show_default=True,
+              help="absj: MoveJ/MoveL become MoveAbsJ on new jointtargets; robtarget: every "
+                   "instruction keeps its kind, robtarget values are rewritten.")
+@click.option("--report", default=None, type=click.Path(dir_okay=False),
+              help="Markdown review report (default: the output's name with .md).")
+@click.option("--no-report", is_flag=True, help="Write no Markdown report.")
+@click.option("--json", "json_path", default=None, type=click.Path(dir_okay=False),
+              help="JSON report with the same content.")
+@click.option("--with", "with_modules", multiple=True, type=click.Path(dir_okay=False),
+              help="Other modules holding tool/work object/target data (repeatable).")
+@click.option("--robot", default=None, help="irb140 (default) or a URDF file.")
+@click.option("--force", is_flag=True, help="Accept profile values beyond 5 mm / 1 deg.")
+@click.option("--limit", "limits", multiple=True, metavar="JOINT=LO:HI",
+              help="Override a joint limit in degrees, e.g. J5=-120:120 (repeatable).")
+@click.option("--allow-partial", is_flag=True,
+              help="Write the output even when some targets cannot be compensated "
+                   "(they stay as they were and are listed).")
+@click.option("-q", "--quiet", is_flag=True, help="No summary on stdout.")
+def fix(programs, profile, output, emit, report, no_report, json_path, with_modules, robot,
+        force, limits, allow_partial, quiet) -> None:
+    """Write a compensated copy of each PROGRAM and a review report.
+
+    Exit code 0: all statically known targets compensated; 1: some could not
+    be (nothing is written unless --allow-partial); 2: bad input.
+    """
+    from pathlib import Path
+
+    from .atomic import write_all
+    from .compensate.job import run_all
+    from .compensate.report import summary_lines
+    try:
+        specs = _fix_specs(programs, profile, output, emit, report, no_report, json_path,
+                           with_modules, robot, force, limits)
+        outcomes = run_all(specs)
+    except RapidcompError as exc:
+        _fail(exc)
+    failed = any(o.result.failed for o in outcomes)
+    for o in outcomes:
+        r = o.result
+        if not quiet:
+            click.echo(f"{r.program} -> {r.output} ({r.mode})")
+            for line in summary_lines(r):
+                click.echo(f"  {line}")
+            for note in r.notes:
+                click.echo(f"  note: {note}")
+    if failed and not allow_partial:
+        click.echo("rapidcomp: some targets cannot be compensated; nothing written "
+                   "(--allow-partial writes the rest and lists these)", err=True)
+        sys.exit(EXIT_PARTIAL)
+    write_all([(Path(path), data) for o in outcomes for path, data in o.files])
+    if not quiet:
+        for o in outcomes:
+            click.echo("wrote " + ", ".join(path for path, _ in o.files))
+    sys.exit(EXIT_PARTIAL if failed else EXIT_OK)
+
+
+def _fix_specs(programs, profile, output, emit, report, no_report, json_path, with_modules,
+               robot, force, limits):
+    """One JobSpec per program, with output paths checked: never the input
+    itself, never two jobs on one file."""
+    import os
+    from pathlib import Path
+
+    from .compensate.job import JobSpec, default_output
+    several = len(programs) > 1
+    if several and (report or json_path):
+        raise RapidcompError("--report/--json name one file; with several programs each "
+                             "report is written next to its output")
+    if several and output is None:
+        raise RapidcompError("several programs need -o DIR")
+    for p in list(programs) + [profile] + list(with_modules):
+        if not os.path.isfile(p):
+            raise RapidcompError(f"{p}: no such file")
+    specs = []
+    seen: set[str] = set()
+    for program in programs:
+        if several or (output is not None and os.path.isdir(output)):
+            out = str(Path(output) / Path(program).name)
+        else:
+            out = output or default_output(program)
+        rep = None if no_report else (report or str(Path(out).with_suffix(".md")))
+        paths = [out] + [x for x in (rep, json_path) if x]
+        for path in paths:
+            real = os.path.realpath(path)
+            if real in seen or any(os.path.realpath(i) == real
+                                   for i in list(programs) + list(with_modules) + [profile]):
+                raise RapidcompError(f"{path}: would overwrite an input or another output")
+            seen.add(real)
+        specs.append(JobSpec(program, out, rep, json_path, profile, robot, tuple(with_modules),
+                             emit, force, tuple(limits)))
+    return specs

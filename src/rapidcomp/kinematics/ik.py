@@ -11,6 +11,7 @@ they change.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from enum import IntEnum, IntFlag
 
@@ -123,6 +124,9 @@ class IKBatch:
             return f"J{j + 1} would move {d:.4f} deg, more than the allowed bound"
         return "the solution is on another configuration branch (cfx changed)"
 
+    def warning_texts(self, i: int) -> tuple[str, ...]:
+        return _warning_texts(int(self.warnings[i]))
+
     def result(self, i: int) -> IKResult:
         ok = bool(self.status[i] == Status.OK)
         q = self.q_deg[i]
@@ -134,7 +138,13 @@ class IKBatch:
             float(self.residual_mm[i]), float(self.residual_rad[i]), int(self.iterations[i]),
             tuple(float(x) for x in self.joint_change_deg[i])
             if self.joint_change_deg is not None and not np.isnan(q).any() else None,
-            tuple(text for flag, text in _WARN_TEXT.items() if flag in warn))
+            _warning_texts(int(warn)))
+
+
+@functools.lru_cache(maxsize=None)
+def _warning_texts(bits: int) -> tuple[str, ...]:
+    warn = Warn(bits)
+    return tuple(text for flag, text in _WARN_TEXT.items() if flag in warn)
 
 
 def _turns(theta_deg: np.ndarray, cf: np.ndarray, tol: float):

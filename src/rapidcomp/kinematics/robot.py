@@ -131,3 +131,24 @@ def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
     lower = tuple(float(x) / DEG for x in model.lowerPositionLimit)
     upper = tuple(float(x) / DEG for x in model.upperPositionLimit)
     return RobotModel(model.name or path.stem, model, fid, lower, upper)
+
+
+def override_limits(robot: RobotModel, specs) -> RobotModel:
+    """Apply `--limit` options, each "J5=-120:120" (degrees)."""
+    from ..errors import RapidcompError
+    if not specs:
+        return robot
+    lower, upper = list(robot.lower_deg), list(robot.upper_deg)
+    names = [n.lower() for n in robot.joint_names]
+    for spec in specs:
+        try:
+            joint, rng = spec.split("=")
+            lo, hi = (float(x) for x in rng.split(":"))
+            k = names.index(joint.strip().lower())
+        except ValueError:
+            raise RapidcompError(f"--limit {spec}: expected JOINT=LOWER:UPPER in degrees with "
+                                 f"JOINT one of {', '.join(robot.joint_names)}") from None
+        if not lo < hi:
+            raise RapidcompError(f"--limit {spec}: the lower limit must be below the upper one")
+        lower[k], upper[k] = lo, hi
+    return robot.with_limits(lower, upper)

@@ -1,0 +1,139 @@
+"""Benchmark: `rapidcomp fix` end to end on CAM-style modules.
+
+    python bench/fix.py [--sizes 1000,10000,100000]
+
+Each size runs in a fresh process (so peak memory is per size) and prints
+seconds and MB/s per stage: parse, resolve, solve, print (edits + splice),
+re-parse and verify of the output, report (diff + Markdown). Then the
+same total with two modules in one call (`fix a.mod b.mod -o DIR`, one
+worker process per core). Goal: 100k targets end to end <= 10 s, <= 1 GB.
+
+Targets are reachable by construction: random joint vectors in the front
+workspace, nominal FK through a 150 mm spindle tool, written with 3
+decimals (mm) and 6 (quaternion) as CAM post-processors do; half declared,
+half inline.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+PROFILE = ROOT / "fixtures" / "warm.csv"
+
+
+def cam_module(n: int, seed: int = 1, name: str = "CAM_Fix") -> str:
+    from rapidcomp.kinematics.chain import Chain
+    from rapidcomp.kinematics.conf import confdata
+    from rapidcomp.kinematics.frames import DEG, matrix_to_quat_wxyz
+    from rapidcomp.kinematics.ik import Solver
+    from rapidcomp.kinematics.robot import irb140
+    rng = np.random.default_rng(seed)
+    sign = rng.choice([-1.0, 1.0], size=(n, 3))
+    q = np.stack([sign[:, 0] * rng.uniform(5, 40, n), rng.uniform(0, 45, n),
+                  rng.uniform(-20, 35, n), sign[:, 1] * rng.uniform(5, 60, n),
+                  rng.uniform(-100, -25, n), sign[:, 2] * rng.uniform(5, 85, n)], axis=1)
+    robot = irb140()
+    chain = Chain.from_robot(robot)
+    R, p = chain.fk(q * DEG)
+    _, frames = chain.joint_frames(q * DEG)
+    conf = confdata(q * DEG, frames[:, 4], Solver(robot).geometry.phi)
+    tcp = p + R[:, :, 2] * 150.0  # tSpindle: 150 mm along the flange z axis
+    ext = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
+
+    def rt(i):
+        qw = matrix_to_quat_wxyz(R[i])
+        return (f"[[{tcp[i, 0]:.3f},{tcp[i, 1]:.3f},{tcp[i, 2]:.3f}],"
+                f"[{qw[0]:.6f},{qw[1]:.6f},{qw[2]:.6f},{qw[3]:.6f}],"
+                f"[{','.join(str(int(c)) for c in conf[i])}],{ext}]")
+    half = n // 2
+    lines = [f"MODULE {name}",
+             "  PERS tooldata tSpindle:=[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];",
+             "  PERS wobjdata wPart:=[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];"]
+    lines += [f"  CONST robtarget p{i}:={rt(i)};" for i in range(half)]
+    lines.append("  PROC Path()")
+    lines += [f"    MoveL p{i},v100,z1,tSpindle\\WObj:=wPart;" for i in range(half)]
+    lines += [f"    MoveL {rt(i)},v100,z1,tSpindle\\WObj:=wPart;" for i in range(half, n)]
+    lines += ["  ENDPROC", "ENDMODULE", ""]
+    return "\n".join(lines)
+
+
+def one(n: int) -> dict:
+    """Run one size in this process; returns figures."""
+    from rapidcomp.compensate import report
+    from rapidcomp.compensate.fix import fix
+    from rapidcomp.compensate.job import load_solver
+    from rapidcomp.rapid.grammar import engine
+    from rapidcomp.rapid.parse import parse_text
+    text = cam_module(n)
+    mb = len(text.encode()) / 1e6
+    engine()
+    solver = load_solver(str(PROFILE), None, False)
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    pf = parse_text(text, "cam.mod")
+    timings["parse"] = time.perf_counter() - t0
+    result = fix([pf], solver, "absj", "cam_comp.mod", timings)
+    t = time.perf_counter()
+    report.markdown(result, {"mode": "absj"})
+    timings["report"] += time.perf_counter() - t
+    total = time.perf_counter() - t0
+    s = result.summary()
+    return {"targets": n, "MB": mb, "stages": timings, "total_s": total,
+            "compensated": s["compensated"], "failed": s["not_compensated"],
+            "peak_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sizes", default="1000,10000,100000")
+    ap.add_argument("--one", type=int, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.one:
+        print(json.dumps(one(args.one)))
+        return
+    stages = ["parse", "resolve", "solve", "print", "re-parse", "verify", "report"]
+    print(f"{'targets':>8} {'MB':>6} " + " ".join(f"{s:>9}" for s in stages)
+          + f" {'total s':>8} {'MB/s':>6} {'targets/s':>10} {'peak MB':>8}")
+    for n in (int(s) for s in args.sizes.split(",")):
+        out = subprocess.run([sys.executable, __file__, "--one", str(n)], check=True,
+                             capture_output=True, text=True).stdout
+        r = json.loads(out)
+        assert r["failed"] == 0 and r["compensated"] == n, r
+        print(f"{n:>8} {r['MB']:>6.2f} "
+              + " ".join(f"{r['stages'].get(s, 0):>8.2f}s" for s in stages)
+              + f" {r['total_s']:>8.2f} {r['MB'] / r['total_s']:>6.2f} "
+              f"{n / r['total_s']:>10.0f} {r['peak_MB']:>8.0f}")
+    # Two modules in one call: the process pool uses both cores.
+    n = max(int(s) for s in args.sizes.split(",")) // 2
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = []
+        for k in range(2):
+            path = Path(tmp) / f"cam{k}.mod"
+            path.write_text(cam_module(n, seed=k + 1, name=f"CAM_{k}"))
+            paths.append(str(path))
+        cmd = [sys.executable, "-m", "rapidcomp", "fix", *paths, "--profile", str(PROFILE),
+               "-o", str(Path(tmp) / "out"), "-q"]
+        t = time.perf_counter()
+        subprocess.run(cmd, check=True)
+        both = time.perf_counter() - t
+        t = time.perf_counter()
+        for path in paths:
+            subprocess.run([sys.executable, "-m", "rapidcomp", "fix", path, "--profile",
+                            str(PROFILE), "-o", str(Path(tmp) / "seq.mod"), "-q"], check=True)
+        seq = time.perf_counter() - t
+    print(f"2 modules x {n} targets, one call (2 workers): {both:.2f} s; "
+          f"one after the other: {seq:.2f} s (CLI, incl. start-up and writing)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,94 @@
+"""The review report of a fix: Markdown and JSON with the same content.
+
+Deterministic (no timestamps, no absolute paths: files are named by their
+base names), so a report can be committed next to the program it reviews.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+
+from .fix import FixResult, FixRow
+
+
+def _num(x, fmt: str) -> str:
+    return "-" if x is None else format(x, fmt)
+
+
+def _joints(q, fmt: str = ".4f") -> str:
+    return "-" if q is None else " ".join(format(v, fmt) for v in q)
+
+
+def _conf(c) -> str:
+    return "-" if c is None else "[" + ",".join(map(str, c)) + "]"
+
+
+def summary_lines(result: FixResult) -> list[str]:
+    s = result.summary()
+    untouched = sum(s["untouched"].values())
+    out = [f"{s['compensated']} of {s['target_uses']} target uses compensated, "
+           f"{s['not_compensated']} not compensated, {untouched} untouched"]
+    for reason, n in s["untouched"].items():
+        out.append(f"untouched ({n}): {reason}")
+    for r in result.rows:
+        if r.status == "not compensated":
+            out.append(f"not compensated: line {r.line} {r.instruction} {r.target}: {r.reason}")
+    if s["error_before_um"]:
+        b, a = s["error_before_um"], s["residual_after_um"]
+        out.append(f"predicted TCP error on the warm robot: max {b['max']:.1f} um, mean "
+                   f"{b['mean']:.1f} um -> after: max {a['max']:.3f} um, mean {a['mean']:.3f} um")
+    return out
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|")
+
+
+def _notes(r: FixRow) -> str:
+    parts = ([r.reason] if r.reason else []) + list(r.warnings)
+    return _cell("; ".join(parts))
+
+
+def markdown(result: FixResult, meta: dict) -> str:
+    out = [f"# rapidcomp fix: {result.program}", ""]
+    out += ["| | |", "|---|---|"]
+    for k, v in meta.items():
+        out.append(f"| {k} | {_cell(str(v))} |")
+    out += ["", "## Summary", ""]
+    out += [f"- {line}" for line in summary_lines(result)]
+    if result.notes:
+        out += ["", "## Notes", ""] + [f"- {n}" for n in result.notes]
+    out += ["", "## Diff", ""]
+    if result.diff:
+        out += ["```diff"] + list(result.diff) + ["```"]
+    else:
+        out.append("No change.")
+    out += ["", "## Targets", "",
+            "Joints in degrees; error = TCP position error of the uncompensated program on the "
+            "warm robot; after = the written values (rounded to float32 as the controller "
+            "stores them) on the warm robot.", "",
+            "| line | instruction | target | status | action | nominal joints | "
+            "compensated joints | delta joints | error um | error deg | after um | "
+            "conf before | conf after | notes |",
+            "|---:|---|---|---|---|---|---|---|---:|---:|---:|---|---|---|"]
+    for r in result.rows:
+        out.append(
+            f"| {r.line} | {r.instruction} | {_cell(r.target)} | {r.status} | "
+            f"{_cell(r.action or '-')} | {_joints(r.nominal_deg)} | {_joints(r.compensated_deg)} | "
+            f"{_joints(r.delta_deg, '+.5f')} | {_num(r.error_um, '.1f')} | "
+            f"{_num(r.error_deg, '.4f')} | {_num(r.residual_um, '.3f')} | {_conf(r.conf_before)} | "
+            f"{_conf(r.conf_after)} | {_notes(r)} |")
+    return "\n".join(out) + "\n"
+
+
+def as_json(result: FixResult, meta: dict) -> str:
+    doc = {
+        "program": result.program,
+        **meta,
+        "summary": result.summary(),
+        "notes": list(result.notes),
+        "diff": list(result.diff),
+        "targets": [asdict(r) for r in result.rows],
+    }
+    return json.dumps(doc, indent=2) + "\n"

@@ -1,0 +1,82 @@
+"""Where each data name is used in a module, and where it is written.
+
+The rewriter edits a declaration in place only when every use of the name
+is one it rewrites; a name that is assigned (or filled by a search
+instruction) is not a static value at all. Both questions need every data
+reference of the module, which this walk collects once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+from . import ast as A
+from .motions import motion_spec
+
+_FIELDS: dict[type, tuple[str, ...]] = {}
+
+
+def _field_names(cls: type) -> tuple[str, ...]:
+    names = _FIELDS.get(cls)
+    if names is None:
+        names = tuple(f.name for f in fields(cls) if f.name not in ("span", "name_span"))
+        _FIELDS[cls] = names
+    return names
+
+
+@dataclass(frozen=True)
+class Usage:
+    refs: dict[str, list[A.Ref]]          # lower-case name -> every reference
+    writes: dict[str, list[A.Span]]       # lower-case name -> assignments / search results
+
+
+def usage(module: A.ModuleNode) -> Usage:
+    refs: dict[str, list[A.Ref]] = {}
+    writes: dict[str, list[A.Span]] = {}
+    stack: list = [module.items]
+    while stack:
+        node = stack.pop()
+        t = type(node)
+        if t is tuple or t is list:
+            stack.extend(node)
+        elif t is A.Ref:
+            refs.setdefault(node.name.lower(), []).append(node)
+            stack.append(node.selectors)
+        elif t is A.Assign:
+            writes.setdefault(node.target.name.lower(), []).append(node.span)
+            stack.append(node.target)
+            stack.append(node.value)
+        elif t is A.ProcCall:
+            spec = motion_spec(node.name)
+            if spec is not None and "search" in spec.roles:
+                positional = [a for a in node.args if a.kind in ("pos", "named")]
+                for role, arg in zip(spec.roles, positional):
+                    if role == "search" and isinstance(arg.value, A.Ref):
+                        writes.setdefault(arg.value.name.lower(), []).append(arg.span)
+            stack.append(node.args)
+        elif t is A.NumAgg or node is None or t in (str, int, float, bool):
+            continue
+        elif hasattr(t, "__dataclass_fields__"):
+            for name in _field_names(t):
+                stack.append(getattr(node, name))
+    return Usage(refs, writes)
+
+
+def names_in(expr) -> set[str]:
+    """Lower-case names of the data an expression refers to."""
+    out: set[str] = set()
+    stack = [expr]
+    while stack:
+        node = stack.pop()
+        t = type(node)
+        if t is tuple or t is list:
+            stack.extend(node)
+        elif t is A.Ref:
+            out.add(node.name.lower())
+            stack.append(node.selectors)
+        elif t is A.NumAgg or node is None or t in (str, int, float, bool):
+            continue
+        elif hasattr(t, "__dataclass_fields__"):
+            for name in _field_names(t):
+                stack.append(getattr(node, name))
+    return out

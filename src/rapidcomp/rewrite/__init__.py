@@ -1,0 +1,1 @@
+"""Writing compensated values back into RAPID text: numbers, names, edits."""

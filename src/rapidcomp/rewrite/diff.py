@@ -1,0 +1,102 @@
+"""Unified diff of a splice, built from the edits themselves.
+
+difflib would have to rediscover what changed by matching 1e5 lines; the
+edits already say which lines they touch, so hunks are cut straight from
+them (linear time). The output is what difflib.unified_diff(n=3,
+lineterm="") prints for the same two texts; the tests check that.
+"""
+
+from __future__ import annotations
+
+from ..edits import SpanEdit, apply_edits
+
+
+def _line_starts(text: str) -> list[int]:
+    starts = [0]
+    for i, line in enumerate(text.splitlines(keepends=True)):
+        starts.append(starts[-1] + len(line))
+    return starts
+
+
+def _range(start: int, length: int) -> str:
+    if length == 1:
+        return str(start + 1)
+    return f"{start if not length else start + 1},{length}"
+
+
+def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
+                 context: int = 3) -> list[str]:
+    if not edits:
+        return []
+    import bisect
+    lines = text.splitlines(keepends=True)
+    starts = _line_starts(text)
+    # Changed blocks: (first line, last line) of the original, edits merged
+    # when they touch the same lines.
+    blocks: list[list] = []
+    for e in sorted(edits, key=lambda e: (e.start, e.end)):
+        a = bisect.bisect_right(starts, e.start) - 1
+        # An edit that removes a line end joins the next line to its block.
+        last = e.end if e.end > e.start and text[e.end - 1] in "\r\n" else max(e.end - 1, e.start)
+        b = bisect.bisect_right(starts, last) - 1
+        a = min(a, len(lines) - 1)
+        b = min(max(a, b), len(lines) - 1)
+        if blocks and a <= blocks[-1][1]:
+            blocks[-1][1] = max(blocks[-1][1], b)
+            blocks[-1][2].append(e)
+        else:
+            blocks.append([a, b, [e]])
+    # New text of each block; lines an edit leaves as they were (e.g. the
+    # line a declaration is inserted after) are context, as difflib has it.
+    changed = []  # (first old line, end old line exclusive, new lines)
+    for a, b, es in blocks:
+        base = starts[a]
+        old_lines = [s.rstrip("\r\n") for s in lines[a:b + 1]]
+        rel = [SpanEdit(e.start - base, e.end - base, e.replacement) for e in es]
+        new_lines = apply_edits("".join(lines[a:b + 1]), rel).splitlines()
+        lo, hi_old, hi_new = 0, len(old_lines), len(new_lines)
+        while lo < hi_old and lo < hi_new and old_lines[lo] == new_lines[lo]:
+            lo += 1
+        while hi_old > lo and hi_new > lo and old_lines[hi_old - 1] == new_lines[hi_new - 1]:
+            hi_old -= 1
+            hi_new -= 1
+        if lo == hi_old and lo == hi_new:
+            continue
+        if changed and changed[-1][1] == a + lo:  # adjacent: one change, as difflib sees it
+            pa, _, pnew = changed.pop()
+            changed.append((pa, a + hi_old, pnew + new_lines[lo:hi_new]))
+        else:
+            changed.append((a + lo, a + hi_old, new_lines[lo:hi_new]))
+    if not changed:
+        return []
+    out = [f"--- {old_name}", f"+++ {new_name}"]
+    n = len(lines)
+    delta = 0  # new line index minus old line index before the current hunk
+    i = 0
+    while i < len(changed):
+        j = i
+        while j + 1 < len(changed) and changed[j + 1][0] - changed[j][1] <= 2 * context:
+            j += 1
+        first = max(0, changed[i][0] - context)
+        end = min(n, changed[j][1] + context)
+        body: list[str] = []
+        pos = first
+        new_len = 0
+        d = delta
+        for a, b, new_lines in changed[i:j + 1]:
+            for k in range(pos, a):
+                body.append(" " + lines[k].rstrip("\r\n"))
+                new_len += 1
+            body.extend("-" + lines[k].rstrip("\r\n") for k in range(a, b))
+            body.extend("+" + s for s in new_lines)
+            new_len += len(new_lines)
+            d += len(new_lines) - (b - a)
+            pos = b
+        for k in range(pos, end):
+            body.append(" " + lines[k].rstrip("\r\n"))
+            new_len += 1
+        out.append(f"@@ -{_range(first, end - first)} +{_range(first + delta, new_len)} @@")
+        out.extend(body)
+        delta = d
+        i = j + 1
+    return out

@@ -1,0 +1,32 @@
+"""New identifiers that collide with nothing.
+
+RAPID identifiers are case-insensitive and at most 32 characters. Every
+word of every given module (code, comments and strings alike: being
+over-careful costs nothing) is taken; new names are built from the name of
+the data they come from and made unique with a number suffix.
+"""
+
+from __future__ import annotations
+
+import re
+
+MAX_LEN = 32
+_WORD = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+
+
+class NameAllocator:
+    def __init__(self, texts: list[str]):
+        self.taken: set[str] = set()
+        for text in texts:
+            self.taken.update(w.lower() for w in _WORD.findall(text))
+
+    def new(self, stem: str) -> str:
+        """A fresh identifier like `stem`, or `stem_2`, `stem_3`, ..."""
+        n = 1
+        while True:
+            suffix = "" if n == 1 else f"_{n}"
+            name = stem[:MAX_LEN - len(suffix)] + suffix
+            if name.lower() not in self.taken:
+                self.taken.add(name.lower())
+                return name
+            n += 1

@@ -1,0 +1,220 @@
+"""`rapidcomp fix`: golden cases, splice guarantees, exit codes, reports."""
+
+from __future__ import annotations
+
+import difflib
+import json
+import random
+
+import pytest
+from click.testing import CliRunner
+
+from rapidcomp.cli import main
+from rapidcomp.compensate.fix import fix
+from rapidcomp.compensate.job import load_solver
+from rapidcomp.edits import SpanEdit, apply_edits
+from rapidcomp.kinematics.ik import Solver
+from rapidcomp.kinematics.robot import irb140, override_limits
+from rapidcomp.rapid.parse import parse_file, parse_text
+from rapidcomp.rewrite.diff import unified_diff
+from rapidcomp.rewrite.names import NameAllocator
+
+from conftest import FIXTURES, RAPID_FIXTURES, ROOT
+from regen_golden import FIX_CASES, GOLDEN, fix_golden
+
+ZERO_PROFILE = "joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg\n"
+WARM = str(FIXTURES / "warm.csv")
+
+
+@pytest.fixture(scope="module")
+def zero_solver():
+    # J5 +-120: the paper's point S21 needs 116.9 deg (see the README).
+    robot = override_limits(irb140(), ["J5=-120:120"])
+    return Solver(robot, robot)
+
+
+@pytest.mark.parametrize("case", sorted(FIX_CASES))
+def test_golden_case(case):
+    folder = GOLDEN / "fix" / case
+    fixture = FIX_CASES[case][0]
+    if fixture is not None:
+        assert (folder / "before.mod").read_bytes() == (FIXTURES / fixture).read_bytes()
+    after, report = fix_golden(case)
+    assert after == (folder / "after.mod").read_bytes()
+    assert report == (folder / "report.md").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("path", RAPID_FIXTURES + [FIXTURES / "cubes.mod",
+                                                   FIXTURES / "paper_front.mod"],
+                         ids=lambda p: p.name)
+def test_zero_profile_robtarget_mode_is_byte_identical(path, zero_solver):
+    pf = parse_file(path)
+    result = fix([pf], zero_solver, "robtarget", "out.mod")
+    assert result.edits == ()
+    assert pf.source.encode(result.text) == path.read_bytes()
+
+
+@pytest.mark.parametrize("case", ["cubes_absj", "cubes_robtarget", "paper_front_absj"])
+def test_second_run_with_zero_profile_changes_nothing(case, zero_solver):
+    after = GOLDEN / "fix" / case / "after.mod"
+    result = fix([parse_file(after)], zero_solver, "robtarget", "again.mod")
+    assert result.edits == () and result.failed == 0
+    # ... and every target of the compensated module is still resolved.
+    assert all(r.status == "compensated" for r in result.rows
+               if "CRobT" not in r.target)
+
+
+def test_only_numbers_and_instructions_change():
+    """Outside the edited spans the output is the input, byte for byte: the
+    CRLF line ends, comments and layout of cubes.mod survive. Without the
+    new declarations, the output has the input's lines; a changed line is a
+    motion whose name and target changed (speed, zone, tool, \\WObj as
+    written) or a declaration whose numbers changed."""
+    import re
+    before = (GOLDEN / "fix" / "cubes_absj" / "before.mod").read_bytes()
+    after = (GOLDEN / "fix" / "cubes_absj" / "after.mod").read_bytes()
+    assert after.count(b"\r\n") == after.count(b"\n") > before.count(b"\n")
+    old = before.decode().split("\r\n")
+    new, skipping = [], False
+    for line in after.decode().split("\r\n"):
+        if line.startswith("    LOCAL CONST jointtarget jt_"):
+            skipping = not line.endswith("];")
+            continue
+        if skipping:
+            skipping = not line.endswith("];")
+            continue
+        new.append(line)
+    assert len(new) == len(old)
+    numbers = re.compile(r"-?\d+(\.\d+)?(E[+-]\d+)?")
+    changed = 0
+    for a, b in zip(old, new):
+        if a == b:
+            continue
+        changed += 1
+        if a.lstrip().startswith("Move"):
+            assert a.split(",")[-3:] == b.split(",")[-3:]
+            assert b.lstrip().startswith("MoveAbsJ jt_") or "[[" in b
+        else:
+            assert numbers.sub("#", a) == numbers.sub("#", b)
+    assert changed == 31  # 27 motions, 2 jointtargets, the 2 MoveC robtargets
+
+
+def test_unified_diff_matches_difflib():
+    """The linear-time diff equals difflib's for line-local edits and
+    inserted lines (the edits fix makes)."""
+    rng = random.Random(7)
+    for _ in range(500):
+        n = rng.randint(1, 40)
+        lines = [f"    MoveL p{i}, v100, {'z' * rng.randint(0, 5)}, tool0;" for i in range(n)]
+        sep = rng.choice(["\n", "\r\n"])
+        text = sep.join(lines) + (sep if rng.random() < 0.8 else "")
+        starts = [0]
+        for line in text.splitlines(keepends=True):
+            starts.append(starts[-1] + len(line))
+        edits = []
+        for k in sorted(rng.sample(range(n), rng.randint(1, min(n, 8)))):
+            s, length = starts[k], len(lines[k])
+            if rng.random() < 0.5:
+                edits.append(SpanEdit(s + 4, s + 9, "MoveAbsJ"))
+            else:
+                edits.append(SpanEdit(s + length, s + length, sep + "    CONST num x := 1;"))
+        new = apply_edits(text, edits)
+        expected = list(difflib.unified_diff(text.splitlines(), new.splitlines(), "a", "b",
+                                             n=3, lineterm=""))
+        assert unified_diff(text, edits, "a", "b") == expected
+
+
+def test_new_names_avoid_every_identifier_case_insensitively():
+    names = NameAllocator(["MODULE m ! JT_P1 and jt_p1_2 are taken\nCONST num x:=1;"])
+    assert names.new("jt_p1") == "jt_p1_3"
+    assert names.new("jt_p1") == "jt_p1_4"
+    long = names.new("jt_" + "a" * 40)
+    assert len(long) == 32 and names.new("jt_" + "a" * 40) == long[:30] + "_2"
+
+
+def test_refusals_say_why_and_collisions_are_avoided():
+    after = (GOLDEN / "fix" / "refusals" / "after.mod").read_text()
+    report = (GOLDEN / "fix" / "refusals" / "report.md").read_text()
+    assert "jt_p1_2" in after and "LOCAL CONST jointtarget jt_p1 " not in after
+    for reason in ("pVar is assigned at run time (before.mod:13)",
+                   "tool tStat is a stationary tool", "coordinated with a mechanical unit",
+                   "out of reach by", "Offs arguments are not literal numbers",
+                   "the target is computed at run time", "\\Corr has no MoveAbsJ equivalent"):
+        assert reason in report, reason
+    parse_text(after)
+
+
+# ---------------------------------------------------------------- command line
+
+def _run(args, cwd):
+    return CliRunner().invoke(main, args, catch_exceptions=False)
+
+
+def test_cli_writes_module_and_report_and_leaves_input_alone(tmp_path, monkeypatch):
+    prog = tmp_path / "paper_front.mod"
+    prog.write_bytes((FIXTURES / "paper_front.mod").read_bytes())
+    (tmp_path / "warm.csv").write_bytes((FIXTURES / "warm.csv").read_bytes())
+    monkeypatch.chdir(tmp_path)
+    r = _run(["fix", "paper_front.mod", "--profile", "warm.csv", "--json", "r.json"], tmp_path)
+    assert r.exit_code == 0, r.output
+    assert prog.read_bytes() == (FIXTURES / "paper_front.mod").read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "paper_front.mod", "paper_front_comp.md", "paper_front_comp.mod", "r.json", "warm.csv"]
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert doc["summary"]["compensated"] == 8 and doc["summary"]["not_compensated"] == 0
+    assert doc["diff"][0] == "--- paper_front.mod"
+    md = (tmp_path / "paper_front_comp.md").read_text()
+    assert str(tmp_path) not in md and str(tmp_path) not in (tmp_path / "r.json").read_text()
+    # Deterministic: a second run writes the same bytes.
+    first = (tmp_path / "r.json").read_bytes(), md
+    assert _run(["fix", "paper_front.mod", "--profile", "warm.csv", "--json", "r.json"],
+                tmp_path).exit_code == 0
+    assert ((tmp_path / "r.json").read_bytes(), (tmp_path / "paper_front_comp.md").read_text()) \
+        == first
+
+
+def test_cli_unreachable_target_exit_1_writes_nothing_unless_allowed(tmp_path):
+    prog = GOLDEN / "fix" / "refusals" / "before.mod"
+    out = tmp_path / "out.mod"
+    r = _run(["fix", str(prog), "--profile", WARM, "-o", str(out)], tmp_path)
+    assert r.exit_code == 1
+    assert "line 20 MoveL pFar: nominal: out of reach by 31.770 mm" in r.output
+    assert list(tmp_path.iterdir()) == []
+    r = _run(["fix", str(prog), "--profile", WARM, "-o", str(out), "--allow-partial"], tmp_path)
+    assert r.exit_code == 1
+    assert out.read_bytes() == (GOLDEN / "fix" / "refusals" / "after.mod").read_bytes()
+    assert "MoveL pFar, v100" in out.read_text()
+
+
+def test_cli_bad_input_exit_2_with_position_and_no_output(tmp_path):
+    bad = FIXTURES / "invalid" / "unclosed_aggregate.mod"
+    r = _run(["fix", str(bad), "--profile", WARM, "-o", str(tmp_path / "x.mod")], tmp_path)
+    assert r.exit_code == 2
+    assert "unclosed_aggregate.mod:" in r.output and list(tmp_path.iterdir()) == []
+    prof = tmp_path / "bad.csv"
+    prof.write_text("joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg\nJ9,0,0,0,0,0,0\n")
+    r = _run(["fix", str(FIXTURES / "paper_front.mod"), "--profile", str(prof),
+              "-o", str(tmp_path / "x.mod")], tmp_path)
+    assert r.exit_code == 2 and "bad.csv:2" in r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv"]
+
+
+def test_cli_refuses_to_overwrite_the_input(tmp_path):
+    prog = tmp_path / "p.mod"
+    prog.write_bytes((FIXTURES / "paper_front.mod").read_bytes())
+    r = _run(["fix", str(prog), "--profile", WARM, "-o", str(prog)], tmp_path)
+    assert r.exit_code == 2 and "would overwrite" in r.output
+    assert prog.read_bytes() == (FIXTURES / "paper_front.mod").read_bytes()
+
+
+def test_cli_several_modules_into_a_directory(tmp_path):
+    out = tmp_path / "out"
+    r = _run(["fix", str(FIXTURES / "paper_front.mod"), str(FIXTURES / "rapid" / "robodk.mod"),
+              "--profile", WARM, "-o", str(out), "-q"], tmp_path)
+    assert r.exit_code in (0, 1), r.output
+    assert sorted(p.name for p in out.iterdir()) == [
+        "paper_front.md", "paper_front.mod", "robodk.md", "robodk.mod"]
+    single = _run(["fix", str(FIXTURES / "paper_front.mod"), "--profile", WARM,
+                   "-o", str(tmp_path / "one.mod"), "-q"], tmp_path)
+    assert single.exit_code == 0
+    assert (out / "paper_front.mod").read_bytes() == (tmp_path / "one.mod").read_bytes()
