@@ -27,6 +27,22 @@ def main() -> None:
     """Thermal compensation of ABB RAPID programs (IRC5, IRB 140)."""
 
 
+def _model_options(f):
+    """The options that build the warm robot, shared by check and fix."""
+    for option in reversed([
+        click.option("--profile", required=True, type=click.Path(dir_okay=False),
+                     help="Thermal profile CSV (joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg)."),
+        click.option("--with", "with_modules", multiple=True, type=click.Path(dir_okay=False),
+                     help="Other modules holding tool/work object/target data (repeatable)."),
+        click.option("--robot", default=None, help="irb140 (default) or a URDF file."),
+        click.option("--force", is_flag=True, help="Accept profile values beyond 5 mm / 1 deg."),
+        click.option("--limit", "limits", multiple=True, metavar="JOINT=LO:HI",
+                     help="Override a joint limit in degrees, e.g. J5=-120:120 (repeatable)."),
+    ]):
+        f = option(f)
+    return f
+
+
 @main.command()
 @click.argument("program", type=click.Path(dir_okay=False))
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
@@ -47,14 +63,7 @@ def inspect(program: str, as_json: bool) -> None:
 
 @main.command()
 @click.argument("program", type=click.Path(dir_okay=False))
-@click.option("--profile", required=True, type=click.Path(dir_okay=False),
-              help="Thermal profile CSV (joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg).")
-@click.option("--with", "with_modules", multiple=True, type=click.Path(dir_okay=False),
-              help="Other modules holding tool/work object/target data (repeatable).")
-@click.option("--robot", default=None, help="irb140 (default) or a URDF file.")
-@click.option("--force", is_flag=True, help="Accept profile values beyond 5 mm / 1 deg.")
-@click.option("--limit", "limits", multiple=True, metavar="JOINT=LO:HI",
-              help="Override a joint limit in degrees, e.g. J5=-120:120 (repeatable).")
+@_model_options
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
 def check(program, profile, with_modules, robot, force, limits, as_json) -> None:
     """Predict each target's error on the warm robot; rewrite nothing.
@@ -84,8 +93,7 @@ def check(program, profile, with_modules, robot, force, limits, as_json) -> None
 
 @main.command()
 @click.argument("programs", nargs=-1, required=True, type=click.Path(dir_okay=False))
-@click.option("--profile", required=True, type=click.Path(dir_okay=False),
-              help="Thermal profile CSV (joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg).")
+@_model_options
 @click.option("-o", "--output", default=None, type=click.Path(),
               help="Output module (default PROGRAM_comp.mod beside the input); a directory "
                    "when several programs are given.")
@@ -98,12 +106,6 @@ def check(program, profile, with_modules, robot, force, limits, as_json) -> None
 @click.option("--no-report", is_flag=True, help="Write no Markdown report.")
 @click.option("--json", "json_path", default=None, type=click.Path(dir_okay=False),
               help="JSON report with the same content.")
-@click.option("--with", "with_modules", multiple=True, type=click.Path(dir_okay=False),
-              help="Other modules holding tool/work object/target data (repeatable).")
-@click.option("--robot", default=None, help="irb140 (default) or a URDF file.")
-@click.option("--force", is_flag=True, help="Accept profile values beyond 5 mm / 1 deg.")
-@click.option("--limit", "limits", multiple=True, metavar="JOINT=LO:HI",
-              help="Override a joint limit in degrees, e.g. J5=-120:120 (repeatable).")
 @click.option("--allow-partial", is_flag=True,
               help="Write the output even when some targets cannot be compensated "
                    "(they stay as they were and are listed).")

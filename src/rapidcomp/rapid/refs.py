@@ -30,22 +30,30 @@ class Usage:
     writes: dict[str, list[A.Span]]       # lower-case name -> assignments / search results
 
 
-def usage(module: A.ModuleNode) -> Usage:
-    refs: dict[str, list[A.Ref]] = {}
-    writes: dict[str, list[A.Span]] = {}
-    stack: list = [module.items]
+def _nodes(root):
+    """Every syntax node below root (numeric aggregates hold no names)."""
+    stack: list = [root]
     while stack:
         node = stack.pop()
         t = type(node)
         if t is tuple or t is list:
             stack.extend(node)
-        elif t is A.Ref:
+        elif not (t is A.NumAgg or node is None or t in (str, int, float, bool)):
+            yield node
+            if hasattr(t, "__dataclass_fields__"):
+                for name in _field_names(t):
+                    stack.append(getattr(node, name))
+
+
+def usage(module: A.ModuleNode) -> Usage:
+    refs: dict[str, list[A.Ref]] = {}
+    writes: dict[str, list[A.Span]] = {}
+    for node in _nodes(module.items):
+        t = type(node)
+        if t is A.Ref:
             refs.setdefault(node.name.lower(), []).append(node)
-            stack.append(node.selectors)
         elif t is A.Assign:
             writes.setdefault(node.target.name.lower(), []).append(node.span)
-            stack.append(node.target)
-            stack.append(node.value)
         elif t is A.ProcCall:
             spec = motion_spec(node.name)
             if spec is not None and "search" in spec.roles:
@@ -53,30 +61,9 @@ def usage(module: A.ModuleNode) -> Usage:
                 for role, arg in zip(spec.roles, positional):
                     if role == "search" and isinstance(arg.value, A.Ref):
                         writes.setdefault(arg.value.name.lower(), []).append(arg.span)
-            stack.append(node.args)
-        elif t is A.NumAgg or node is None or t in (str, int, float, bool):
-            continue
-        elif hasattr(t, "__dataclass_fields__"):
-            for name in _field_names(t):
-                stack.append(getattr(node, name))
     return Usage(refs, writes)
 
 
 def names_in(expr) -> set[str]:
     """Lower-case names of the data an expression refers to."""
-    out: set[str] = set()
-    stack = [expr]
-    while stack:
-        node = stack.pop()
-        t = type(node)
-        if t is tuple or t is list:
-            stack.extend(node)
-        elif t is A.Ref:
-            out.add(node.name.lower())
-            stack.append(node.selectors)
-        elif t is A.NumAgg or node is None or t in (str, int, float, bool):
-            continue
-        elif hasattr(t, "__dataclass_fields__"):
-            for name in _field_names(t):
-                stack.append(getattr(node, name))
-    return out
+    return {node.name.lower() for node in _nodes(expr) if type(node) is A.Ref}
