@@ -48,7 +48,7 @@ def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
             blocks.append([a, b, [e]])
     # New text of each block; lines an edit leaves as they were (e.g. the
     # line a declaration is inserted after) are context, as difflib has it.
-    changed = []  # (first old line, end old line exclusive, new lines)
+    changed: list[list] = []  # [first old line, end old line (exclusive), new lines]
     for a, b, es in blocks:
         base = starts[a]
         old_lines = [s.rstrip("\r\n") for s in lines[a:b + 1]]
@@ -63,10 +63,10 @@ def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
         if lo == hi_old and lo == hi_new:
             continue
         if changed and changed[-1][1] == a + lo:  # adjacent: one change, as difflib sees it
-            pa, _, pnew = changed.pop()
-            changed.append((pa, a + hi_old, pnew + new_lines[lo:hi_new]))
+            changed[-1][1] = a + hi_old
+            changed[-1][2].extend(new_lines[lo:hi_new])  # in place: linear, not quadratic
         else:
-            changed.append((a + lo, a + hi_old, new_lines[lo:hi_new]))
+            changed.append([a + lo, a + hi_old, new_lines[lo:hi_new]])
     if not changed:
         return []
     out = [f"--- {old_name}", f"+++ {new_name}"]
