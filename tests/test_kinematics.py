@@ -8,7 +8,7 @@ import pinocchio as pin
 import pytest
 
 from rapidcomp.kinematics.chain import Chain
-from rapidcomp.kinematics.frames import DEG, rot_y, rot_z
+from rapidcomp.kinematics.frames import DEG, rot_y
 from rapidcomp.kinematics.ik import IKOptions, Solver, Status, solve_deformed_pinocchio
 from rapidcomp.kinematics.profile import deform, parse_profile, read_profile
 from rapidcomp.kinematics.robot import irb140

@@ -24,15 +24,14 @@ from ..edits import SpanEdit, apply_edits
 from ..errors import RapidcompError
 from ..kinematics.conf import confdata
 from ..kinematics.frames import DEG
-from ..kinematics.ik import Solver
+from ..kinematics.ik import IKBatch, Solver
 from ..rapid import ast as A
 from ..rapid.model import Declaration, Module, ParsedFile
 from ..rapid.parse import parse_text
-from ..rapid.values import JointTarget, RobTarget
 from ..rewrite import records
 from ..rewrite.diff import unified_diff
 from ..rewrite.names import NameAllocator
-from .targets import Resolver, Source, TargetUse, compose_pose, invert_pose
+from .targets import Resolver, Source, TargetUse, base_pose, compose_pose, invert_pose
 
 MODES = ("absj", "robtarget")
 # Optional arguments MoveJ/MoveL share with MoveAbsJ (RAPID Instructions
@@ -102,6 +101,22 @@ class FixResult:
             "movel_to_moveabsj": sum(1 for r in comp if LINEAR_WARNING in r.warnings),
             "edits": len(self.edits),
         }
+
+
+@dataclass(frozen=True, eq=False)
+class _Batch:
+    """One solved batch (robtargets or jointtargets), row i = items[i]."""
+
+    items: list                      # (group, element)
+    R: np.ndarray                    # intended base_M_flange
+    p: np.ndarray
+    nominal: IKBatch
+    deformed: IKBatch
+    err_p: np.ndarray                # uncompensated error on the warm robot, mm
+    err_r: np.ndarray                # ... rad
+    flange_R: np.ndarray             # nominal FK of the compensated joints
+    flange_p: np.ndarray
+    conf_after: np.ndarray           # confdata of the compensated joints (ideal robot)
 
 
 # ---------------------------------------------------------------- groups
@@ -224,7 +239,7 @@ class _Plan:
             for k in g.elements:
                 (joint if g.mode == "joint" else rob).append((g, k))
         s = self.solver
-        self.batches = {}
+        solved = {}
         if rob:
             R = np.empty((len(rob), 3, 3))
             p = np.empty((len(rob), 3))
@@ -234,13 +249,13 @@ class _Plan:
                 Rf, pf = compose_pose(compose_pose(g.wobj[1], self.resolver.target_pose(src)),
                                       invert_pose(g.tool[1]))
                 R[i], p[i], conf[i] = Rf, pf, src.record.conf
-            nominal, deformed = s.compensate(R, p, conf)
-            self.batches["rob"] = (rob, R, p, nominal, deformed)
+            solved["rob"] = (rob, R, p) + s.compensate(R, p, conf)
         if joint:
             q = np.array([self._element_source(g, k).record.joints for g, k in joint], float)
             R, p, nominal = s.seed_from_joints(q)
-            self.batches["joint"] = (joint, R, p, nominal, s.solve_deformed(R, p, nominal))
-        for name, (items, R, p, nominal, deformed) in self.batches.items():
+            solved["joint"] = (joint, R, p, nominal, s.solve_deformed(R, p, nominal))
+        self.batches: dict[str, _Batch] = {}
+        for name, (items, R, p, nominal, deformed) in solved.items():
             err_p, err_r = s.deformed_chain.pose_error(np.nan_to_num(nominal.q_deg) * DEG, R, p)
             qc = np.nan_to_num(deformed.q_deg) * DEG
             Rn, pn = s.nominal_chain.fk(qc)
@@ -254,8 +269,8 @@ class _Plan:
                     why = (f"nominal: {nominal.reason(i)}" if not nominal.success[i]
                            else deformed.reason(i))
                     g.failure = (why, k)
-            self.batches[name] = (items, R, p, nominal, deformed, err_p, err_r, Rn, pn,
-                                  conf_after)
+            self.batches[name] = _Batch(items, R, p, nominal, deformed, err_p, err_r, Rn, pn,
+                                        conf_after)
 
     # -------------------------------------------------------- placement
     def place(self) -> None:
@@ -288,7 +303,7 @@ class _Plan:
     # -------------------------------------------------------- values
     def joints(self, g: _Group, k) -> np.ndarray:
         name, i = g.sol[k]
-        return self.batches[name][4].q_deg[i]
+        return self.batches[name].deformed.q_deg[i]
 
     def robtarget_value(self, g: _Group, k):
         """(R, p, conf) of the literal the ideal controller must be given:
@@ -296,16 +311,9 @@ class _Plan:
         object, with Offs/RelTool undone."""
         name, i = g.sol[k]
         b = self.batches[name]
-        flange = (b[7][i], b[8][i])
-        R, p = compose_pose(compose_pose(invert_pose(g.wobj[1]), flange), g.tool[1])
-        src = g.src
-        if src.call is not None:
-            if src.call.name.lower() == "offs":
-                p = p - src.rel_d
-            else:
-                R = R @ src.rel_R.T
-                p = p - R @ src.rel_d
-        return R, p, b[9][i]
+        flange = (b.flange_R[i], b.flange_p[i])
+        target = compose_pose(compose_pose(invert_pose(g.wobj[1]), flange), g.tool[1])
+        return (*base_pose(g.src, target), b.conf_after[i])
 
     def field_texts(self, g: _Group, k) -> list[str]:
         record = self._element_source(g, k).record
@@ -314,13 +322,15 @@ class _Plan:
         R, p, conf = self.robtarget_value(g, k)
         return records.robtarget_texts(record, R, p, conf)
 
-    def literal(self, g: _Group, k) -> str:
+    def literal(self, g: _Group, k, texts: list[str] | None = None) -> str:
+        """The new literal of element k (`texts`: its field texts, when the
+        caller has them already)."""
         record = self._element_source(g, k).record
         if g.mode == "absj":
-            return records.jointtarget_literal(self.joints(g, k), record.texts[11:17])
-        texts = self.field_texts(g, k)
+            return records.jointtarget_literal(records.absj_texts(self.joints(g, k), record))
+        texts = texts if texts is not None else self.field_texts(g, k)
         if g.mode == "joint":
-            return f"[[{','.join(texts[0:6])}],[{','.join(texts[6:12])}]]"
+            return records.jointtarget_literal(texts)
         return records.robtarget_literal(texts)
 
 
@@ -412,9 +422,9 @@ class _Editor:
         self.insert_nl[end] = nl
         self.insert_indent[end] = indent
 
-    def array_value(self, g: _Group, nl: str, indent: str) -> str:
+    def array_value(self, g: _Group, nl: str, indent: str, texts: dict) -> str:
         dims = g.decl.dims
-        lits = [self.plan.literal(g, k) for k in g.elements]
+        lits = [self.plan.literal(g, k, texts.get(k)) for k in g.elements]
         rows = len(lits) // dims[0]
 
         def nest(items, ds):
@@ -433,9 +443,9 @@ class _Editor:
         plan = self.plan
         first = g.uses[0]
         type_name = "jointtarget" if g.mode in ("absj", "joint") else "robtarget"
+        texts = {} if g.mode == "absj" else {k: plan.field_texts(g, k) for k in g.elements}
         if g.mode != "absj" and all(
-                plan.field_texts(g, k) == list(plan._element_source(g, k).record.texts)
-                for k in g.elements):
+                texts[k] == list(plan._element_source(g, k).record.texts) for k in g.elements):
             # Nothing moves beyond the precision a new text would carry: the
             # value stays as written (a zero profile changes no byte).
             for u in g.uses:
@@ -444,7 +454,7 @@ class _Editor:
         if g.placement == "in place" or (g.placement == "inline" and g.mode != "absj"):
             for k in g.elements:
                 record = plan._element_source(g, k).record
-                for e in records.field_edits(record, plan.field_texts(g, k),
+                for e in records.field_edits(record, texts[k],
                                              f"{_element_label(g, k)} compensated"):
                     self.edit(e, e.replacement, e.why)
             what = (f"inline {type_name} rewritten" if g.decl is None
@@ -466,14 +476,15 @@ class _Editor:
             _, nl, indent, _ = self._anchor(g, first.motion.span)
             dims = "{" + ",".join(map(str, g.decl.dims)) + "}"
             self.declare(g, first.motion.span, type_name, name, dims,
-                         self.array_value(g, nl, indent))
+                         self.array_value(g, nl, indent, texts))
             g.names["array"] = name
         else:
             for k in g.elements:
                 s = stem if k is None else stem + "_" + "_".join(
                     map(str, _multi_index(k, g.decl.dims)))
                 name = self.names.new(("jt_" + s) if g.mode == "absj" else s + "_c")
-                self.declare(g, first.motion.span, type_name, name, "", plan.literal(g, k))
+                self.declare(g, first.motion.span, type_name, name, "",
+                             plan.literal(g, k, texts.get(k)))
                 g.names[k] = name
         for u in g.uses:
             src = u.source
@@ -544,7 +555,7 @@ def _verify(plan: _Plan, out_pf: ParsedFile) -> dict[int, tuple[float, float]]:
     p = np.empty((len(want), 3))
     for i, (_, u) in enumerate(want):
         name, j = plan.group_of[id(u)].sol[u.source.element]
-        R[i], p[i] = plan.batches[name][1][j], plan.batches[name][2][j]
+        R[i], p[i] = plan.batches[name].R[j], plan.batches[name].p[j]
     err_p, err_r = s.deformed_chain.pose_error(np.nan_to_num(q) * DEG, R, p)
     out = {}
     for i, (_, u) in enumerate(want):
@@ -655,11 +666,12 @@ def _row(plan: _Plan, editor: _Editor, u: TargetUse, verified) -> FixRow:
     g = plan.group_of[id(u)]
     k = u.source.element
     name, i = g.sol[k]
-    items, R, p, nominal, deformed, err_p, err_r, Rn, pn, conf_after = plan.batches[name]
+    b = plan.batches[name]
+    nominal, deformed = b.nominal, b.deformed
     n_ok = bool(nominal.success[i])
     d_warnings = deformed.warning_texts(i)
     qn = nominal.q_deg[i]
-    error = (float(err_p[i]) * 1000, float(err_r[i]) / DEG) if n_ok else (None, None)
+    error = (float(b.err_p[i]) * 1000, float(b.err_r[i]) / DEG) if n_ok else (None, None)
     conf_before = tuple(int(c) for c in (u.conf if u.conf is not None else nominal.conf[i]))
     if g.failure is not None:
         why, fk = g.failure
@@ -682,5 +694,5 @@ def _row(plan: _Plan, editor: _Editor, u: TargetUse, verified) -> FixRow:
     return FixRow(**base, status="compensated", action=editor.actions.get(id(u)),
                   nominal_deg=_t(qn), compensated_deg=_t(qc), delta_deg=_t(qc - qn),
                   error_um=error[0], error_deg=error[1], residual_um=res[0], residual_deg=res[1],
-                  conf_before=conf_before, conf_after=tuple(int(c) for c in conf_after[i]),
+                  conf_before=conf_before, conf_after=tuple(int(c) for c in b.conf_after[i]),
                   warnings=warnings, reason=None)

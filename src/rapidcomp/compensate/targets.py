@@ -327,6 +327,18 @@ class Resolver:
                          src, tool, wobj, envt)
 
 
+def base_pose(src: Source, target):
+    """The literal's pose that gives wobj_M_target `target` through src's
+    Offs/RelTool (the inverse of Resolver.target_pose)."""
+    R, p = target
+    if src.call is None:
+        return R, p
+    if src.call.name.lower() == "offs":
+        return R, p - src.rel_d
+    R = R @ src.rel_R.T
+    return R, p - R @ src.rel_d
+
+
 def target_uses(files: list[ParsedFile], float32: bool = False) -> list[TargetUse]:
     """Every target use of the first file's motions, resolved against all files."""
     resolver = Resolver(files, float32)

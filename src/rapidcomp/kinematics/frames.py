@@ -16,31 +16,25 @@ import numpy as np
 DEG = np.pi / 180.0
 
 
+def _quat_matrix_rows(w, x, y, z):
+    """Rows of the rotation matrix of a unit quaternion (scalars or arrays)."""
+    return ((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
+            (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
+            (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)))
+
+
 def quat_wxyz_to_matrix(q) -> np.ndarray:
     """Rotation matrix of a (possibly unnormalised) RAPID quaternion w,x,y,z."""
     q = np.asarray(q, dtype=float)
     if q.shape == (4,):
         # One quaternion (the resolver's case, 1e5 times per program): plain
-        # float arithmetic is ~10x faster than the broadcasting path below.
+        # float arithmetic is ~10x faster than broadcasting.
         w, x, y, z = q.tolist()
         n = (w * w + x * x + y * y + z * z) ** 0.5
-        w, x, y, z = w / n, x / n, y / n, z / n
-        return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+        return np.array(_quat_matrix_rows(w / n, x / n, y / n, z / n))
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    w, x, y, z = np.moveaxis(q, -1, 0)
-    out = np.empty(q.shape[:-1] + (3, 3))
-    out[..., 0, 0] = 1 - 2 * (y * y + z * z)
-    out[..., 0, 1] = 2 * (x * y - w * z)
-    out[..., 0, 2] = 2 * (x * z + w * y)
-    out[..., 1, 0] = 2 * (x * y + w * z)
-    out[..., 1, 1] = 1 - 2 * (x * x + z * z)
-    out[..., 1, 2] = 2 * (y * z - w * x)
-    out[..., 2, 0] = 2 * (x * z - w * y)
-    out[..., 2, 1] = 2 * (y * z + w * x)
-    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
-    return out
+    rows = _quat_matrix_rows(*np.moveaxis(q, -1, 0))
+    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
 
 
 def matrix_to_quat_wxyz(R) -> np.ndarray:

@@ -19,7 +19,7 @@ import numpy as np
 
 from .analytic import ArmGeometry, solve_branches
 from .chain import Chain
-from .conf import confdata, quadrant, wrap_pi
+from .conf import confdata, wrap_pi
 from .frames import DEG, rotation_log
 from .robot import RobotModel
 

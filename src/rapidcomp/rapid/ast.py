@@ -7,7 +7,7 @@ built). Spans are half-open character offsets into SourceText.text.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 from typing import NamedTuple, Union
 

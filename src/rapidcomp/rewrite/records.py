@@ -58,6 +58,11 @@ def robtarget_literal(texts: list[str]) -> str:
             f"[{','.join(t[11:17])}]]")
 
 
-def jointtarget_literal(q_deg, ext_texts) -> str:
-    return (f"[[{','.join(numbers.joint(float(v)) for v in q_deg)}],"
-            f"[{','.join(ext_texts)}]]")
+def jointtarget_literal(texts: list[str]) -> str:
+    return f"[[{','.join(texts[0:6])}],[{','.join(texts[6:12])}]]"
+
+
+def absj_texts(q_deg, source: RobTarget) -> list[str]:
+    """Field texts of the jointtarget that replaces a robtarget: new joints,
+    the robtarget's external axes as written."""
+    return [numbers.joint(float(v)) for v in q_deg] + list(source.texts[11:17])
