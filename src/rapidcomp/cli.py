@@ -31,7 +31,7 @@ def _model_options(f):
     """The options that build the warm robot, shared by check and fix."""
     for option in reversed([
         click.option("--profile", required=True, type=click.Path(dir_okay=False),
-                     help="Thermal profile CSV (joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg)."),
+                     help="Profile CSV: joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg (or the extended format discover writes)."),
         click.option("--with", "with_modules", multiple=True, type=click.Path(dir_okay=False),
                      help="Other modules holding tool/work object/target data (repeatable)."),
         click.option("--robot", default=None, help="irb140 (default) or a URDF file."),
@@ -183,3 +183,111 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
         specs.append(JobSpec(program, out, rep, json_path, profile, robot, tuple(with_modules),
                              emit, force, tuple(limits)))
     return specs
+
+
+def _floats(count: int, what: str):
+    """A click callback: "X,Y,Z" -> a tuple of `count` floats."""
+    def parse(ctx, param, value):
+        if value is None:
+            return None
+        try:
+            vals = tuple(float(v) for v in value.split(","))
+        except ValueError:
+            vals = ()
+        if len(vals) != count or not all(v == v and abs(v) != float("inf") for v in vals):
+            raise click.BadParameter(f"expected {what} ({count} numbers separated by commas)")
+        return vals
+    return parse
+
+
+def _campaign_options(f):
+    """The options that describe the measurement set-up, shared by discover
+    and simulate."""
+    for option in reversed([
+        click.option("--profile", default=None, type=click.Path(dir_okay=False),
+                     help="Profile CSV of the model (plain or extended); default: none."),
+        click.option("--robot", default=None, help="irb140 (default) or a URDF file."),
+        click.option("--tool", default="0,0,0", callback=_floats(3, "X,Y,Z in mm"),
+                     help="Measuring point in the flange frame, mm (default: flange origin)."),
+        click.option("--payload", default=None, callback=_floats(4, "KG,CX,CY,CZ"),
+                     help="Load on the flange during the measurement: kg and centre of mass "
+                          "in the flange frame, mm (gravity compliance)."),
+        click.option("--force", is_flag=True, help="Accept profile values beyond the sanity "
+                                                   "limits."),
+    ]):
+        f = option(f)
+    return f
+
+
+def _write_outcome(outcome, quiet: bool) -> None:
+    from pathlib import Path
+
+    from .atomic import write_all
+    write_all([(Path(p), data) for p, data in outcome.files])
+    if not quiet:
+        for line in outcome.summary:
+            click.echo(line)
+        for note in outcome.notes:
+            click.echo(f"note: {note}")
+        if outcome.files:
+            click.echo("wrote " + ", ".join(p for p, _ in outcome.files))
+
+
+@main.command()
+@click.argument("measured", type=click.Path(dir_okay=False))
+@_campaign_options
+@click.option("--sigma", type=float, default=None,
+              help="Measurement noise, standard deviation per axis in mm (default: estimated).")
+@click.option("--report", "report_path", default=None, type=click.Path(dir_okay=False),
+              help="Markdown report: residual analysis and one table per step.")
+@click.option("--json", "json_path", default=None, type=click.Path(dir_okay=False),
+              help="JSON result.")
+@click.option("--plot", "plot_path", default=None, type=click.Path(dir_okay=False),
+              help="PNG of residual vectors before/after (needs rapidcomp[plot]).")
+@click.option("--out-profile", default=None, type=click.Path(dir_okay=False),
+              help="Write the profile with the named effects added, for fix --profile.")
+@click.option("-q", "--quiet", is_flag=True, help="No summary on stdout.")
+def discover(measured, profile, robot, tool, payload, force, sigma, report_path, json_path,
+             plot_path, out_profile, quiet) -> None:
+    """Compare MEASURED positions with the model, name the effects it misses.
+
+    MEASURED.csv has columns point,j1..j6,x,y,z: commanded joints (deg) and
+    the measured position (mm, base frame) of the measuring point.
+    """
+    from .discover.job import run_discover
+    try:
+        outcome = run_discover(measured, profile, robot, tool, payload, sigma, report_path,
+                               json_path, plot_path, out_profile, force)
+    except RapidcompError as exc:
+        _fail(exc)
+    _write_outcome(outcome, quiet)
+    sys.exit(EXIT_OK)
+
+
+@main.command()
+@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
+              help="Measured-data CSV to write (point,j1..j6,x,y,z).")
+@click.option("--points", default="cube", show_default=True,
+              help="cube (the paper's 72 points), random:N, or a CSV of joints (point,j1..j6).")
+@_campaign_options
+@click.option("--effect", "effects", multiple=True, metavar="ID=V[,V...]",
+              help="A catalogue effect and its values in its parameters' units, e.g. "
+                   "joint_offset:J2=0.01 (repeatable).")
+@click.option("--noise", type=float, default=0.005, show_default=True,
+              help="Gaussian noise, standard deviation per axis in mm.")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Random seed (noise and random:N poses).")
+@click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False),
+              help="Also write the detectability table as Markdown.")
+@click.option("-q", "--quiet", is_flag=True, help="No summary on stdout.")
+def simulate(output, points, profile, robot, tool, payload, force, effects, noise, seed,
+             table_path, quiet) -> None:
+    """Make a measured-data file from a model, and say what it can detect."""
+    from .discover.job import run_simulate
+    try:
+        outcome = run_simulate(output, points, profile, robot, tool, payload, effects, noise,
+                               seed, table_path, force)
+    except RapidcompError as exc:
+        _fail(exc)
+    _write_outcome(outcome, quiet)
+    sys.exit(EXIT_OK)

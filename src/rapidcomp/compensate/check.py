@@ -12,7 +12,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kinematics.chain import Chain
 from ..kinematics.frames import DEG
 from ..kinematics.ik import IKBatch, Solver
 from ..rapid.model import ParsedFile
@@ -35,8 +34,8 @@ class CheckRow:
     warnings: tuple[str, ...]
 
 
-def _errors(chain: Chain, q_deg: np.ndarray, R: np.ndarray, p: np.ndarray):
-    pos, rot = chain.pose_error(np.nan_to_num(q_deg) * DEG, R, p)
+def _errors(pose_error, q_deg: np.ndarray, R: np.ndarray, p: np.ndarray):
+    pos, rot = pose_error(np.nan_to_num(q_deg) * DEG, R, p)
     return pos, rot / DEG
 
 
@@ -59,8 +58,8 @@ def check(files: list[ParsedFile], solver: Solver) -> list[CheckRow]:
         else:
             R, p, nominal = solver.seed_from_joints(np.array([u.joints_deg for u in sel]))
         deformed = solver.solve_deformed(R, p, nominal)
-        err, err_rot = _errors(solver.deformed_chain, nominal.q_deg, R, p)
-        res, _ = _errors(solver.deformed_chain, deformed.q_deg, R, p)
+        err, err_rot = _errors(solver.deformed_pose_error, nominal.q_deg, R, p)
+        res, _ = _errors(solver.deformed_pose_error, deformed.q_deg, R, p)
         for k, i in enumerate(idx):
             rows[i] = _row(sel[k], nominal, deformed, k, err[k], err_rot[k], res[k])
     return rows

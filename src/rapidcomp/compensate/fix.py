@@ -256,7 +256,7 @@ class _Plan:
             solved["joint"] = (joint, R, p, nominal, s.solve_deformed(R, p, nominal))
         self.batches: dict[str, _Batch] = {}
         for name, (items, R, p, nominal, deformed) in solved.items():
-            err_p, err_r = s.deformed_chain.pose_error(np.nan_to_num(nominal.q_deg) * DEG, R, p)
+            err_p, err_r = s.deformed_pose_error(np.nan_to_num(nominal.q_deg) * DEG, R, p)
             qc = np.nan_to_num(deformed.q_deg) * DEG
             Rn, pn = s.nominal_chain.fk(qc)
             _, frames = s.nominal_chain.joint_frames(qc)
@@ -556,7 +556,7 @@ def _verify(plan: _Plan, out_pf: ParsedFile) -> dict[int, tuple[float, float]]:
     for i, (_, u) in enumerate(want):
         name, j = plan.group_of[id(u)].sol[u.source.element]
         R[i], p[i] = plan.batches[name].R[j], plan.batches[name].p[j]
-    err_p, err_r = s.deformed_chain.pose_error(np.nan_to_num(q) * DEG, R, p)
+    err_p, err_r = s.deformed_pose_error(np.nan_to_num(q) * DEG, R, p)
     out = {}
     for i, (_, u) in enumerate(want):
         if np.isnan(q[i]).any():

@@ -134,3 +134,11 @@ def rotation_log(R) -> np.ndarray:
 def rpy_matrix(rx, ry, rz) -> np.ndarray:
     """R = Rz(rz) . Ry(ry) . Rx(rx), angles in radians (profile semantics)."""
     return rot_z(rz) @ rot_y(ry) @ rot_x(rx)
+
+
+def rpy_angles(R) -> tuple[float, float, float]:
+    """rx, ry, rz (radians) with R = Rz(rz) . Ry(ry) . Rx(rx); the inverse of
+    rpy_matrix for |ry| < 90 deg (all the small rotations a profile holds)."""
+    R = np.asarray(R, dtype=float)
+    ry = np.arctan2(-R[2, 0], np.hypot(R[0, 0], R[1, 0]))
+    return float(np.arctan2(R[2, 1], R[2, 2])), float(ry), float(np.arctan2(R[1, 0], R[0, 0]))

@@ -173,6 +173,9 @@ class Solver:
         self.nominal_chain = Chain.from_robot(nominal)
         self.geometry = ArmGeometry.from_chain(self.nominal_chain)
         self.deformed_chain = Chain.from_robot(deformed) if deformed is not None else None
+        # Joint-space terms (offset, scale, compliance) of the deformed model:
+        # Newton solves for the actual angles, the commanded ones are sent.
+        self.joint_map = deformed.joint_map if deformed is not None else None
         self.lower = np.asarray(nominal.lower_deg)
         self.upper = np.asarray(nominal.upper_deg)
 
@@ -259,6 +262,12 @@ class Solver:
                        np.zeros(N, dtype=int), warnings)
 
     # ------------------------------------------------------------ deformed
+    def deformed_pose_error(self, q_cmd: np.ndarray, R: np.ndarray, p: np.ndarray):
+        """Flange error (mm, rad) of the deformed robot commanded q_cmd (rad)
+        against the poses R, p."""
+        q = self.joint_map.apply(q_cmd) if self.joint_map is not None else q_cmd
+        return self.deformed_chain.pose_error(q, R, p)
+
     def solve_deformed(self, R: np.ndarray, p: np.ndarray, seed: IKBatch) -> IKBatch:
         """Joint angles with which the deformed robot reaches R, p.
 
@@ -312,6 +321,9 @@ class Solver:
             q[idx_next] += dq
             iters[idx_next] += 1
             idx = idx_next
+        q_act = q
+        if self.joint_map is not None:
+            q = np.where(active[:, None], self.joint_map.invert(q_act), 0.0)
         qd = q / DEG
         detail = seed.detail.copy()
         djoint = seed.detail_joint.copy()
@@ -327,7 +339,7 @@ class Solver:
         detail[jump] = big[np.arange(N), jmax][jump]
         djoint[jump] = jmax[jump]
         # Configuration of the result, from the deformed robot's own wrist centre.
-        _, ps = chain.joint_frames(q)
+        _, ps = chain.joint_frames(q_act)
         conf = confdata(q, ps[:, 4], self.geometry.phi)
         warnings = seed.warnings | self._singularity_warnings(q, ps[:, 4])
         flipped = (conf[:, 3] ^ seed.conf[:, 3]) & 7

@@ -12,6 +12,20 @@ built-in model): placement_i' = placement_i . Delta_i with
 Delta_i = (R, d), R = Rz(rz).Ry(ry).Rx(rx), d = (dx, dy, dz): rotate about
 the joint's origin, then translate. Missing rows are zero; an optional
 `flange` row displaces the flange frame.
+
+Extended format (written by `rapidcomp discover --out-profile`; the plain
+file above is a valid extended file). Four optional columns and two more
+row names carry the effects that are not frame displacements:
+
+    joint,dx_mm,...,rz_deg,offset_deg,scale,compliance_deg_per_nm,mass_kg
+    J2,0,0,0,0,0,0,0.004,0,1.2e-4,        joint-space terms of J2
+    base,0.02,0,0,0,0,0.001,,,,           world_M_base = (Rz.Ry.Rx, d)
+    payload,0,0,60,0,0,0,,,,2.5           flange load: CoM (flange frame), kg
+
+offset/scale/compliance apply to joint rows only (jointmap.py:
+q_actual = q_cmd (1 + scale) + offset + compliance * tau_gravity(q_cmd)),
+mass_kg to the payload row only, whose dx..dz are the centre of mass. An
+empty cell is 0.
 """
 
 from __future__ import annotations
@@ -26,12 +40,17 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InputError
-from .frames import DEG, rpy_matrix
+from .frames import DEG, rpy_angles, rpy_matrix
+from .gravity import NO_PAYLOAD, GravityModel, Payload
+from .jointmap import JointMap
 from .robot import RobotModel
 
 COLUMNS = ("joint", "dx_mm", "dy_mm", "dz_mm", "rx_deg", "ry_deg", "rz_deg")
+EXTRA_COLUMNS = ("offset_deg", "scale", "compliance_deg_per_nm", "mass_kg")
 MAX_SHIFT_MM = 5.0
 MAX_ROTATION_DEG = 1.0
+MAX_SCALE = 0.01
+MAX_COMPLIANCE_DEG_PER_NM = 0.01
 
 
 @dataclass(frozen=True, slots=True)
@@ -47,16 +66,40 @@ class Displacement:
         rx, ry, rz = (a * DEG for a in self.r_deg)
         return pin.SE3(rpy_matrix(rx, ry, rz), np.asarray(self.d_mm, dtype=float))
 
+    @classmethod
+    def from_se3(cls, M: pin.SE3) -> "Displacement":
+        rx, ry, rz = rpy_angles(np.array(M.rotation))
+        return cls(tuple(float(x) for x in M.translation),
+                   (float(rx / DEG), float(ry / DEG), float(rz / DEG)))
+
 
 ZERO = Displacement((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
 
 
+@dataclass(frozen=True, slots=True)
+class JointTerms:
+    offset_deg: float = 0.0
+    scale: float = 0.0
+    compliance_deg_per_nm: float = 0.0
+
+    @property
+    def is_zero(self) -> bool:
+        return not (self.offset_deg or self.scale or self.compliance_deg_per_nm)
+
+
+NO_TERMS = JointTerms()
+
+
 @dataclass(frozen=True)
 class ThermalProfile:
-    """Displacement per joint name ("J1".."J6") and optionally "flange"."""
+    """Displacement per joint name ("J1".."J6") and optionally "flange";
+    the extended format's base frame, joint-space terms and payload."""
 
     displacements: tuple[tuple[str, Displacement], ...]
     source: str = "<profile>"
+    base: Displacement = ZERO
+    joint_terms: tuple[tuple[str, JointTerms], ...] = ()
+    payload: Payload = NO_PAYLOAD
 
     def get(self, name: str) -> Displacement:
         for key, disp in self.displacements:
@@ -64,14 +107,27 @@ class ThermalProfile:
                 return disp
         return ZERO
 
+    def terms(self, name: str) -> JointTerms:
+        for key, t in self.joint_terms:
+            if key.lower() == name.lower():
+                return t
+        return NO_TERMS
+
     @property
     def is_zero(self) -> bool:
-        return all(d.is_zero for _, d in self.displacements)
+        return (all(d.is_zero for _, d in self.displacements) and self.base.is_zero
+                and all(t.is_zero for _, t in self.joint_terms))
+
+    @property
+    def is_extended(self) -> bool:
+        return (not self.base.is_zero or any(not t.is_zero for _, t in self.joint_terms)
+                or self.payload.mass_kg > 0)
 
 
 def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "J5", "J6"),
                   force: bool = False) -> ThermalProfile:
-    allowed = {n.lower(): n for n in joint_names} | {"flange": "flange"}
+    allowed = {n.lower(): n for n in joint_names} | {
+        "flange": "flange", "base": "base", "payload": "payload"}
     rows = list(csv.reader(io.StringIO(text)))
     # Skip leading blank lines and '#' comments, but keep line numbers right.
     numbered = [(i + 1, r) for i, r in enumerate(rows) if r and not r[0].strip().startswith("#")]
@@ -83,9 +139,11 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
     if missing:
         raise InputError(source, f"missing column(s) {', '.join(missing)}; expected the header "
                          + ",".join(COLUMNS), head_line)
-    index = {c: header.index(c) for c in COLUMNS}
+    columns = COLUMNS + tuple(c for c in EXTRA_COLUMNS if c in header)
+    index = {c: header.index(c) for c in columns}
     seen: dict[str, int] = {}
-    out = []
+    disps, terms = [], []
+    base, payload = ZERO, NO_PAYLOAD
     for line, row in numbered[1:]:
         if all(not cell.strip() for cell in row):
             continue
@@ -95,31 +153,68 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
         key = allowed.get(name.lower())
         if key is None:
             raise InputError(source, f"unknown joint {name!r}; expected one of "
-                             + ", ".join([*joint_names, "flange"]), line)
+                             + ", ".join([*joint_names, "flange", "base", "payload"]), line)
         if key in seen:
             raise InputError(source, f"duplicate row for {key} (first on line {seen[key]})", line)
         seen[key] = line
-        values = []
-        for col in COLUMNS[1:]:
+        v = {}
+        for col in columns[1:]:
             cell = row[index[col]].strip()
             try:
-                v = float(cell)
+                v[col] = float(cell) if cell else 0.0
             except ValueError:
                 raise InputError(source, f"{col} is {cell!r}, expected a number", line) from None
-            if not math.isfinite(v):
+            if not math.isfinite(v[col]):
                 raise InputError(source, f"{col} is {cell}, expected a finite number", line)
-            values.append(v)
-        d, r = tuple(values[:3]), tuple(values[3:])
+        extra = {c: v.get(c, 0.0) for c in EXTRA_COLUMNS}
+        is_joint = key not in ("flange", "base", "payload")
+        for col in EXTRA_COLUMNS[:3] if not is_joint else ():
+            if extra[col]:
+                raise InputError(source, f"{col} applies to joint rows only, not {key}", line)
+        if key != "payload" and extra["mass_kg"]:
+            raise InputError(source, f"mass_kg applies to the payload row only, not {key}", line)
+        d = (v["dx_mm"], v["dy_mm"], v["dz_mm"])
+        r = (v["rx_deg"], v["ry_deg"], v["rz_deg"])
+        if key == "payload":
+            if any(r):
+                raise InputError(source, "the payload row takes a centre of mass (dx_mm, dy_mm, "
+                                 "dz_mm) and mass_kg; its rotations must be 0", line)
+            if not 0 <= extra["mass_kg"] <= 1000:
+                raise InputError(source, f"mass_kg is {extra['mass_kg']}, expected 0..1000", line)
+            payload = Payload(extra["mass_kg"], d)
+            continue
         if not force:
-            if math.hypot(*d) > MAX_SHIFT_MM:
-                raise InputError(source, f"{key} shift of {math.hypot(*d):.3f} mm exceeds "
-                                 f"{MAX_SHIFT_MM} mm (thermal shifts are microns; use --force "
-                                 "if this is intended)", line)
-            if max(abs(a) for a in r) > MAX_ROTATION_DEG:
-                raise InputError(source, f"{key} rotation of {max(abs(a) for a in r)} deg "
-                                 f"exceeds {MAX_ROTATION_DEG} deg (use --force if intended)", line)
-        out.append((key, Displacement(d, r)))
-    return ThermalProfile(tuple(out), source)
+            _check_size(source, line, key, d, r, extra)
+        if extra["compliance_deg_per_nm"] < 0:
+            raise InputError(source, f"{key} compliance_deg_per_nm is "
+                             f"{extra['compliance_deg_per_nm']}, expected >= 0 (a joint yields "
+                             "to gravity, it does not push against it)", line)
+        if key == "base":
+            base = Displacement(d, r)
+            continue
+        disps.append((key, Displacement(d, r)))
+        if is_joint:
+            jt = JointTerms(extra["offset_deg"], extra["scale"], extra["compliance_deg_per_nm"])
+            if not jt.is_zero:
+                terms.append((key, jt))
+    return ThermalProfile(tuple(disps), source, base, tuple(terms), payload)
+
+
+def _check_size(source, line, key, d, r, extra) -> None:
+    if math.hypot(*d) > MAX_SHIFT_MM:
+        raise InputError(source, f"{key} shift of {math.hypot(*d):.3f} mm exceeds "
+                         f"{MAX_SHIFT_MM} mm (thermal shifts are microns; use --force "
+                         "if this is intended)", line)
+    rot = max(abs(a) for a in (*r, extra["offset_deg"]))
+    if rot > MAX_ROTATION_DEG:
+        raise InputError(source, f"{key} rotation of {rot} deg "
+                         f"exceeds {MAX_ROTATION_DEG} deg (use --force if intended)", line)
+    if abs(extra["scale"]) > MAX_SCALE:
+        raise InputError(source, f"{key} scale of {extra['scale']} exceeds {MAX_SCALE} "
+                         "(use --force if intended)", line)
+    if extra["compliance_deg_per_nm"] > MAX_COMPLIANCE_DEG_PER_NM:
+        raise InputError(source, f"{key} compliance of {extra['compliance_deg_per_nm']} deg/N m "
+                         f"exceeds {MAX_COMPLIANCE_DEG_PER_NM} (use --force if intended)", line)
 
 
 def read_profile(path: str | Path, force: bool = False, joint_names=None) -> ThermalProfile:
@@ -134,6 +229,50 @@ def read_profile(path: str | Path, force: bool = False, joint_names=None) -> The
     return parse_profile(text, str(path), force=force, **kwargs)
 
 
+def _num(x: float) -> str:
+    # 12 significant digits: far below a micron or a microdegree, and the
+    # written file reproduces the model it describes (tested).
+    text = format(float(x), ".12g")
+    return "0" if text in ("0", "-0") else text
+
+
+def format_profile(profile: ThermalProfile, joint_names, comments=()) -> str:
+    """CSV text of a profile: the plain 7 columns unless an extended term is
+    non-zero, then the extended header (parse_profile reads both)."""
+    extended = profile.is_extended
+    header = COLUMNS + (EXTRA_COLUMNS if extended else ())
+    lines = [f"# {c}" for c in comments] + [",".join(header)]
+
+    def row(name, disp: Displacement, extra=("", "", "", "")):
+        cells = [name, *map(_num, disp.d_mm), *map(_num, disp.r_deg)]
+        return ",".join(cells + (list(extra) if extended else []))
+
+    for name in joint_names:
+        t = profile.terms(name)
+        lines.append(row(name, profile.get(name), (_num(t.offset_deg), _num(t.scale),
+                                                   _num(t.compliance_deg_per_nm), "")))
+    if not profile.get("flange").is_zero:
+        lines.append(row("flange", profile.get("flange")))
+    if not profile.base.is_zero:
+        lines.append(row("base", profile.base))
+    if profile.payload.mass_kg > 0:
+        lines.append(row("payload", Displacement(profile.payload.com_mm, (0.0, 0.0, 0.0)),
+                         ("", "", "", _num(profile.payload.mass_kg))))
+    return "\n".join(lines) + "\n"
+
+
+def joint_map(robot: RobotModel, profile: ThermalProfile) -> JointMap | None:
+    """The profile's joint-space terms for `robot`, None when there are none."""
+    names = robot.joint_names
+    t = [profile.terms(n) for n in names]
+    if all(x.is_zero for x in t):
+        return None
+    comp = np.array([x.compliance_deg_per_nm for x in t]) * DEG
+    gravity = GravityModel.from_robot(robot, profile.payload) if np.any(comp) else None
+    return JointMap(np.array([x.offset_deg for x in t]) * DEG, np.array([x.scale for x in t]),
+                    comp, gravity)
+
+
 def deform(robot: RobotModel, profile: ThermalProfile) -> RobotModel:
     """A deformed copy of `robot`; the nominal model is left untouched."""
     model = robot.copy_model()
@@ -141,10 +280,12 @@ def deform(robot: RobotModel, profile: ThermalProfile) -> RobotModel:
         disp = profile.get(model.names[jid])
         if not disp.is_zero:
             model.jointPlacements[jid] = model.jointPlacements[jid] * disp.se3()
+    if not profile.base.is_zero:
+        model.jointPlacements[1] = profile.base.se3() * model.jointPlacements[1]
     flange = profile.get("flange")
     if not flange.is_zero:
         frame = model.frames[robot.flange_frame]
         frame.placement = frame.placement * flange.se3()
         model.frames[robot.flange_frame] = frame
     return RobotModel(robot.name + "+thermal", model, robot.flange_frame,
-                      robot.lower_deg, robot.upper_deg)
+                      robot.lower_deg, robot.upper_deg, joint_map(robot, profile))

@@ -30,6 +30,9 @@ class RobotModel:
     flange_frame: int
     lower_deg: tuple[float, ...]
     upper_deg: tuple[float, ...]
+    # Joint-space terms of a deformed model (jointmap.JointMap): commanded ->
+    # actual angles. None for a nominal model and plain thermal profiles.
+    joint_map: object = None
 
     @property
     def nq(self) -> int:
@@ -43,15 +46,19 @@ class RobotModel:
         """A copy with other joint limits (sources differ, e.g. J5 +-115 vs +-120)."""
         return RobotModel(self.name, self.model, self.flange_frame,
                           tuple(lower_deg) if lower_deg is not None else self.lower_deg,
-                          tuple(upper_deg) if upper_deg is not None else self.upper_deg)
+                          tuple(upper_deg) if upper_deg is not None else self.upper_deg,
+                          self.joint_map)
 
     def copy_model(self) -> pin.Model:
         return pin.Model(self.model)
 
     def base_M_flange(self, q_deg) -> pin.SE3:
-        """Forward kinematics with Pinocchio (one configuration, degrees)."""
+        """Forward kinematics with Pinocchio (one configuration, commanded
+        degrees; a deformed model's joint-space terms are applied)."""
         data = self.model.createData()
         q = np.asarray(q_deg, dtype=float) * DEG
+        if self.joint_map is not None:
+            q = self.joint_map.apply(q[None])[0]
         pin.framesForwardKinematics(self.model, data, q)
         return pin.SE3(data.oMf[self.flange_frame])
 

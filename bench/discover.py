@@ -1,0 +1,85 @@
+"""Benchmark of `rapidcomp discover`: 80 random poses, the full effect
+catalogue, two hidden effects and 5 um noise; seconds per stage.
+
+    python bench/discover.py [--points 80] [--repeat 3]
+
+Goal (issue #5): the whole discovery within 5 s on 2 cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from rapidcomp.discover import report
+from rapidcomp.discover.effects import catalogue
+from rapidcomp.discover.measured import Measurements
+from rapidcomp.discover.model import ParamModel
+from rapidcomp.discover.points import random_points
+from rapidcomp.discover.select import discover
+from rapidcomp.discover.simulate import add_noise, parse_effect_values, simulate_positions
+from rapidcomp.kinematics.profile import ThermalProfile
+from rapidcomp.kinematics.robot import irb140
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--points", type=int, default=80)
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    robot = irb140()
+    prof = ThermalProfile(())
+    cat = catalogue(robot)
+    tool = (0.0, 0.0, 150.0)
+    names, q = random_points(robot, args.points, 1)
+    values = parse_effect_values(cat, ["gravity_compliance:J2=0.0001",
+                                       "joint_displacement:J3=0.04,-0.05,0.03"])
+    print(f"{args.points} points, {len(cat)} candidate effects "
+          f"({sum(e.size for e in cat)} parameters), best of {args.repeat}")
+    print(f"{'sigma':>10} {'simulate':>9} {'model':>7} {'discover':>9} {'report':>7} "
+          f"{'total s':>8} {'steps':>6} {'fits':>6}")
+    for sigma in (0.005, None):
+        best = None
+        for _ in range(args.repeat):
+            t0 = time.perf_counter()
+            xyz = add_noise(simulate_positions(robot, prof, values, q, tool), 0.005, 2)
+            t1 = time.perf_counter()
+            model = ParamModel(robot, prof, q, tool)
+            data = Measurements("bench", names, q, xyz, tuple(range(len(q))))
+            t2 = time.perf_counter()
+            calls = _count_fits()
+            d = discover(model, data, cat, sigma)
+            t3 = time.perf_counter()
+            report.markdown(d, {})
+            report.as_json(d)
+            t4 = time.perf_counter()
+            row = (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t4 - t0, len(d.steps), calls())
+            best = row if best is None or row[4] < best[4] else best
+        label = "given" if sigma else "estimated"
+        print(f"{label:>10} {best[0]:8.3f}s {best[1]:6.3f}s {best[2]:8.3f}s {best[3]:6.3f}s "
+              f"{best[4]:8.3f} {best[5]:6d} {best[6]:6d}")
+        print("           named: " + ", ".join(s.effect.id for s in d.steps) + f"; {d.verdict}")
+
+
+def _count_fits():
+    """Count least-squares fits made by discover (a measure of its work)."""
+    from rapidcomp.discover import select
+    count = [0]
+    original = select.fit
+
+    def counted(*a, **k):
+        count[0] += 1
+        return original(*a, **k)
+    select.fit = counted
+
+    def done():
+        select.fit = original
+        return count[0]
+    return done
+
+
+if __name__ == "__main__":
+    np.seterr(all="raise")
+    main()

@@ -1,0 +1,1 @@
+"""rapidcomp discover and simulate: name the effect a model misses."""

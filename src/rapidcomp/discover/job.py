@@ -1,0 +1,165 @@
+"""`rapidcomp discover` and `rapidcomp simulate` as calls: load, compute,
+render every output in memory. The caller writes the files all at once
+(atomic.py) so that bad input leaves nothing behind."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import RapidcompError
+from ..kinematics.gravity import Payload
+from ..kinematics.profile import ThermalProfile, format_profile, read_profile
+from . import plot, report
+from .effects import catalogue, to_profile
+from .measured import format_measured, read_joints, read_measured
+from .model import ParamModel
+from .points import cube_points, random_points
+from .select import Discovery, discover
+from .simulate import add_noise, detectability, parse_effect_values, simulate_positions
+
+
+@dataclass(frozen=True)
+class Outcome:
+    summary: tuple[str, ...]
+    notes: tuple[str, ...]
+    files: tuple[tuple[str, bytes], ...]
+    discovery: Discovery | None = None
+
+
+def _load(robot: str | None, profile: str | None, force: bool, payload):
+    from ..compensate.job import load_robot
+    nominal = load_robot(robot)
+    if profile:
+        prof = read_profile(profile, force=force, joint_names=nominal.joint_names)
+    else:
+        prof = ThermalProfile((), "<none>")
+    if payload is not None:
+        prof = replace(prof, payload=Payload(payload[0], tuple(payload[1:])))
+    return nominal, prof
+
+
+def _check_outputs(outputs, inputs) -> None:
+    seen = set()
+    for path in outputs:
+        real = os.path.realpath(path)
+        if real in seen or any(os.path.realpath(i) == real for i in inputs if i):
+            raise RapidcompError(f"{path}: would overwrite an input or another output")
+        seen.add(real)
+
+
+def _payload_text(p: Payload) -> str:
+    if p.mass_kg <= 0:
+        return "none"
+    return f"{p.mass_kg:g} kg at ({', '.join(f'{x:g}' for x in p.com_mm)}) mm in the flange frame"
+
+
+def run_discover(measured: str, profile: str | None = None, robot: str | None = None,
+                 tool=(0.0, 0.0, 0.0), payload=None, sigma: float | None = None,
+                 report_path: str | None = None, json_path: str | None = None,
+                 plot_path: str | None = None, out_profile: str | None = None,
+                 force: bool = False) -> Outcome:
+    outputs = [p for p in (report_path, json_path, plot_path, out_profile) if p]
+    _check_outputs(outputs, [measured, profile, robot])
+    if sigma is not None and not sigma > 0:
+        raise RapidcompError(f"--sigma {sigma}: expected a positive standard deviation in mm")
+    nominal, prof = _load(robot, profile, force, payload)
+    data = read_measured(measured)
+    model = ParamModel(nominal, prof, data.q_deg, tool)
+    effects = catalogue(nominal)
+    d = discover(model, data, effects, sigma)
+    notes = []
+    if data.ignored_columns:
+        notes.append(f"{Path(measured).name}: column(s) {', '.join(data.ignored_columns)} "
+                     "ignored")
+    meta = {"measured": Path(measured).name,
+            "model": (f"{Path(robot).name if robot else 'irb140'} + "
+                      f"{Path(profile).name if profile else 'no profile'}"),
+            "measuring point": f"({', '.join(f'{x:g}' for x in tool)}) mm in the flange frame",
+            "payload": _payload_text(prof.payload)}
+    files = []
+    plot_note = None
+    if plot_path:
+        if plot.available():
+            files.append((plot_path, plot.residual_plot(
+                data.xyz_mm, d.initial_residuals, d.final_fit.residuals,
+                f"{Path(measured).name}: measured - simulated")))
+        else:
+            plot_note = plot.MISSING
+            notes.append(plot.MISSING)
+    if report_path:
+        files.append((report_path, report.markdown(d, meta, plot_note).encode("utf-8")))
+    if json_path:
+        files.append((json_path, report.as_json(d).encode("utf-8")))
+    if out_profile:
+        new = to_profile(nominal, prof, d.named_values())
+        comments = [f"written by rapidcomp discover from {Path(measured).name} "
+                    f"(base profile: {Path(profile).name if profile else 'none'})",
+                    "effects: " + (", ".join(s.effect.id for s in d.steps) or "none")]
+        if any(e.kind == "tool_offset" for e in d.final_fit.effects):
+            comments.append("tool_offset is written into the flange row; if it is an error of "
+                            "the measuring point's mounting, not of the robot, remove it "
+                            "before using this profile with fix")
+        files.append((out_profile, format_profile(new, nominal.joint_names,
+                                                  comments).encode("utf-8")))
+    return Outcome(tuple(report.summary_lines(d)), tuple(notes), tuple(files), d)
+
+
+def point_set(spec: str, robot, seed: int):
+    """`cube`, `random:N` or a CSV of joints."""
+    if spec == "cube":
+        return cube_points(robot)
+    if spec.startswith("random"):
+        try:
+            count = int(spec.split(":", 1)[1]) if ":" in spec else 80
+        except ValueError:
+            count = 0
+        if count < 1:
+            raise RapidcompError(f"--points {spec}: expected random:N with N a positive count")
+        return random_points(robot, count, seed)
+    if not os.path.isfile(spec):
+        raise RapidcompError(f"--points {spec}: expected cube, random:N or a CSV file of joints "
+                             "(point,j1..j6)")
+    return read_joints(spec)
+
+
+def run_simulate(output: str, points: str = "cube", profile: str | None = None,
+                 robot: str | None = None, tool=(0.0, 0.0, 0.0), payload=None,
+                 effects=(), noise: float = 0.005, seed: int = 0,
+                 table_path: str | None = None, force: bool = False) -> Outcome:
+    _check_outputs([p for p in (output, table_path) if p],
+                   [profile, robot, points if os.path.isfile(points) else None])
+    if not noise >= 0:
+        raise RapidcompError(f"--noise {noise}: expected a standard deviation >= 0 in mm")
+    nominal, prof = _load(robot, profile, force, payload)
+    cat = catalogue(nominal)
+    values = parse_effect_values(cat, effects)
+    names, q = point_set(points, nominal, seed)
+    exact = simulate_positions(nominal, prof, values, q, tool)
+    xyz = add_noise(exact, noise, seed) if noise > 0 else exact
+    shift = np.linalg.norm(exact - simulate_positions(nominal, prof, {}, q, tool), axis=1)
+    effect_text = ", ".join(f"{e.id}=" + ",".join(f"{v:g}" for v in e.user(val).values())
+                            for e, val in values.items()) or "none"
+    comments = [f"simulated by rapidcomp simulate: points {Path(points).name}, model "
+                f"{Path(robot).name if robot else 'irb140'} + "
+                f"{Path(profile).name if profile else 'no profile'}",
+                f"effects: {effect_text}",
+                f"measuring point ({', '.join(f'{x:g}' for x in tool)}) mm in the flange "
+                f"frame; payload {_payload_text(prof.payload)}",
+                f"noise {noise:g} mm per axis, seed {seed}"]
+    files = [(output, format_measured(names, q, xyz, comments).encode("utf-8"))]
+    rows = detectability(ParamModel(nominal, prof, q, tool), cat, noise if noise > 0 else 0.005)
+    meta = {"points": f"{Path(points).name} ({len(names)})",
+            "noise": f"{(noise if noise > 0 else 0.005) * 1000:g} um per axis"
+                     + ("" if noise > 0 else " (assumed: --noise is 0)"),
+            "measuring point": f"({', '.join(f'{x:g}' for x in tool)}) mm in the flange frame"}
+    table = report.detectability_markdown(rows, meta)
+    if table_path:
+        files.append((table_path, table.encode("utf-8")))
+    summary = (f"{len(names)} points, effects: {effect_text}; TCP shift by the effects max "
+               f"{shift.max() * 1000:.1f} um, RMS {np.sqrt(np.mean(shift ** 2)) * 1000:.1f} um; "
+               f"noise {noise:g} mm",)
+    return Outcome(summary + ("",) + tuple(table.splitlines()), (), tuple(files))

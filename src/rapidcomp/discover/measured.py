@@ -1,0 +1,123 @@
+"""Measured-data files: `point,j1,j2,j3,j4,j5,j6,x,y,z`.
+
+Joints are the commanded angles (deg), x/y/z the measured position (mm, robot
+base frame) of the measuring point. Lines starting with '#' are comments
+(simulate writes its provenance there); extra columns are ignored and
+reported; any bad row is a path:line error.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+
+JOINT_COLUMNS = ("j1", "j2", "j3", "j4", "j5", "j6")
+COLUMNS = ("point",) + JOINT_COLUMNS + ("x", "y", "z")
+MIN_POINTS = 3
+
+
+@dataclass(frozen=True, eq=False)
+class Measurements:
+    source: str
+    names: tuple[str, ...]
+    q_deg: np.ndarray     # (N, 6) commanded joints
+    xyz_mm: np.ndarray    # (N, 3) measured positions
+    lines: tuple[int, ...]
+    ignored_columns: tuple[str, ...] = ()
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+
+def _rows(text: str):
+    rows = list(csv.reader(io.StringIO(text)))
+    return [(i + 1, r) for i, r in enumerate(rows)
+            if r and any(c.strip() for c in r) and not r[0].strip().startswith("#")]
+
+
+def parse_table(text: str, source: str, columns, numeric, min_rows: int):
+    """Rows of a CSV with a header holding `columns` (any order, extra
+    columns ignored): (names, values (N, len(numeric)), lines, ignored)."""
+    numbered = _rows(text)
+    if not numbered:
+        raise InputError(source, "empty file; expected the header " + ",".join(columns), 1)
+    head_line, header = numbered[0]
+    header = [h.strip().lower() for h in header]
+    missing = [c for c in columns if c not in header]
+    if missing:
+        raise InputError(source, f"missing column(s) {', '.join(missing)}; expected the header "
+                         + ",".join(columns), head_line)
+    ignored = tuple(h for h in header if h not in columns)
+    index = {c: header.index(c) for c in columns}
+    names, values, lines = [], [], []
+    seen: dict[str, int] = {}
+    for line, row in numbered[1:]:
+        if len(row) < len(header):
+            raise InputError(source, f"{len(row)} values, expected {len(header)}", line)
+        name = row[index["point"]].strip() if "point" in index else str(len(names) + 1)
+        if not name:
+            raise InputError(source, "the point has no name", line)
+        if name in seen:
+            raise InputError(source, f"duplicate point {name!r} (first on line {seen[name]})", line)
+        seen[name] = line
+        vals = []
+        for col in numeric:
+            cell = row[index[col]].strip()
+            try:
+                v = float(cell)
+            except ValueError:
+                raise InputError(source, f"{col} is {cell!r}, expected a number", line) from None
+            if not math.isfinite(v):
+                raise InputError(source, f"{col} is {cell}, expected a finite number", line)
+            vals.append(v)
+        names.append(name)
+        values.append(vals)
+        lines.append(line)
+    if len(names) < min_rows:
+        raise InputError(source, f"{len(names)} point(s), expected at least {min_rows}",
+                         numbered[-1][0])
+    return tuple(names), np.array(values, float), tuple(lines), ignored
+
+
+def read_text(path: str | Path) -> str:
+    path = Path(path)
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise InputError(str(path), f"cannot read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise InputError(str(path), "not UTF-8 text") from None
+
+
+def parse_measured(text: str, source: str) -> Measurements:
+    names, values, lines, ignored = parse_table(text, source, COLUMNS, COLUMNS[1:], MIN_POINTS)
+    return Measurements(source, names, values[:, :6], values[:, 6:], lines, ignored)
+
+
+def read_measured(path: str | Path) -> Measurements:
+    return parse_measured(read_text(path), str(path))
+
+
+def read_joints(path: str | Path) -> tuple[tuple[str, ...], np.ndarray]:
+    """A point set for simulate: `point,j1..j6`, or `j1..j6` alone (points
+    then named by their row number)."""
+    text = read_text(path)
+    first = _rows(text)[:1]
+    named = bool(first) and "point" in [h.strip().lower() for h in first[0][1]]
+    columns = (("point",) if named else ()) + JOINT_COLUMNS
+    names, values, _, _ = parse_table(text, str(path), columns, JOINT_COLUMNS, 1)
+    return names, values
+
+
+def format_measured(names, q_deg, xyz_mm, comments=()) -> str:
+    out = [f"# {c}" for c in comments] + [",".join(COLUMNS)]
+    for name, q, x in zip(names, q_deg, xyz_mm):
+        out.append(",".join([name, *(f"{v:.6f}" for v in q), *(f"{v:.6f}" for v in x)]))
+    return "\n".join(out) + "\n"

@@ -1,0 +1,142 @@
+"""The simulation of a measurement campaign: where the model (robot +
+profile + effects at given values) puts the measuring point, with the exact
+Jacobian with respect to every effect parameter.
+
+This is a chain evaluator of its own, written from the effect definitions
+in effects.py; `rapidcomp simulate` makes data with Pinocchio on the model
+`effects.to_profile` builds, and tests/test_discover_model.py checks that
+the two agree to 1e-9 mm and that the Jacobian matches central differences.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..kinematics.chain import Chain
+from ..kinematics.frames import DEG, rot_axis, rot_x, rot_y, rot_z
+from ..kinematics.gravity import GravityModel, Payload
+from ..kinematics.profile import ThermalProfile, deform
+from ..kinematics.robot import RobotModel
+from .effects import Effect, tilt_rotation
+
+# A Jacobian column below this (mm per internal unit: rad, mm, 1, rad/(N m))
+# is round-off: the parameter does not move the measuring point (a J6
+# offset with the point on the J6 axis, the compliance of a vertical axis).
+ZERO_COLUMN = 1e-8
+
+
+class ParamModel:
+    """Measuring point positions (base frame, mm) for N commanded joint
+    vectors; `evaluate` adds effects at internal values."""
+
+    def __init__(self, robot: RobotModel, profile: ThermalProfile, q_deg: np.ndarray,
+                 tool_mm=(0.0, 0.0, 0.0), payload: Payload | None = None):
+        if payload is not None:
+            profile = replace(profile, payload=payload)
+        self.robot = robot
+        self.profile = profile
+        deformed = deform(robot, profile)
+        self.chain = Chain.from_robot(deformed)
+        self.nominal = Chain.from_robot(robot)
+        self.q_cmd = np.asarray(q_deg, float) * DEG
+        jm = deformed.joint_map
+        self.q0 = jm.apply(self.q_cmd) if jm is not None else self.q_cmd.copy()
+        self.tau_nm = GravityModel.from_robot(robot, profile.payload).torques_nm(self.q_cmd)
+        self.tool = np.asarray(tool_mm, float)
+        self.n = len(self.chain.trans)
+
+    @property
+    def size(self) -> int:
+        return len(self.q_cmd)
+
+    def evaluate(self, effects: tuple[Effect, ...], values, jacobian: bool = True):
+        """Positions (N, 3) and, if asked, the Jacobian (N, 3, P) with
+        respect to the concatenated internal parameters of `effects`."""
+        vals = [np.asarray(v, float) for v in values]
+        n, N = self.n, self.size
+        q = self.q0.copy()
+        eps = np.zeros(n + 1)
+        disp = np.zeros((n, 3))
+        tilt = [np.eye(3) for _ in range(n)]
+        tool = self.tool.copy()
+        T_ang, T_d = np.zeros(3), np.zeros(3)
+        for e, v in zip(effects, vals):
+            k = e.joint
+            if e.kind == "joint_offset":
+                q[:, k] += v[0]
+            elif e.kind == "joint_scale":
+                q[:, k] += v[0] * self.q_cmd[:, k]
+            elif e.kind == "gravity_compliance":
+                q[:, k] += v[0] * self.tau_nm[:, k]
+            elif e.kind == "link_elongation":
+                eps[k] += v[0]
+            elif e.kind == "axis_tilt":
+                tilt[k] = tilt[k] @ tilt_rotation(e, v)
+            elif e.kind == "joint_displacement":
+                disp[k] += e.axes @ v
+            elif e.kind == "tool_offset":
+                tool = tool + v
+            elif e.kind == "base_frame":
+                T_d, T_ang = T_d + v[:3], T_ang + v[3:]
+        c = self.chain
+        R = np.broadcast_to(np.eye(3), (N, 3, 3))
+        p = np.zeros((N, 3))
+        parent, W, origin, z = [], [], [], []
+        for k in range(n):
+            parent.append(R)
+            p = p + R @ (c.trans[k] + eps[k] * self.nominal.trans[k] + c.rot[k] @ disp[k])
+            Wk = R @ c.rot[k]
+            W.append(Wk)
+            Wt = Wk @ tilt[k]
+            origin.append(p)
+            z.append(Wt @ c.axes[k])
+            R = Wt @ rot_axis(c.axes[k], q[:, k])
+        last = R
+        Rf = R @ c.flange_rot
+        P = p + R @ (c.flange_trans + eps[n] * self.nominal.flange_trans) + Rf @ tool
+        Rx, Ry, Rz = rot_x(T_ang[0]), rot_y(T_ang[1]), rot_z(T_ang[2])
+        TR = Rz @ Ry @ Rx
+        X = P @ TR.T + T_d
+        if not jacobian:
+            return X, None
+        cols = []
+        for e, v in zip(effects, vals):
+            k = e.joint
+            if e.kind in ("joint_offset", "joint_scale", "gravity_compliance"):
+                d = np.cross(z[k], P - origin[k])
+                w = {"joint_offset": 1.0, "joint_scale": self.q_cmd[:, k],
+                     "gravity_compliance": self.tau_nm[:, k]}[e.kind]
+                cols.append([d * np.reshape(w, (-1, 1))])
+            elif e.kind == "link_elongation":
+                seg = self.nominal.trans[k] if k < n else self.nominal.flange_trans
+                R_par = parent[k] if k < n else last
+                cols.append([R_par @ seg])
+            elif e.kind == "axis_tilt":
+                u1, u2 = e.axes
+                w1 = W[k] @ u1
+                w2 = W[k] @ (rot_axis(u1, v[0]) @ u2)
+                cols.append([np.cross(w1, P - origin[k]), np.cross(w2, P - origin[k])])
+            elif e.kind == "joint_displacement":
+                cols.append([W[k] @ e.axes[:, j] for j in range(3)])
+            elif e.kind == "tool_offset":
+                cols.append([Rf[:, :, j] for j in range(3)])
+            elif e.kind == "base_frame":
+                cols.append(None)
+        J = np.empty((N, 3, sum(e.size for e in effects)))
+        at = 0
+        for e, block in zip(effects, cols):
+            if e.kind == "base_frame":
+                ex, ey, ez = np.eye(3)
+                for j in range(3):
+                    J[:, :, at + j] = np.eye(3)[j]
+                J[:, :, at + 3] = np.cross(ex, P @ Rx.T) @ (Rz @ Ry).T
+                J[:, :, at + 4] = np.cross(ey, P @ (Ry @ Rx).T) @ Rz.T
+                J[:, :, at + 5] = np.cross(ez, X - T_d)
+                at += 6
+                continue
+            for d in block:
+                J[:, :, at] = np.broadcast_to(d, (N, 3)) @ TR.T
+                at += 1
+        return X, J

@@ -1,0 +1,131 @@
+"""The discover report: Markdown for people (one table per step), JSON with
+exactly the keys the issue fixes, and the terminal summary. No timestamps,
+no paths beyond base names: the same input gives the same bytes."""
+
+from __future__ import annotations
+
+import json
+
+from .residuals import Analysis
+from .select import Discovery
+from .simulate import Detectability
+
+
+def _um(mm: float) -> str:
+    return f"{mm * 1000:.1f}"
+
+
+def _num(x: float) -> str:
+    return f"{x:.4g}"
+
+
+def as_json(d: Discovery) -> str:
+    doc = {
+        "initial_rms_mm": round(d.initial_rms_mm, 9),
+        "final_rms_mm": round(d.final_rms_mm, 9),
+        "verdict": d.verdict,
+        "steps": [{"effect": s.effect.id,
+                   "params": {k: float(f"{v:.9g}") for k, v in s.params.items()},
+                   "stderr": {k: float(f"{v:.3g}") for k, v in s.stderr.items()},
+                   "rms_before_mm": round(s.rms_before_mm, 9),
+                   "rms_after_mm": round(s.rms_after_mm, 9),
+                   "alternatives": list(s.alternatives)} for s in d.steps],
+    }
+    return json.dumps(doc, indent=2) + "\n"
+
+
+def _analysis(a: Analysis, title: str) -> list[str]:
+    out = [f"### {title}", "",
+           f"RMS {_um(a.rms_mm)} um, max {_um(a.max_mm)} um (point {a.max_point}), mean vector "
+           f"({', '.join(_um(x) for x in a.mean_mm)}) um.", "",
+           "| point | residual um | dx um | dy um | dz um |", "|---|---:|---:|---:|---:|"]
+    out += [f"| {name} | {_um(length)} | " + " | ".join(_um(x) for x in r) + " |"
+            for name, length, r in a.worst]
+    out += ["", "Per region (octants about the median measured position):", "",
+            "| region | points | RMS um | mean dx um | mean dy um | mean dz um |",
+            "|---|---:|---:|---:|---:|---:|"]
+    out += [f"| {r.region} | {r.points} | {_um(r.rms_mm)} | "
+            + " | ".join(_um(x) for x in r.mean_mm) + " |" for r in a.regions]
+    out += ["", "Correlation of the residual with the joint angles (Pearson r; |r| > 0.5 "
+            "marked):", "", "| joint | with length | with dx | with dy | with dz |",
+            "|---|---:|---:|---:|---:|"]
+    for c in a.correlations:
+        cells = [c.with_length, *c.with_xyz]
+        out.append(f"| {c.joint} | " + " | ".join(
+            f"**{x:+.2f}**" if abs(x) > 0.5 else f"{x:+.2f}" for x in cells) + " |")
+    return out + [""]
+
+
+def markdown(d: Discovery, meta: dict, plot_note: str | None = None) -> str:
+    out = ["# rapidcomp discover", ""]
+    out += [f"- {k}: {v}" for k, v in meta.items()]
+    out += [f"- points: {d.points}",
+            f"- noise: {d.sigma_mm * 1000:.2f} um per axis, {d.sigma_source}", "",
+            "## Verdict", "", f"**{d.verdict}** — {d.verdict_text}", "",
+            f"RMS of the 3-D residuals: {_um(d.initial_rms_mm)} um before, "
+            f"{_um(d.final_rms_mm)} um after "
+            f"({len(d.steps)} effect{'s' if len(d.steps) != 1 else ''} named).", ""]
+    if d.steps:
+        out += ["## Final model", "", "| effect | parameter | value | stderr |",
+                "|---|---|---:|---:|"]
+        errors = d.final_fit.stderr(d.sigma_mm)
+        for e, v, s in zip(d.final_fit.effects, d.final_fit.values, errors):
+            for name, val, err in zip(e.params, e.user(v).values(), e.user(s).values()):
+                out.append(f"| {e.id} | {name} | {_num(val)} | {_num(err)} |")
+        out.append("")
+    out += ["## Before fitting", ""] + _analysis(d.initial, "Residuals: measured - simulated")
+    for i, s in enumerate(d.steps, 1):
+        out += [f"## Step {i}: {s.effect.id}", "",
+                "| parameter | final value | stderr | fitted at this step |",
+                "|---|---:|---:|---:|"]
+        out += [f"| {k} | {_num(v)} | {_num(s.stderr[k])} | {_num(s.at_step[k])} |"
+                for k, v in s.params.items()]
+        out += ["", "| | all points | held out (leave one point out) |", "|---|---:|---:|",
+                f"| RMS before um | {_um(s.rms_before_mm)} | {_um(s.heldout_before_mm)} |",
+                f"| RMS after um | {_um(s.rms_after_mm)} | {_um(s.heldout_after_mm)} |", "",
+                f"Evidence: chi-square p = {s.p_value:.3g}, BIC change {s.delta_bic:.1f}, "
+                f"condition number {s.fit.cond:.3g}.",
+                f"Alternatives (explain these data equally): "
+                f"{', '.join(s.alternatives) if s.alternatives else 'none'}."]
+        if s.note:
+            out.append(f"Note: {s.note}")
+        out += ["", "Candidates at this step (best five):", "",
+                "| effect | params | RMS after um | held out um | p | BIC change |",
+                "|---|---:|---:|---:|---:|---:|"]
+        out += [f"| {c.effect} | {c.nparams} | {_um(c.rms_mm)} | {_um(c.heldout_mm)} | "
+                f"{c.p_value:.3g} | {c.delta_bic:.1f} |" for c in s.candidates[:5]]
+        out.append("")
+    if d.steps:
+        out += _analysis(d.final, "Residuals after the final model")
+    if d.not_identifiable:
+        out += ["## Not identifiable with these points", ""]
+        out += [f"- {eid}: {why}" for eid, why in d.not_identifiable]
+        out.append("")
+    if plot_note:
+        out += [f"Plot: {plot_note}", ""]
+    return "\n".join(out)
+
+
+def summary_lines(d: Discovery) -> list[str]:
+    out = [f"residual RMS {_um(d.initial_rms_mm)} um before, {_um(d.final_rms_mm)} um after; "
+           f"noise {d.sigma_mm * 1000:.2f} um per axis ({d.sigma_source.split(' (')[0]})"]
+    for i, s in enumerate(d.steps, 1):
+        params = ", ".join(f"{k}={_num(v)}±{_num(s.stderr[k])}" for k, v in s.params.items())
+        alt = f"  [alternatives: {', '.join(s.alternatives)}]" if s.alternatives else ""
+        out.append(f"step {i}: {s.effect.id}: {params}; RMS {_um(s.rms_before_mm)} -> "
+                   f"{_um(s.rms_after_mm)} um{alt}")
+    out.append(f"verdict: {d.verdict} — {d.verdict_text}")
+    return out
+
+
+def detectability_markdown(rows: tuple[Detectability, ...], meta: dict) -> str:
+    out = ["# Detectability", ""] + [f"- {k}: {v}" for k, v in meta.items()] + [
+        "", "Smallest size of each effect, alone, that discover names with 90 % probability "
+        "on this point set and noise, and the largest TCP shift it causes at that size.", "",
+        "| effect | parameter | smallest detectable | TCP shift um | note |",
+        "|---|---|---:|---:|---|"]
+    for r in rows:
+        size = "not detectable" if r.smallest is None else f"{r.smallest:.3g}"
+        tcp = "-" if r.tcp_um is None else f"{r.tcp_um:.1f}"
+        out.append(f"| {r.effect} | {r.param} | {size} | {tcp} | {r.note} |")
+    return "\n".join(out) + "\n"

@@ -1,0 +1,326 @@
+"""Forward selection: name the effect the model misses, add it, repeat
+until what is left is noise.
+
+Statistics (README "How discover decides"):
+
+- Noise sigma per axis: `--sigma`, else estimated from the fit of the whole
+  catalogue at once (dependent directions dropped): sigma^2 = RSS_full /
+  (3N - rank). An effect outside the catalogue inflates that estimate, so
+  the report says which was used and recommends --sigma.
+- Noise test: RSS / sigma^2 against chi2(3N - p). Above its 99 % quantile
+  the residuals are not noise.
+- Each candidate is fitted together with the effects already named. Its
+  evidence: the drop in RSS, which for an absent effect is sigma^2 chi2(k)
+  (k its parameters). Named only when all hold: p-value below 0.001 divided
+  by the number of candidates (Bonferroni), BIC (RSS / sigma^2 + p ln 3N)
+  lower by at least 10 ("very strong", Kass & Raftery), and the
+  leave-one-point-out RMS lower too.
+- Candidates whose RSS differs from the best's by less than the 99 %
+  quantile of chi2(max(1, |k - k_best|)) explain the data equally: the one
+  with the fewest parameters is named and the others are its
+  `alternatives`; a tie in parameters is broken by the smaller RSS and the
+  report says the data cannot tell them apart.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RapidcompError
+from .effects import Effect
+from .fit import Fit, fit, min_norm_rss
+from .measured import Measurements
+from .model import ParamModel
+from .residuals import Analysis, analyse
+from .stats import chi2_ppf, chi2_sf
+
+ALPHA = 0.001
+STRONG_BIC = 10.0
+NOISE_QUANTILE = 0.99
+EQUIVALENT_QUANTILE = 0.99
+MIN_NOISE_DOF = 10
+
+
+@dataclass(frozen=True)
+class Candidate:
+    effect: str
+    nparams: int
+    rms_mm: float
+    heldout_mm: float
+    p_value: float
+    delta_bic: float          # BIC(model + candidate) - BIC(model): negative is better
+
+
+@dataclass(frozen=True)
+class Step:
+    effect: Effect
+    fit: Fit                  # the fit at this step
+    params: dict              # final model's estimate, user units
+    stderr: dict
+    at_step: dict             # this step's own estimate
+    rms_before_mm: float
+    rms_after_mm: float
+    heldout_before_mm: float
+    heldout_after_mm: float
+    p_value: float
+    delta_bic: float
+    alternatives: tuple[str, ...]
+    note: str | None
+    candidates: tuple[Candidate, ...]   # best first
+
+
+@dataclass(frozen=True)
+class Discovery:
+    points: int
+    sigma_mm: float
+    sigma_source: str
+    initial: Analysis
+    final: Analysis
+    initial_heldout_mm: float
+    steps: tuple[Step, ...]
+    verdict: str                 # explained | noise | unexplained
+    verdict_text: str
+    noise_p: float               # p-value of the final residuals as noise
+    not_identifiable: tuple[tuple[str, str], ...]
+    final_fit: Fit
+    start_fit: Fit
+    effects: tuple[Effect, ...]
+
+    @property
+    def initial_rms_mm(self) -> float:
+        return self.initial.rms_mm
+
+    @property
+    def final_rms_mm(self) -> float:
+        return self.final.rms_mm
+
+    @property
+    def initial_residuals(self) -> np.ndarray:
+        return self.start_fit.residuals
+
+    def named_values(self) -> dict:
+        """{Effect: internal values} of the final model."""
+        return dict(zip(self.final_fit.effects, self.final_fit.values))
+
+
+def _bic(f: Fit, sigma: float, n: int) -> float:
+    return f.rss / sigma ** 2 + f.nparams * math.log(n)
+
+
+def _noise_p(f: Fit, sigma: float, n: int) -> float:
+    return chi2_sf(f.rss / sigma ** 2, max(1, n - f.nparams))
+
+
+@dataclass(frozen=True, eq=False)
+class _Scored:
+    effect: Effect
+    fit: Fit
+    candidate: Candidate
+    strong: bool
+    order: int
+
+
+class _Selector:
+    """One discover run: the data, the noise, and the fits it makes."""
+
+    def __init__(self, model: ParamModel, meas: np.ndarray, effects, sigma: float):
+        self.model, self.meas, self.effects, self.sigma = model, meas, tuple(effects), sigma
+        self.n = meas.size
+        self.not_identifiable: dict[str, str] = {}
+
+    def fit(self, effects, start=None) -> Fit:
+        return fit(self.model, self.meas, tuple(effects), start)
+
+    def score(self, current: Fit) -> list[_Scored]:
+        """Every candidate not in `current`, fitted with it, best BIC first."""
+        named = {e.id for e in current.effects}
+        fits = []
+        for order, e in enumerate(self.effects):
+            if e.id in named:
+                continue
+            f = self.fit(current.effects + (e,), current.values + (np.zeros(e.size),))
+            if f.success:
+                fits.append((order, e, f))
+            elif not current.effects:
+                self.not_identifiable[e.id] = f.reason
+        m = max(1, len(fits))
+        bic0 = _bic(current, self.sigma, self.n)
+        held0 = current.heldout_rms_mm()
+        out = []
+        for order, e, f in fits:
+            k = f.nparams - current.nparams
+            drop = max(0.0, (current.rss - f.rss) / self.sigma ** 2)
+            p = chi2_sf(drop, k) if k > 0 else 1.0
+            cand = Candidate(e.id, e.size, f.rms_mm, f.heldout_rms_mm(), p,
+                             _bic(f, self.sigma, self.n) - bic0)
+            strong = p < ALPHA / m and cand.delta_bic <= -STRONG_BIC and cand.heldout_mm < held0
+            out.append(_Scored(e, f, cand, strong, order))
+        out.sort(key=lambda s: (s.candidate.delta_bic, s.order))
+        return out
+
+    def equivalents(self, scored: list[_Scored], best: _Scored) -> list[_Scored]:
+        return [s for s in scored if s is best or _equivalent(s.fit, best.fit, self.sigma)]
+
+    def pick(self, scored: list[_Scored]) -> _Scored | None:
+        """The best candidate with strong evidence, or the simplest of those
+        that explain the data equally well."""
+        strong = [s for s in scored if s.strong]
+        if not strong:
+            return None
+        equal = [s for s in self.equivalents(scored, strong[0]) if s.strong]
+        return min(equal, key=lambda s: (s.fit.nparams, s.fit.rss, s.order))
+
+    def simplify(self, current: Fit, swapped: dict[str, list[str]]) -> Fit:
+        """With a new effect in the model, an earlier one may be standing in
+        for a simpler effect (a J4 origin shift doing a forearm elongation's
+        and part of a J2 offset's work) or no longer be needed: swap it for
+        the simplest equivalent, or drop it, until nothing changes."""
+        changed = True
+        while changed and len(current.effects) > 1:
+            changed = False
+            for i, e in enumerate(current.effects):
+                rest = current.effects[:i] + current.effects[i + 1:]
+                start = current.values[:i] + current.values[i + 1:]
+                named = {x.id for x in current.effects}
+                options = []
+                for order, f in enumerate(self.effects):
+                    if f.id in named or f.size >= e.size:
+                        continue
+                    g = self.fit(rest + (f,), start + (np.zeros(f.size),))
+                    if g.success and _equivalent(g, current, self.sigma):
+                        options.append((f.size, g.rss, order, f, g))
+                if options:
+                    _, _, _, f, g = min(options, key=lambda o: o[:3])
+                    swapped.setdefault(f.id, []).extend([e.id, *swapped.pop(e.id, [])])
+                    current, changed = g, True
+                    break
+                without = self.fit(rest, start)
+                k = current.nparams - without.nparams
+                drop = max(0.0, (without.rss - current.rss) / self.sigma ** 2)
+                needed = (k <= 0 or (chi2_sf(drop, k) < ALPHA and
+                                     _bic(current, self.sigma, self.n)
+                                     <= _bic(without, self.sigma, self.n) - STRONG_BIC))
+                if without.success and not needed:
+                    current, changed = without, True
+                    break
+        return current
+
+    def replay(self, chosen: tuple[Effect, ...], swapped) -> tuple[list[Step], Fit]:
+        """The steps of the final model, in the order the data rank them:
+        at each step the best-scoring remaining named effect is added."""
+        current = self.fit(())
+        steps = []
+        remaining = list(chosen)
+        while remaining:
+            scored = self.score(current)
+            mine = [s for s in scored if s.effect in remaining]
+            if not mine:
+                break
+            s = mine[0]
+            equal = self.equivalents(scored, s)
+            alternatives = [x.effect.id for x in sorted(equal, key=lambda x: x.order)
+                            if x is not s]
+            alternatives += [a for a in swapped.get(s.effect.id, []) if a not in alternatives]
+            ties = [x for x in equal if x is not s and x.fit.nparams == s.fit.nparams]
+            note = None
+            if ties:
+                identical = all(abs(x.fit.rss - s.fit.rss) <= 1e-9 * max(s.fit.rss, 1e-30)
+                                for x in ties)
+                why = ("the fits are identical; it comes first in the catalogue" if identical
+                       else "it leaves the smaller residual")
+                note = (f"the data cannot tell {s.effect.id} from "
+                        f"{', '.join(x.effect.id for x in ties)} (same number of parameters, "
+                        f"residuals within noise); named {s.effect.id} because {why}. "
+                        "Measure poses that separate them to decide.")
+            if swapped.get(s.effect.id):
+                extra = (f"replaces {', '.join(swapped[s.effect.id])}, named earlier in the "
+                         "search: with the other effects in the model it explains the same "
+                         "with fewer parameters")
+                note = f"{note} {extra}" if note else extra
+            k = len(current.effects)
+            f = s.fit
+            steps.append(dict(effect=s.effect, fit=f, at_step=s.effect.user(f.values[k]),
+                              rms_before_mm=current.rms_mm, rms_after_mm=f.rms_mm,
+                              heldout_before_mm=current.heldout_rms_mm(),
+                              heldout_after_mm=s.candidate.heldout_mm,
+                              p_value=s.candidate.p_value, delta_bic=s.candidate.delta_bic,
+                              alternatives=tuple(alternatives), note=note,
+                              candidates=tuple(x.candidate for x in scored)))
+            remaining.remove(s.effect)
+            current = f
+        # Parameters are reported as the final model estimates them (all
+        # named effects fitted together); an early step's own fit is biased
+        # by the effects not yet added.
+        errors = current.stderr(self.sigma)
+        final = {e.id: (e.user(v), e.user(err))
+                 for e, v, err in zip(current.effects, current.values, errors)}
+        return [Step(params=final[st["effect"].id][0], stderr=final[st["effect"].id][1], **st)
+                for st in steps], current
+
+
+def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
+             sigma_mm: float | None = None) -> Discovery:
+    n = 3 * len(data)
+    meas = data.xyz_mm
+    if sigma_mm is None:
+        rss_full, rank = min_norm_rss(model, meas, effects)
+        dof = n - rank
+        if dof < MIN_NOISE_DOF:
+            raise RapidcompError(
+                f"{len(data)} points leave {dof} degrees of freedom after the whole catalogue "
+                f"({rank} identifiable parameters): too few to estimate the noise; give --sigma "
+                "(the measuring system's standard deviation per axis, mm) or measure more points")
+        sigma = max(math.sqrt(rss_full / dof), 1e-9)
+        source = (f"estimated from the fit of the whole catalogue ({rank} identifiable "
+                  f"parameters, {dof} degrees of freedom)")
+    else:
+        sigma = float(sigma_mm)
+        source = "given (--sigma)"
+    sel = _Selector(model, meas, effects, sigma)
+    start = sel.fit(())
+    current = start
+    swapped: dict[str, list[str]] = {}
+    while _noise_p(current, sigma, n) < 1 - NOISE_QUANTILE:
+        chosen = sel.pick(sel.score(current))
+        if chosen is None:
+            break
+        current = sel.simplify(chosen.fit, swapped)
+    if not current.effects:
+        sel.score(start)   # the not-identifiable list is made on the first scoring
+    steps, current = sel.replay(current.effects, swapped)
+    noise_p = _noise_p(current, sigma, n)
+    initial = analyse(data.names, data.q_deg, meas, start.residuals, model.robot.joint_names)
+    final = analyse(data.names, data.q_deg, meas, current.residuals, model.robot.joint_names)
+    verdict, text = _verdict(steps, current, sigma, noise_p, sigma_mm is None)
+    return Discovery(len(data), sigma, source, initial, final, start.heldout_rms_mm(),
+                     tuple(steps), verdict, text, noise_p, tuple(sel.not_identifiable.items()),
+                     current, start, effects)
+
+
+def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:
+    dk = max(1, abs(a.nparams - b.nparams))
+    return abs(a.rss - b.rss) / sigma ** 2 <= chi2_ppf(EQUIVALENT_QUANTILE, dk)
+
+
+def _verdict(steps, current: Fit, sigma: float, noise_p: float, estimated: bool):
+    s_um = sigma * 1000
+    at_noise = noise_p >= 1 - NOISE_QUANTILE
+    est = " (estimated)" if estimated else ""
+    if at_noise and not steps:
+        return "noise", (f"The residuals (RMS {current.rms_mm * 1000:.1f} um) are consistent with "
+                         f"measurement noise of {s_um:.1f} um per axis{est} "
+                         f"(chi-square p = {noise_p:.3g}): nothing to name.")
+    if at_noise:
+        names = ", ".join(s.effect.id for s in steps)
+        return "explained", (f"With {names} added, the residuals (RMS "
+                             f"{current.rms_mm * 1000:.1f} um) are consistent with measurement "
+                             f"noise of {s_um:.1f} um per axis{est} (chi-square p = "
+                             f"{noise_p:.3g}).")
+    return "unexplained", (f"The residuals (RMS {current.rms_mm * 1000:.1f} um) stay above "
+                           f"measurement noise of {s_um:.1f} um per axis{est} (chi-square p = "
+                           f"{noise_p:.3g}) and no catalogue effect explains more with strong "
+                           "evidence: the missing effect is outside the catalogue. The residual "
+                           "analysis shows where it concentrates.")

@@ -1,0 +1,132 @@
+"""Measured-data files for planning a campaign, and what they can detect.
+
+The generator is independent of the fitting code: the effects become an
+extended profile (effects.to_profile), the profile a deformed Pinocchio
+model (profile.deform), and positions come from Pinocchio's forward
+kinematics with the joint map, then Gaussian noise per axis.
+
+The detectability table asks, for every catalogue effect alone, how large
+it must be for discover to name it with 90 % probability: the fitted RSS
+drop of an effect of size delta is sigma^2 times a non-central chi2(k,
+lambda) with lambda = |J delta|^2 / sigma^2, and discover names it when
+that exceeds the larger of its two thresholds (select.py).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import RapidcompError
+from ..kinematics.frames import DEG
+from ..kinematics.gravity import Payload
+from ..kinematics.profile import ThermalProfile, deform
+from ..kinematics.robot import RobotModel
+from .effects import Effect, find, to_profile
+from .model import ZERO_COLUMN, ParamModel
+from .select import ALPHA, STRONG_BIC
+from .stats import chi2_ppf, ncx2_lambda_for_power
+
+POWER = 0.9
+
+
+def parse_effect_values(effects, specs) -> dict[Effect, np.ndarray]:
+    """`--effect ID=V[,V...]` options, values in the parameters' user units."""
+    out: dict[Effect, np.ndarray] = {}
+    for spec in specs:
+        if "=" not in spec:
+            raise RapidcompError(f"--effect {spec}: expected ID=VALUE[,VALUE...]")
+        eid, text = spec.split("=", 1)
+        e = find(effects, eid.strip())
+        try:
+            vals = [float(v) for v in text.split(",")]
+        except ValueError:
+            vals = []
+        if len(vals) != e.size or not all(math.isfinite(v) for v in vals):
+            raise RapidcompError(f"--effect {spec}: {e.id} takes {e.size} number(s): "
+                                 + ", ".join(e.params))
+        if e.kind == "gravity_compliance" and vals[0] < 0:
+            raise RapidcompError(f"--effect {spec}: a compliance is >= 0")
+        if e in out:
+            raise RapidcompError(f"--effect {spec}: {e.id} given twice")
+        out[e] = e.internal(vals)
+    return out
+
+
+def simulate_positions(robot: RobotModel, profile: ThermalProfile, values, q_deg: np.ndarray,
+                       tool_mm, payload: Payload | None = None) -> np.ndarray:
+    """Measuring point positions (N, 3) of the model robot + profile + effects."""
+    if payload is not None:
+        profile = replace(profile, payload=payload)
+    model = deform(robot, to_profile(robot, profile, values))
+    data = model.model.createData()
+    q = np.asarray(q_deg, float) * DEG
+    if model.joint_map is not None:
+        q = model.joint_map.apply(q)
+    tool = np.asarray(tool_mm, float)
+    out = np.empty((len(q), 3))
+    for i, qi in enumerate(q):
+        pin.framesForwardKinematics(model.model, data, qi)
+        out[i] = data.oMf[model.flange_frame].act(tool)
+    return out
+
+
+def add_noise(xyz: np.ndarray, sigma_mm: float, seed: int) -> np.ndarray:
+    return xyz + np.random.default_rng(seed).normal(0.0, sigma_mm, xyz.shape)
+
+
+@dataclass(frozen=True)
+class Detectability:
+    effect: str
+    param: str
+    smallest: float | None        # user units; None: cannot be detected
+    tcp_um: float | None          # largest TCP shift at that size, um
+    note: str
+
+
+def detectability(model: ParamModel, effects, sigma_mm: float) -> tuple[Detectability, ...]:
+    N = model.size
+    n = 3 * N
+    cols = {}
+    for e in effects:
+        _, J = model.evaluate((e,), (np.zeros(e.size),))
+        cols[e] = J.reshape(n, e.size)
+    live = [e for e in effects if np.all(np.linalg.norm(cols[e], axis=0) >= ZERO_COLUMN)]
+    m = max(1, len(live))
+    rows = []
+    for e in effects:
+        A = cols[e]
+        norms = np.linalg.norm(A, axis=0)
+        k = e.size
+        threshold = max(chi2_ppf(1 - ALPHA / m, k), STRONG_BIC + k * math.log(n))
+        lam = ncx2_lambda_for_power(threshold, k, POWER)
+        note = _same_as(e, A, cols)
+        for j, name in enumerate(e.params):
+            if norms[j] < ZERO_COLUMN:
+                rows.append(Detectability(e.id, name, None, None,
+                                          "does not move the measuring point at these poses"))
+                continue
+            size = sigma_mm * math.sqrt(lam) / norms[j]
+            shift = float(np.max(np.linalg.norm(A[:, j].reshape(N, 3), axis=1)) * size)
+            rows.append(Detectability(e.id, name, size / e.to_internal[j], shift * 1000, note))
+    return tuple(rows)
+
+
+def _same_as(e: Effect, A: np.ndarray, cols) -> str:
+    """Effects with no more parameters whose columns span e's: the data
+    cannot tell them apart, discover names the one with fewer parameters."""
+    scale = np.linalg.norm(A, axis=0)
+    if np.any(scale < ZERO_COLUMN):
+        return ""
+    An = A / scale
+    same = []
+    for f, B in cols.items():
+        if f is e or f.size > e.size or np.any(np.linalg.norm(B, axis=0) < ZERO_COLUMN):
+            continue
+        coef, *_ = np.linalg.lstsq(B, An, rcond=None)
+        if np.max(np.linalg.norm(An - B @ coef, axis=0)) < 1e-6:
+            same.append(f.id)
+    return ("indistinguishable from " + ", ".join(same)) if same else ""
