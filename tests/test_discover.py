@@ -271,3 +271,20 @@ def test_detectability_predicts_what_discover_names():
         model, data, _ = _data("random", [f"joint_offset:J2={smallest * factor}"], seed=9)
         d = discover(model, data, CAT, SIGMA)
         assert bool(d.steps) == named, factor
+
+
+@pytest.mark.parametrize("body,line,phrase", [
+    ("point,j1,j2,j3,j4,j5,x,y,z\n", 1, "missing column(s) j6"),
+    ("point,j1,j2,j3,j4,j5,j6,x,y,z\nA,0,0,0,0,30,0,515,0,nan\n", 2, "z is nan"),
+    ("point,j1,j2,j3,j4,j5,j6,x,y,z\nA,0,0,0,0,30,0,515,0,600\nA,0,1,0,0,30,0,515,0,600\n", 3,
+     "duplicate point 'A' (first on line 2)"),
+    ("# c\npoint,j1,j2,j3,j4,j5,j6,x,y,z\nA,0,0,0,0,30,0,515,0\n", 3, "9 values, expected 10"),
+    ("point,j1,j2,j3,j4,j5,j6,x,y,z\nA,0,0,0,0,30,0,515,0,600\n", 2, "expected at least 3"),
+])
+def test_measured_file_errors(body, line, phrase):
+    from rapidcomp.discover.measured import parse_measured
+    from rapidcomp.errors import InputError
+    with pytest.raises(InputError) as exc:
+        parse_measured(body, "m.csv")
+    assert exc.value.format().startswith(f"m.csv:{line}: ")
+    assert phrase in exc.value.format()

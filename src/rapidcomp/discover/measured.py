@@ -8,14 +8,13 @@ reported; any bad row is a path:line error.
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..csvtable import header_and_rows
 from ..errors import InputError
 
 JOINT_COLUMNS = ("j1", "j2", "j3", "j4", "j5", "j6")
@@ -36,29 +35,15 @@ class Measurements:
         return len(self.names)
 
 
-def _rows(text: str):
-    rows = list(csv.reader(io.StringIO(text)))
-    return [(i + 1, r) for i, r in enumerate(rows)
-            if r and any(c.strip() for c in r) and not r[0].strip().startswith("#")]
-
-
 def parse_table(text: str, source: str, columns, numeric, min_rows: int):
     """Rows of a CSV with a header holding `columns` (any order, extra
     columns ignored): (names, values (N, len(numeric)), lines, ignored)."""
-    numbered = _rows(text)
-    if not numbered:
-        raise InputError(source, "empty file; expected the header " + ",".join(columns), 1)
-    head_line, header = numbered[0]
-    header = [h.strip().lower() for h in header]
-    missing = [c for c in columns if c not in header]
-    if missing:
-        raise InputError(source, f"missing column(s) {', '.join(missing)}; expected the header "
-                         + ",".join(columns), head_line)
+    header, body = header_and_rows(text, source, columns)
     ignored = tuple(h for h in header if h not in columns)
     index = {c: header.index(c) for c in columns}
     names, values, lines = [], [], []
     seen: dict[str, int] = {}
-    for line, row in numbered[1:]:
+    for line, row in body:
         if len(row) < len(header):
             raise InputError(source, f"{len(row)} values, expected {len(header)}", line)
         name = row[index["point"]].strip() if "point" in index else str(len(names) + 1)
@@ -82,7 +67,7 @@ def parse_table(text: str, source: str, columns, numeric, min_rows: int):
         lines.append(line)
     if len(names) < min_rows:
         raise InputError(source, f"{len(names)} point(s), expected at least {min_rows}",
-                         numbered[-1][0])
+                         body[-1][0] if body else None)
     return tuple(names), np.array(values, float), tuple(lines), ignored
 
 
@@ -109,9 +94,8 @@ def read_joints(path: str | Path) -> tuple[tuple[str, ...], np.ndarray]:
     """A point set for simulate: `point,j1..j6`, or `j1..j6` alone (points
     then named by their row number)."""
     text = read_text(path)
-    first = _rows(text)[:1]
-    named = bool(first) and "point" in [h.strip().lower() for h in first[0][1]]
-    columns = (("point",) if named else ()) + JOINT_COLUMNS
+    header, _ = header_and_rows(text, str(path), JOINT_COLUMNS)
+    columns = (("point",) if "point" in header else ()) + JOINT_COLUMNS
     names, values, _, _ = parse_table(text, str(path), columns, JOINT_COLUMNS, 1)
     return names, values
 

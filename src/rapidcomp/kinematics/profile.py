@@ -30,8 +30,6 @@ empty cell is 0.
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,6 +37,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from ..csvtable import header_and_rows
 from ..errors import InputError
 from .frames import DEG, rpy_angles, rpy_matrix
 from .gravity import NO_PAYLOAD, GravityModel, Payload
@@ -128,25 +127,13 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
                   force: bool = False) -> ThermalProfile:
     allowed = {n.lower(): n for n in joint_names} | {
         "flange": "flange", "base": "base", "payload": "payload"}
-    rows = list(csv.reader(io.StringIO(text)))
-    # Skip leading blank lines and '#' comments, but keep line numbers right.
-    numbered = [(i + 1, r) for i, r in enumerate(rows) if r and not r[0].strip().startswith("#")]
-    if not numbered:
-        raise InputError(source, "empty profile; expected the header " + ",".join(COLUMNS), 1)
-    head_line, header = numbered[0]
-    header = [h.strip().lower() for h in header]
-    missing = [c for c in COLUMNS if c not in header]
-    if missing:
-        raise InputError(source, f"missing column(s) {', '.join(missing)}; expected the header "
-                         + ",".join(COLUMNS), head_line)
+    header, body = header_and_rows(text, source, COLUMNS, "profile")
     columns = COLUMNS + tuple(c for c in EXTRA_COLUMNS if c in header)
     index = {c: header.index(c) for c in columns}
     seen: dict[str, int] = {}
     disps, terms = [], []
     base, payload = ZERO, NO_PAYLOAD
-    for line, row in numbered[1:]:
-        if all(not cell.strip() for cell in row):
-            continue
+    for line, row in body:
         if len(row) < len(header):
             raise InputError(source, f"{len(row)} values, expected {len(header)}", line)
         name = row[index["joint"]].strip()
