@@ -288,3 +288,13 @@ def test_measured_file_errors(body, line, phrase):
         parse_measured(body, "m.csv")
     assert exc.value.format().startswith(f"m.csv:{line}: ")
     assert phrase in exc.value.format()
+
+
+def test_plot_is_a_png_and_deterministic(tmp_path):
+    pytest.importorskip("matplotlib")
+    from rapidcomp.discover import job
+    outs = [job.run_discover(str(FIXTURES / "measured.csv"), str(FIXTURES / "warm.csv"),
+                             tool=(0, 0, 150), plot_path=str(tmp_path / "p.png"))
+            for _ in range(2)]
+    data = [dict(o.files)[str(tmp_path / "p.png")] for o in outs]
+    assert data[0].startswith(b"\x89PNG\r\n\x1a\n") and data[0] == data[1]

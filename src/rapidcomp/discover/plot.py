@@ -40,6 +40,11 @@ def residual_plot(xyz_mm: np.ndarray, before: np.ndarray, after: np.ndarray,
         ax.set_title(f"{name}: RMS {rms:.1f} um")
         ax.set_xlabel("x mm")
         ax.set_aspect("equal")
+    # quiver does not widen the axes for its arrows: leave room for the longest.
+    pad = longest * gain + 0.05 * span
+    lo, hi = xyz_mm[:, :2].min(axis=0) - pad, xyz_mm[:, :2].max(axis=0) + pad
+    axes[0].set_xlim(lo[0], hi[0])
+    axes[0].set_ylim(lo[1], hi[1])
     axes[0].set_ylabel("y mm")
     fig.colorbar(q, ax=axes, label="residual z um")
     fig.suptitle(f"{title} (arrows x{gain:.0f}: {longest * 1000:.0f} um drawn as "
