@@ -130,12 +130,18 @@ class _Selector:
         self.model, self.meas, self.effects, self.sigma = model, meas, tuple(effects), sigma
         self.n = meas.size
         self.not_identifiable: dict[str, str] = {}
+        # Scorings by the model fit they extend: the search and the replay
+        # of its steps meet the same models, whose candidates need fitting once.
+        self._scored: dict[int, tuple[Fit, list]] = {}
 
     def fit(self, effects, start=None) -> Fit:
         return fit(self.model, self.meas, tuple(effects), start)
 
     def score(self, current: Fit) -> list[_Scored]:
         """Every candidate not in `current`, fitted with it, best BIC first."""
+        hit = self._scored.get(id(current))
+        if hit is not None and hit[0] is current:
+            return hit[1]
         named = {e.id for e in current.effects}
         fits = []
         for order, e in enumerate(self.effects):
@@ -159,6 +165,7 @@ class _Selector:
             strong = p < ALPHA / m and cand.delta_bic <= -STRONG_BIC and cand.heldout_mm < held0
             out.append(_Scored(e, f, cand, strong, order))
         out.sort(key=lambda s: (s.candidate.delta_bic, s.order))
+        self._scored[id(current)] = (current, out)
         return out
 
     def equivalents(self, scored: list[_Scored], best: _Scored) -> list[_Scored]:
@@ -208,10 +215,11 @@ class _Selector:
                     break
         return current
 
-    def replay(self, chosen: tuple[Effect, ...], swapped) -> tuple[list[Step], Fit]:
-        """The steps of the final model, in the order the data rank them:
-        at each step the best-scoring remaining named effect is added."""
-        current = self.fit(())
+    def replay(self, start: Fit, chosen: tuple[Effect, ...], swapped) -> tuple[list[Step], Fit]:
+        """The steps of the final model from `start` (no effects), in the
+        order the data rank them: at each step the best-scoring remaining
+        named effect is added."""
+        current = start
         steps = []
         remaining = list(chosen)
         while remaining:
@@ -288,9 +296,8 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
         if chosen is None:
             break
         current = sel.simplify(chosen.fit, swapped)
-    if not current.effects:
-        sel.score(start)   # the not-identifiable list is made on the first scoring
-    steps, current = sel.replay(current.effects, swapped)
+    sel.score(start)   # the not-identifiable list is made on the first scoring (cached)
+    steps, current = sel.replay(start, current.effects, swapped)
     noise_p = _noise_p(current, sigma, n)
     initial = analyse(data.names, data.q_deg, meas, start.residuals, model.robot.joint_names)
     final = analyse(data.names, data.q_deg, meas, current.residuals, model.robot.joint_names)
