@@ -28,7 +28,7 @@ import pinocchio as pin
 
 from ..errors import RapidcompError
 from ..kinematics.chain import Chain
-from ..kinematics.frames import DEG, rot_axis
+from ..kinematics.frames import DEG, rot_axis, rpy_matrix
 from ..kinematics.profile import Displacement, JointTerms, ThermalProfile
 from ..kinematics.robot import RobotModel
 
@@ -128,11 +128,6 @@ def tilt_rotation(effect: Effect, theta) -> np.ndarray:
     return rot_axis(effect.axes[0], theta[0]) @ rot_axis(effect.axes[1], theta[1])
 
 
-def base_rotation(angles) -> np.ndarray:
-    from ..kinematics.frames import rpy_matrix
-    return rpy_matrix(*angles)
-
-
 def to_profile(robot: RobotModel, profile: ThermalProfile, values) -> ThermalProfile:
     """`profile` plus effects at internal values ({Effect: array}), as the
     extended profile format expresses them (see model.py for the same
@@ -146,15 +141,22 @@ def to_profile(robot: RobotModel, profile: ThermalProfile, values) -> ThermalPro
     names = robot.joint_names
     n = len(names)
     pre = {k: pin.SE3.Identity() for k in range(n + 1)}
-    post = {k: pin.SE3.Identity() for k in range(n + 1)}
+    # Tilt and displacement of one joint compose as (I, d) . (R, 0) = (R, d)
+    # whatever order they were listed in; the tool offset is the flange's d.
+    tilt = [np.eye(3) for _ in range(n + 1)]
+    disp = np.zeros((n + 1, 3))
     terms = {k: np.zeros(3) for k in range(n)}   # offset_deg, scale, compliance_deg_per_nm
     base = profile.base.se3()
     for e, v in values.items():
         v = np.asarray(v, float)
         if e.kind == "base_frame":
-            base = pin.SE3(base_rotation(v[3:]), v[:3]) * base
+            base = pin.SE3(rpy_matrix(*v[3:]), v[:3]) * base
         elif e.kind == "tool_offset":
-            post[n] = post[n] * pin.SE3(np.eye(3), v)
+            disp[n] += v
+        elif e.kind == "axis_tilt":
+            tilt[e.joint] = tilt[e.joint] @ tilt_rotation(e, v)
+        elif e.kind == "joint_displacement":
+            disp[e.joint] += e.axes @ v
         elif e.kind in ("joint_offset", "joint_scale", "gravity_compliance"):
             col = ("joint_offset", "joint_scale", "gravity_compliance").index(e.kind)
             terms[e.joint][col] += v[0] / e.to_internal[0]
@@ -163,19 +165,9 @@ def to_profile(robot: RobotModel, profile: ThermalProfile, values) -> ThermalPro
             rot = chain.rot[b] if b < n else chain.flange_rot
             seg = chain.trans[b] if b < n else chain.flange_trans
             pre[b] = pin.SE3(np.eye(3), rot.T @ seg * v[0]) * pre[b]
-    # Tilt and displacement of one joint compose as (I, d) . (R, 0) = (R, d)
-    # whatever order they were listed in.
-    for k in range(n):
-        d = sum((e.axes @ np.asarray(v, float) for e, v in values.items()
-                 if e.kind == "joint_displacement" and e.joint == k), np.zeros(3))
-        R = np.eye(3)
-        for e, v in values.items():
-            if e.kind == "axis_tilt" and e.joint == k:
-                R = R @ tilt_rotation(e, v)
-        post[k] = pin.SE3(R, d)
     disps = []
     for k, name in enumerate([*names, "flange"]):
-        M = pre[k] * profile.get(name).se3() * post[k]
+        M = pre[k] * profile.get(name).se3() * pin.SE3(tilt[k], disp[k])
         disps.append((name, Displacement.from_se3(M)))
     jt = []
     for k, name in enumerate(names):

@@ -101,6 +101,8 @@ class ParamModel:
         X = P @ TR.T + T_d
         if not jacobian:
             return X, None
+        # Columns in the model's base frame (rotated by T below), except
+        # base_frame's own, which are the derivatives of T . P itself.
         cols = []
         for e, v in zip(effects, vals):
             k = e.joint
@@ -108,35 +110,27 @@ class ParamModel:
                 d = np.cross(z[k], P - origin[k])
                 w = {"joint_offset": 1.0, "joint_scale": self.q_cmd[:, k],
                      "gravity_compliance": self.tau_nm[:, k]}[e.kind]
-                cols.append([d * np.reshape(w, (-1, 1))])
+                block = [d * np.reshape(w, (-1, 1))]
             elif e.kind == "link_elongation":
                 seg = self.nominal.trans[k] if k < n else self.nominal.flange_trans
-                R_par = parent[k] if k < n else last
-                cols.append([R_par @ seg])
+                block = [(parent[k] if k < n else last) @ seg]
             elif e.kind == "axis_tilt":
                 u1, u2 = e.axes
                 w1 = W[k] @ u1
                 w2 = W[k] @ (rot_axis(u1, v[0]) @ u2)
-                cols.append([np.cross(w1, P - origin[k]), np.cross(w2, P - origin[k])])
+                block = [np.cross(w1, P - origin[k]), np.cross(w2, P - origin[k])]
             elif e.kind == "joint_displacement":
-                cols.append([W[k] @ e.axes[:, j] for j in range(3)])
+                block = [W[k] @ e.axes[:, j] for j in range(3)]
             elif e.kind == "tool_offset":
-                cols.append([Rf[:, :, j] for j in range(3)])
-            elif e.kind == "base_frame":
-                cols.append(None)
-        J = np.empty((N, 3, sum(e.size for e in effects)))
-        at = 0
-        for e, block in zip(effects, cols):
-            if e.kind == "base_frame":
+                block = [Rf[:, :, j] for j in range(3)]
+            else:   # base_frame
                 ex, ey, ez = np.eye(3)
-                for j in range(3):
-                    J[:, :, at + j] = np.eye(3)[j]
-                J[:, :, at + 3] = np.cross(ex, P @ Rx.T) @ (Rz @ Ry).T
-                J[:, :, at + 4] = np.cross(ey, P @ (Ry @ Rx).T) @ Rz.T
-                J[:, :, at + 5] = np.cross(ez, X - T_d)
-                at += 6
+                cols += [np.broadcast_to(ex, (N, 3)), np.broadcast_to(ey, (N, 3)),
+                         np.broadcast_to(ez, (N, 3)),
+                         np.cross(ex, P @ Rx.T) @ (Rz @ Ry).T,
+                         np.cross(ey, P @ (Ry @ Rx).T) @ Rz.T,
+                         np.cross(ez, X - T_d)]
                 continue
-            for d in block:
-                J[:, :, at] = np.broadcast_to(d, (N, 3)) @ TR.T
-                at += 1
+            cols += [np.broadcast_to(d, (N, 3)) @ TR.T for d in block]
+        J = np.stack(cols, axis=-1) if cols else np.empty((N, 3, 0))
         return X, J

@@ -2,7 +2,8 @@
 
 tau_k(q) = z_k . sum over bodies b moved by joint k of (c_b - o_k) x (m_b g):
 the torque gravity exerts about axis k, i.e. minus Pinocchio's generalized
-gravity (tests/test_gravity.py checks it against pin.computeGeneralizedGravity).
+gravity (tests/test_discover_model.py checks it against
+pin.computeGeneralizedGravity).
 Masses and centres of mass come from the Pinocchio model's inertias, plus an
 optional payload on the flange. The model is in millimetres and kg, so its
 torques are in kg mm^2/s^2 = 1e-6 N m; they are converted to N m here, in
