@@ -14,6 +14,7 @@ from pathlib import Path
 from rapidcomp.compensate import report
 from rapidcomp.compensate.fix import fix
 from rapidcomp.compensate.job import load_solver
+from rapidcomp.compensate.plan import Task
 from rapidcomp.rapid.inspect import render_text, report as inspect_report
 from rapidcomp.rapid.parse import parse_file
 
@@ -40,10 +41,11 @@ def fix_golden(case: str) -> tuple[bytes, str]:
     """(after.mod bytes, report.md text) of a case's before.mod."""
     _, mode, limits = FIX_CASES[case]
     pf = parse_file(GOLDEN / "fix" / case / "before.mod", "before.mod")
-    result = fix([pf], load_solver(str(PROFILE), None, False, limits), mode, "after.mod")
+    result = fix(Task("before.mod", (pf,)), load_solver(str(PROFILE), None, False, limits), mode,
+                 output_names={"before.mod": "after.mod"})
     meta = {"output": "after.mod", "mode": mode, "profile": PROFILE.name, "robot": "irb140",
             "with": "-", "joint limits": ", ".join(limits) or "robot defaults"}
-    return pf.source.encode(result.text), report.markdown(result, meta)
+    return pf.source.encode(result.modules[0].text), report.markdown(result, meta)
 
 
 def main() -> None:

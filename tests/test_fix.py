@@ -11,6 +11,7 @@ from click.testing import CliRunner
 
 from rapidcomp.cli import main
 from rapidcomp.compensate.fix import fix
+from rapidcomp.compensate.plan import Task
 from rapidcomp.edits import SpanEdit, apply_edits
 from rapidcomp.kinematics.ik import Solver
 from rapidcomp.kinematics.robot import irb140, override_limits
@@ -48,15 +49,15 @@ def test_golden_case(case):
                          ids=lambda p: p.name)
 def test_zero_profile_robtarget_mode_is_byte_identical(path, zero_solver):
     pf = parse_file(path)
-    result = fix([pf], zero_solver, "robtarget", "out.mod")
+    result = fix(Task(path.name, (pf,)), zero_solver, "robtarget")
     assert result.edits == ()
-    assert pf.source.encode(result.text) == path.read_bytes()
+    assert pf.source.encode(result.modules[0].text) == path.read_bytes()
 
 
 @pytest.mark.parametrize("case", ["cubes_absj", "cubes_robtarget", "paper_front_absj"])
 def test_second_run_with_zero_profile_changes_nothing(case, zero_solver):
     after = GOLDEN / "fix" / case / "after.mod"
-    result = fix([parse_file(after)], zero_solver, "robtarget", "again.mod")
+    result = fix(Task("again", (parse_file(after),)), zero_solver, "robtarget")
     assert result.edits == () and result.failed == 0
     # ... and every target of the compensated module is still resolved.
     assert all(r.status == "compensated" for r in result.rows
@@ -161,7 +162,7 @@ def test_cli_writes_module_and_report_and_leaves_input_alone(tmp_path, monkeypat
         "paper_front.mod", "paper_front_comp.md", "paper_front_comp.mod", "r.json", "warm.csv"]
     doc = json.loads((tmp_path / "r.json").read_text())
     assert doc["summary"]["compensated"] == 8 and doc["summary"]["not_compensated"] == 0
-    assert doc["diff"][0] == "--- paper_front.mod"
+    assert doc["modules"][0]["diff"][0] == "--- paper_front.mod"
     md = (tmp_path / "paper_front_comp.md").read_text()
     assert str(tmp_path) not in md and str(tmp_path) not in (tmp_path / "r.json").read_text()
     # Deterministic: a second run writes the same bytes.

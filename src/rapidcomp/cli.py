@@ -4,6 +4,7 @@ in one place: 0 ok, 1 some targets not compensated, 2 bad input."""
 from __future__ import annotations
 
 import json
+import os
 import sys
 
 import click
@@ -28,19 +29,33 @@ def main() -> None:
 
 
 def _model_options(f):
-    """The options that build the warm robot, shared by check and fix."""
+    """The options that build the warm robot and name the task, shared by
+    check and fix."""
     for option in reversed([
         click.option("--profile", required=True, type=click.Path(dir_okay=False),
-                     help="Profile CSV: joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg (or the extended format discover writes)."),
+                     help="Profile CSV: joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg (or the "
+                          "extended format discover writes)."),
         click.option("--with", "with_modules", multiple=True, type=click.Path(dir_okay=False),
-                     help="Other modules holding tool/work object/target data (repeatable)."),
+                     help="Another module holding tool/work object/target data, read but not "
+                          "written (repeatable)."),
+        click.option("--task", "tasks", multiple=True, metavar="NAME",
+                     help="Of a controller backup, only this motion task (repeatable; default: "
+                          "every motion task)."),
         click.option("--robot", default=None, help="irb140 (default) or a URDF file."),
         click.option("--force", is_flag=True, help="Accept profile values beyond 5 mm / 1 deg."),
         click.option("--limit", "limits", multiple=True, metavar="JOINT=LO:HI",
                      help="Override a joint limit in degrees, e.g. J5=-120:120 (repeatable)."),
+        click.option("--track", "track", multiple=True, metavar="AXIS:x|y|z",
+                     help="External axis eax_AXIS (a..f) carries the robot along that world "
+                          "axis, in mm, e.g. a:x (repeatable). Default: external axes do not "
+                          "move the robot's base."),
     ]):
         f = option(f)
     return f
+
+
+PROGRAM_HELP = ("PROGRAM is a module (.mod, .modx, .sys, .prg), a task folder (every module "
+                "below it), a program file (.pgf) or a controller backup (RAPID/<TASK>/...).")
 
 
 @main.command()
@@ -61,11 +76,11 @@ def inspect(program: str, as_json: bool) -> None:
         click.echo(render_text(rep), nl=False)
 
 
-@main.command()
-@click.argument("program", type=click.Path(dir_okay=False))
+@main.command(epilog=PROGRAM_HELP)
+@click.argument("program", type=click.Path())
 @_model_options
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
-def check(program, profile, with_modules, robot, force, limits, as_json) -> None:
+def check(program, profile, with_modules, tasks, robot, force, limits, track, as_json) -> None:
     """Predict each target's error on the warm robot; rewrite nothing.
 
     Exit code 1 when some targets could not be compensated.
@@ -73,30 +88,37 @@ def check(program, profile, with_modules, robot, force, limits, as_json) -> None
     from dataclasses import asdict
 
     from .compensate.check import check as run_check
-    from .compensate.check import render_text, summary
-    from .compensate.job import load_solver
-    from .rapid.parse import parse_file
+    from .compensate.check import render_text
+    from .compensate.job import load_solver, load_task
+    from .compensate.targets import parse_track
+    from .rapid.task import tasks_of
     try:
-        files = [parse_file(program)] + [parse_file(m) for m in with_modules]
+        sources = tasks_of(program, tuple(tasks))
+        for m in with_modules:
+            if not os.path.isfile(m):
+                raise RapidcompError(f"{m}: no such file")
         solver = load_solver(profile, robot, force, limits)
+        tracked = parse_track(track)
+        results = [run_check(load_task(s, with_modules), solver, tracked) for s in sources]
     except RapidcompError as exc:
         _fail(exc)
-    rows = run_check(files, solver)
-    summ = summary(rows)
     if as_json:
-        click.echo(json.dumps({"program": program, "summary": summ,
-                               "targets": [asdict(r) for r in rows]}, indent=2))
+        docs = [{"program": r.program, "summary": r.summary(), "notes": list(r.notes),
+                 "targets": [asdict(x) for x in r.rows]} for r in results]
+        doc = docs[0] if len(docs) == 1 else {"program": program, "tasks": docs}
+        click.echo(json.dumps(doc, indent=2))
     else:
-        click.echo(render_text(rows, summ, program), nl=False)
-    sys.exit(EXIT_PARTIAL if summ["not_compensable"] else EXIT_OK)
+        click.echo("\n".join(render_text(r) for r in results), nl=False)
+    sys.exit(EXIT_PARTIAL if any(r.failed for r in results) else EXIT_OK)
 
 
-@main.command()
-@click.argument("programs", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@main.command(epilog=PROGRAM_HELP)
+@click.argument("programs", nargs=-1, required=True, type=click.Path())
 @_model_options
 @click.option("-o", "--output", default=None, type=click.Path(),
-              help="Output module (default PROGRAM_comp.mod beside the input); a directory "
-                   "when several programs are given.")
+              help="Output module (default PROGRAM_comp.mod beside the input) or, for a task "
+                   "folder, program file or backup, the output folder (default PROGRAM_comp "
+                   "beside it); a folder when several programs are given.")
 @click.option("--emit", type=click.Choice(["absj", "robtarget"]), default="absj",
               show_default=True,
               help="absj: MoveJ/MoveL become MoveAbsJ on new jointtargets; robtarget: every "
@@ -110,8 +132,8 @@ def check(program, profile, with_modules, robot, force, limits, as_json) -> None
               help="Write the output even when some targets cannot be compensated "
                    "(they stay as they were and are listed).")
 @click.option("-q", "--quiet", is_flag=True, help="No summary on stdout.")
-def fix(programs, profile, output, emit, report, no_report, json_path, with_modules, robot,
-        force, limits, allow_partial, quiet) -> None:
+def fix(programs, profile, output, emit, report, no_report, json_path, with_modules, tasks,
+        robot, force, limits, track, allow_partial, quiet) -> None:
     """Write a compensated copy of each PROGRAM and a review report.
 
     Exit code 0: all statically known targets compensated; 1: some could not
@@ -120,19 +142,29 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
     from pathlib import Path
 
     from .atomic import write_all
-    from .compensate.job import run_all
+    from .compensate.job import copies, run_all
     from .compensate.report import summary_lines
     try:
         specs = _fix_specs(programs, profile, output, emit, report, no_report, json_path,
-                           with_modules, robot, force, limits)
+                           with_modules, tasks, robot, force, limits, track)
         outcomes = run_all(specs)
+        files = [(path, data) for o in outcomes for path, data in o.files]
+        done = {path for path, _ in files}
+        seen_inputs = set()
+        for spec in specs:
+            key = (str(spec.source.input), spec.output)
+            if key not in seen_inputs:
+                seen_inputs.add(key)
+                files += copies(spec.source, spec.output, done)
     except RapidcompError as exc:
         _fail(exc)
     failed = any(o.result.failed for o in outcomes)
     for o in outcomes:
         r = o.result
         if not quiet:
-            click.echo(f"{r.program} -> {r.output} ({r.mode})")
+            src = o.spec.source
+            what = r.program if not src.is_folder else f"{src.input} ({r.program})"
+            click.echo(f"{what} -> {o.spec.output} ({r.mode})")
             for line in summary_lines(r):
                 click.echo(f"  {line}")
             for note in r.notes:
@@ -141,47 +173,86 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
         click.echo("rapidcomp: some targets cannot be compensated; nothing written "
                    "(--allow-partial writes the rest and lists these)", err=True)
         sys.exit(EXIT_PARTIAL)
-    write_all([(Path(path), data) for o in outcomes for path, data in o.files])
+    try:
+        write_all([(Path(path), data) for path, data in files])
+    except OSError as exc:
+        _fail(RapidcompError(f"{exc.filename or 'output'}: cannot write: "
+                             f"{exc.strerror or exc}; nothing written"))
     if not quiet:
         for o in outcomes:
-            click.echo("wrote " + ", ".join(path for path, _ in o.files))
+            shown = [p for p, _ in o.files if not o.spec.source.is_folder
+                     or not p.startswith(o.spec.output)]
+            if o.spec.source.is_folder:
+                shown.insert(0, o.spec.output + os.sep)
+            click.echo("wrote " + ", ".join(shown))
     sys.exit(EXIT_PARTIAL if failed else EXIT_OK)
 
 
 def _fix_specs(programs, profile, output, emit, report, no_report, json_path, with_modules,
-               robot, force, limits):
-    """One JobSpec per program, with output paths checked: never the input
-    itself, never two jobs on one file."""
-    import os
+               tasks, robot, force, limits, track):
+    """One JobSpec per task, with output paths checked: never an input,
+    never two jobs on one file, never inside an input folder."""
     from pathlib import Path
 
     from .compensate.job import JobSpec, default_output
+    from .rapid.task import tasks_of
     several = len(programs) > 1
-    if several and (report or json_path):
-        raise RapidcompError("--report/--json name one file; with several programs each "
-                             "report is written next to its output")
     if several and output is None:
         raise RapidcompError("several programs need -o DIR")
-    for p in list(programs) + [profile] + list(with_modules):
+    for p in [profile] + list(with_modules):
         if not os.path.isfile(p):
             raise RapidcompError(f"{p}: no such file")
+    groups = [(program, tasks_of(program, tuple(tasks))) for program in programs]
+    n_tasks = sum(len(ts) for _, ts in groups)
+    if n_tasks > 1 and (report or json_path):
+        raise RapidcompError("--report/--json name one file; with several programs or tasks "
+                             "each report is written next to its output")
+    inputs = {os.path.realpath(p) for p in [profile] + list(with_modules)}
+    folders = []
+    for _, ts in groups:
+        for t in ts:
+            inputs.update(os.path.realpath(t.root / m) for m in t.modules)
+            inputs.add(os.path.realpath(t.input))
+            if t.is_folder:
+                folders.append(os.path.realpath(t.root))
     specs = []
     seen: set[str] = set()
-    for program in programs:
-        if several or (output is not None and os.path.isdir(output)):
-            out = str(Path(output) / Path(program).name)
+    for program, ts in groups:
+        src = ts[0]
+        name = Path(program.rstrip("/\\")).name
+        if src.is_folder:
+            stem = Path(name).stem if src.kind == "pgf" else name
+            out = str(Path(output) / stem) if several else (output or default_output(
+                program.rstrip("/\\"), folder=True))
+        elif several or (output is not None and os.path.isdir(output)):
+            out = str(Path(output) / name)
         else:
             out = output or default_output(program)
-        rep = None if no_report else (report or str(Path(out).with_suffix(".md")))
-        paths = [out] + [x for x in (rep, json_path) if x]
-        for path in paths:
-            real = os.path.realpath(path)
-            if real in seen or any(os.path.realpath(i) == real
-                                   for i in list(programs) + list(with_modules) + [profile]):
-                raise RapidcompError(f"{path}: would overwrite an input or another output")
-            seen.add(real)
-        specs.append(JobSpec(program, out, rep, json_path, profile, robot, tuple(with_modules),
-                             emit, force, tuple(limits)))
+        real_out = os.path.realpath(out)
+        for f in folders:
+            if real_out == f or real_out.startswith(f + os.sep):
+                raise RapidcompError(f"{out}: is inside the input folder {program}; write the "
+                                     "output beside it")
+        for t in ts:
+            if no_report:
+                rep = None
+            elif report:
+                rep = report
+            elif src.is_folder:
+                rep = out + (f".{t.task}" if len(ts) > 1 else "") + ".md"
+            else:
+                rep = str(Path(out).with_suffix(".md"))
+            paths = [rep, json_path] + ([str(Path(out) / m) for m in t.modules]
+                                        if t.is_folder else [out])
+            for path in paths:
+                if path is None:
+                    continue
+                real = os.path.realpath(path)
+                if real in seen or real in inputs:
+                    raise RapidcompError(f"{path}: would overwrite an input or another output")
+                seen.add(real)
+            specs.append(JobSpec(t, out, rep, json_path, profile, robot, tuple(with_modules),
+                                 emit, force, tuple(limits), tuple(track)))
     return specs
 
 

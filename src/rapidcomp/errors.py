@@ -36,3 +36,8 @@ class InputError(RapidcompError):
             if self.col is not None:
                 text += "\n    " + " " * (self.col - 1) + "^"
         return text
+
+
+class InternalError(RapidcompError):
+    """The output failed its own check (a defect of rapidcomp, not of the
+    input); nothing is written."""

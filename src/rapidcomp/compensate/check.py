@@ -1,127 +1,72 @@
-"""`rapidcomp check`: predicted error of every target on the warm robot.
+"""`rapidcomp check`: the plan of `fix`, solved, without the rewrite.
 
-For each target use: the nominal joints (what the controller computes), the
-TCP error those joints give on the deformed robot (the error of the
-uncompensated program), and whether compensation succeeds, with its
-residual. Nothing is rewritten.
+For each target use: the joints the controller computes (and by which
+rule), the TCP error those joints give on the deformed robot (the error of
+the uncompensated program), and whether compensation succeeds, with its
+residual. The same plan, solve and rows as `fix`: what check predicts is
+what fix does, up to the float32 rounding of the written numbers.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
+from ..kinematics.ik import Solver
+from .plan import Plan, Task
+from .rows import UNTOUCHED, UseRow, summary, use_rows
+from .solve import solve
 
-from ..kinematics.frames import DEG
-from ..kinematics.ik import IKBatch, Solver
-from ..rapid.model import ParsedFile
-from .targets import TargetUse, target_uses
+OK, FAILED = "compensable", "not compensable"
 
 
 @dataclass(frozen=True)
-class CheckRow:
-    line: int
-    instruction: str
-    target: str
-    status: str                      # "compensable", "not compensable", "untouched"
-    error_um: float | None           # uncompensated TCP position error on the warm robot
-    error_deg: float | None          # ... orientation error
-    residual_um: float | None        # after compensation
-    max_joint_change_deg: float | None
-    conf_before: tuple[int, ...] | None
-    conf_after: tuple[int, ...] | None
-    reason: str | None
-    warnings: tuple[str, ...]
+class CheckResult:
+    program: str
+    rows: tuple[UseRow, ...]
+    notes: tuple[str, ...]
+
+    @property
+    def failed(self) -> int:
+        return sum(r.status == FAILED for r in self.rows)
+
+    def summary(self) -> dict:
+        return summary(list(self.rows), OK, FAILED)
 
 
-def _errors(pose_error, q_deg: np.ndarray, R: np.ndarray, p: np.ndarray):
-    pos, rot = pose_error(np.nan_to_num(q_deg) * DEG, R, p)
-    return pos, rot / DEG
+def check(task: Task, solver: Solver, track=()) -> CheckResult:
+    plan = Plan(task, track)
+    solved = solve(plan, solver)
+    rows = use_rows(plan, solved, statuses=(OK, FAILED))
+    return CheckResult(task.name, tuple(rows), tuple(plan.notes()))
 
 
-def check(files: list[ParsedFile], solver: Solver) -> list[CheckRow]:
-    uses = target_uses(files)
-    rows: list[CheckRow | None] = [None] * len(uses)
-    for i, u in enumerate(uses):
-        if u.reason is not None:
-            rows[i] = CheckRow(u.line, u.motion.spec.name, u.label, "untouched", None, None,
-                               None, None, None, None, u.reason, ())
-    for kind in ("robtarget", "jointtarget"):
-        idx = [i for i, u in enumerate(uses) if u.reason is None and u.kind == kind]
-        if not idx:
-            continue
-        sel = [uses[i] for i in idx]
-        if kind == "robtarget":
-            R = np.array([u.R for u in sel])
-            p = np.array([u.p for u in sel])
-            nominal = solver.solve_nominal(R, p, np.array([u.conf for u in sel]))
-        else:
-            R, p, nominal = solver.seed_from_joints(np.array([u.joints_deg for u in sel]))
-        deformed = solver.solve_deformed(R, p, nominal)
-        err, err_rot = _errors(solver.deformed_pose_error, nominal.q_deg, R, p)
-        res, _ = _errors(solver.deformed_pose_error, deformed.q_deg, R, p)
-        for k, i in enumerate(idx):
-            rows[i] = _row(sel[k], nominal, deformed, k, err[k], err_rot[k], res[k])
-    return rows
-
-
-def _row(u: TargetUse, nominal: IKBatch, deformed: IKBatch, k: int, err, err_rot, res) -> CheckRow:
-    n = nominal.result(k)
-    d = deformed.result(k)
-    base = dict(line=u.line, instruction=u.motion.spec.name, target=u.label)
-    if not n.success:
-        return CheckRow(**base, status="not compensable", error_um=None, error_deg=None,
-                        residual_um=None, max_joint_change_deg=None, conf_before=None,
-                        conf_after=None, reason=f"nominal: {n.reason}", warnings=n.warnings)
-    ok = d.success
-    return CheckRow(
-        **base, status="compensable" if ok else "not compensable",
-        error_um=float(err) * 1000, error_deg=float(err_rot),
-        residual_um=float(res) * 1000 if ok else None,
-        max_joint_change_deg=float(np.max(np.abs(d.joint_change_deg))) if ok else None,
-        conf_before=n.conf, conf_after=d.conf if ok else None,
-        reason=None if ok else d.reason, warnings=d.warnings)
-
-
-def summary(rows: list[CheckRow]) -> dict:
-    comp = [r for r in rows if r.status == "compensable"]
-    errs = [r.error_um for r in comp]
-    untouched: dict[str, int] = {}
-    for r in rows:
-        if r.status == "untouched":
-            untouched[r.reason] = untouched.get(r.reason, 0) + 1
-    return {
-        "targets": len(rows),
-        "compensable": len(comp),
-        "not_compensable": sum(r.status == "not compensable" for r in rows),
-        "untouched": untouched,
-        "error_before_um": {"max": max(errs), "mean": float(np.mean(errs))} if errs else None,
-        "residual_after_um": {"max": max(r.residual_um for r in comp)} if comp else None,
-    }
-
-
-def render_text(rows: list[CheckRow], summ: dict, program: str) -> str:
-    out = [f"{program}: predicted error on the warm robot, per target",
+def render_text(result: CheckResult) -> str:
+    rows = result.rows
+    several = len({r.file for r in rows}) > 1
+    out = [f"{result.program}: predicted error on the warm robot, per target",
            f"{'line':>6}  {'instruction':<10} {'target':<28} {'error um':>9} {'error deg':>9} "
-           f"{'after um':>9} {'max dq deg':>10}  status"]
+           f"{'after um':>9}  status"]
     for r in rows:
         def f(x, fmt):
             return format(x, fmt) if x is not None else "-"
         note = r.reason or ("; ".join(r.warnings) if r.warnings else "")
-        out.append(f"{r.line:>6}  {r.instruction:<10} {r.target[:28]:<28} {f(r.error_um, '9.1f')} "
-                   f"{f(r.error_deg, '9.4f')} {f(r.residual_um, '9.1e')} "
-                   f"{f(r.max_joint_change_deg, '10.4f')}  {r.status}"
+        where = f"{r.file}:{r.line}" if several else str(r.line)
+        out.append(f"{where:>6}  {r.instruction:<10} {r.target[:28]:<28} "
+                   f"{f(r.error_um, '9.1f')} {f(r.error_deg, '9.4f')} {f(r.residual_um, '9.1e')}"
+                   f"  {r.status}" + (f" [{r.rule}]" if r.rule else "")
                    + (f": {note}" if note else ""))
-    s = summ
+    s = result.summary()
     out.append("")
-    line = f"{s['compensable']} of {s['targets']} target uses compensable"
-    if s["not_compensable"]:
-        line += f", {s['not_compensable']} not compensable"
+    line = f"{s[OK]} of {s['target_uses']} target uses compensable"
+    if s[FAILED.replace(' ', '_')]:
+        line += f", {s[FAILED.replace(' ', '_')]} not compensable"
     if s["untouched"]:
         line += f", {sum(s['untouched'].values())} untouched"
     out.append(line)
-    for reason, n in sorted(s["untouched"].items()):
-        out.append(f"  untouched ({n}): {reason}")
+    for reason, n in s["untouched"].items():
+        out.append(f"  {UNTOUCHED} ({n}): {reason}")
+    for note in result.notes:
+        out.append(f"note: {note}")
     if s["error_before_um"]:
         out.append(f"predicted TCP error without compensation: max {s['error_before_um']['max']:.1f} um, "
                    f"mean {s['error_before_um']['mean']:.1f} um -> after: max "

@@ -1,8 +1,8 @@
-"""One `rapidcomp fix` job per program: load, compensate, render outputs in
+"""One `rapidcomp fix` job per task: load, compensate, render outputs in
 memory. Files are written by the caller, all at once (atomic.py), and only
 when every job succeeded: bad input anywhere means no output anywhere.
 
-Several programs run in a process pool of two workers (the machine's cores).
+Several tasks run in a process pool of two workers (the machine's cores).
 """
 
 from __future__ import annotations
@@ -11,16 +11,18 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import RapidcompError
+from ..errors import InputError, RapidcompError
 from ..progress import Progress
+from ..rapid.task import TaskSource
 from . import report
 from .fix import FixResult, fix
+from .plan import Task
 
 
 @dataclass(frozen=True)
 class JobSpec:
-    program: str
-    output: str
+    source: TaskSource
+    output: str                      # module file, or the output folder of a task folder
     report: str | None
     json: str | None
     profile: str
@@ -29,7 +31,12 @@ class JobSpec:
     mode: str
     force: bool
     limits: tuple[str, ...] = ()
+    track: tuple[str, ...] = ()
     progress: bool | None = None
+
+    @property
+    def program(self) -> str:
+        return str(self.source.input)
 
 
 @dataclass(frozen=True)
@@ -39,8 +46,11 @@ class JobOutcome:
     files: tuple[tuple[str, bytes], ...]   # (path, bytes) to write
 
 
-def default_output(program: str) -> str:
-    p = Path(program)
+def default_output(path: str, folder: bool = False) -> str:
+    p = Path(path)
+    if folder:
+        base = p.parent / p.stem if p.suffix.lower() == ".pgf" else p
+        return str(base.with_name(base.name + "_comp"))
     return str(p.with_name(p.stem + "_comp" + p.suffix))
 
 
@@ -63,25 +73,59 @@ def load_solver(profile: str, robot: str | None, force: bool, limits=()):
         raise RapidcompError(f"{robot}: {exc}") from exc
 
 
-def run(spec: JobSpec) -> JobOutcome:
+def load_task(source: TaskSource, with_modules=()) -> Task:
+    """Parse the task's modules (named by their path inside the task) and
+    the --with modules; a module name twice in a task is refused, as the
+    controller refuses to load it."""
     from ..rapid.parse import parse_file
-    progress = Progress(Path(spec.program).name, spec.progress)
+    files = [parse_file(source.root / rel, rel) for rel in source.modules]
+    seen: dict[str, str] = {}
+    for pf in files:
+        for m in pf.modules:
+            first = seen.setdefault(m.name.lower(), pf.source.display_path)
+            if first != pf.source.display_path:
+                raise InputError(pf.source.display_path,
+                                 f"module {m.name} is also in {first}: a task holds each module "
+                                 "once (the controller refuses to load it twice)",
+                                 pf.line(m.node.name_span))
+    context = [parse_file(m) for m in with_modules]
+    return Task(source.task or source.name, tuple(files), tuple(context))
+
+
+def output_path(spec: JobSpec, rel: str) -> Path:
+    if not spec.source.is_folder:
+        return Path(spec.output)
+    return Path(spec.output) / rel
+
+
+def run(spec: JobSpec) -> JobOutcome:
+    from .targets import parse_track
+    src = spec.source
+    progress = Progress(src.name, spec.progress)
     progress.stage("parsing")
-    files = [parse_file(spec.program, Path(spec.program).name)]
-    files += [parse_file(m) for m in spec.with_modules]
+    task = load_task(src, spec.with_modules)
     solver = load_solver(spec.profile, spec.robot, spec.force, spec.limits)
     progress.stage("compensating")
-    result = fix(files, solver, spec.mode, Path(spec.output).name)
+    names = {} if src.is_folder else {src.modules[0]: Path(spec.output).name}
+    result = fix(task, solver, spec.mode, track=parse_track(spec.track), output_names=names)
     progress.stage("writing")
     meta = {
-        "output": Path(spec.output).name,
+        "output": Path(spec.output).name + ("/" if src.is_folder else ""),
         "mode": spec.mode,
         "profile": Path(spec.profile).name,
         "robot": Path(spec.robot).name if spec.robot else "irb140",
         "with": ", ".join(Path(m).name for m in spec.with_modules) or "-",
         "joint limits": ", ".join(spec.limits) or "robot defaults",
     }
-    out = [(spec.output, files[0].source.encode(result.text))]
+    if spec.track:
+        meta["track"] = ", ".join(spec.track)
+    if src.is_folder:
+        meta = {"input": f"{src.kind} {src.input.name}" + (f", task {src.task}" if src.task
+                                                           else ""),
+                "modules": len(src.modules), **meta}
+    out = []
+    for pf, m in zip(task.files, result.modules):
+        out.append((str(output_path(spec, m.path)), pf.source.encode(m.text)))
     if spec.report:
         out.append((spec.report, report.markdown(result, meta).encode("utf-8")))
     if spec.json:
@@ -107,3 +151,29 @@ def run_all(specs: list[JobSpec], workers: int = 2) -> list[JobOutcome]:
         if error is not None:
             raise error
         return outcomes
+
+
+def copies(source: TaskSource, output: str, written: set[str]) -> list[tuple[str, bytes]]:
+    """Files of a folder input that are not modules of a compensated task,
+    copied so the output has the input's layout: a backup whole (it must
+    restore), a program file's .pgf, a task folder's .pgf files."""
+    if not source.is_folder:
+        return []
+    root = source.root
+    if source.kind == "backup":
+        paths = [p for p in root.rglob("*") if p.is_file()]
+    elif source.kind == "pgf":
+        paths = [source.input]
+    else:
+        paths = [p for p in root.rglob("*.pgf") if p.is_file()]
+    out = []
+    for p in sorted(paths):
+        rel = p.relative_to(root).as_posix()
+        dest = str(Path(output) / rel)
+        if dest in written:
+            continue
+        try:
+            out.append((dest, p.read_bytes()))
+        except OSError as exc:
+            raise InputError(str(p), f"cannot read file: {exc.strerror or exc}") from None
+    return out

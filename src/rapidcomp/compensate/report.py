@@ -1,7 +1,9 @@
 """The review report of a fix: Markdown and JSON with the same content.
 
-Deterministic (no timestamps, no absolute paths: files are named by their
-base names), so a report can be committed next to the program it reviews.
+Deterministic (no timestamps, no absolute paths: modules are named by
+their path inside the task), so a report can be committed next to the
+program it reviews. One report covers a task: its summary and notes, then
+per module the diff and the rows of its motions.
 """
 
 from __future__ import annotations
@@ -9,7 +11,8 @@ from __future__ import annotations
 import json
 from dataclasses import asdict
 
-from .fix import FixResult, FixRow
+from .fix import FixResult
+from .rows import UNTOUCHED, UseRow
 
 
 def _num(x, fmt: str) -> str:
@@ -30,14 +33,18 @@ def summary_lines(result: FixResult) -> list[str]:
     out = [f"{s['compensated']} of {s['target_uses']} target uses compensated, "
            f"{s['not_compensated']} not compensated, {untouched} untouched"]
     for reason, n in s["untouched"].items():
-        out.append(f"untouched ({n}): {reason}")
+        out.append(f"{UNTOUCHED} ({n}): {reason}")
+    several = len(result.modules) > 1
     for r in result.rows:
         if r.status == "not compensated":
-            out.append(f"not compensated: line {r.line} {r.instruction} {r.target}: {r.reason}")
+            where = f"{r.file}:{r.line}" if several else f"line {r.line}"
+            out.append(f"not compensated: {where} {r.instruction} {r.target}: {r.reason}")
     if s["error_before_um"]:
         b, a = s["error_before_um"], s["residual_after_um"]
         out.append(f"predicted TCP error on the warm robot: max {b['max']:.1f} um, mean "
                    f"{b['mean']:.1f} um -> after: max {a['max']:.3f} um, mean {a['mean']:.3f} um")
+    if several:
+        out.append(f"{s['modules_changed']} of {len(result.modules)} modules changed")
     return out
 
 
@@ -45,7 +52,7 @@ def _cell(text: str) -> str:
     return text.replace("|", "\\|")
 
 
-def _notes(r: FixRow) -> str:
+def _notes(r: UseRow) -> str:
     parts = ([r.reason] if r.reason else []) + list(r.warnings)
     return _cell("; ".join(parts))
 
@@ -59,27 +66,47 @@ def markdown(result: FixResult, meta: dict) -> str:
     out += [f"- {line}" for line in summary_lines(result)]
     if result.notes:
         out += ["", "## Notes", ""] + [f"- {n}" for n in result.notes]
-    out += ["", "## Diff", ""]
-    if result.diff:
-        out += ["```diff"] + list(result.diff) + ["```"]
-    else:
-        out.append("No change.")
-    out += ["", "## Targets", "",
-            "Joints in degrees; error = TCP position error of the uncompensated program on the "
-            "warm robot; after = the written values (rounded to float32 as the controller "
-            "stores them) on the warm robot.", "",
-            "| line | instruction | target | status | action | nominal joints | "
-            "compensated joints | delta joints | error um | error deg | after um | "
-            "conf before | conf after | notes |",
-            "|---:|---|---|---|---|---|---|---|---:|---:|---:|---|---|---|"]
-    for r in result.rows:
+    several = len(result.modules) > 1
+    for m in result.modules:
+        rows = [r for r in result.rows if r.file == m.path]
+        if several:
+            out += ["", f"## {m.path}", ""]
+            if not m.edits:
+                out.append("Unchanged (written byte for byte as it was)."
+                           if not rows else "No change.")
+            if not rows and not m.edits:
+                continue
+        level = "###" if several else "##"
+        out += ["", f"{level} Diff", ""]
+        if m.diff:
+            out += ["```diff"] + list(m.diff) + ["```"]
+        else:
+            out.append("No change.")
+        out += ["", f"{level} Targets", ""] + _table(rows)
+    return "\n".join(out) + "\n"
+
+
+def _table(rows: list[UseRow]) -> list[str]:
+    if not rows:
+        return ["No motion instructions."]
+    out = ["Joints in degrees; rule = how the controller chooses the joints (confdata, or "
+           "the solution closest to the previous move where configuration supervision is "
+           "off); error = TCP position error of the uncompensated program on the warm robot; "
+           "after = the written values (rounded to float32 as the controller stores them) on "
+           "the warm robot.", "",
+           "| line | instruction | target | status | rule | action | nominal joints | "
+           "compensated joints | delta joints | error um | error deg | after um | "
+           "conf before | conf after | notes |",
+           "|---:|---|---|---|---|---|---|---|---|---:|---:|---:|---|---|---|"]
+    for r in rows:
         out.append(
             f"| {r.line} | {r.instruction} | {_cell(r.target)} | {r.status} | "
-            f"{_cell(r.action or '-')} | {_joints(r.nominal_deg)} | {_joints(r.compensated_deg)} | "
-            f"{_joints(r.delta_deg, '+.5f')} | {_num(r.error_um, '.1f')} | "
-            f"{_num(r.error_deg, '.4f')} | {_num(r.residual_um, '.3f')} | {_conf(r.conf_before)} | "
-            f"{_conf(r.conf_after)} | {_notes(r)} |")
-    return "\n".join(out) + "\n"
+            f"{_cell(r.rule or '-')} | {_cell(r.action or '-')} | {_joints(r.nominal_deg)} | "
+            f"{_joints(r.compensated_deg)} | {_joints(r.delta_deg, '+.5f')} | "
+            f"{_num(r.error_um, '.1f')} | {_num(r.error_deg, '.4f')} | "
+            f"{_num(r.residual_um, '.3f')} | {_conf(r.conf_before)} | {_conf(r.conf_after)} | "
+            f"{_notes(r)} |")
+    return out
 
 
 def as_json(result: FixResult, meta: dict) -> str:
@@ -88,7 +115,8 @@ def as_json(result: FixResult, meta: dict) -> str:
         **meta,
         "summary": result.summary(),
         "notes": list(result.notes),
-        "diff": list(result.diff),
+        "modules": [{"path": m.path, "changed": bool(m.edits), "diff": list(m.diff)}
+                    for m in result.modules],
         "targets": [asdict(r) for r in result.rows],
     }
     return json.dumps(doc, indent=2) + "\n"

@@ -1,28 +1,45 @@
 """Resolve each motion instruction's target to a flange pose, or say why not.
 
-base_M_flange = world_M_uframe . uframe_M_oframe . oframe_M_tcp . tframe^-1
-(the robot base is the world frame: no track, no base frame offset). tool0
-and wobj0 are built in; tooldata/wobjdata come from the program or from the
-modules given with --with. Only values known statically are resolved:
-literal targets, declared targets with literal values, array elements with
-literal indices or indexed by the enclosing FOR loop's variable with literal
-bounds, Offs/RelTool with literal numbers, and jointtargets of MoveAbsJ.
+base_M_flange = base_M_world . world_M_uframe . uframe_M_oframe . oframe_M_tcp
+                . tframe^-1
+
+base_M_world is the identity unless a track axis carries the robot (--track:
+the base moves by the axis value along a world axis). tool0 and wobj0 are
+built in; tooldata/wobjdata come from the task's modules or from --with
+modules. Names are looked up as the controller does: the routine's own data
+and parameters, then the module's data (LOCAL included), then the global
+data of every module of the task.
+
+Only values known statically are resolved: literal targets, declared
+targets with literal values, array elements with literal indices or
+indexed by the enclosing FOR loop's variable with constant bounds,
+Offs/RelTool with literal numbers, and jointtargets of MoveAbsJ. What is
+not resolved says why, and whether that is by design (untouched: a value
+known only at run time, a stationary tool) or a gap in the input (blocked:
+a name no given module declares), which fails the compensation.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from ..kinematics.frames import DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z
 from ..rapid import ast as A
-from ..rapid.model import Declaration, Motion, ParsedFile
+from ..rapid.model import Declaration, Module, Motion, ParsedFile
 from ..rapid.refs import names_in, usage
-from ..rapid.values import (DecodeIssue, JointTarget, Pose, RobTarget, ToolData, WobjData,
-                             decode)
+from ..rapid.values import DecodeIssue, JointTarget, Pose, RobTarget, ToolData, WobjData, decode
 
 IDENTITY_POSE = (np.eye(3), np.zeros(3))
+# External axis values at or above this are "not used" (RAPID writes 9E9).
+EXTAX_UNUSED = 8.9e9
+# A FOR loop walking more iterations than this is not expanded.
+MAX_LOOP_ITERATIONS = 1_000_000
+MISSING_HINT = ("give the task folder, program file or backup that declares it, or its module "
+                "with --with")
+AXES = "abcdef"
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,6 +61,7 @@ class Source:
     call: A.Call | None            # the Offs/RelTool around ref
     rel_R: np.ndarray | None       # RelTool rotation (identity for Offs)
     rel_d: np.ndarray | None       # Offs/RelTool displacement, mm
+    home_module: Module | None = None  # the module holding decl
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,6 +82,19 @@ class TargetUse:
     tool: tuple | None = None  # (key, (R, p) tframe)
     wobj: tuple | None = None  # (key, (R, p) uframe . oframe)
     env: tuple = ()            # FOR-loop variable values, sorted (name, value)
+    blocked: bool = False      # the reason is a gap in the input: not compensated
+    file: ParsedFile | None = None
+    module: Module | None = None
+    ext: tuple[float, ...] = ()  # external axes of the target as written
+    key: tuple = ()            # (file index, motion index in the file, role, env)
+
+
+class Unresolved(NamedTuple):
+    """Why a target, tool or work object has no static value; blocked: the
+    input lacks something (a gap to fill), else it is so by design."""
+
+    reason: str
+    blocked: bool = False
 
 
 def compose_pose(a, b):
@@ -74,33 +105,67 @@ def invert_pose(a):
     return a[0].T, -a[0].T @ a[1]
 
 
+def parse_track(specs) -> tuple[tuple[int, np.ndarray], ...]:
+    """`--track AXIS:x|y|z` options: eax_<AXIS> carries the robot base along
+    that world axis (mm; -x etc. for the opposite sense). Returns
+    ((axis index, unit vector), ...)."""
+    from ..errors import RapidcompError
+    out = []
+    for spec in specs or ():
+        axis, _, direction = spec.strip().lower().partition(":")
+        axis = axis[4:] if axis.startswith("eax_") else axis
+        sign, along = (-1.0, direction[1:]) if direction.startswith("-") else (
+            1.0, direction.lstrip("+"))
+        if len(axis) != 1 or axis not in AXES or along not in ("x", "y", "z"):
+            raise RapidcompError(f"--track {spec}: expected AXIS:DIRECTION with AXIS one of "
+                                 "a..f (eax_a..eax_f) and DIRECTION x, y or z, e.g. a:x")
+        k = AXES.index(axis)
+        if any(k == j for j, _ in out):
+            raise RapidcompError(f"--track {spec}: axis {axis} given twice")
+        vec = np.zeros(3)
+        vec["xyz".index(along)] = sign
+        out.append((k, vec))
+    return tuple(out)
+
+
 class Resolver:
-    """Resolves motion targets of `files` (the program first, then --with
+    """Resolves motion targets of `files` (the task's modules, then --with
     modules). With float32=True every number is first rounded to a 32-bit
     float, as the controller stores it (used to verify written output)."""
 
     def __init__(self, files: list[ParsedFile], float32: bool = False,
-                 usages: dict | None = None, writes: bool = True):
+                 usages: dict | None = None, writes: bool = True, track=()):
         self.float32 = float32
-        self.decls: dict[str, Declaration] = {}
-        self.routine_decls: dict[tuple[str, str], Declaration] = {}
+        self.track = tuple(track)
+        self.globals: dict[str, list[Declaration]] = {}
+        self.module_decls: dict[tuple[int, str], Declaration] = {}
+        self.routine_decls: dict[tuple[int, str, str], Declaration] = {}
+        self.params: dict[tuple[int, str], set[str]] = {}
         self.home: dict[int, ParsedFile] = {}
+        self.home_module: dict[int, Module] = {}
         self.writes: dict[str, tuple[ParsedFile, A.Span]] = {}
         self.usages: dict[int, object] = {}   # id(Module) -> refs.Usage
         for pf in files:
             for m in pf.modules:
+                mid = id(m)
+                for r in m.routines:
+                    self.params[(mid, r.name.lower())] = {p.name.lower() for p in r.node.params}
                 for d in m.declarations:
                     self.home[id(d)] = pf
+                    self.home_module[id(d)] = m
+                    name = d.name.lower()
                     if d.routine is None:
-                        self.decls.setdefault(d.name.lower(), d)
+                        self.module_decls.setdefault((mid, name), d)
+                        if d.scope != "LOCAL":
+                            self.globals.setdefault(name, []).append(d)
                     else:
-                        self.routine_decls[(d.routine.lower(), d.name.lower())] = d
-                us = usages.get(id(m)) if usages is not None else None
+                        self.routine_decls[(mid, d.routine.lower(), name)] = d
+                us = usages.get(mid) if usages is not None else None
                 if us is None:
                     if not writes:
                         continue
                     us = usage(m.node)
-                self.usages[id(m)] = us
+                self.usages[mid] = us
                 for name, spans in us.writes.items():
                     self.writes.setdefault(name, (pf, spans[0]))
 
@@ -111,24 +176,53 @@ class Resolver:
     def _pose(self, pose: Pose):
         return quat_wxyz_to_matrix(self._num(pose.quat_wxyz)), self._num(pose.xyz)
 
-    def _lookup(self, name: str, routine: str) -> Declaration | None:
-        return self.routine_decls.get((routine.lower(), name.lower())) or self.decls.get(name.lower())
+    def lookup(self, name: str, module: Module, routine: str | None):
+        """The declaration a name means in a routine of a module, None when
+        no given module declares it, or Unresolved (a routine parameter, an
+        ambiguous global)."""
+        key = name.lower()
+        mid = id(module)
+        if routine is not None:
+            d = self.routine_decls.get((mid, routine.lower(), key))
+            if d is not None:
+                return d
+            if key in self.params.get((mid, routine.lower()), ()):
+                return Unresolved(f"{name} is a parameter of routine {routine} (its value "
+                                  "comes from the caller)")
+        d = self.module_decls.get((mid, key))
+        if d is not None:
+            return d
+        found = self.globals.get(key)
+        if not found:
+            return None
+        if len(found) > 1 and not all(x.storage == "PERS" and x.type == found[0].type
+                                      for x in found):
+            where = ", ".join(f"{self.home[id(x)].source.display_path}:"
+                              f"{self.home[id(x)].line(x.span)}" for x in found)
+            return Unresolved(f"{name} is declared globally more than once ({where})", True)
+        return found[0]
 
     # ------------------------------------------------------------ tool / wobj
-    def _data(self, expr, routine: str, builtin: str, cls, what: str):
+    def _data(self, expr, module, routine: str, builtin: str, cls, what: str):
         """The literal value of a tool/work object argument, None for the
-        built-in one, or a reason string."""
+        built-in one, or Unresolved."""
         if not (isinstance(expr, A.Ref) and not expr.selectors):
-            return f"the {what} is not a plain data name"
+            return Unresolved(f"the {what} is not a plain data name")
         if expr.name.lower() == builtin:
             return None
-        d = self._lookup(expr.name, routine)
+        d = self.lookup(expr.name, module, routine)
+        if isinstance(d, Unresolved):
+            return d
         if d is None:
-            return f"{what} {expr.name} is not declared in the given modules"
+            return Unresolved(f"{what} {expr.name} is not declared in the given modules "
+                              f"({MISSING_HINT})", True)
         if not isinstance(d.value, cls):
-            return f"{what} {expr.name} has no literal value"
+            if d.type != cls.__name__.lower():
+                return Unresolved(f"{expr.name} is a {d.type}, not {what} data", True)
+            return Unresolved(f"{what} {expr.name} has no literal value "
+                              f"({d.issue or 'run-time data'})")
         written = self._written(d)
-        return written or d.value
+        return Unresolved(written) if written else d.value
 
     def _written(self, d: Declaration) -> str | None:
         if d.storage == "CONST" or d.name.lower() not in self.writes:
@@ -136,110 +230,136 @@ class Resolver:
         pf, span = self.writes[d.name.lower()]
         return f"{d.name} is assigned at run time ({pf.source.display_path}:{pf.line(span)})"
 
-    def tool(self, expr, routine: str):
-        """(key, tframe as (R, p)), or a reason string."""
+    def tool(self, expr, module, routine: str):
+        """(key, tframe as (R, p)), or Unresolved."""
         if expr is None:
-            return "no tool argument"
-        t = self._data(expr, routine, "tool0", ToolData, "tool")
-        if isinstance(t, str):
+            return Unresolved("no tool argument", True)
+        t = self._data(expr, module, routine, "tool0", ToolData, "tool")
+        if isinstance(t, Unresolved):
             return t
         if t is None:
             return "tool0", IDENTITY_POSE
         if t.robhold.value is not True:
-            return f"tool {expr.name} is a stationary tool (robhold FALSE)"
+            return Unresolved(f"tool {expr.name} is a stationary tool (robhold FALSE)")
         return expr.name.lower(), self._pose(t.tframe)
 
-    def wobj(self, expr, routine: str):
-        """(key, uframe . oframe as (R, p)), or a reason string."""
+    def wobj(self, expr, module, routine: str):
+        """(key, uframe . oframe as (R, p)), or Unresolved."""
         if expr is None:
             return "wobj0", IDENTITY_POSE
-        w = self._data(expr, routine, "wobj0", WobjData, "work object")
-        if isinstance(w, str):
+        w = self._data(expr, module, routine, "wobj0", WobjData, "work object")
+        if isinstance(w, Unresolved):
             return w
         if w is None:
             return "wobj0", IDENTITY_POSE
         if w.robhold.value is not False:
-            return f"work object {expr.name} is held by the robot (stationary tool set-up)"
+            return Unresolved(f"work object {expr.name} is held by the robot (stationary tool "
+                              "set-up)")
         if w.ufprog.value is not True or w.ufmec.value != "":
-            return f"work object {expr.name} is coordinated with a mechanical unit"
+            return Unresolved(f"work object {expr.name} is coordinated with a mechanical unit")
         return expr.name.lower(), compose_pose(self._pose(w.uframe), self._pose(w.oframe))
 
+    def world_M_base(self, record) -> tuple | Unresolved:
+        """The robot base in the world frame for a target's external axes:
+        moved along the track axes (--track), else the identity."""
+        if not self.track:
+            return IDENTITY_POSE
+        ext = self._num(record.ext)
+        d = np.zeros(3)
+        for k, u in self.track:
+            if abs(ext[k]) >= EXTAX_UNUSED:
+                return Unresolved(f"the target has no value for track axis eax_{AXES[k]} "
+                                  "(9E9) but --track says it carries the robot", True)
+            d = d + ext[k] * u
+        return np.eye(3), d
+
     # ------------------------------------------------------------ targets
-    def _source(self, expr, routine: str, env: dict[str, int], outer=None):
-        """The Source of a target expression, or a reason string."""
+    def _source(self, expr, module, routine: str, env: dict[str, int], outer=None):
+        """The Source of a target expression, or Unresolved."""
         whole = outer if outer is not None else expr
         if isinstance(expr, A.Ref):
-            d = self._lookup(expr.name, routine)
+            d = self.lookup(expr.name, module, routine)
+            if isinstance(d, Unresolved):
+                return d
             if d is None:
-                return f"{expr.name} is not declared in the given modules"
+                return Unresolved(f"{expr.name} is not declared in the given modules "
+                                  f"({MISSING_HINT})", True)
+            if d.type not in ("robtarget", "jointtarget"):
+                return Unresolved(f"{expr.name} is a {d.type}, not a target", True)
             if d.value is None:
-                return f"{expr.name} has no literal value ({d.issue or 'runtime data'})"
+                return Unresolved(f"{expr.name} has no literal value "
+                                  f"({d.issue or 'run-time data'})")
             written = self._written(d)
             if written:
-                return written
-            home = self.home[id(d)]
+                return Unresolved(written)
+            home, home_m = self.home[id(d)], self.home_module[id(d)]
             if not expr.selectors:
                 if isinstance(d.value, tuple):
-                    return f"{expr.name} is an array"
-                return Source(d.value, d, home, None, False, expr, whole, None, None, None)
+                    return Unresolved(f"{expr.name} is an array", True)
+                return Source(d.value, d, home, None, False, expr, whole, None, None, None, home_m)
             if len(expr.selectors) == 1 and isinstance(expr.selectors[0], A.Index):
+                if not isinstance(d.value, tuple):
+                    return Unresolved(f"{expr.name} is not an array", True)
                 idx = []
                 by_loop = False
                 for e in expr.selectors[0].indices:
-                    if isinstance(e, A.Num):
-                        idx.append(int(e.value))
+                    k = self.integer(e, module, routine)
+                    if k is not None:
+                        idx.append(k)
                     elif isinstance(e, A.Ref) and not e.selectors and e.name.lower() in env:
                         idx.append(env[e.name.lower()])
                         by_loop = True
                     else:
-                        return (f"index of {expr.name} is not a literal or the variable of an "
-                                "enclosing FOR loop with constant bounds")
+                        return Unresolved(f"index of {expr.name} is not a literal or the "
+                                          "variable of an enclosing FOR loop with constant bounds")
                 if len(idx) != len(d.dims):
-                    return f"{expr.name} has {len(d.dims)} dimensions, indexed with {len(idx)}"
+                    return Unresolved(f"{expr.name} has {len(d.dims)} dimensions, indexed with "
+                                      f"{len(idx)}", True)
                 flat = 0
                 for k, dim in zip(idx, d.dims):
                     if not 1 <= k <= dim:
-                        return f"index {k} of {expr.name} is outside 1..{dim}"
+                        return Unresolved(f"index {k} of {expr.name} is outside 1..{dim}", True)
                     flat = flat * dim + (k - 1)
-                return Source(d.value[flat], d, home, flat, by_loop, expr, whole, None, None, None)
-            return f"{expr.name} with components is not a target"
+                return Source(d.value[flat], d, home, flat, by_loop, expr, whole, None, None, None,
+                              home_m)
+            return Unresolved(f"{expr.name} with components is not a target")
         if isinstance(expr, A.Call) and expr.name.lower() in ("offs", "reltool") and outer is None:
-            return self._offset(expr, routine, env)
+            return self._offset(expr, module, routine, env)
         if isinstance(expr, (A.Agg, A.NumAgg)):
-            return "inline aggregate is not a literal value"
-        return "the target is computed at run time"
+            return Unresolved("inline aggregate is not a literal value")
+        return Unresolved("the target is computed at run time")
 
-    def _offset(self, call: A.Call, routine: str, env):
+    def _offset(self, call: A.Call, module, routine: str, env):
         pos = [a.value for a in call.args if a.kind == "pos"]
         if len(pos) != 4 or not all(isinstance(v, A.Num) for v in pos[1:]):
-            return f"{call.name} arguments are not literal numbers"
+            return Unresolved(f"{call.name} arguments are not literal numbers")
         if isinstance(pos[0], (A.Agg, A.NumAgg)):
             try:
                 record = decode("robtarget", pos[0], f"{call.name} robtarget")
             except DecodeIssue as exc:
-                return exc.reason
+                return Unresolved(exc.reason)
             base = Source(record, None, None, None, False, pos[0], call, None, None, None)
         else:
-            base = self._source(pos[0], routine, env, outer=call)
-        if isinstance(base, str):
+            base = self._source(pos[0], module, routine, env, outer=call)
+        if isinstance(base, Unresolved):
             return base
         if not isinstance(base.record, RobTarget):
-            return f"{call.name} of a non-robtarget"
+            return Unresolved(f"{call.name} of a non-robtarget", True)
         d = self._num([v.value for v in pos[1:]])
         rot = np.eye(3)
         if call.name.lower() == "reltool":
             for a in call.args:
                 if a.kind == "optval" and a.name.lower() in ("rx", "ry", "rz"):
                     if not isinstance(a.value, A.Num):
-                        return "RelTool rotation is not a literal number"
+                        return Unresolved("RelTool rotation is not a literal number")
                     f = {"rx": rot_x, "ry": rot_y, "rz": rot_z}[a.name.lower()]
                     rot = rot @ f(float(self._num(a.value.value)) * DEG)
                 elif a.kind != "pos":
-                    return f"RelTool argument \\{a.name} is not supported"
+                    return Unresolved(f"RelTool argument \\{a.name} is not supported")
         elif any(a.kind != "pos" for a in call.args):
-            return "Offs takes no optional arguments"
+            return Unresolved("Offs takes no optional arguments")
         return Source(base.record, base.decl, base.home, base.element, base.by_loop, base.ref,
-                      call, call, rot, d)
+                      call, call, rot, d, base.home_module)
 
     def target_pose(self, src: Source):
         """wobj_M_target of a robtarget source, with Offs/RelTool applied."""
@@ -251,80 +371,105 @@ class Resolver:
             return R, p + src.rel_d
         return R @ src.rel_R, p + R @ src.rel_d
 
-    def resolve(self, pf: ParsedFile, motion: Motion) -> list[TargetUse]:
+    def integer(self, expr, module, routine: str | None) -> int | None:
+        """A literal integer, or a CONST num with a literal integer value."""
+        if isinstance(expr, A.Num) and float(expr.value).is_integer() and abs(expr.value) < 2**53:
+            return int(expr.value)
+        if isinstance(expr, A.Unary) and expr.op == "-":
+            v = self.integer(expr.operand, module, routine)
+            return -v if v is not None else None
+        if isinstance(expr, A.Paren):
+            return self.integer(expr.expr, module, routine)
+        if isinstance(expr, A.Ref) and not expr.selectors:
+            d = self.lookup(expr.name, module, routine)
+            if isinstance(d, Declaration) and d.storage == "CONST" and d.type == "num":
+                return self.integer(d.node.init, module, None)
+        return None
+
+    def loop_range(self, loop, module, routine: str) -> range | None:
+        """The values a FOR loop walks when its bounds are constant (None
+        when they are not, or when it walks more than the limit)."""
+        start = self.integer(loop.start, module, routine)
+        stop = self.integer(loop.stop, module, routine)
+        step = 1 if loop.step is None else self.integer(loop.step, module, routine)
+        if start is None or stop is None or not step:
+            return None
+        r = range(start, stop + (1 if step > 0 else -1), step)
+        return r if len(r) <= MAX_LOOP_ITERATIONS else None
+
+    def resolve(self, pf: ParsedFile, module: Module, motion: Motion,
+                index: tuple[int, int] = (0, 0)) -> list[TargetUse]:
+        """Every target use of a motion; index = (file index, motion index in
+        the file), the first part of each use's key."""
         out = []
         for t in motion.targets:
             if t.role == "search":
                 continue
             kind = "jointtarget" if motion.spec.joint_space else "robtarget"
             inline = isinstance(t.expr, (A.Agg, A.NumAgg))
-            for env in self._loop_envs(motion, names_in(t.expr)):
+            for env in self._loop_envs(module, motion, names_in(t.expr)):
                 label = pf.text(t.expr) if not inline else "inline"
                 if env:
                     label += " [" + ", ".join(f"{k}={v}" for k, v in env.items()) + "]"
-                out.append(self._use(pf, motion, t, kind, label, env))
+                out.append(self._use(pf, module, motion, t, kind, label, env,
+                                     index + (t.role, tuple(sorted(env.items())))))
         return out
 
-    def _int(self, expr, routine: str) -> int | None:
-        """A literal integer, or a CONST num with a literal integer value."""
-        if isinstance(expr, A.Num) and float(expr.value).is_integer():
-            return int(expr.value)
-        if isinstance(expr, A.Unary) and expr.op == "-":
-            v = self._int(expr.operand, routine)
-            return -v if v is not None else None
-        if isinstance(expr, A.Ref) and not expr.selectors:
-            d = self._lookup(expr.name, routine)
-            if d is not None and d.storage == "CONST" and d.type == "num":
-                return self._int(d.node.init, routine)
-        return None
-
-    def _loop_envs(self, motion: Motion, names: set[str]) -> list[dict[str, int]]:
+    def _loop_envs(self, module, motion: Motion, names: set[str]) -> list[dict[str, int]]:
         """One environment per iteration of the enclosing FOR loops whose
         variable the target expression uses."""
         envs: list[dict[str, int]] = [{}]
         for lp in motion.loops:
             if lp.var is None or lp.var.lower() not in names:
                 continue
-            start = self._int(lp.start, motion.routine)
-            stop = self._int(lp.stop, motion.routine)
-            step = 1 if lp.step is None else self._int(lp.step, motion.routine)
-            if start is None or stop is None or not step:
+            values = self.loop_range(lp, module, motion.routine)
+            if values is None:
                 continue  # the target stays unresolved and says why
-            values = list(range(start, stop + (1 if step > 0 else -1), step))
             envs = [{**e, lp.var.lower(): v} for e in envs for v in values]
         return envs
 
-    def _use(self, pf, motion, t, kind, label, env) -> TargetUse:
+    def _use(self, pf, module, motion, t, kind, label, env, key) -> TargetUse:
         line = pf.line(motion.span)
+        envt = key[3]
+
+        def fail(why: Unresolved):
+            return TargetUse(motion, t.role, label, line, kind, None, None, None, None,
+                             why.reason, env=envt, blocked=why.blocked, file=pf, module=module,
+                             key=key)
+
+        if not motion.spec.moves_arm:
+            return fail(Unresolved(f"{motion.spec.name} moves only external axes; the arm "
+                                   "stays where it is"))
         if t.value is not None:
             src = Source(t.value, None, None, None, False, t.expr, t.expr, None, None, None)
+        elif t.issue:
+            src = Unresolved(t.issue)
         else:
-            src = t.issue if t.issue else self._source(t.expr, motion.routine, env)
-        envt = tuple(sorted(env.items()))
-
-        def fail(reason):
-            return TargetUse(motion, t.role, label, line, kind, None, None, None, None, reason,
-                             env=envt)
-
-        if isinstance(src, str):
+            src = self._source(t.expr, module, motion.routine, env)
+        if isinstance(src, Unresolved):
             return fail(src)
         if kind == "jointtarget":
             if not isinstance(src.record, JointTarget):
-                return fail("not a jointtarget")
+                return fail(Unresolved("not a jointtarget", True))
             joints = tuple(float(v) for v in self._num(src.record.joints))
             return TargetUse(motion, t.role, label, line, kind, None, None, None, joints, None,
-                             src, env=envt)
+                             src, env=envt, file=pf, module=module, ext=src.record.ext, key=key)
         if not isinstance(src.record, RobTarget):
-            return fail("not a robtarget")
-        tool = self.tool(motion.tool, motion.routine)
-        if isinstance(tool, str):
+            return fail(Unresolved("not a robtarget", True))
+        tool = self.tool(motion.tool, module, motion.routine)
+        if isinstance(tool, Unresolved):
             return fail(tool)
-        wobj = self.wobj(motion.wobj, motion.routine)
-        if isinstance(wobj, str):
+        wobj = self.wobj(motion.wobj, module, motion.routine)
+        if isinstance(wobj, Unresolved):
             return fail(wobj)
-        Rf, pf_ = compose_pose(compose_pose(wobj[1], self.target_pose(src)), invert_pose(tool[1]))
+        base = self.world_M_base(src.record)
+        if isinstance(base, Unresolved):
+            return fail(base)
+        Rf, pf_ = compose_pose(compose_pose(invert_pose(base), compose_pose(
+            wobj[1], self.target_pose(src))), invert_pose(tool[1]))
         return TargetUse(motion, t.role, label, line, kind, Rf, pf_, src.record.conf, None, None,
-                         src, tool, wobj, envt)
+                         src, tool, wobj, envt, file=pf, module=module, ext=src.record.ext,
+                         key=key)
 
 
 def base_pose(src: Source, target):
@@ -337,14 +482,3 @@ def base_pose(src: Source, target):
         return R, p - src.rel_d
     R = R @ src.rel_R.T
     return R, p - R @ src.rel_d
-
-
-def target_uses(files: list[ParsedFile], float32: bool = False) -> list[TargetUse]:
-    """Every target use of the first file's motions, resolved against all files."""
-    resolver = Resolver(files, float32)
-    main = files[0]
-    out: list[TargetUse] = []
-    for m in main.modules:
-        for motion in m.motions:
-            out.extend(resolver.resolve(main, motion))
-    return out

@@ -44,6 +44,7 @@ class Warn(IntFlag):
     ELBOW_SINGULAR = 4      # forearm stretched along the lower arm
     QUADRANT_CHANGED = 8    # cf1/cf4/cf6 of the result differ from the target's
     CFX_AT_SINGULARITY = 16  # cfx bit flipped across a singularity boundary
+    ORIENTATION_LEFT = 32   # at the wrist singularity: position exact, orientation partly
 
 
 _WARN_TEXT = {
@@ -52,6 +53,9 @@ _WARN_TEXT = {
     Warn.ELBOW_SINGULAR: "near elbow singularity (arm stretched)",
     Warn.QUADRANT_CHANGED: "joint quadrant changed (cf1/cf4/cf6 recomputed)",
     Warn.CFX_AT_SINGULARITY: "cfx changed across a singularity boundary",
+    Warn.ORIENTATION_LEFT: ("at the wrist singularity the position is compensated exactly and "
+                            "the orientation only as far as small J4/J6 changes allow "
+                            "(what is left over is the row's residual in degrees)"),
 }
 
 
@@ -59,14 +63,20 @@ _WARN_TEXT = {
 class IKOptions:
     singular_margin_deg: float = 0.5
     max_joint_change_deg: float = 1.0
-    # A program's confdata may sit on a quadrant boundary; a solution this
-    # close to the programmed quadrant is accepted (and reported).
-    quadrant_tol_deg: float = 1e-6
+    # A taught target whose J1, J4 or J6 is 0 deg sits on a quadrant
+    # boundary; written with 3 decimals it solves a few 1e-5 deg on either
+    # side. A solution this close to the programmed quadrant is in it (the
+    # controller runs such targets every day).
+    quadrant_tol_deg: float = 0.01
     tol_mm: float = 1e-9
     tol_rad: float = 1e-9
     # Newton from the nominal seed converges in 2-4 steps; more means the
     # warm robot cannot reach the pose (typically the arm fully stretched).
     max_iterations: int = 12
+    # Within this distance of J5 = 0 a pose whose full compensation would
+    # swing J4/J6 beyond the joint-change bound is compensated in position
+    # exactly and in orientation as far as the bound allows.
+    wrist_fallback_deg: float = 5.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -189,6 +199,16 @@ class Solver:
         w |= np.where(np.abs(wrap_pi(q[:, 2] - self.geometry.phi)) < m,
                       int(Warn.ELBOW_SINGULAR), 0)
         return w
+
+    def _outside_quadrants(self, q_deg: np.ndarray, conf: np.ndarray) -> np.ndarray:
+        """Rows whose J1, J4 or J6 lies beyond the quadrant tolerance outside
+        the quadrant conf names (cf1, cf4, cf6)."""
+        out = np.zeros(len(q_deg), dtype=bool)
+        for col, cf in ((0, 0), (3, 1), (5, 2)):
+            lo = 90.0 * conf[:, cf]
+            miss = np.maximum(lo - q_deg[:, col], q_deg[:, col] - (lo + 90.0))
+            out |= miss > self.options.quadrant_tol_deg
+        return out
 
     def _mark_limits(self, q_deg, status, detail, djoint) -> None:
         """Mark rows still OK whose joints lie beyond a limit (in place),
@@ -321,13 +341,17 @@ class Solver:
             q[idx_next] += dq
             iters[idx_next] += 1
             idx = idx_next
+        q_ref = np.nan_to_num(seed.q_deg) * DEG
+        if self.joint_map is not None:
+            q_ref = np.where(active[:, None], self.joint_map.apply(q_ref), 0.0)
+        leftover = self._wrist_fallback(R, p, q, q_ref, seed, active, res_mm, res_rad)
         q_act = q
         if self.joint_map is not None:
             q = np.where(active[:, None], self.joint_map.invert(q_act), 0.0)
         qd = q / DEG
         detail = seed.detail.copy()
         djoint = seed.detail_joint.copy()
-        conv = active & (res_mm <= opt.tol_mm) & (res_rad <= opt.tol_rad)
+        conv = active & (res_mm <= opt.tol_mm) & ((res_rad <= opt.tol_rad) | leftover)
         nc = active & ~conv
         status[nc] = Status.NOT_CONVERGED
         detail[nc] = res_mm[nc]
@@ -342,6 +366,7 @@ class Solver:
         _, ps = chain.joint_frames(q_act)
         conf = confdata(q, ps[:, 4], self.geometry.phi)
         warnings = seed.warnings | self._singularity_warnings(q, ps[:, 4])
+        warnings |= np.where(leftover, int(Warn.ORIENTATION_LEFT), 0)
         flipped = (conf[:, 3] ^ seed.conf[:, 3]) & 7
         at_singularity = (
             ((flipped & 1) == 0) | ((warnings & Warn.WRIST_SINGULAR) > 0)) & (
@@ -352,12 +377,114 @@ class Solver:
         status[branch] = Status.BRANCH_CHANGED
         warnings |= np.where(ok & (flipped != 0) & at_singularity,
                              int(Warn.CFX_AT_SINGULARITY), 0)
-        quad = np.any(conf[:, :3] != seed.conf[:, :3], axis=1)
+        quad = self._outside_quadrants(qd, seed.conf)
         warnings |= np.where(ok & quad, int(Warn.QUADRANT_CHANGED), 0)
         self._mark_limits(qd, status, detail, djoint)
         q_out = np.where(active[:, None], qd, np.nan)
         return IKBatch(q_out, status, detail, djoint, conf, res_mm, res_rad, iters,
                        warnings, change)
+
+    def _wrist_fallback(self, R, p, q, q_ref, seed: IKBatch, active, res_mm, res_rad):
+        """Rows near J5 = 0 that the full solve left unconverged or moved
+        J4/J6 beyond the bound: solve again with the position exact and the
+        orientation as close as the joint-change bound allows (in place on
+        q, res_mm, res_rad). Returns the mask of rows solved this way.
+
+        At J5 = 0 the axes of J4 and J6 coincide: one direction of rotation
+        is reached only by swinging J4 and J6 far. Its share of the thermal
+        tilt (~0.01 deg) is left over rather than bought with that swing.
+        """
+        opt = self.options
+        leftover = np.zeros(len(q), dtype=bool)
+        near = active & (np.abs(wrap_pi(np.nan_to_num(seed.q_deg[:, 4]) * DEG))
+                         < opt.wrist_fallback_deg * DEG)
+        if not near.any():
+            return leftover
+        change = np.abs(q - q_ref).max(axis=1) / DEG
+        need = near & ((res_mm > opt.tol_mm) | (res_rad > opt.tol_rad)
+                       | (change > opt.max_joint_change_deg))
+        bound = 0.95 * opt.max_joint_change_deg * DEG
+        for i in np.flatnonzero(need):
+            got = self._position_exact(R[i], p[i], q_ref[i], bound)
+            if got is not None:
+                q[i], res_mm[i], res_rad[i] = got
+                leftover[i] = res_rad[i] > opt.tol_rad
+        return leftover
+
+    def _position_exact(self, R, p, q_ref, bound):
+        """min |orientation error|^2 + mu |q - q_ref|^2 subject to the exact
+        flange position, with the smallest mu (tried in decades) whose
+        solution stays within `bound` (rad) of q_ref. Gauss-Newton on the
+        KKT system; (q, residual mm, residual rad) or None."""
+        opt = self.options
+        chain = self.deformed_chain
+        n = len(q_ref)
+        for mu in (1e-8, 1e-6, 1e-4, 1e-2, 1.0, 1e2):
+            q = q_ref.copy()
+            for _ in range(40):
+                Rc, pc, J = chain.fk_jacobian(q[None])
+                e_p = p - pc[0]
+                e_w = rotation_log((R @ Rc[0].T)[None])[0]
+                Jp, Jw = J[0, :3], J[0, 3:]
+                K = np.zeros((n + 3, n + 3))
+                K[:n, :n] = Jw.T @ Jw + mu * np.eye(n)
+                K[:n, n:] = Jp.T
+                K[n:, :n] = Jp
+                rhs = np.concatenate([Jw.T @ e_w - mu * (q - q_ref), e_p])
+                dq = np.linalg.solve(K, rhs)[:n]
+                q = q + dq
+                if np.max(np.abs(dq)) < 1e-13:
+                    break
+            Rc, pc = chain.fk(q[None])
+            e_p = float(np.linalg.norm(p - pc[0]))
+            e_w = float(np.linalg.norm(rotation_log((R @ Rc[0].T)[None])[0]))
+            if e_p <= opt.tol_mm and np.max(np.abs(q - q_ref)) <= bound:
+                return q, e_p, e_w
+        return None
+
+    def candidates(self, R: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """Every closed-form solution of the flange poses (N, 8, 6), degrees
+        in (-180, 180], NaN on a branch that cannot reach. For the rule the
+        controller follows without configuration supervision (closest)."""
+        br = solve_branches(self.geometry, np.asarray(R, float).reshape(-1, 3, 3),
+                            np.asarray(p, float).reshape(-1, 3))
+        return br.q / DEG
+
+    def closest(self, cands_deg: np.ndarray, prev_deg: np.ndarray) -> np.ndarray:
+        """Per row, the solution nearest (Euclidean, degrees) to prev_deg
+        (M, 6) among cands_deg (M, 8, 6) within the joint limits: J1, J4
+        and J6 turned by whole turns towards the previous angles, J2, J3, J5
+        within their limits. NaN rows where no candidate is within limits.
+        At an exact wrist singularity (J5 = 0) only J4 + J6 is defined; it is
+        split evenly around the previous J4, J6 (the nearest split)."""
+        c = np.array(cands_deg, float, copy=True)
+        prev = np.asarray(prev_deg, float)[:, None, :]
+        lo, hi = self.lower, self.upper
+        singular = np.abs(c[:, :, 4]) < 1e-7
+        if singular.any():
+            s = c[:, :, 3] + c[:, :, 5]
+            target = prev[:, :, 3] + prev[:, :, 5]
+            s = s + 360.0 * np.round((target - s) / 360.0)
+            half = (s - target) / 2.0
+            c[:, :, 3] = np.where(singular, prev[:, :, 3] + half, c[:, :, 3])
+            c[:, :, 5] = np.where(singular, prev[:, :, 5] + half, c[:, :, 5])
+        for col in (0, 3, 5):
+            a = c[:, :, col] + 360.0 * np.round((prev[:, :, col] - c[:, :, col]) / 360.0)
+            a = np.where(a > hi[col], a - 360.0, a)
+            a = np.where(a < lo[col], a + 360.0, a)
+            c[:, :, col] = a
+        for col in (1, 2, 4):
+            for shift in (-360.0, 360.0):
+                moved = c[:, :, col] + shift
+                out = (c[:, :, col] < lo[col]) | (c[:, :, col] > hi[col])
+                c[:, :, col] = np.where(out & (moved >= lo[col]) & (moved <= hi[col]), moved,
+                                        c[:, :, col])
+        inside = np.all((c >= lo - 1e-9) & (c <= hi + 1e-9), axis=2) & ~np.isnan(c).any(axis=2)
+        dist = np.where(inside, np.linalg.norm(c - prev, axis=2), np.inf)
+        best = np.argmin(dist, axis=1)
+        out = c[np.arange(len(c)), best]
+        out[~np.isfinite(dist[np.arange(len(c)), best])] = np.nan
+        return out
 
     def seed_from_joints(self, q_deg: np.ndarray):
         """Nominal flange poses of joint vectors (MoveAbsJ targets) and a seed

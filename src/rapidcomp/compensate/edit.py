@@ -1,0 +1,271 @@
+"""Stage 4 of `fix`: the span edits that write every group's values.
+
+Each written file gets its own edits: numeric fields replaced in place,
+MoveJ/MoveL renamed to MoveAbsJ with a new target, new declarations
+inserted on the line after the one they come from (in that line's
+indentation and line break). Nothing else of the text changes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..edits import SpanEdit
+from ..errors import InternalError
+from ..rapid import ast as A
+from ..rewrite import records
+from ..rewrite.names import NameAllocator
+from .flow import ON
+from .place import Group, element_label, multi_index
+from .plan import Plan
+from .solve import Solved
+from .targets import Source, base_pose, compose_pose, invert_pose
+
+
+class Values:
+    """The compensated value of each group element, as numbers and text."""
+
+    def __init__(self, plan: Plan, solved: Solved, quadrant_tol_deg: float):
+        self.plan = plan
+        self.solved = solved
+        self.tol = quadrant_tol_deg
+
+    def source(self, g: Group, k) -> Source:
+        if k is None or k == g.src.element:
+            return g.src
+        return replace(g.src, record=g.decl.value[k], element=k)
+
+    def joints(self, g: Group, k) -> np.ndarray:
+        if k in g.slots:
+            return g.slots[k][0]
+        return self.solved.deformed.q_deg[g.rows[k]]
+
+    def robtarget_value(self, g: Group, k):
+        """(R, p, conf) of the literal the ideal controller must be given:
+        nominal FK of the compensated joints, back in the tool and work
+        object (and track position), with Offs/RelTool undone. confdata:
+        the compensated joints', except where every use runs with
+        supervision off (the controller ignores it: it stays as written)
+        and for a J1/J4/J6 within the quadrant tolerance of the written
+        quadrant (it stays as written)."""
+        s = self.solved
+        i = g.rows[k]
+        src = self.source(g, k)
+        flange = (s.flange_R[i], s.flange_p[i])
+        base = self.plan.resolver.world_M_base(src.record)
+        target = compose_pose(compose_pose(invert_pose(g.wobj[1]), compose_pose(base, flange)),
+                              g.tool[1])
+        written = np.array(src.record.conf)
+        if all(ON not in self.plan.supervision(u) for u in g.uses):
+            conf = written
+        else:
+            conf = np.array(s.conf_after[i])
+            q = s.deformed.q_deg[i]
+            for col, cf in ((0, 0), (3, 1), (5, 2)):
+                lo = 90.0 * written[cf]
+                if lo - self.tol <= q[col] <= lo + 90.0 + self.tol:
+                    conf[cf] = written[cf]
+        return (*base_pose(src, target), conf)
+
+    def field_texts(self, g: Group, k) -> list[str]:
+        record = self.source(g, k).record
+        if g.mode == "joint":
+            return records.jointtarget_texts(record, self.joints(g, k))
+        R, p, conf = self.robtarget_value(g, k)
+        return records.robtarget_texts(record, R, p, conf)
+
+    def literal(self, g: Group, k, texts: list[str] | None = None) -> str:
+        """The new literal of element k (`texts`: its field texts, when the
+        caller has them already)."""
+        record = self.source(g, k).record
+        if g.mode == "absj":
+            return records.jointtarget_literal(records.absj_texts(self.joints(g, k), record))
+        if k in g.slots or (g.array and k not in g.rows):
+            return records.robtarget_literal(list(record.texts))  # unreached: as written
+        texts = texts if texts is not None else self.field_texts(g, k)
+        if g.mode == "joint":
+            return records.jointtarget_literal(texts)
+        return records.robtarget_literal(texts)
+
+
+def _style(word: str, like: str) -> str:
+    """An inserted keyword in the letter case of the word it replaces."""
+    if like.islower():
+        return word.lower()
+    if like.isupper():
+        return word.upper()
+    return word
+
+
+def _line_end(text: str, pos: int) -> tuple[int, str]:
+    """Offset of the end of the line holding `pos`, and its line break."""
+    n = len(text)
+    i = pos
+    while i < n and text[i] not in "\r\n":
+        i += 1
+    if i == n:
+        return n, "\n"
+    return i, "\r\n" if text.startswith("\r\n", i) else text[i]
+
+
+def _indent(text: str, pos: int) -> str:
+    start = max(text.rfind("\n", 0, pos), text.rfind("\r", 0, pos)) + 1
+    i = start
+    while i < len(text) and text[i] in " \t":
+        i += 1
+    return text[start:i]
+
+
+class Editor:
+    def __init__(self, plan: Plan, values: Values):
+        self.plan = plan
+        self.values = values
+        self.names = NameAllocator([pf.source.text for pf in plan.files])
+        self.edits: dict[tuple[int, int, int], SpanEdit] = {}   # (file, start, end)
+        self.inserts: dict[tuple[int, int], list[str]] = {}    # (file, offset) -> decls
+        self.insert_nl: dict[tuple[int, int], str] = {}
+        self.insert_indent: dict[tuple[int, int], str] = {}
+        self.actions: dict = {}                                # use key -> what was done
+        self.file_index = {id(pf): i for i, pf in enumerate(plan.files)}
+
+    def text(self, fi: int) -> str:
+        return self.plan.files[fi].source.text
+
+    def edit(self, fi: int, span, text: str, why: str) -> None:
+        key = (fi, span.start, span.end)
+        old = self.edits.get(key)
+        if old is not None and old.replacement != text:
+            raise InternalError(f"{self.plan.files[fi].source.display_path}: conflicting edits "
+                                f"at offset {span.start}: {why}")
+        self.edits[key] = SpanEdit(span.start, span.end, text, why)
+
+    # -------------------------------------------------------- declarations
+    def _anchor(self, g: Group) -> tuple[int, int, str, str, bool]:
+        """Where a new declaration goes: after the source declaration when
+        it is in the home module, else after the home module's last data
+        declaration (or its MODULE line). Returns (file, line end offset,
+        line break, indentation, in a routine)."""
+        fi, module = g.home
+        text = self.text(fi)
+        if g.decl is not None and g.src.home_module is module:
+            span, in_routine = g.decl.span, g.decl.routine is not None
+            indent = _indent(text, span.start)
+        else:
+            last = None
+            for item in module.node.items:
+                if isinstance(item, A.DataDecl):
+                    last = item
+                elif isinstance(item, A.Routine):
+                    break
+            span = last.span if last is not None else module.node.name_span
+            indent = _indent(text, span.start) if last is not None else (
+                _indent(text, span.start) + "    ")
+            in_routine = False
+        end, nl = _line_end(text, span.end)
+        return fi, end, nl, indent, in_routine
+
+    def declare(self, g: Group, type_name: str, name: str, dims: str, value: str) -> None:
+        fi, end, nl, indent, in_routine = self._anchor(g)
+        scope = "" if in_routine or not g.local else "LOCAL "
+        decl = f"{scope}CONST {type_name} {name}{dims} := {value};"
+        self.inserts.setdefault((fi, end), []).append(decl)
+        self.insert_nl[(fi, end)] = nl
+        self.insert_indent[(fi, end)] = indent
+
+    def array_value(self, g: Group, nl: str, indent: str, texts: dict) -> str:
+        dims = g.decl.dims
+        lits = [self.values.literal(g, k, texts.get(k)) for k in range(len(g.decl.value))]
+        rows = len(lits) // dims[0]
+
+        def nest(items, ds):
+            if len(ds) == 1:
+                return "[" + ",".join(items) + "]"
+            step = len(items) // ds[0]
+            return "[" + ",".join(nest(items[i * step:(i + 1) * step], ds[1:])
+                                  for i in range(ds[0])) + "]"
+        parts = [nest(lits[i * rows:(i + 1) * rows], dims[1:]) if len(dims) > 1 else lits[i]
+                 for i in range(dims[0])]
+        inner = indent + "    "
+        return "[" + nl + inner + ("," + nl + inner).join(parts) + "]"
+
+    # -------------------------------------------------------- per group
+    def apply(self, g: Group) -> None:
+        vals = self.values
+        type_name = "jointtarget" if g.mode in ("absj", "joint") else "robtarget"
+        texts = {} if g.mode == "absj" else {k: vals.field_texts(g, k) for k in g.elements}
+        if g.mode != "absj" and all(
+                texts[k] == list(vals.source(g, k).record.texts) for k in g.elements):
+            # Nothing moves beyond the precision a new text would carry: the
+            # value stays as written (a zero profile changes no byte).
+            for u in g.uses:
+                self.actions[u.key] = "unchanged (the change is below the written precision)"
+            return
+        if g.placement == "in place" or (g.placement == "inline" and g.mode != "absj"):
+            for k in g.elements:
+                record = vals.source(g, k).record
+                fi = (self.file_index[id(g.src.home)] if g.decl is not None
+                      else g.uses[0].key[0])
+                for e in records.field_edits(record, texts[k],
+                                             f"{element_label(g, k)} compensated"):
+                    self.edit(fi, e, e.replacement, e.why)
+            what = (f"inline {type_name} rewritten" if g.decl is None
+                    else f"{type_name} {g.decl.name} rewritten in place")
+            for u in g.uses:
+                self.actions[u.key] = what
+            return
+        if g.placement == "inline":  # absj of an inline robtarget: inline jointtarget
+            for u in g.uses:
+                self._to_absj(u, vals.literal(g, None))
+                self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ, inline jointtarget"
+            return
+        # A new declaration next to the source one.
+        stem = g.decl.name
+        if g.src.call is not None:
+            stem += "_" + g.src.call.name.lower()
+        if g.array:
+            name = self.names.new(("jt_" + stem) if g.mode == "absj" else stem + "_c")
+            _, _, nl, indent, _ = self._anchor(g)
+            dims = "{" + ",".join(map(str, g.decl.dims)) + "}"
+            self.declare(g, type_name, name, dims, self.array_value(g, nl, indent, texts))
+            g.names["array"] = name
+        else:
+            for k in g.elements:
+                s = stem if k is None else stem + "_" + "_".join(
+                    map(str, multi_index(k, g.decl.dims)))
+                name = self.names.new(("jt_" + s) if g.mode == "absj" else s + "_c")
+                self.declare(g, type_name, name, "", vals.literal(g, k, texts.get(k)))
+                g.names[k] = name
+        for u in g.uses:
+            src = u.source
+            if g.array:
+                ref_text = u.file.text(src.ref)
+                new_ref = g.names["array"] + ref_text[len(src.ref.name):]
+            else:
+                new_ref = g.names[src.element]
+            if g.mode == "absj":
+                self._to_absj(u, new_ref)
+                self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {new_ref}"
+            else:
+                self.edit(u.key[0], src.ref.span, new_ref, f"{u.label} -> {new_ref}")
+                self.actions[u.key] = f"new {type_name} {new_ref.split('{')[0]}"
+
+    def _to_absj(self, u, target_text: str) -> None:
+        m = u.motion
+        fi = u.key[0]
+        self.edit(fi, m.name_span, _style("MoveAbsJ", m.instruction),
+                  f"{m.instruction} -> MoveAbsJ")
+        self.edit(fi, u.source.expr.span, target_text, f"{u.label} -> {target_text[:40]}")
+
+    def file_edits(self) -> dict[int, list[SpanEdit]]:
+        out: dict[int, list[SpanEdit]] = {}
+        for (fi, _, _), e in self.edits.items():
+            out.setdefault(fi, []).append(e)
+        for (fi, pos), decls in self.inserts.items():
+            nl, indent = self.insert_nl[(fi, pos)], self.insert_indent[(fi, pos)]
+            out.setdefault(fi, []).append(SpanEdit(pos, pos, "".join(nl + indent + d
+                                                                     for d in decls),
+                                                   "new declarations"))
+        return {fi: sorted(es, key=lambda e: (e.start, e.end)) for fi, es in out.items()}
+

@@ -1,0 +1,226 @@
+"""Stage 3 of `fix`: which uses share one written value, and where it goes.
+
+A group is the set of target uses whose compensated value is written in
+one place: the same literal (declaration, array or inline aggregate), the
+same Offs/RelTool, tool and work object, and the same solution (a target
+reached on two configurations needs two values). Placement:
+
+* "inline": the inline aggregate itself (or, for MoveAbsJ, a new inline
+  jointtarget);
+* "in place": the declaration is edited, when every reference to it in the
+  task is one of the group's uses and its module is written;
+* "new": a new declaration next to the source one, referenced instead
+  (LOCAL when every use is in its module), or in the using module when the
+  source lies in a --with module.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..kinematics.ik import Solver
+from ..rapid.model import Declaration, Module
+from .plan import Plan
+from .solve import SAME_DEG, Solved
+from .targets import Source, TargetUse, compose_pose, invert_pose
+
+MODES = ("absj", "robtarget")
+# Optional arguments MoveJ/MoveL share with MoveAbsJ (RAPID Instructions
+# manual); anything else (\Corr) keeps the instruction as it is.
+ABSJ_OPTIONALS = frozenset({"conc", "id", "v", "t", "z", "inpos", "wobj", "tload"})
+TO_ABSJ = frozenset({"movej", "movel"})
+
+
+@dataclass(eq=False)
+class Group:
+    mode: str                        # "absj", "rob" or "joint"
+    src: Source
+    tool: tuple | None
+    wobj: tuple | None
+    home: tuple                      # (file index, Module) where new declarations go
+    uses: list[TargetUse] = field(default_factory=list)
+    array: bool = False              # all elements of the array (FOR-loop index)
+    elements: list = field(default_factory=list)  # element indices reached, or [None]
+    rows: dict = field(default_factory=dict)      # element -> row in Solved
+    failure: tuple | None = None     # (why, element)
+    placement: str | None = None     # "inline", "in place", "new"
+    names: dict = field(default_factory=dict)     # element (or "array") -> new name
+    local: bool = True               # a new declaration is LOCAL to its module
+    slots: dict = field(default_factory=dict)     # unreached element -> (joints, what)
+
+    @property
+    def decl(self) -> Declaration | None:
+        return self.src.decl
+
+    @property
+    def home_module(self) -> Module:
+        return self.home[1]
+
+
+def mode_of(u: TargetUse, mode: str, plan: Plan) -> str:
+    """absj: the use becomes a MoveAbsJ; rob: a robtarget is written; joint:
+    a jointtarget of a MoveAbsJ is written."""
+    if u.kind == "jointtarget":
+        return "joint"
+    m = u.motion
+    if (mode == "absj" and m.spec.name.lower() in TO_ABSJ
+            and all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional)
+            and not plan.may_be_displaced(u)):
+        return "absj"
+    return "rob"
+
+
+def _call_key(src: Source):
+    if src.call is None:
+        return None
+    return (src.call.name.lower(), tuple(np.round(src.rel_d, 12)),
+            tuple(np.round(src.rel_R, 12).ravel()))
+
+
+def multi_index(flat: int, dims: tuple[int, ...]) -> tuple[int, ...]:
+    out = []
+    for dim in reversed(dims):
+        out.append(flat % dim + 1)
+        flat //= dim
+    return tuple(reversed(out))
+
+
+def element_label(g: Group, k) -> str:
+    if k is None:
+        return g.decl.name if g.decl is not None else "inline target"
+    return f"{g.decl.name}{{{','.join(map(str, multi_index(k, g.decl.dims)))}}}"
+
+
+def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
+    if mode not in MODES:
+        raise ValueError(f"mode must be one of {MODES}")
+    file_index = {id(pf): i for i, pf in enumerate(plan.files)}
+    by_key: dict = {}
+    out: list[Group] = []
+    for u in solved.uses:
+        src = u.source
+        m = mode_of(u, mode, plan)
+        row = solved.row[u.key]
+        q = solved.nominal.q_deg[row]
+        # A target reached on two solutions needs two values: its solution
+        # is part of the key. Not for arrays: one array holds one value per
+        # element (a conflict there is reported by _elements).
+        sig = (None if m == "joint" or src.element is not None or np.isnan(q).any()
+               else tuple(np.round(q, 3)))
+        if src.decl is not None and file_index[id(src.home)] < plan.n_written:
+            home = (file_index[id(src.home)], src.home_module)
+        else:
+            home = (u.key[0], u.module)
+        where = (("decl", id(src.decl)) if src.decl is not None
+                 else ("inline", u.key[0], src.ref.span))
+        context = (None, None) if m == "joint" else (u.tool[0], u.wobj[0])
+        key = (m, where, _call_key(src), *context, home[0], id(home[1]), sig)
+        g = by_key.get(key)
+        if g is None:
+            g = by_key[key] = Group(m, src, u.tool, u.wobj, home)
+            out.append(g)
+        g.uses.append(u)
+    for g in out:
+        _elements(g, solved)
+        g.local = all(u.module is g.home_module for u in g.uses)
+    return out
+
+
+def _elements(g: Group, solved: Solved) -> None:
+    g.array = any(u.source.by_loop for u in g.uses)
+    seen: dict = {}
+    for u in g.uses:
+        k = u.source.element
+        row = solved.row[u.key]
+        first = seen.get(k)
+        if first is None:
+            seen[k] = row
+            continue
+        a, b = solved.nominal.q_deg[first], solved.nominal.q_deg[row]
+        if (g.failure is None and not (np.isnan(a).any() or np.isnan(b).any())
+                and np.linalg.norm(a - b) > SAME_DEG):
+            lines = sorted({x.line for x in g.uses if x.source.element == k})
+            g.failure = (f"{element_label(g, k)} is reached on different configurations "
+                         f"(lines {', '.join(map(str, lines))}); one value cannot serve both", k)
+    g.elements = sorted(seen) if g.array else list(seen)
+    g.rows = seen
+    if g.failure is None:
+        for k in g.elements:
+            i = seen[k]
+            if not solved.ok(i):
+                g.failure = (solved.reason(i), k)
+                break
+
+
+def place(plan: Plan, gs: list[Group]) -> None:
+    refs: dict[str, set] = {}
+    decl_count: dict[str, int] = {}
+    file_index = {id(pf): i for i, pf in enumerate(plan.files)}
+    for fi, pf in enumerate(plan.files):
+        for m in pf.modules:
+            for name, rs in plan.resolver.usages[id(m)].refs.items():
+                refs.setdefault(name, set()).update((fi, r.span) for r in rs)
+            for d in m.declarations:
+                decl_count[d.name.lower()] = decl_count.get(d.name.lower(), 0) + 1
+    consumed = {(u.key[0], u.source.ref.span)
+                for g in gs if g.mode == "absj" and g.failure is None and g.decl is not None
+                for u in g.uses}
+    for g in gs:
+        if g.failure is not None:
+            continue
+        if g.decl is None:
+            g.placement = "inline"
+            continue
+        if g.mode == "absj":
+            g.placement = "new"
+            continue
+        name = g.decl.name.lower()
+        mine = {(u.key[0], u.source.ref.span) for u in g.uses}
+        exclusive = (file_index[id(g.src.home)] < plan.n_written and decl_count.get(name) == 1
+                     and refs.get(name, set()) - consumed == mine)
+        g.placement = "in place" if exclusive else "new"
+
+
+def fill_slots(plan: Plan, solver: Solver, gs: list[Group]) -> None:
+    """A jointtarget array written for a FOR-walked robtarget array needs a
+    value in every slot; slots no executed use reaches get the compensated
+    joints of their own robtarget (by its confdata) where it solves, else
+    its nominal joints, else the calibration position [0,0,0,0,0,0]."""
+    want = [(g, k) for g in gs if g.failure is None and g.array and g.mode == "absj"
+            for k in range(len(g.decl.value)) if k not in g.rows]
+    if not want:
+        return
+    R = np.empty((len(want), 3, 3))
+    p = np.empty((len(want), 3))
+    conf = np.zeros((len(want), 4), dtype=int)
+    valid = np.zeros(len(want), dtype=bool)
+    for i, (g, k) in enumerate(want):
+        record = g.decl.value[k]
+        q = np.asarray(record.quat_wxyz, float)
+        if not np.all(np.isfinite(record.values[:7])) or np.linalg.norm(q) < 1e-6:
+            R[i], p[i] = np.eye(3), np.zeros(3)
+            continue
+        src = Source(record, g.decl, g.src.home, k, True, g.src.ref, g.src.expr, g.src.call,
+                     g.src.rel_R, g.src.rel_d, g.src.home_module)
+        base = plan.resolver.world_M_base(record)
+        if not isinstance(base, tuple):
+            R[i], p[i] = np.eye(3), np.zeros(3)
+            continue
+        R[i], p[i] = compose_pose(compose_pose(invert_pose(base), compose_pose(
+            g.wobj[1], plan.resolver.target_pose(src))), invert_pose(g.tool[1]))
+        conf[i] = record.conf
+        valid[i] = True
+    nominal, deformed = solver.compensate(R, p, conf)
+    for i, (g, k) in enumerate(want):
+        label = element_label(g, k)
+        if valid[i] and deformed.success[i]:
+            g.slots[k] = (deformed.q_deg[i], f"{label}: its own compensated joints")
+        elif valid[i] and nominal.success[i]:
+            g.slots[k] = (nominal.q_deg[i], f"{label}: its nominal joints (not compensated: "
+                                            f"{deformed.reason(i)})")
+        else:
+            why = nominal.reason(i) if valid[i] else "not a valid pose"
+            g.slots[k] = (np.zeros(6), f"{label}: [0,0,0,0,0,0], the calibration position "
+                                       f"(its robtarget has no solution: {why})")

@@ -1,0 +1,111 @@
+"""Stage 1 of `fix` and `check`: what a task moves to, and in which motion
+state the controller runs each move.
+
+A plan holds every target use of the task's motions (resolved to a flange
+pose, or the reason it is not), and for each the state the flow analysis
+found before it: configuration supervision, program displacement and the
+moves that may have run just before. `check` stops after solving the plan;
+`fix` goes on to place, edit and verify.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..rapid.model import ParsedFile
+from .flow import BOTH, OFF, ON, Flow, State, analyse
+from .targets import EXTAX_UNUSED, Resolver, TargetUse
+
+UNKNOWN = State(BOTH, BOTH, frozenset((OFF, ON)), None)
+
+
+@dataclass(frozen=True)
+class Task:
+    """The modules of one task (written) and --with modules (read only)."""
+
+    name: str
+    files: tuple[ParsedFile, ...]
+    context: tuple[ParsedFile, ...] = ()
+
+    @property
+    def all_files(self) -> list[ParsedFile]:
+        return list(self.files) + list(self.context)
+
+
+class Plan:
+    def __init__(self, task: Task, track=()):
+        self.task = task
+        self.files = task.all_files
+        self.n_written = len(task.files)
+        self.resolver = Resolver(self.files, track=track)
+        self.track = tuple(track)
+        self.uses: list[TargetUse] = []
+        for fi, pf in enumerate(task.files):
+            mi = 0
+            for m in pf.modules:
+                for motion in m.motions:
+                    self.uses.extend(self.resolver.resolve(pf, m, motion, (fi, mi)))
+                    mi += 1
+        self.by_key = {u.key: u for u in self.uses}
+        self.flow: Flow = analyse(self.files, self.n_written, self.resolver)
+
+    def state(self, u: TargetUse) -> State:
+        """The motion state before a use (unknown where the flow never
+        reached it)."""
+        return self.flow.before.get(u.key, UNKNOWN)
+
+    def supervision(self, u: TargetUse) -> frozenset:
+        return self.state(u).supervision(u.motion.spec.interpolation)
+
+    def may_be_displaced(self, u: TargetUse) -> bool:
+        return ON in self.state(u).pdisp
+
+    def order(self) -> list[TargetUse]:
+        """Uses in the order the controller reaches them first; uses the
+        flow never reached come last, in text order."""
+        seen = set()
+        out = []
+        for key in self.flow.order:
+            u = self.by_key.get(key)
+            if u is not None and key not in seen:
+                seen.add(key)
+                out.append(u)
+        out += [u for u in self.uses if u.key not in seen]
+        return out
+
+    def notes(self) -> list[str]:
+        out = list(self.flow.notes)
+        active = [u for u in self.uses if u.reason is None
+                  and any(abs(v) < EXTAX_UNUSED for v in u.ext)]
+        if active:
+            axes = sorted({"abcdef"[i] for u in active for i, v in enumerate(u.ext)
+                           if abs(v) < EXTAX_UNUSED})
+            tracked = {"abcdef"[k] for k, _ in self.track}
+            free = [a for a in axes if a not in tracked]
+            lines = line_ranges(sorted({u.line for u in active}))
+            if free:
+                out.append(
+                    f"{len(active)} target uses carry external axis values (eax_"
+                    f"{', eax_'.join(free)}; lines {lines}): assumed not to move the robot's "
+                    "base (as with a positioner); they are copied as written. If an axis "
+                    "carries the robot, say so with --track AXIS:x|y|z.")
+            if tracked & set(axes):
+                out.append(
+                    "track axes (--track " + ", ".join(sorted(tracked & set(axes))) + ") move "
+                    "the robot's base: each target is solved relative to the base at its own "
+                    "track position, and a MoveAbsJ keeps the track value.")
+        return out
+
+
+def line_ranges(lines: list[int]) -> str:
+    out = []
+    start = prev = lines[0]
+    for x in lines[1:] + [None]:
+        if x is not None and x == prev + 1:
+            prev = x
+            continue
+        out.append(str(start) if start == prev else f"{start}-{prev}")
+        if x is not None:
+            start = prev = x
+    return ", ".join(out)
+

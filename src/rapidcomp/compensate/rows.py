@@ -1,0 +1,142 @@
+"""One row per target use, the content of every report: what `check`
+predicts and what `fix` did, in the same terms."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kinematics.frames import DEG
+from .place import ABSJ_OPTIONALS, TO_ABSJ, Group, element_label
+from .plan import Plan
+from .solve import Solved
+from .targets import TargetUse
+
+LINEAR_WARNING = "MoveL -> MoveAbsJ: the path to this point is no longer a straight line"
+COMPENSATED, NOT_COMPENSATED, UNTOUCHED = "compensated", "not compensated", "untouched"
+
+
+@dataclass(frozen=True)
+class UseRow:
+    file: str                        # the module file (display path)
+    line: int
+    instruction: str
+    target: str
+    status: str                      # compensated / not compensated / untouched (check: ...able)
+    rule: str | None                 # how the controller's solution is determined
+    action: str | None
+    nominal_deg: tuple[float, ...] | None
+    compensated_deg: tuple[float, ...] | None
+    delta_deg: tuple[float, ...] | None
+    error_um: float | None           # uncompensated program on the warm robot
+    error_deg: float | None
+    residual_um: float | None        # compensated (fix: the written values, float32)
+    residual_deg: float | None
+    conf_before: tuple[int, ...] | None
+    conf_after: tuple[int, ...] | None
+    warnings: tuple[str, ...]
+    reason: str | None
+
+
+def _t(a) -> tuple[float, ...] | None:
+    return None if a is None or np.isnan(a).any() else tuple(round(float(x), 6) for x in a)
+
+
+def displacement_warning(um_per_mm: float) -> str:
+    return ("may run under program displacement (PDispOn/PDispSet): compensated for the "
+            "undisplaced pose and kept a robtarget move (the controller does not displace "
+            f"MoveAbsJ); each mm of displacement adds up to {um_per_mm:.2f} um of error")
+
+
+def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
+             actions: dict | None = None, verified: dict | None = None, mode: str | None = None,
+             statuses=(COMPENSATED, NOT_COMPENSATED)) -> list[UseRow]:
+    """Rows in text order. Without group_of/verified (check): per use, the
+    solve's own residual; with them (fix, in `mode`): the written values'."""
+    ok_label, fail_label = statuses
+    out = []
+    for u in plan.uses:
+        base = dict(file=u.file.source.display_path, line=u.line,
+                    instruction=u.motion.instruction, target=u.label)
+        if u.reason is not None:
+            out.append(UseRow(**base, status=fail_label if u.blocked else UNTOUCHED, rule=None,
+                              action=None, nominal_deg=None, compensated_deg=None,
+                              delta_deg=None, error_um=None, error_deg=None, residual_um=None,
+                              residual_deg=None, conf_before=None, conf_after=None,
+                              warnings=(), reason=u.reason))
+            continue
+        out.append(_row(solved, u, base, group_of, actions, verified, mode, ok_label,
+                        fail_label))
+    return out
+
+
+def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, ok_label,
+         fail_label) -> UseRow:
+    i = solved.row[u.key]
+    pick = solved.picks[i]
+    nominal, deformed = solved.nominal, solved.deformed
+    qn = nominal.q_deg[i]
+    has_q = pick.failure is None
+    error = ((float(solved.err_p[i]) * 1000, float(solved.err_r[i]) / DEG) if has_q
+             else (None, None))
+    conf_before = tuple(int(c) for c in (u.conf if u.conf is not None else nominal.conf[i]))
+    d_warnings = deformed.warning_texts(i) if has_q else ()
+    g: Group | None = group_of.get(u.key) if group_of is not None else None
+    why = None
+    if not solved.ok(i):
+        why = solved.reason(i)
+    elif g is not None and g.failure is not None:
+        reason, fk = g.failure
+        why = reason if fk == u.source.element else (
+            f"{element_label(g, fk)} of the same group: {reason}")
+    if why is not None:
+        return UseRow(**base, status=fail_label, rule=pick.rule, action=None,
+                      nominal_deg=_t(qn) if has_q else None, compensated_deg=None,
+                      delta_deg=None, error_um=error[0], error_deg=error[1], residual_um=None,
+                      residual_deg=None, conf_before=conf_before, conf_after=None,
+                      warnings=d_warnings, reason=why)
+    qc = deformed.q_deg[i]
+    warnings = d_warnings
+    if g is not None:
+        if g.mode == "absj" and u.motion.spec.name == "MoveL":
+            warnings = warnings + (LINEAR_WARNING,)
+        elif g.mode == "rob" and u.motion.spec.name.lower() in TO_ABSJ and mode == "absj":
+            extra = ", ".join("\\" + a.name for a in u.motion.optional
+                              if a.name.lower() not in ABSJ_OPTIONALS)
+            if extra:
+                warnings = warnings + (f"kept as {u.motion.instruction}: {extra} has no "
+                                       "MoveAbsJ equivalent",)
+    if not np.isnan(solved.displacement_um_per_mm[i]):
+        warnings = warnings + (displacement_warning(solved.displacement_um_per_mm[i]),)
+    if verified is not None:
+        res = verified[u.key]
+    else:
+        res = (float(deformed.residual_mm[i]) * 1000, float(deformed.residual_rad[i]) / DEG)
+    return UseRow(**base, status=ok_label, rule=pick.rule,
+                  action=actions.get(u.key) if actions is not None else None,
+                  nominal_deg=_t(qn), compensated_deg=_t(qc), delta_deg=_t(qc - qn),
+                  error_um=error[0], error_deg=error[1], residual_um=res[0], residual_deg=res[1],
+                  conf_before=conf_before,
+                  conf_after=tuple(int(c) for c in solved.conf_after[i]),
+                  warnings=warnings, reason=None)
+
+
+def summary(rows: list[UseRow], ok_label: str = COMPENSATED,
+            fail_label: str = NOT_COMPENSATED) -> dict:
+    comp = [r for r in rows if r.status == ok_label]
+    untouched: dict[str, int] = {}
+    for r in rows:
+        if r.status == UNTOUCHED:
+            untouched[r.reason] = untouched.get(r.reason, 0) + 1
+    errs = [r.error_um for r in comp]
+    res = [r.residual_um for r in comp]
+    return {
+        "target_uses": len(rows),
+        ok_label: len(comp),
+        fail_label.replace(" ", "_"): sum(r.status == fail_label for r in rows),
+        "untouched": dict(sorted(untouched.items())),
+        "error_before_um": {"max": max(errs), "mean": float(np.mean(errs))} if errs else None,
+        "residual_after_um": {"max": max(res), "mean": float(np.mean(res))} if res else None,
+        "movel_to_moveabsj": sum(1 for r in comp if LINEAR_WARNING in r.warnings),
+    }

@@ -1,0 +1,124 @@
+"""Stage 5 of `fix`: the written output, checked as the controller will run it.
+
+Every edited module is parsed again; every compensated use is resolved on
+the output with its numbers rounded to float32 (as the controller stores
+them), turned into joints the way the controller does (MoveAbsJ: as
+written; a robtarget: the ideal controller's IK, on the confdata's branch
+or, where supervision is off, the solution closest to the previous move's
+verified joints) and put through the deformed robot's FK. The residual
+against the intended pose is what the report shows as "after".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InternalError, RapidcompError
+from ..kinematics.frames import DEG
+from ..kinematics.ik import Solver
+from ..rapid.model import ParsedFile
+from ..rapid.parse import parse_text
+from .plan import Plan
+from .solve import Solved
+from .targets import Resolver
+
+# Acceptance of a written value, after float32 rounding.
+VERIFY_UM = 1.0
+VERIFY_DEG = 1e-4
+
+
+def reparse(plan: Plan, texts: dict[int, str]) -> dict[int, ParsedFile]:
+    """The output files that changed, parsed again."""
+    out = {}
+    for fi, text in texts.items():
+        name = plan.files[fi].source.display_path
+        try:
+            out[fi] = parse_text(text, name)
+        except RapidcompError as exc:
+            raise InternalError(f"the compensated module does not parse: {exc}") from exc
+    return out
+
+
+def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFile],
+           solver: Solver) -> dict:
+    """Residual (um, deg) of each compensated use (by key), evaluated on
+    the written output."""
+    files = [out_files.get(fi, pf) for fi, pf in enumerate(plan.task.files)]
+    files += list(plan.task.context)
+    # Run-time writes were ruled out on the input; the output adds none.
+    res = Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
+                   track=plan.track)
+    wanted = set(keys)
+    motions = {k[:2] for k in keys}
+    found = {}
+    for fi, pf in enumerate(files[:plan.n_written]):
+        mi = 0
+        for m in pf.modules:
+            for motion in m.motions:
+                if (fi, mi) in motions:
+                    for o in res.resolve(pf, m, motion, (fi, mi)):
+                        if o.key in wanted:
+                            found[o.key] = o
+                mi += 1
+    rows = sorted((solved.row[k] for k in keys))
+    outs = {}
+    for i in rows:
+        u = solved.uses[i]
+        o = found.get(u.key)
+        if o is None or o.reason is not None:
+            raise InternalError(f"{u.file.source.display_path}:{u.line}: the written target of "
+                                f"{u.label} does not resolve ({o.reason if o else 'missing'})")
+        outs[i] = o
+    q = {}
+    # Joint targets first (a robtarget chosen "closest to the first
+    # jointtarget" needs it), then robtargets in the order they were chosen.
+    for i in rows:
+        if outs[i].kind == "jointtarget":
+            q[i] = np.array(outs[i].joints_deg)
+    for i in _robtarget_order(solved, [i for i in rows if outs[i].kind == "robtarget"]):
+        o = outs[i]
+        pick = solved.picks[i]
+        if pick.kind == "closest":
+            prev = q.get(pick.pred)
+            if prev is None:   # the previous move is not compensated: as solved
+                prev = solved.nominal.q_deg[pick.pred]
+            got = solver.closest(solver.candidates(o.R[None], o.p[None]), prev[None])[0]
+        else:
+            sol = solver.solve_nominal(o.R[None], o.p[None], np.array([o.conf]))
+            got = sol.q_deg[0]
+        if np.isnan(got).any():
+            u = solved.uses[i]
+            raise InternalError(f"{u.file.source.display_path}:{u.line}: the ideal controller "
+                                f"finds no solution for the written target of {u.label}")
+        q[i] = got
+    qa = np.array([q[i] for i in rows]).reshape(-1, 6)
+    err_p, err_r = solver.deformed_pose_error(qa * DEG, solved.R[rows], solved.p[rows])
+    out = {}
+    for n, i in enumerate(rows):
+        out[solved.uses[i].key] = (float(err_p[n]) * 1000, float(err_r[n]) / DEG)
+    return out
+
+
+def _robtarget_order(solved: Solved, rows: list[int]) -> list[int]:
+    """Rows such that a row comes after the row its solution was chosen
+    closest to (the order they were chosen in)."""
+    todo = set(rows)
+    out: list[int] = []
+    placed: set[int] = set()
+
+    for i in rows:
+        stack = [i]
+        chain = []
+        while stack:
+            x = stack.pop()
+            if x in placed or x not in todo or x in chain:
+                continue
+            chain.append(x)
+            j = solved.picks[x].pred
+            if j is not None and j in todo and j not in placed:
+                stack.append(j)
+        for x in reversed(chain):
+            if x not in placed:
+                placed.add(x)
+                out.append(x)
+    return out
