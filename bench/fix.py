@@ -72,6 +72,7 @@ def one(n: int) -> dict:
     from rapidcomp.compensate import report
     from rapidcomp.compensate.fix import fix
     from rapidcomp.compensate.job import load_solver
+    from rapidcomp.compensate.plan import Task
     from rapidcomp.rapid.grammar import engine
     from rapidcomp.rapid.parse import parse_text
     text = cam_module(n)
@@ -82,7 +83,8 @@ def one(n: int) -> dict:
     t0 = time.perf_counter()
     pf = parse_text(text, "cam.mod")
     timings["parse"] = time.perf_counter() - t0
-    result = fix([pf], solver, "absj", "cam_comp.mod", timings)
+    result = fix(Task("cam.mod", (pf,)), solver, "absj", timings,
+                 output_names={"cam.mod": "cam_comp.mod"})
     t = time.perf_counter()
     report.markdown(result, {"mode": "absj"})
     timings["report"] += time.perf_counter() - t

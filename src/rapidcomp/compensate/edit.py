@@ -17,7 +17,6 @@ from ..errors import InternalError
 from ..rapid import ast as A
 from ..rewrite import records
 from ..rewrite.names import NameAllocator
-from .flow import ON
 from .place import Group, element_label, multi_index
 from .plan import Plan
 from .solve import Solved
@@ -47,7 +46,7 @@ class Values:
         nominal FK of the compensated joints, back in the tool and work
         object (and track position), with Offs/RelTool undone. confdata:
         the compensated joints', except where every use runs with
-        supervision off (the controller ignores it: it stays as written)
+        supervision off (the controller does not read it: it stays as written)
         and for a J1/J4/J6 within the quadrant tolerance of the written
         quadrant (it stays as written)."""
         s = self.solved
@@ -58,8 +57,8 @@ class Values:
         target = compose_pose(compose_pose(invert_pose(g.wobj[1]), compose_pose(base, flange)),
                               g.tool[1])
         written = np.array(src.record.conf)
-        if all(ON not in self.plan.supervision(u) for u in g.uses):
-            conf = written
+        if all(s.picks[s.row[u.key]].kind == "closest" for u in g.uses):
+            conf = written       # supervision is off for every use: confdata is not read
         else:
             conf = np.array(s.conf_after[i])
             q = s.deformed.q_deg[i]

@@ -138,9 +138,6 @@ class _Walker:
         others = [rt for rt in self.routines if rt is not main and id(rt.node) not in called]
         try:
             if main is not None:
-                self.flow.notes.append(
-                    f"{main.node.name} ({main.pf.source.display_path}) is followed from program "
-                    "start: ConfJ\\On, ConfL\\On, no program displacement, robot position unknown")
                 self.routine(main, START, ())
             for rt in others:
                 self.routine(rt, entry, ())

@@ -86,7 +86,8 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
             if first != pf.source.display_path:
                 raise InputError(pf.source.display_path,
                                  f"module {m.name} is also in {first}: a task holds each module "
-                                 "once (the controller refuses to load it twice)",
+                                 "once (the controller refuses to load it twice); give the "
+                                 "program file (.pgf) or a folder without the copy",
                                  pf.line(m.node.name_span))
     context = [parse_file(m) for m in with_modules]
     return Task(source.task or source.name, tuple(files), tuple(context))

@@ -59,15 +59,19 @@ class Group:
         return self.home[1]
 
 
-def mode_of(u: TargetUse, mode: str, plan: Plan) -> str:
+def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved) -> str:
     """absj: the use becomes a MoveAbsJ; rob: a robtarget is written; joint:
-    a jointtarget of a MoveAbsJ is written."""
+    a jointtarget of a MoveAbsJ is written. A move that program
+    displacement may shift, or whose configuration the controller may
+    choose otherwise than assumed, stays a robtarget move: MoveAbsJ would
+    fix both."""
     if u.kind == "jointtarget":
         return "joint"
     m = u.motion
     if (mode == "absj" and m.spec.name.lower() in TO_ABSJ
             and all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional)
-            and not plan.may_be_displaced(u)):
+            and not plan.may_be_displaced(u)
+            and solved.picks[solved.row[u.key]].caution is None):
         return "absj"
     return "rob"
 
@@ -101,7 +105,7 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
     out: list[Group] = []
     for u in solved.uses:
         src = u.source
-        m = mode_of(u, mode, plan)
+        m = mode_of(u, mode, plan, solved)
         row = solved.row[u.key]
         q = solved.nominal.q_deg[row]
         # A target reached on two solutions needs two values: its solution

@@ -12,6 +12,7 @@ import json
 from dataclasses import asdict
 
 from .fix import FixResult
+from .plan import line_ranges
 from .rows import UNTOUCHED, UseRow
 
 
@@ -35,16 +36,35 @@ def summary_lines(result: FixResult) -> list[str]:
     for reason, n in s["untouched"].items():
         out.append(f"{UNTOUCHED} ({n}): {reason}")
     several = len(result.modules) > 1
-    for r in result.rows:
-        if r.status == "not compensated":
-            where = f"{r.file}:{r.line}" if several else f"line {r.line}"
-            out.append(f"not compensated: {where} {r.instruction} {r.target}: {r.reason}")
+    out += failure_lines([r for r in result.rows if r.status == "not compensated"], several)
     if s["error_before_um"]:
         b, a = s["error_before_um"], s["residual_after_um"]
         out.append(f"predicted TCP error on the warm robot: max {b['max']:.1f} um, mean "
                    f"{b['mean']:.1f} um -> after: max {a['max']:.3f} um, mean {a['mean']:.3f} um")
     if several:
         out.append(f"{s['modules_changed']} of {len(result.modules)} modules changed")
+    return out
+
+
+def failure_lines(rows: list[UseRow], several: bool, label: str = "not compensated") -> list[str]:
+    """One line per failure; failures sharing a reason (a missing module
+    fails every move that uses it) in one line with their places."""
+    by_reason: dict[str, list[UseRow]] = {}
+    for r in rows:
+        by_reason.setdefault(r.reason, []).append(r)
+    out = []
+    for reason, rs in by_reason.items():
+        if len(rs) <= 2:
+            for r in rs:
+                where = f"{r.file}:{r.line}" if several else f"line {r.line}"
+                out.append(f"{label}: {where} {r.instruction} {r.target}: {reason}")
+            continue
+        places: dict[str, list[int]] = {}
+        for r in rs:
+            places.setdefault(r.file, []).append(r.line)
+        where = "; ".join((f"{f} " if several else "") + "lines "
+                          + line_ranges(sorted(set(lines))) for f, lines in places.items())
+        out.append(f"{label} ({len(rs)}): {reason} [{where}]")
     return out
 
 

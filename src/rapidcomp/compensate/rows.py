@@ -8,10 +8,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics.frames import DEG
+from ..kinematics.ik import WARN_TEXT, Warn
 from .place import ABSJ_OPTIONALS, TO_ABSJ, Group, element_label
 from .plan import Plan
 from .solve import Solved
-from .targets import TargetUse
+from .targets import EXTAX_UNUSED, TargetUse
 
 LINEAR_WARNING = "MoveL -> MoveAbsJ: the path to this point is no longer a straight line"
 COMPENSATED, NOT_COMPENSATED, UNTOUCHED = "compensated", "not compensated", "untouched"
@@ -91,13 +92,14 @@ def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, 
         why = reason if fk == u.source.element else (
             f"{element_label(g, fk)} of the same group: {reason}")
     if why is not None:
+        why = _hint(why, u)
         return UseRow(**base, status=fail_label, rule=pick.rule, action=None,
                       nominal_deg=_t(qn) if has_q else None, compensated_deg=None,
                       delta_deg=None, error_um=error[0], error_deg=error[1], residual_um=None,
                       residual_deg=None, conf_before=conf_before, conf_after=None,
                       warnings=d_warnings, reason=why)
     qc = deformed.q_deg[i]
-    warnings = d_warnings
+    warnings = _warnings(solved, i, u, g, d_warnings)
     if g is not None:
         if g.mode == "absj" and u.motion.spec.name == "MoveL":
             warnings = warnings + (LINEAR_WARNING,)
@@ -107,6 +109,8 @@ def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, 
             if extra:
                 warnings = warnings + (f"kept as {u.motion.instruction}: {extra} has no "
                                        "MoveAbsJ equivalent",)
+    if pick.caution is not None:
+        warnings = warnings + (pick.caution,)
     if not np.isnan(solved.displacement_um_per_mm[i]):
         warnings = warnings + (displacement_warning(solved.displacement_um_per_mm[i]),)
     if verified is not None:
@@ -120,6 +124,39 @@ def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, 
                   conf_before=conf_before,
                   conf_after=tuple(int(c) for c in solved.conf_after[i]),
                   warnings=warnings, reason=None)
+
+
+def _warnings(solved: Solved, i: int, u: TargetUse, g, texts) -> tuple[str, ...]:
+    """The solver's warnings that matter for this use: a quadrant change
+    only where a robtarget with supervision on is written (confdata changes
+    there); the orientation left over at the wrist singularity with its
+    amount."""
+    writes_conf = u.kind == "robtarget" and (g is None or g.mode == "rob")
+    left = WARN_TEXT[Warn.ORIENTATION_LEFT] in texts
+    out = []
+    for text in texts:
+        if left and text == WARN_TEXT[Warn.WRIST_SINGULAR]:
+            continue
+        if text == WARN_TEXT[Warn.QUADRANT_CHANGED] and not (
+                writes_conf and solved.picks[i].kind != "closest"):
+            continue
+        if text == WARN_TEXT[Warn.ORIENTATION_LEFT]:
+            text = (f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
+                    "position is compensated exactly, the orientation only as far as small "
+                    "J4/J6 changes allow: "
+                    f"{float(solved.deformed.residual_rad[i]) / DEG:.4f} deg left over")
+        out.append(text)
+    return tuple(out)
+
+
+def _hint(reason: str, u: TargetUse) -> str:
+    """A target out of reach that carries external axis values the tool
+    assumes do not move the base: say what to check."""
+    if reason.startswith("nominal: out of reach") and any(
+            abs(v) < EXTAX_UNUSED for v in u.ext):
+        return (reason + " (its external axes are assumed not to move the robot's base; if "
+                "one is a track, say so with --track)")
+    return reason
 
 
 def summary(rows: list[UseRow], ok_label: str = COMPENSATED,

@@ -81,6 +81,10 @@ class Pick(NamedTuple):
     failure: str | None
     kind: str | None = None
     pred: int | None = None
+    # The controller might choose otherwise (supervision not known): the
+    # move stays a robtarget move, so its configuration stays the
+    # controller's choice, and the report says what was assumed.
+    caution: str | None = None
 
 
 def _fail(why: str) -> Pick:
@@ -112,6 +116,69 @@ class _Chooser:
         first = next((u for u in plan.order() if u.kind == "jointtarget" and u.reason is None),
                      None)
         self.first_joint = self.rows[first.key] if first is not None else None
+        self.order = [self.rows[u.key] for u in plan.order() if u.key in self.rows]
+        self._speculate()
+
+    # ------------------------------------------------------------ speed
+    def _speculate(self) -> None:
+        """A guess of every row's joints and, in one batch, the solution of
+        each row closest to its guessed predecessor. The choice in flow
+        order (run) takes the batch result wherever the predecessor's real
+        joints equal the guess, and computes it afresh elsewhere: the guess
+        changes the speed, never the result. Guess: the confdata's solution
+        where it is valid, MoveAbsJ joints as written, and along a chain of
+        moves without supervision the branch of the chain's first move,
+        followed turn by turn (Solver.follow)."""
+        n = len(self.uses)
+        self.spec = np.full((n, 6), np.nan)
+        self.pred1 = np.full(n, -1)
+        self.off_spec = np.full((n, 6), np.nan)
+        if not self.rob_row:
+            return
+        for i, u in enumerate(self.uses):
+            if u.kind == "jointtarget":
+                self.spec[i] = self.q[i]
+        ok = self.by_conf.success
+        rob = np.array(list(self.rob_row))
+        self.spec[rob[ok]] = self.by_conf.q_deg[ok]
+        need = []
+        for i in self.order:
+            u = self.uses[i]
+            if u.kind != "robtarget":
+                continue
+            st = self.plan.state(u)
+            if OFF not in st.supervision(u.motion.spec.interpolation):
+                continue
+            if st.last is not None and len(st.last) == 1:
+                (pk,) = st.last
+                self.pred1[i] = self.rows.get(pk, -1)
+            need.append(i)
+        # Chains: consecutive rows each following the one before.
+        run: list[int] = []
+        for i in need + [-1]:
+            j = self.pred1[i] if i >= 0 else -2
+            if i >= 0 and np.isnan(self.spec[i]).any() and run and j == run[-1]:
+                run.append(i)
+                continue
+            self._follow(run)
+            run = [i] if i >= 0 and np.isnan(self.spec[i]).any() and j >= 0 else []
+        sel = [i for i in need if self.pred1[i] >= 0 and not np.isnan(self.spec[self.pred1[i]]).any()]
+        if sel:
+            ks = [self.rob_row[i] for i in sel]
+            self.off_spec[sel] = self.solver.closest(self.cands[ks], self.spec[self.pred1[sel]])
+
+    def _follow(self, run: list[int]) -> None:
+        if not run or np.isnan(self.spec[self.pred1[run[0]]]).any():
+            return
+        k0 = self.rob_row[run[0]]
+        first, branch = self.solver.closest(self.cands[k0][None],
+                                            self.spec[self.pred1[run[0]]][None], with_branch=True)
+        if branch[0] < 0:
+            return
+        self.spec[run[0]] = first[0]
+        if len(run) > 1:
+            ks = [self.rob_row[i] for i in run[1:]]
+            self.spec[run[1:]] = self.solver.follow(self.cands[ks, branch[0]], first[0])
 
     # ------------------------------------------------------------ rules
     def _by_conf(self, i: int, rule: str) -> Pick:
@@ -122,8 +189,11 @@ class _Chooser:
         return Pick(None, rule, f"nominal: {b.reason(k)}")
 
     def _closest_to(self, i: int, j: int, rule: str) -> Pick:
-        k = self.rob_row[i]
-        q = self.solver.closest(self.cands[k][None], self.q[j][None])[0]
+        if self.pred1[i] == j and np.array_equal(self.q[j], self.spec[j]):
+            q = self.off_spec[i]      # computed in the batch from these very joints
+        else:
+            k = self.rob_row[i]
+            q = self.solver.closest(self.cands[k][None], self.q[j][None])[0]
         if np.isnan(q).any():
             return _fail("nominal: no solution within the joint limits")
         return Pick(q, rule, None, "closest", j)
@@ -185,18 +255,26 @@ class _Chooser:
         if ON not in sup:
             return off
         on = self._by_conf(i, f"confdata ({flag} on or off: the same solution)")
-        if on.q is not None and off.q is not None and np.linalg.norm(on.q - off.q) <= SAME_DEG:
-            return on
-        if on.q is None:
-            return _fail(f"{flag} may be on or off here (not known statically): on, the "
-                         f"confdata {c} names no solution ({on.failure}); give the task's "
-                         f"modules or set {flag} before the move")
-        return _fail(f"{flag} may be on or off here (not known statically), and the solution "
-                     f"of the confdata {c} is not the one closest to the previous position; "
-                     f"give the task's modules or set {flag} before the move")
+        if on.q is not None:
+            if off.q is not None and np.linalg.norm(on.q - off.q) <= SAME_DEG:
+                return on
+            other = ("" if off.q is None else " (J" + ", J".join(
+                f"{j + 1} {off.q[j]:.1f}" for j in range(6)) + ")")
+            return on._replace(
+                rule=f"confdata ({flag} may be on or off here)",
+                caution=(f"{flag} may be on or off here (not known statically): compensated on "
+                         "the solution of the programmed confdata and kept a robtarget move; if "
+                         f"{flag} is off when it runs, the controller takes the solution closest "
+                         f"to the previous position{other}, for which this correction is not "
+                         "made"))
+        if off.q is not None:
+            return off._replace(rule=f"{off.rule}; its confdata names no solution, so {flag} "
+                                     "is off here")
+        return _fail(f"{flag} may be on or off here (not known statically): on, the confdata "
+                     f"{c} names no solution ({on.failure}); off, {off.failure}")
 
     def run(self) -> None:
-        order = [self.rows[u.key] for u in self.plan.order() if u.key in self.rows]
+        order = self.order
         done = set()
         pending = []
         succ: dict[int, list[int]] = {}

@@ -37,8 +37,8 @@ IDENTITY_POSE = (np.eye(3), np.zeros(3))
 EXTAX_UNUSED = 8.9e9
 # A FOR loop walking more iterations than this is not expanded.
 MAX_LOOP_ITERATIONS = 1_000_000
-MISSING_HINT = ("give the task folder, program file or backup that declares it, or its module "
-                "with --with")
+MISSING_HINT = ("give the whole task: its folder, program file or backup, or the declaring "
+                "module with --with")
 AXES = "abcdef"
 
 
@@ -428,6 +428,20 @@ class Resolver:
             envs = [{**e, lp.var.lower(): v} for e in envs for v in values]
         return envs
 
+    def _all_missing(self, first: Unresolved, module, motion) -> Unresolved:
+        """A target no given module declares: name the tool and work object
+        of the move too when they are missing as well."""
+        names = [_missing_name(first.reason)]
+        for what in (self.tool(motion.tool, module, motion.routine),
+                     self.wobj(motion.wobj, module, motion.routine)):
+            if isinstance(what, Unresolved) and what.reason.endswith(f"({MISSING_HINT})"):
+                names.append(_missing_name(what.reason))
+        if len(names) == 1:
+            return first
+        listed = ", ".join(names[:-1]) + " and " + names[-1]
+        return Unresolved(f"{listed} are not declared in the given modules ({MISSING_HINT})",
+                          True)
+
     def _use(self, pf, module, motion, t, kind, label, env, key) -> TargetUse:
         line = pf.line(motion.span)
         envt = key[3]
@@ -447,6 +461,8 @@ class Resolver:
         else:
             src = self._source(t.expr, module, motion.routine, env)
         if isinstance(src, Unresolved):
+            if src.blocked and kind == "robtarget" and src.reason.endswith(f"({MISSING_HINT})"):
+                return fail(self._all_missing(src, module, motion))
             return fail(src)
         if kind == "jointtarget":
             if not isinstance(src.record, JointTarget):
@@ -470,6 +486,10 @@ class Resolver:
         return TargetUse(motion, t.role, label, line, kind, Rf, pf_, src.record.conf, None, None,
                          src, tool, wobj, envt, file=pf, module=module, ext=src.record.ext,
                          key=key)
+
+
+def _missing_name(reason: str) -> str:
+    return reason.split(" is not declared")[0]
 
 
 def base_pose(src: Source, target):

@@ -70,27 +70,34 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
                                 f"{u.label} does not resolve ({o.reason if o else 'missing'})")
         outs[i] = o
     q = {}
-    # Joint targets first (a robtarget chosen "closest to the first
-    # jointtarget" needs it), then robtargets in the order they were chosen.
     for i in rows:
         if outs[i].kind == "jointtarget":
             q[i] = np.array(outs[i].joints_deg)
-    for i in _robtarget_order(solved, [i for i in rows if outs[i].kind == "robtarget"]):
-        o = outs[i]
-        pick = solved.picks[i]
-        if pick.kind == "closest":
-            prev = q.get(pick.pred)
-            if prev is None:   # the previous move is not compensated: as solved
-                prev = solved.nominal.q_deg[pick.pred]
-            got = solver.closest(solver.candidates(o.R[None], o.p[None]), prev[None])[0]
-        else:
-            sol = solver.solve_nominal(o.R[None], o.p[None], np.array([o.conf]))
-            got = sol.q_deg[0]
-        if np.isnan(got).any():
-            u = solved.uses[i]
-            raise InternalError(f"{u.file.source.display_path}:{u.line}: the ideal controller "
-                                f"finds no solution for the written target of {u.label}")
-        q[i] = got
+    rob = [i for i in rows if outs[i].kind == "robtarget"]
+    if rob:
+        R = np.array([outs[i].R for i in rob])
+        p = np.array([outs[i].p for i in rob])
+        conf = np.array([outs[i].conf for i in rob])
+        by_conf = solver.solve_nominal(R, p, conf).q_deg
+        # Supervision off: the solution closest to the joints the previous
+        # move was compensated to (its written value differs from them by
+        # float32 rounding, ~1e-6 deg: no solution is that close to another).
+        closest = [n for n, i in enumerate(rob) if solved.picks[i].kind == "closest"]
+        got = by_conf
+        if closest:
+            sel = [rob[n] for n in closest]
+            prev = np.array([solved.deformed.q_deg[solved.picks[i].pred]
+                             if solved.ok(solved.picks[i].pred)
+                             else solved.nominal.q_deg[solved.picks[i].pred] for i in sel])
+            got = by_conf.copy()
+            got[closest] = solver.closest(solver.candidates(R[closest], p[closest]), prev)
+        for n, i in enumerate(rob):
+            if np.isnan(got[n]).any():
+                u = solved.uses[i]
+                raise InternalError(f"{u.file.source.display_path}:{u.line}: the ideal "
+                                    "controller finds no solution for the written target of "
+                                    f"{u.label}")
+            q[i] = got[n]
     qa = np.array([q[i] for i in rows]).reshape(-1, 6)
     err_p, err_r = solver.deformed_pose_error(qa * DEG, solved.R[rows], solved.p[rows])
     out = {}
@@ -98,27 +105,3 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
         out[solved.uses[i].key] = (float(err_p[n]) * 1000, float(err_r[n]) / DEG)
     return out
 
-
-def _robtarget_order(solved: Solved, rows: list[int]) -> list[int]:
-    """Rows such that a row comes after the row its solution was chosen
-    closest to (the order they were chosen in)."""
-    todo = set(rows)
-    out: list[int] = []
-    placed: set[int] = set()
-
-    for i in rows:
-        stack = [i]
-        chain = []
-        while stack:
-            x = stack.pop()
-            if x in placed or x not in todo or x in chain:
-                continue
-            chain.append(x)
-            j = solved.picks[x].pred
-            if j is not None and j in todo and j not in placed:
-                stack.append(j)
-        for x in reversed(chain):
-            if x not in placed:
-                placed.add(x)
-                out.append(x)
-    return out

@@ -47,7 +47,7 @@ class Warn(IntFlag):
     ORIENTATION_LEFT = 32   # at the wrist singularity: position exact, orientation partly
 
 
-_WARN_TEXT = {
+WARN_TEXT = {
     Warn.WRIST_SINGULAR: "near wrist singularity (J5 ~ 0)",
     Warn.SHOULDER_SINGULAR: "near shoulder singularity (wrist centre near axis 1)",
     Warn.ELBOW_SINGULAR: "near elbow singularity (arm stretched)",
@@ -154,7 +154,7 @@ class IKBatch:
 @functools.lru_cache(maxsize=None)
 def _warning_texts(bits: int) -> tuple[str, ...]:
     warn = Warn(bits)
-    return tuple(text for flag, text in _WARN_TEXT.items() if flag in warn)
+    return tuple(text for flag, text in WARN_TEXT.items() if flag in warn)
 
 
 def _turns(theta_deg: np.ndarray, cf: np.ndarray, tol: float):
@@ -450,16 +450,36 @@ class Solver:
                             np.asarray(p, float).reshape(-1, 3))
         return br.q / DEG
 
-    def closest(self, cands_deg: np.ndarray, prev_deg: np.ndarray) -> np.ndarray:
+    def _turned(self, c: np.ndarray, prev: np.ndarray) -> np.ndarray:
+        """Candidates c (..., 6) with J1, J4, J6 turned by whole turns
+        towards prev (then back inside the limits if that left them), and
+        J2, J3, J5 shifted into their limits where a turn does that."""
+        c = c.copy()
+        lo, hi = self.lower, self.upper
+        for col in (0, 3, 5):
+            a = c[..., col] + 360.0 * np.round((prev[..., col] - c[..., col]) / 360.0)
+            a = np.where(a > hi[col], a - 360.0, a)
+            a = np.where(a < lo[col], a + 360.0, a)
+            c[..., col] = a
+        for col in (1, 2, 4):
+            for shift in (-360.0, 360.0):
+                moved = c[..., col] + shift
+                out = (c[..., col] < lo[col]) | (c[..., col] > hi[col])
+                c[..., col] = np.where(out & (moved >= lo[col]) & (moved <= hi[col]), moved,
+                                       c[..., col])
+        return c
+
+    def closest(self, cands_deg: np.ndarray, prev_deg: np.ndarray,
+                with_branch: bool = False):
         """Per row, the solution nearest (Euclidean, degrees) to prev_deg
         (M, 6) among cands_deg (M, 8, 6) within the joint limits: J1, J4
         and J6 turned by whole turns towards the previous angles, J2, J3, J5
         within their limits. NaN rows where no candidate is within limits.
         At an exact wrist singularity (J5 = 0) only J4 + J6 is defined; it is
-        split evenly around the previous J4, J6 (the nearest split)."""
+        split evenly around the previous J4, J6 (the nearest split).
+        with_branch: also the index of the branch chosen (-1: none)."""
         c = np.array(cands_deg, float, copy=True)
         prev = np.asarray(prev_deg, float)[:, None, :]
-        lo, hi = self.lower, self.upper
         singular = np.abs(c[:, :, 4]) < 1e-7
         if singular.any():
             s = c[:, :, 3] + c[:, :, 5]
@@ -468,23 +488,36 @@ class Solver:
             half = (s - target) / 2.0
             c[:, :, 3] = np.where(singular, prev[:, :, 3] + half, c[:, :, 3])
             c[:, :, 5] = np.where(singular, prev[:, :, 5] + half, c[:, :, 5])
-        for col in (0, 3, 5):
-            a = c[:, :, col] + 360.0 * np.round((prev[:, :, col] - c[:, :, col]) / 360.0)
-            a = np.where(a > hi[col], a - 360.0, a)
-            a = np.where(a < lo[col], a + 360.0, a)
-            c[:, :, col] = a
-        for col in (1, 2, 4):
-            for shift in (-360.0, 360.0):
-                moved = c[:, :, col] + shift
-                out = (c[:, :, col] < lo[col]) | (c[:, :, col] > hi[col])
-                c[:, :, col] = np.where(out & (moved >= lo[col]) & (moved <= hi[col]), moved,
-                                        c[:, :, col])
+        c = self._turned(c, prev)
+        lo, hi = self.lower, self.upper
         inside = np.all((c >= lo - 1e-9) & (c <= hi + 1e-9), axis=2) & ~np.isnan(c).any(axis=2)
         dist = np.where(inside, np.linalg.norm(c - prev, axis=2), np.inf)
         best = np.argmin(dist, axis=1)
-        out = c[np.arange(len(c)), best]
-        out[~np.isfinite(dist[np.arange(len(c)), best])] = np.nan
+        rows = np.arange(len(c))
+        out = c[rows, best]
+        none = ~np.isfinite(dist[rows, best])
+        out[none] = np.nan
+        if with_branch:
+            return out, np.where(none, -1, best)
         return out
+
+    def follow(self, branch_deg: np.ndarray, start_deg: np.ndarray) -> np.ndarray:
+        """The joints of a path that stays on one branch: each row of
+        branch_deg (M, 6) turned towards the row before it (the first
+        towards start_deg), in one vectorized pass. Equal to calling
+        closest() row by row wherever that keeps the branch and no limit
+        turns a joint back (the turn counts come from an unwrap of the
+        sequence; the angles are then computed as closest() does)."""
+        c = np.asarray(branch_deg, float)
+        seq = np.vstack([np.asarray(start_deg, float)[None], c])
+        prev = np.empty_like(c)
+        prev[:] = np.nan
+        unwrapped = seq.copy()
+        for col in (0, 3, 5):
+            unwrapped[:, col] = np.unwrap(seq[:, col], period=360.0)
+        # Row i is turned towards row i - 1 of the unwrapped sequence.
+        prev = unwrapped[:-1]
+        return self._turned(c, prev)
 
     def seed_from_joints(self, q_deg: np.ndarray):
         """Nominal flange poses of joint vectors (MoveAbsJ targets) and a seed

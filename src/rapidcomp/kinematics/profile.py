@@ -125,7 +125,10 @@ class ThermalProfile:
 
 def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "J5", "J6"),
                   force: bool = False) -> ThermalProfile:
-    allowed = {n.lower(): n for n in joint_names} | {
+    # A URDF arm's joints are named by its URDF; J1..J6 (chain order) name
+    # them too, so one profile serves the built-in model and the URDF.
+    allowed = {f"j{i + 1}": n for i, n in enumerate(joint_names)}
+    allowed |= {n.lower(): n for n in joint_names} | {
         "flange": "flange", "base": "base", "payload": "payload"}
     header, body = header_and_rows(text, source, COLUMNS, "profile")
     columns = COLUMNS + tuple(c for c in EXTRA_COLUMNS if c in header)
@@ -139,10 +142,16 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
         name = row[index["joint"]].strip()
         key = allowed.get(name.lower())
         if key is None:
+            aliases = [] if list(joint_names) == [f"J{i + 1}" for i in range(len(joint_names))] \
+                else [f"J1..J{len(joint_names)}"]
             raise InputError(source, f"unknown joint {name!r}; expected one of "
-                             + ", ".join([*joint_names, "flange", "base", "payload"]), line)
+                             + ", ".join([*joint_names, *aliases, "flange", "base", "payload"]),
+                             line)
         if key in seen:
-            raise InputError(source, f"duplicate row for {key} (first on line {seen[key]})", line)
+            raise InputError(source, f"duplicate row for {key} (first on line {seen[key]}; "
+                             "J1..J6 and the URDF's joint names name the same joints)"
+                             if name.lower() != key.lower() else
+                             f"duplicate row for {key} (first on line {seen[key]})", line)
         seen[key] = line
         v = {}
         for col in columns[1:]:
