@@ -5,7 +5,8 @@
 inspect/: the parser's report of every fixture.
 fix/<case>/: before.mod (the input; copied from fixtures/ when the case
 names one, else written by hand), after.mod and report.md from
-`rapidcomp fix` with the case's options.
+`rapidcomp fix` with the case's options. A task case (a folder of
+fixtures/tasks/) has before/ and after/ folders with one file per module.
 """
 
 import shutil
@@ -28,6 +29,12 @@ FIX_CASES = {
     "paper_front_absj": ("paper_front.mod", "absj", ()),
     "paper_front_robtarget": ("paper_front.mod", "robtarget", ()),
     "refusals": (None, "absj", ()),
+    "cam_confoff_robtarget": ("rapid/cam_confoff.mod", "robtarget", ()),
+}
+# case -> (task folder under fixtures/tasks, mode)
+TASK_CASES = {
+    "cell_absj": ("cell", "absj"),
+    "cell_robtarget": ("cell", "robtarget"),
 }
 
 
@@ -48,6 +55,20 @@ def fix_golden(case: str) -> tuple[bytes, str]:
     return pf.source.encode(result.modules[0].text), report.markdown(result, meta)
 
 
+def task_golden(case: str) -> tuple[dict[str, bytes], str]:
+    """({module path: after bytes}, report.md text) of a task case."""
+    from rapidcomp.compensate.job import load_task
+    from rapidcomp.rapid.task import tasks_of
+    folder, mode = TASK_CASES[case]
+    (source,) = tasks_of(ROOT / "fixtures" / "tasks" / folder)
+    task = load_task(source)
+    result = fix(task, load_solver(str(PROFILE), None, False, ()), mode)
+    meta = {"input": f"folder {folder}", "output": "after/", "mode": mode,
+            "profile": PROFILE.name, "robot": "irb140"}
+    after = {m.path: pf.source.encode(m.text) for pf, m in zip(task.files, result.modules)}
+    return after, report.markdown(result, meta)
+
+
 def main() -> None:
     out = GOLDEN / "inspect"
     out.mkdir(parents=True, exist_ok=True)
@@ -60,6 +81,15 @@ def main() -> None:
             shutil.copyfile(ROOT / "fixtures" / fixture, folder / "before.mod")
         after, rep = fix_golden(case)
         (folder / "after.mod").write_bytes(after)
+        (folder / "report.md").write_text(rep, encoding="utf-8", newline="\n")
+    for case, (name, _) in TASK_CASES.items():
+        folder = GOLDEN / "fix" / case
+        shutil.rmtree(folder, ignore_errors=True)
+        shutil.copytree(ROOT / "fixtures" / "tasks" / name, folder / "before")
+        after, rep = task_golden(case)
+        for rel, data in after.items():
+            (folder / "after" / rel).parent.mkdir(parents=True, exist_ok=True)
+            (folder / "after" / rel).write_bytes(data)
         (folder / "report.md").write_text(rep, encoding="utf-8", newline="\n")
 
 

@@ -20,7 +20,7 @@ from rapidcomp.rewrite.diff import unified_diff
 from rapidcomp.rewrite.names import NameAllocator
 
 from conftest import FIXTURES, RAPID_FIXTURES
-from regen_golden import FIX_CASES, GOLDEN, fix_golden
+from regen_golden import FIX_CASES, GOLDEN, TASK_CASES, fix_golden, task_golden
 
 ZERO_PROFILE = "joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg\n"
 WARM = str(FIXTURES / "warm.csv")
@@ -41,6 +41,19 @@ def test_golden_case(case):
         assert (folder / "before.mod").read_bytes() == (FIXTURES / fixture).read_bytes()
     after, report = fix_golden(case)
     assert after == (folder / "after.mod").read_bytes()
+    assert report == (folder / "report.md").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("case", sorted(TASK_CASES))
+def test_golden_task_case(case):
+    folder = GOLDEN / "fix" / case
+    src = FIXTURES / "tasks" / TASK_CASES[case][0]
+    for p in src.rglob("*"):
+        if p.is_file():
+            assert (folder / "before" / p.relative_to(src)).read_bytes() == p.read_bytes()
+    after, report = task_golden(case)
+    for rel, data in after.items():
+        assert data == (folder / "after" / rel).read_bytes(), rel
     assert report == (folder / "report.md").read_text(encoding="utf-8")
 
 

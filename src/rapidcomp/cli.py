@@ -85,7 +85,7 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, as
 
     Exit code 1 when some targets could not be compensated.
     """
-    from dataclasses import asdict
+    from dataclasses import asdict, replace
 
     from .compensate.check import check as run_check
     from .compensate.check import render_text
@@ -100,6 +100,7 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, as
         solver = load_solver(profile, robot, force, limits)
         tracked = parse_track(track)
         results = [run_check(load_task(s, with_modules), solver, tracked) for s in sources]
+        results = [replace(r, notes=s.notes + r.notes) for r, s in zip(results, sources)]
     except RapidcompError as exc:
         _fail(exc)
     if as_json:

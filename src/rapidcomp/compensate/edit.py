@@ -30,6 +30,7 @@ class Values:
         self.plan = plan
         self.solved = solved
         self.tol = quadrant_tol_deg
+        self._values: dict = {}
 
     def source(self, g: Group, k) -> Source:
         if k is None or k == g.src.element:
@@ -49,6 +50,12 @@ class Values:
         supervision off (the controller does not read it: it stays as written)
         and for a J1/J4/J6 within the quadrant tolerance of the written
         quadrant (it stays as written)."""
+        key = (id(g), k)
+        if key not in self._values:
+            self._values[key] = self._robtarget_value(g, k)
+        return self._values[key]
+
+    def _robtarget_value(self, g: Group, k):
         s = self.solved
         i = g.rows[k]
         src = self.source(g, k)

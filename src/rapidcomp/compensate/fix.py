@@ -111,8 +111,11 @@ def _fix(task, solver, mode, timings, track, output_names) -> FixResult:
     keys = [u.key for g in gs if g.failure is None for u in g.uses]
     verified = verify(plan, solved, keys, out_files, solver) if keys else {}
     clock("verify")
+    written_conf = {u.key: (values.robtarget_value(g, u.source.element)[2]
+                            if g.mode == "rob" else None)
+                    for g in gs if g.failure is None for u in g.uses}
     rows = use_rows(plan, solved, group_of=group_of, actions=editor.actions, verified=verified,
-                    mode=mode)
+                    mode=mode, written_conf=written_conf)
     for r, u in zip(rows, plan.uses):
         if r.status != COMPENSATED:
             continue

@@ -8,7 +8,7 @@ Several tasks run in a process pool of two workers (the machine's cores).
 from __future__ import annotations
 
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import InputError, RapidcompError
@@ -109,6 +109,8 @@ def run(spec: JobSpec) -> JobOutcome:
     progress.stage("compensating")
     names = {} if src.is_folder else {src.modules[0]: Path(spec.output).name}
     result = fix(task, solver, spec.mode, track=parse_track(spec.track), output_names=names)
+    if src.notes:
+        result = replace(result, notes=src.notes + result.notes)
     progress.stage("writing")
     meta = {
         "output": Path(spec.output).name + ("/" if src.is_folder else ""),

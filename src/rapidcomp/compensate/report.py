@@ -90,11 +90,9 @@ def markdown(result: FixResult, meta: dict) -> str:
     for m in result.modules:
         rows = [r for r in result.rows if r.file == m.path]
         if several:
-            out += ["", f"## {m.path}", ""]
-            if not m.edits:
-                out.append("Unchanged (written byte for byte as it was)."
-                           if not rows else "No change.")
+            out += ["", f"## {m.path}"]
             if not rows and not m.edits:
+                out += ["", "No motion instructions; written byte for byte as it was."]
                 continue
         level = "###" if several else "##"
         out += ["", f"{level} Diff", ""]

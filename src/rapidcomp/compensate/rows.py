@@ -52,9 +52,13 @@ def displacement_warning(um_per_mm: float) -> str:
 
 def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
              actions: dict | None = None, verified: dict | None = None, mode: str | None = None,
+             written_conf: dict | None = None,
              statuses=(COMPENSATED, NOT_COMPENSATED)) -> list[UseRow]:
     """Rows in text order. Without group_of/verified (check): per use, the
-    solve's own residual; with them (fix, in `mode`): the written values'."""
+    solve's own residual and the confdata of the compensated joints; with
+    them (fix, in `mode`): the written values' residual and confdata
+    (written_conf: use key -> the confdata written, None where no robtarget
+    is written)."""
     ok_label, fail_label = statuses
     out = []
     for u in plan.uses:
@@ -67,13 +71,13 @@ def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
                               residual_deg=None, conf_before=None, conf_after=None,
                               warnings=(), reason=u.reason))
             continue
-        out.append(_row(solved, u, base, group_of, actions, verified, mode, ok_label,
-                        fail_label))
+        out.append(_row(solved, u, base, group_of, actions, verified, mode, written_conf,
+                        ok_label, fail_label))
     return out
 
 
-def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, ok_label,
-         fail_label) -> UseRow:
+def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, written_conf,
+         ok_label, fail_label) -> UseRow:
     i = solved.row[u.key]
     pick = solved.picks[i]
     nominal, deformed = solved.nominal, solved.deformed
@@ -81,7 +85,8 @@ def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, 
     has_q = pick.failure is None
     error = ((float(solved.err_p[i]) * 1000, float(solved.err_r[i]) / DEG) if has_q
              else (None, None))
-    conf_before = tuple(int(c) for c in (u.conf if u.conf is not None else nominal.conf[i]))
+    # confdata is a robtarget's: a MoveAbsJ has none.
+    conf_before = tuple(int(c) for c in u.conf) if u.conf is not None else None
     d_warnings = deformed.warning_texts(i) if has_q else ()
     g: Group | None = group_of.get(u.key) if group_of is not None else None
     why = None
@@ -121,9 +126,17 @@ def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, 
                   action=actions.get(u.key) if actions is not None else None,
                   nominal_deg=_t(qn), compensated_deg=_t(qc), delta_deg=_t(qc - qn),
                   error_um=error[0], error_deg=error[1], residual_um=res[0], residual_deg=res[1],
-                  conf_before=conf_before,
-                  conf_after=tuple(int(c) for c in solved.conf_after[i]),
+                  conf_before=conf_before, conf_after=_conf_after(solved, i, u, written_conf),
                   warnings=warnings, reason=None)
+
+
+def _conf_after(solved: Solved, i: int, u: TargetUse, written_conf):
+    if written_conf is not None:
+        c = written_conf.get(u.key)
+        return None if c is None else tuple(int(x) for x in c)
+    if u.kind != "robtarget":
+        return None
+    return tuple(int(c) for c in solved.conf_after[i])
 
 
 def _warnings(solved: Solved, i: int, u: TargetUse, g, texts) -> tuple[str, ...]:

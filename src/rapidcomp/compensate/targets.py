@@ -190,17 +190,19 @@ class Resolver:
                 return Unresolved(f"{name} is a parameter of routine {routine} (its value "
                                   "comes from the caller)")
         d = self.module_decls.get((mid, key))
-        if d is not None:
+        if d is not None and d.scope == "LOCAL":
             return d
         found = self.globals.get(key)
         if not found:
-            return None
+            return d
+        # Global data of one name in two modules: the controller refuses to
+        # load the task (PERS of one type are one shared object: allowed).
         if len(found) > 1 and not all(x.storage == "PERS" and x.type == found[0].type
                                       for x in found):
             where = ", ".join(f"{self.home[id(x)].source.display_path}:"
                               f"{self.home[id(x)].line(x.span)}" for x in found)
             return Unresolved(f"{name} is declared globally more than once ({where})", True)
-        return found[0]
+        return d if d is not None else found[0]
 
     # ------------------------------------------------------------ tool / wobj
     def _data(self, expr, module, routine: str, builtin: str, cls, what: str):

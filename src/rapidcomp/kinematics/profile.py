@@ -133,7 +133,7 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
     header, body = header_and_rows(text, source, COLUMNS, "profile")
     columns = COLUMNS + tuple(c for c in EXTRA_COLUMNS if c in header)
     index = {c: header.index(c) for c in columns}
-    seen: dict[str, int] = {}
+    seen: dict[str, tuple[int, str]] = {}
     disps, terms = [], []
     base, payload = ZERO, NO_PAYLOAD
     for line, row in body:
@@ -148,11 +148,11 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
                              + ", ".join([*joint_names, *aliases, "flange", "base", "payload"]),
                              line)
         if key in seen:
-            raise InputError(source, f"duplicate row for {key} (first on line {seen[key]}; "
-                             "J1..J6 and the URDF's joint names name the same joints)"
-                             if name.lower() != key.lower() else
-                             f"duplicate row for {key} (first on line {seen[key]})", line)
-        seen[key] = line
+            first, as_named = seen[key]
+            raise InputError(source, f"duplicate row for {key} (first on line {first}"
+                             + ("; J1..J6 and the URDF's joint names name the same joints)"
+                                if as_named.lower() != name.lower() else ")"), line)
+        seen[key] = (line, name)
         v = {}
         for col in columns[1:]:
             cell = row[index[col]].strip()

@@ -1,0 +1,291 @@
+"""The motion state the controller runs each move in (flow.py), the rule
+that chooses its solution (solve.py) and how a task's names resolve
+(targets.py), on small hand-written tasks. Expected states are read off
+the RAPID semantics by hand (ConfJ/ConfL and program displacement persist
+across routine calls; supervision is on at program start)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rapidcomp.compensate.check import check
+from rapidcomp.compensate.fix import fix
+from rapidcomp.compensate.plan import Plan, Task
+from rapidcomp.kinematics.ik import Solver
+from rapidcomp.kinematics.profile import deform, read_profile
+from rapidcomp.kinematics.robot import irb140
+from rapidcomp.rapid.parse import parse_text
+
+from conftest import FIXTURES
+
+ROBOT = irb140()
+SOLVER = Solver(ROBOT, deform(ROBOT, read_profile(FIXTURES / "warm.csv")))
+EXT = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
+# The paper's P1 (front cube, Table 5 row 1) and P4, flange Ry(90).
+P1 = f"[[400,300,250],[0.707107,0,0.707107,0],[0,0,-1,1],{EXT}]"
+P4 = f"[[400,-150,250],[0.707107,0,0.707107,0],[-1,-1,0,1],{EXT}]"
+P1_BAD = f"[[400,300,250],[0.707107,0,0.707107,0],[0,-1,-1,0],{EXT}]"   # placeholder
+# P4 on the other wrist branch (J4 + 180, -J5, J6 + 180): valid, but not the
+# solution closest to P1's.
+P4_FLIP = f"[[400,-150,250],[0.707107,0,0.707107,0],[-1,1,2,0],{EXT}]"
+
+
+def task(*modules: str) -> Task:
+    files = tuple(parse_text(text, f"M{i}.mod") for i, text in enumerate(modules))
+    return Task("t", files)
+
+
+def states(t: Task):
+    plan = Plan(t)
+    return plan, {(u.line, u.role): plan.state(u) for u in plan.uses}
+
+
+def test_supervision_persists_into_called_routines_and_starts_on():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        MoveL p1, v100, fine, tool0;
+        ConfL\\Off;
+        Sub;
+        ConfL\\On;
+        Sub;
+    ENDPROC
+    PROC Sub()
+        MoveL p1, v100, fine, tool0;
+        MoveJ p1, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    assert st[(4, "to")].confl == {"on"}
+    # Sub is called with ConfL off and with it on: both.
+    assert st[(11, "to")].confl == {"on", "off"}
+    assert st[(12, "to")].confj == {"on"}
+    # The previous move of Sub's first move: main's MoveL (first call) and
+    # Sub's own MoveJ (second call).
+    assert {plan.by_key[k].line for k in st[(11, "to")].last} == {4, 12}
+
+
+def test_branches_join_and_loops_chain_their_moves():
+    t = task(f"""MODULE A
+    CONST robtarget p{{3}}:=[{P1},{P1},{P1}];
+    VAR num n:=0;
+    PROC main()
+        IF n > 1 THEN
+            ConfJ\\Off;
+        ENDIF
+        MoveJ p{{1}}, v100, fine, tool0;
+        FOR i FROM 1 TO 3 DO
+            MoveL p{{i}}, v100, fine, tool0;
+        ENDFOR
+        WHILE n < 3 DO
+            MoveL p{{2}}, v100, fine, tool0;
+            MoveL p{{3}}, v100, fine, tool0;
+        ENDWHILE
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    assert st[(8, "to")].confj == {"on", "off"}
+    loop = {k[3]: s for k, s in plan.flow.before.items() if plan.by_key[k].line == 10}
+    line = {u.key: u.line for u in plan.uses}
+    assert {line[k] for k in loop[(("i", 1),)].last} == {8}
+    prev2 = list(loop[(("i", 2),)].last)[0]
+    assert line[prev2] == 10 and prev2[3] == (("i", 1),)
+    # The WHILE body's first move follows the loop before it, or its own last move.
+    assert {line[k] for k in st[(13, "to")].last} == {10, 14}
+
+
+def test_program_displacement_from_a_caller_and_unknown_calls():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PERS pose pd:=[[1,0,0],[1,0,0,0]];
+    PROC main()
+        PDispSet pd;
+        Work;
+        PDispOff;
+        Work;
+        VendorProc;
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+    PROC Work()
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    assert st[(13, "to")].pdisp == {"on", "off"}
+    after = st[(10, "to")]
+    assert after.last is None and after.confl == {"on", "off"} and after.pdisp == {"on", "off"}
+    assert any("VendorProc (M0.mod:9)" in n for n in plan.notes())
+
+
+def test_routines_nobody_calls_are_entries_with_unknown_state():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+    PROC Service()
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    assert st[(7, "to")].confl == {"on", "off"} and st[(7, "to")].last is None
+    assert st[(7, "to")].pdisp == {"off"}   # nothing given switches it on
+    assert any("Service" in n and "not called" in n for n in plan.notes())
+
+
+def rows_of(t: Task, mode="absj"):
+    return {r.line: r for r in fix(t, SOLVER, mode).rows}
+
+
+def test_supervision_off_follows_the_previous_move_and_ignores_confdata():
+    t = task(f"""MODULE A
+    CONST jointtarget jStart:=[[35,40,25,40,-70,-10],{EXT}];
+    PROC main()
+        ConfL\\Off;
+        MoveAbsJ jStart, v100, fine, tool0;
+        MoveL {P1_BAD}, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    rows = rows_of(t)
+    r = rows[6]
+    assert r.status == "compensated" and r.rule == "closest to line 5 (ConfL\\Off)"
+    # The solution is the paper's (Table 5 row 1, truncated to 2 decimals).
+    assert np.allclose(r.nominal_deg, [41.85, 44.63, 25.88, 43.53, -75.61, -13.29], atol=0.01)
+    # With supervision on, the same placeholder has no solution.
+    t_on = task(f"""MODULE A
+    PROC main()
+        MoveL {P1_BAD}, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    r = rows_of(t_on)[3]
+    assert r.status == "not compensated" and "J4 quadrant no solution has" in r.reason
+
+
+def test_unknown_supervision_valid_confdata_other_closest_stays_a_robtarget_move():
+    """Service is entered from outside the given modules: ConfL may be on or
+    off. Its confdata is valid but from P1 the closest solution of P4 is
+    another: compensated on the confdata's solution, kept as MoveL (the
+    controller keeps choosing), and the report says what was assumed."""
+    t = task(f"""MODULE A
+    PROC Service()
+        MoveL {P1}, v100, fine, tool0;
+        MoveL {P4_FLIP}, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    rows = rows_of(t)
+    assert rows[3].rule == "confdata (ConfL on or off: the same solution)"
+    assert rows[3].action.startswith("MoveL -> MoveAbsJ")
+    r = rows[4]
+    assert r.status == "compensated" and r.rule == "confdata (ConfL may be on or off here)"
+    assert r.action == "inline robtarget rewritten"
+    assert any("may be on or off here" in w and "closest" in w for w in r.warnings)
+
+
+def test_unknown_supervision_invalid_confdata_means_off():
+    t = task(f"""MODULE A
+    CONST jointtarget jStart:=[[35,40,25,40,-70,-10],{EXT}];
+    PROC Service()
+        MoveAbsJ jStart, v100, fine, tool0;
+        MoveL {P1_BAD}, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    r = rows_of(t)[5]
+    assert r.status == "compensated"
+    assert r.rule.endswith("its confdata names no solution, so ConfL is off here")
+
+
+def test_previous_moves_that_disagree_are_refused():
+    """Supervision off after an IF whose branches leave the wrist on either
+    side: the controller's choice depends on the branch taken."""
+    t = task(f"""MODULE A
+    CONST jointtarget jA:=[[41.85,44.63,25.88,43.53,-75.61,-13.29],{EXT}];
+    CONST jointtarget jB:=[[41.85,44.63,25.88,-136.47,75.61,166.71],{EXT}];
+    VAR num n:=0;
+    PROC main()
+        ConfL\\Off;
+        IF n > 0 THEN
+            MoveAbsJ jA, v100, fine, tool0;
+        ELSE
+            MoveAbsJ jB, v100, fine, tool0;
+        ENDIF
+        MoveL {P1_BAD}, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    r = rows_of(t)[12]
+    assert r.status == "not compensated"
+    assert "depends on which move ran before it (lines 8, 10)" in r.reason
+
+
+def test_scopes_local_data_parameters_and_ambiguous_globals():
+    t = task(f"""MODULE A
+    LOCAL CONST robtarget p:={P1};
+    CONST robtarget q:={P1};
+    PROC main()
+        MoveL p, v100, fine, tool0;
+        B_Go;
+    ENDPROC
+    PROC Go(robtarget t)
+        MoveL t, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""", f"""MODULE B
+    LOCAL CONST robtarget p:={P4};
+    CONST robtarget q:={P4};
+    PROC B_Go()
+        MoveL p, v100, fine, tool0;
+        MoveL q, v100, fine, tGun;
+    ENDPROC
+ENDMODULE""")
+    plan = Plan(t)
+    by = {(u.file.source.display_path, u.line): u for u in plan.uses}
+    assert by[("M0.mod", 5)].p[1] == pytest.approx(300 - 0, abs=200)  # A's own p (y = 300)
+    assert by[("M0.mod", 5)].source.record.xyz[1] == 300
+    assert by[("M1.mod", 5)].source.record.xyz[1] == -150      # B's LOCAL p shadows A's
+    assert "parameter of routine Go" in by[("M0.mod", 9)].reason
+    assert not by[("M0.mod", 9)].blocked
+    u = by[("M1.mod", 6)]
+    assert u.blocked and "declared globally more than once (M0.mod:3, M1.mod:3)" in u.reason
+
+
+def test_missing_tool_only_is_named():
+    t = task(f"""MODULE A
+    PROC main()
+        MoveL {P1}, v100, fine, tGun\\WObj:=wTable;
+    ENDPROC
+ENDMODULE""")
+    r = rows_of(t)[3]
+    assert r.status == "not compensated"
+    assert r.reason.startswith("tool tGun is not declared in the given modules (give the whole task")
+
+
+def test_array_reached_on_two_configurations_is_one_failure_not_a_wrong_value():
+    t = task(f"""MODULE A
+    CONST robtarget p{{2}}:=[{P1_BAD},{P4}];
+    CONST jointtarget jA:=[[41.85,44.63,25.88,43.53,-75.61,-13.29],{EXT}];
+    CONST jointtarget jB:=[[41.85,44.63,25.88,-136.47,75.61,166.71],{EXT}];
+    PROC main()
+        ConfL\\Off;
+        MoveAbsJ jA, v100, fine, tool0;
+        MoveL p{{1}}, v100, fine, tool0;
+        MoveAbsJ jB, v100, fine, tool0;
+        MoveL p{{1}}, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    rows = rows_of(t)
+    assert rows[8].status == rows[10].status == "not compensated"
+    assert "p{1} is reached on different configurations (lines 8, 10)" in rows[8].reason
+
+
+def test_check_is_fixs_plan():
+    """check and fix share the plan and the solve: the same joints, rules
+    and errors for every use (fix's residual is of the written values)."""
+    from rapidcomp.rapid.parse import parse_file
+    names = ["CellData.mod", "MainModule.mod"]
+    t = Task("cell", tuple(parse_file(FIXTURES / "tasks" / "cell" / n, n) for n in names))
+    c = check(t, SOLVER)
+    f = fix(t, SOLVER, "robtarget")
+    assert len(c.rows) == len(f.rows) == 30
+    for a, b in zip(c.rows, f.rows):
+        assert (a.line, a.target, a.rule, a.nominal_deg, a.compensated_deg, a.error_um) == (
+            b.line, b.target, b.rule, b.nominal_deg, b.compensated_deg, b.error_um)
+        assert (a.status, b.status) in {("compensable", "compensated"), ("untouched", "untouched")}

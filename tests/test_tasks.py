@@ -1,0 +1,130 @@
+"""What a program is (rapid/task.py) and how `fix`/`check` take whole tasks
+from the command line: folders, program files, backups, output layout."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import pytest
+from click.testing import CliRunner
+
+from rapidcomp.cli import main
+from rapidcomp.errors import InputError, RapidcompError
+from rapidcomp.kinematics.profile import parse_profile
+from rapidcomp.rapid.task import tasks_of
+
+from conftest import FIXTURES
+
+TASKS = FIXTURES / "tasks"
+WARM = str(FIXTURES / "warm.csv")
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def test_a_module_a_folder_a_program_file_and_a_backup():
+    (m,) = tasks_of(FIXTURES / "cubes.mod")
+    assert (m.kind, m.modules, m.is_folder) == ("module", ("cubes.mod",), False)
+    (f,) = tasks_of(TASKS / "cell")
+    assert (f.kind, f.name, f.modules) == ("folder", "cell", ("CellData.mod", "MainModule.mod"))
+    (p,) = tasks_of(TASKS / "glue" / "Glue.pgf")
+    assert (p.kind, p.modules) == ("pgf", ("GlueData.mod", "GlueMain.mod"))
+    (b,) = tasks_of(TASKS / "backup_irbt")
+    assert (b.kind, b.task) == ("backup", "T_ROB1")
+    assert b.modules == ("RAPID/TASK1/PROGMOD/Track.mod", "RAPID/TASK1/SYSMOD/user.sys")
+    assert b.notes == ("task T_COMM (RAPID/TASK2) is not a motion task (SYSPAR/SYS.cfg): not "
+                       "compensated",)
+
+
+def test_backup_without_sys_cfg_takes_every_task_and_names_them(tmp_path):
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    (bk / "SYSPAR" / "SYS.cfg").unlink()
+    names = [t.task for t in tasks_of(bk)]
+    assert names == ["T_ROB1", "T_COMM"]
+    assert [t.task for t in tasks_of(bk, ("t_comm",))] == ["T_COMM"]
+    (bk / "BACKINFO" / "backinfo.txt").unlink()
+    assert [t.task for t in tasks_of(bk)] == ["TASK1", "TASK2"]
+
+
+@pytest.mark.parametrize("setup, message", [
+    (lambda d: d / "missing.mod", "no such file or folder"),
+    (lambda d: (d / "x.txt").write_text("x") and d / "x.txt", "expected a module"),
+    (lambda d: d, "no module files"),
+])
+def test_what_is_not_a_program(tmp_path, setup, message):
+    with pytest.raises(RapidcompError, match=message):
+        tasks_of(setup(tmp_path))
+
+
+def test_bad_program_files_name_the_line(tmp_path):
+    pgf = tmp_path / "P.pgf"
+    pgf.write_text("<Program>\n  <Module>A.mod</Module>\n  <Module>B.mod</Module>\n</Program>\n")
+    (tmp_path / "A.mod").write_text("MODULE A\nENDMODULE\n")
+    with pytest.raises(InputError) as e:
+        tasks_of(pgf)
+    assert e.value.format() == f"{pgf}:3: module B.mod listed here does not exist beside the " \
+                               "program file"
+    pgf.write_text("<Program><Module>A.mod</Module>\n<Module>A.mod")
+    with pytest.raises(InputError, match=r"P.pgf:2:\d+: not a program file"):
+        tasks_of(pgf)
+    with pytest.raises(RapidcompError, match="--task picks tasks of a controller backup"):
+        tasks_of(TASKS / "cell", ("T_ROB1",))
+
+
+def test_folder_output_has_the_input_layout_and_its_report_beside(tmp_path):
+    r = run("fix", TASKS / "cell", "--profile", WARM, "-o", tmp_path / "out", "--emit",
+            "robtarget", "-q")
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "out.md"]
+    report = (tmp_path / "out.md").read_text()
+    assert "## CellData.mod" in report and "## MainModule.mod" in report
+    assert str(tmp_path) not in report and str(FIXTURES) not in report
+
+
+def test_default_output_is_beside_the_input_and_never_inside_it(tmp_path):
+    cell = tmp_path / "cell"
+    shutil.copytree(TASKS / "cell", cell)
+    r = run("fix", cell, "--profile", WARM, "-q")
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cell", "cell_comp", "cell_comp.md"]
+    before = {p.name: p.read_bytes() for p in cell.iterdir()}
+    r = run("fix", cell, "--profile", WARM, "-o", cell / "out")
+    assert r.exit_code == 2 and "is inside the input folder" in r.output
+    assert {p.name: p.read_bytes() for p in cell.iterdir()} == before
+
+
+def test_several_tasks_use_a_folder_and_refuse_one_report_name(tmp_path):
+    r = run("fix", TASKS / "cell", TASKS / "glue" / "Glue.pgf", "--profile", WARM,
+            "-o", tmp_path / "o", "--report", tmp_path / "r.md")
+    assert r.exit_code == 2 and "--report/--json name one file" in r.output
+    r = run("fix", TASKS / "cell", TASKS / "glue" / "Glue.pgf", FIXTURES / "cubes.mod",
+            "--profile", WARM, "--limit", "J5=-120:120", "-o", tmp_path / "o", "-q")
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == [
+        "Glue", "Glue.md", "cell", "cell.md", "cubes.md", "cubes.mod"]
+
+
+def test_check_json_of_a_folder():
+    r = run("check", TASKS / "cell", "--profile", WARM, "--json")
+    assert r.exit_code == 0
+    doc = json.loads(r.output)
+    assert doc["program"] == "cell" and doc["summary"]["compensable"] == 29
+    assert {t["file"] for t in doc["targets"]} == {"MainModule.mod"}
+    assert all(t["rule"] for t in doc["targets"] if t["status"] == "compensable")
+
+
+def test_urdf_arm_profile_rows_may_name_joints_j1_to_j6():
+    names = ("shoulder_pan", "shoulder_lift", "elbow", "wrist_1", "wrist_2", "wrist_3")
+    text = "joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg\nJ2,0.01,0,0,0,0.002,0\n" \
+           "wrist_3,0,0,0.02,0,0,0\n"
+    prof = parse_profile(text, "p.csv", joint_names=names)
+    assert prof.get("shoulder_lift").d_mm == (0.01, 0.0, 0.0)
+    assert prof.get("wrist_3").d_mm == (0.0, 0.0, 0.02)
+    dup = text + "shoulder_lift,0,0,0,0,0,0\n"
+    with pytest.raises(InputError, match="duplicate row for shoulder_lift .*name the same joints"):
+        parse_profile(dup, "p.csv", joint_names=names)
+    with pytest.raises(InputError, match="J1..J6"):
+        parse_profile(text + "J7,0,0,0,0,0,0\n", "p.csv", joint_names=names)
