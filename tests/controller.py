@@ -66,7 +66,7 @@ class Executed:
 
 
 class Controller:
-    def __init__(self, files, robot, track=None, start_deg=None):
+    def __init__(self, files, robot, track=None, start_deg=None, confj=True):
         self.files = files
         self.robot = robot
         self.ik = Solver(robot)
@@ -85,7 +85,8 @@ class Controller:
                 for mo in m.motions:
                     self.motions[(id(pf), mo.span.start)] = mo
         self.q = None if start_deg is None else np.asarray(start_deg, float)
-        self.confj = self.confl = True
+        self.confj = confj      # as at program start, unless the test says otherwise
+        self.confl = True
         self.disp = None
         self.out: list[Executed] = []
 

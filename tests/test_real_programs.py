@@ -48,12 +48,13 @@ def parsed(folder: Path, names) -> list:
     return [parse_file(folder / n, n) for n in names]
 
 
-def evaluate(inp, out, track=None, displaced_um=1.0):
+def evaluate(inp, out, track=None, displaced_um=1.0, **controller):
     """Run input and output on the controller model; returns the rows
     (executed input, executed output, position error um, orientation error
     deg) and checks the bounds."""
-    a = Controller(inp, NOMINAL, track).run()
-    b = Controller(out, NOMINAL, track).run()
+    entry = controller.pop("entry", "main")
+    a = Controller(inp, NOMINAL, track, **controller).run(entry)
+    b = Controller(out, NOMINAL, track, **controller).run(entry)
     assert [x.kind == "ext" for x in a] == [x.kind == "ext" for x in b]
     assert len(a) == len(b) > 0
     rows = []
@@ -203,6 +204,21 @@ def test_cam_first_move_needs_a_known_position(tmp_path):
                   check=False)
     assert r.returncode == 1
     assert "the program has no jointtarget to start from" in r.stdout
+
+
+def test_cam_without_home_compensates_from_start(tmp_path):
+    """cam_inline.mod: a routine no given module calls, ConfL\\Off, placeholder
+    confdata, no jointtarget: with --start (where the robot stands when the
+    routine runs) every move compensates; the controller model, started
+    there with ConfJ off, lands them all."""
+    src = FIXTURES / "rapid" / "cam_inline.mod"
+    out = tmp_path / "cam.mod"
+    r = rapidcomp("fix", src, "--profile", FIXTURES / "warm.csv", "-o", out, "--emit",
+                  "robtarget", "--start", "0,0,0,0,30,0")
+    assert "313 of 313 target uses compensated" in r.stdout
+    rows = evaluate([parse_file(src)], [parse_file(out)], entry="Contour",
+                    start_deg=[0, 0, 0, 0, 30, 0], confj=False)
+    assert len(rows) == 313
 
 
 # ---------------------------------------------------------------- program file

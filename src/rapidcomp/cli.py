@@ -28,6 +28,21 @@ def main() -> None:
     """Thermal compensation of ABB RAPID programs (IRC5, IRB 140)."""
 
 
+def _floats(count: int, what: str):
+    """A click callback: "X,Y,Z" -> a tuple of `count` floats."""
+    def parse(ctx, param, value):
+        if value is None:
+            return None
+        try:
+            vals = tuple(float(v) for v in value.split(","))
+        except ValueError:
+            vals = ()
+        if len(vals) != count or not all(v == v and abs(v) != float("inf") for v in vals):
+            raise click.BadParameter(f"expected {what} ({count} numbers separated by commas)")
+        return vals
+    return parse
+
+
 def _model_options(f):
     """The options that build the warm robot and name the task, shared by
     check and fix."""
@@ -49,6 +64,12 @@ def _model_options(f):
                      help="External axis eax_AXIS (a..f) carries the robot along that world "
                           "axis, in mm, e.g. a:x (repeatable). Default: external axes do not "
                           "move the robot's base."),
+        click.option("--start", default=None, metavar="J1,...,J6",
+                     callback=_floats(6, "J1,...,J6 in degrees"),
+                     help="Where the robot is when the program leaves its position unknown "
+                          "(deg): moves without configuration supervision whose confdata names "
+                          "no solution take the solution closest to it. Default: the program's "
+                          "first jointtarget."),
     ]):
         f = option(f)
     return f
@@ -80,7 +101,8 @@ def inspect(program: str, as_json: bool) -> None:
 @click.argument("program", type=click.Path())
 @_model_options
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
-def check(program, profile, with_modules, tasks, robot, force, limits, track, as_json) -> None:
+def check(program, profile, with_modules, tasks, robot, force, limits, track, start,
+          as_json) -> None:
     """Predict each target's error on the warm robot; rewrite nothing.
 
     Exit code 1 when some targets could not be compensated.
@@ -99,7 +121,8 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, as
                 raise RapidcompError(f"{m}: no such file")
         solver = load_solver(profile, robot, force, limits)
         tracked = parse_track(track)
-        results = [run_check(load_task(s, with_modules), solver, tracked) for s in sources]
+        results = [run_check(load_task(s, with_modules), solver, tracked, start)
+                   for s in sources]
         results = [replace(r, notes=s.notes + r.notes) for r, s in zip(results, sources)]
     except RapidcompError as exc:
         _fail(exc)
@@ -134,7 +157,7 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, as
                    "(they stay as they were and are listed).")
 @click.option("-q", "--quiet", is_flag=True, help="No summary on stdout.")
 def fix(programs, profile, output, emit, report, no_report, json_path, with_modules, tasks,
-        robot, force, limits, track, allow_partial, quiet) -> None:
+        robot, force, limits, track, start, allow_partial, quiet) -> None:
     """Write a compensated copy of each PROGRAM and a review report.
 
     Exit code 0: all statically known targets compensated; 1: some could not
@@ -147,7 +170,7 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
     from .compensate.report import summary_lines
     try:
         specs = _fix_specs(programs, profile, output, emit, report, no_report, json_path,
-                           with_modules, tasks, robot, force, limits, track)
+                           with_modules, tasks, robot, force, limits, track, start)
         outcomes = run_all(specs)
         files = [(path, data) for o in outcomes for path, data in o.files]
         done = {path for path, _ in files}
@@ -190,7 +213,7 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
 
 
 def _fix_specs(programs, profile, output, emit, report, no_report, json_path, with_modules,
-               tasks, robot, force, limits, track):
+               tasks, robot, force, limits, track, start):
     """One JobSpec per task, with output paths checked: never an input,
     never two jobs on one file, never inside an input folder."""
     from pathlib import Path
@@ -253,23 +276,8 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
                     raise RapidcompError(f"{path}: would overwrite an input or another output")
                 seen.add(real)
             specs.append(JobSpec(t, out, rep, json_path, profile, robot, tuple(with_modules),
-                                 emit, force, tuple(limits), tuple(track)))
+                                 emit, force, tuple(limits), tuple(track), start))
     return specs
-
-
-def _floats(count: int, what: str):
-    """A click callback: "X,Y,Z" -> a tuple of `count` floats."""
-    def parse(ctx, param, value):
-        if value is None:
-            return None
-        try:
-            vals = tuple(float(v) for v in value.split(","))
-        except ValueError:
-            vals = ()
-        if len(vals) != count or not all(v == v and abs(v) != float("inf") for v in vals):
-            raise click.BadParameter(f"expected {what} ({count} numbers separated by commas)")
-        return vals
-    return parse
 
 
 def _campaign_options(f):

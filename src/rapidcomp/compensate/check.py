@@ -33,9 +33,9 @@ class CheckResult:
         return summary(list(self.rows), OK, FAILED)
 
 
-def check(task: Task, solver: Solver, track=()) -> CheckResult:
+def check(task: Task, solver: Solver, track=(), start=None) -> CheckResult:
     plan = Plan(task, track)
-    solved = solve(plan, solver)
+    solved = solve(plan, solver, start)
     rows = use_rows(plan, solved, statuses=(OK, FAILED))
     return CheckResult(task.name, tuple(rows), tuple(plan.notes()))
 

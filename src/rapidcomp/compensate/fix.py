@@ -67,7 +67,7 @@ class FixResult:
 
 
 def fix(task: Task, solver: Solver, mode: str = "absj", timings: dict | None = None,
-        track=(), output_names: dict | None = None) -> FixResult:
+        track=(), output_names: dict | None = None, start=None) -> FixResult:
     """Compensate the modules of `task` (its context modules supply data
     only). Targets that cannot be compensated keep their text and are
     listed with the reason; whether to write such an output is the caller's
@@ -80,19 +80,19 @@ def fix(task: Task, solver: Solver, mode: str = "absj", timings: dict | None = N
     enabled = gc.isenabled()
     gc.disable()
     try:
-        return _fix(task, solver, mode, timings, track, output_names or {})
+        return _fix(task, solver, mode, timings, track, output_names or {}, start)
     finally:
         if enabled:
             gc.enable()
 
 
-def _fix(task, solver, mode, timings, track, output_names) -> FixResult:
+def _fix(task, solver, mode, timings, track, output_names, start) -> FixResult:
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}")
     clock = _Clock(timings)
     plan = Plan(task, track)
     clock("resolve")
-    solved = solve(plan, solver)
+    solved = solve(plan, solver, start)
     clock("solve")
     gs = P.groups(plan, solved, mode)
     P.place(plan, gs)

@@ -32,6 +32,7 @@ class JobSpec:
     force: bool
     limits: tuple[str, ...] = ()
     track: tuple[str, ...] = ()
+    start: tuple[float, ...] | None = None
     progress: bool | None = None
 
     @property
@@ -108,7 +109,8 @@ def run(spec: JobSpec) -> JobOutcome:
     solver = load_solver(spec.profile, spec.robot, spec.force, spec.limits)
     progress.stage("compensating")
     names = {} if src.is_folder else {src.modules[0]: Path(spec.output).name}
-    result = fix(task, solver, spec.mode, track=parse_track(spec.track), output_names=names)
+    result = fix(task, solver, spec.mode, track=parse_track(spec.track), output_names=names,
+                 start=spec.start)
     if src.notes:
         result = replace(result, notes=src.notes + result.notes)
     progress.stage("writing")
@@ -122,6 +124,8 @@ def run(spec: JobSpec) -> JobOutcome:
     }
     if spec.track:
         meta["track"] = ", ".join(spec.track)
+    if spec.start:
+        meta["start"] = ", ".join(f"{v:g}" for v in spec.start)
     if src.is_folder:
         meta = {"input": f"{src.kind} {src.input.name}" + (f", task {src.task}" if src.task
                                                            else ""),

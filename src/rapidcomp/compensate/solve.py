@@ -53,6 +53,7 @@ class Solved:
     conf_after: np.ndarray     # confdata of the compensated joints
     picks: list                # Pick: how the nominal solution was chosen, or why none
     displacement_um_per_mm: np.ndarray  # extra error per mm of program displacement
+    start: np.ndarray | None = None     # --start joints, deg
 
     def ok(self, i: int) -> bool:
         return self.picks[i].failure is None and bool(self.deformed.success[i])
@@ -80,7 +81,7 @@ class Pick(NamedTuple):
     rule: str | None
     failure: str | None
     kind: str | None = None
-    pred: int | None = None
+    pred: int | None = None   # "closest": the row it is closest to (None: --start)
     # The controller might choose otherwise (supervision not known): the
     # move stays a robtarget move, so its configuration stays the
     # controller's choice, and the report says what was assumed.
@@ -94,7 +95,9 @@ def _fail(why: str) -> Pick:
 class _Chooser:
     """The nominal solution of each robtarget use, in flow order."""
 
-    def __init__(self, plan: Plan, solver: Solver, uses: list[TargetUse], rows: dict):
+    def __init__(self, plan: Plan, solver: Solver, uses: list[TargetUse], rows: dict,
+                 start: np.ndarray | None = None):
+        self.start = start
         self.plan = plan
         self.solver = solver
         self.uses = uses
@@ -205,11 +208,18 @@ class _Chooser:
         pick = self._by_conf(i, f"confdata; position before unknown ({flag}\\Off)")
         if pick.q is not None:
             return pick
+        if self.start is not None:
+            k = self.rob_row[i]
+            q = self.solver.closest(self.cands[k][None], self.start[None])[0]
+            if np.isnan(q).any():
+                return _fail("nominal: no solution within the joint limits")
+            return Pick(q, f"closest to --start: position before unknown, confdata names no "
+                           f"solution ({flag}\\Off)", None, "closest", None)
         j = self.first_joint
         if j is None:
             return _fail(f"{flag}\\Off and the position before it is unknown: its confdata {c} "
                          f"names no solution ({pick.failure}) and the program has no "
-                         "jointtarget to start from")
+                         "jointtarget to start from (say where the robot starts with --start)")
         ju = self.uses[j]
         return self._closest_to(i, j, f"closest to {ju.label} (line {ju.line}), the first "
                                       "jointtarget: position before unknown, confdata names no "
@@ -315,11 +325,15 @@ class _Chooser:
         self.picks[i] = pick
 
 
-def solve(plan: Plan, solver: Solver) -> Solved:
+def solve(plan: Plan, solver: Solver, start=None) -> Solved:
+    """start: the joints (deg) the robot is at where the program leaves its
+    position unknown (--start), for moves without supervision whose
+    confdata names no solution; default: the program's first jointtarget."""
     uses = [u for u in plan.uses if u.reason is None]
     rows = {u.key: i for i, u in enumerate(uses)}
     n = len(uses)
-    chooser = _Chooser(plan, solver, uses, rows)
+    start = None if start is None else np.asarray(start, float)
+    chooser = _Chooser(plan, solver, uses, rows, start)
     chooser.run()
     q_nom = chooser.q
     picks = chooser.picks
@@ -353,7 +367,7 @@ def solve(plan: Plan, solver: Solver) -> Solved:
     if moved:
         disp[moved] = _displacement_sensitivity(solver, deformed.q_deg[moved])
     return Solved(uses, rows, R, p, seed, deformed, err_p, err_r, Rn, pn, conf_after, picks,
-                  disp)
+                  disp, start)
 
 
 def _displacement_sensitivity(solver: Solver, q_deg: np.ndarray) -> np.ndarray:

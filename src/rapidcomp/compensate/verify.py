@@ -86,9 +86,7 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
         got = by_conf
         if closest:
             sel = [rob[n] for n in closest]
-            prev = np.array([solved.deformed.q_deg[solved.picks[i].pred]
-                             if solved.ok(solved.picks[i].pred)
-                             else solved.nominal.q_deg[solved.picks[i].pred] for i in sel])
+            prev = np.array([_previous(solved, solved.picks[i].pred) for i in sel])
             got = by_conf.copy()
             got[closest] = solver.closest(solver.candidates(R[closest], p[closest]), prev)
         for n, i in enumerate(rob):
@@ -105,3 +103,12 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
         out[solved.uses[i].key] = (float(err_p[n]) * 1000, float(err_r[n]) / DEG)
     return out
 
+
+
+def _previous(solved: Solved, j: int | None) -> np.ndarray:
+    """The joints a move without supervision starts from: the previous
+    move's compensated ones (its nominal ones if it is not compensated), or
+    the --start joints."""
+    if j is None:
+        return solved.start
+    return solved.deformed.q_deg[j] if solved.ok(j) else solved.nominal.q_deg[j]
