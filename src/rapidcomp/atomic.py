@@ -9,8 +9,17 @@ import tempfile
 from pathlib import Path
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def write_all(files: list[tuple[Path, bytes]]) -> None:
+    """Write every file or none. OSError (with .filename) on failure."""
     temps: list[tuple[str, Path]] = []
+    # mkstemp creates 0600 files; a written file gets what open() would give.
+    mode = 0o666 & ~_umask()
     try:
         for path, data in files:
             path.parent.mkdir(parents=True, exist_ok=True)
@@ -18,6 +27,7 @@ def write_all(files: list[tuple[Path, bytes]]) -> None:
             temps.append((tmp, path))
             with os.fdopen(fd, "wb") as f:
                 f.write(data)
+            os.chmod(tmp, mode)
         for tmp, path in temps:
             os.replace(tmp, path)
     finally:

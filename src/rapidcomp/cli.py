@@ -9,7 +9,7 @@ import sys
 
 import click
 
-from .errors import InputError, RapidcompError
+from .errors import Errors, InputError, RapidcompError
 
 EXIT_OK = 0
 EXIT_PARTIAL = 1
@@ -17,9 +17,21 @@ EXIT_BAD_INPUT = 2
 
 
 def _fail(exc: RapidcompError) -> None:
-    click.echo(f"rapidcomp: error: {exc}" if not isinstance(exc, InputError) else exc.format(),
-               err=True)
+    text = exc.format() if isinstance(exc, (InputError, Errors)) else f"rapidcomp: error: {exc}"
+    click.echo(text, err=True)
     sys.exit(EXIT_BAD_INPUT)
+
+
+def _write(files) -> None:
+    """All files or none (atomic.py); an OS error names the path."""
+    from pathlib import Path
+
+    from .atomic import write_all
+    try:
+        write_all([(Path(p), data) for p, data in files])
+    except OSError as exc:
+        where = exc.filename or "output"
+        _fail(RapidcompError(f"{where}: cannot write: {exc.strerror or exc}; nothing written"))
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -163,9 +175,6 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
     Exit code 0: all statically known targets compensated; 1: some could not
     be (nothing is written unless --allow-partial); 2: bad input.
     """
-    from pathlib import Path
-
-    from .atomic import write_all
     from .compensate.job import copies, run_all
     from .compensate.report import summary_lines
     try:
@@ -197,11 +206,7 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
         click.echo("rapidcomp: some targets cannot be compensated; nothing written "
                    "(--allow-partial writes the rest and lists these)", err=True)
         sys.exit(EXIT_PARTIAL)
-    try:
-        write_all([(Path(path), data) for path, data in files])
-    except OSError as exc:
-        _fail(RapidcompError(f"{exc.filename or 'output'}: cannot write: "
-                             f"{exc.strerror or exc}; nothing written"))
+    _write(files)
     if not quiet:
         for o in outcomes:
             shown = [p for p, _ in o.files if not o.spec.source.is_folder
@@ -300,10 +305,7 @@ def _campaign_options(f):
 
 
 def _write_outcome(outcome, quiet: bool) -> None:
-    from pathlib import Path
-
-    from .atomic import write_all
-    write_all([(Path(p), data) for p, data in outcome.files])
+    _write(outcome.files)
     if not quiet:
         for line in outcome.summary:
             click.echo(line)

@@ -11,9 +11,28 @@ import io
 from .errors import InputError
 
 
+def _delimiter(text: str) -> str:
+    """',' unless the header line is split by ';' (a spreadsheet in a
+    locale with decimal commas) or by tabs."""
+    for line in text.splitlines():
+        if line.strip() and not line.lstrip().startswith("#"):
+            if ";" in line and "," not in line.split(";", 1)[0]:
+                return ";"
+            if "\t" in line and "," not in line:
+                return "\t"
+            return ","
+    return ","
+
+
 def header_and_rows(text: str, source: str, required, what: str = "file"):
-    """(header names lower-cased, [(line, row), ...] after the header)."""
-    rows = list(csv.reader(io.StringIO(text)))
+    """(header names lower-cased, [(line, row), ...] after the header).
+
+    A file saved by a spreadsheet with ';' between cells and decimal commas
+    (1,5 for 1.5) is read as such: the commas become points."""
+    delimiter = _delimiter(text)
+    rows = list(csv.reader(io.StringIO(text), delimiter=delimiter))
+    if delimiter == ";":
+        rows = [[c.replace(",", ".") for c in r] for r in rows]
     numbered = [(i + 1, r) for i, r in enumerate(rows)
                 if r and any(c.strip() for c in r) and not r[0].strip().startswith("#")]
     if not numbered:
@@ -22,6 +41,7 @@ def header_and_rows(text: str, source: str, required, what: str = "file"):
     header = [h.strip().lower() for h in header]
     missing = [c for c in required if c not in header]
     if missing:
-        raise InputError(source, f"missing column(s) {', '.join(missing)}; expected the header "
-                         + ",".join(required), head_line)
+        found = ", ".join(h for h in header if h) or "nothing"
+        raise InputError(source, f"missing column(s) {', '.join(missing)}; the header names "
+                         f"{found}; expected " + ",".join(required), head_line)
     return header, numbered[1:]

@@ -23,6 +23,10 @@ class InputError(RapidcompError):
         self.source_line = source_line
         super().__init__(self.format())
 
+    def __reduce__(self):
+        # Errors cross process boundaries (fix runs tasks in worker processes).
+        return (type(self), (self.path, self.message, self.line, self.col, self.source_line))
+
     def format(self) -> str:
         where = self.path
         if self.line is not None:
@@ -41,3 +45,19 @@ class InputError(RapidcompError):
 class InternalError(RapidcompError):
     """The output failed its own check (a defect of rapidcomp, not of the
     input); nothing is written."""
+
+
+class Errors(RapidcompError):
+    """Several bad inputs at once (every program of a multi-program run
+    that failed), reported together."""
+
+    def __init__(self, errors: list[RapidcompError]):
+        self.errors = errors
+        super().__init__(self.format())
+
+    def __reduce__(self):
+        return (type(self), (self.errors,))
+
+    def format(self) -> str:
+        return "\n".join(e.format() if isinstance(e, InputError) else f"rapidcomp: error: {e}"
+                         for e in self.errors)

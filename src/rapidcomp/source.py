@@ -25,7 +25,7 @@ class SourceText:
 
     display_path: str
     text: str
-    encoding: str  # "utf-8" (BOM kept as U+FEFF in text), "cp1252" or "latin-1"
+    encoding: str  # "utf-8", "utf-16-le/-be" (BOM kept as U+FEFF in text), "cp1252", "latin-1"
     line_starts: tuple[int, ...] = field(repr=False, compare=False)
 
     @classmethod
@@ -73,7 +73,17 @@ class SourceText:
 
 
 def decode_bytes(data: bytes, display_path: str) -> SourceText:
-    """Decode a module: UTF-8 first, then cp1252, then latin-1 (reported)."""
+    """Decode a module: UTF-16 with its byte order mark (RobotStudio can
+    save modules so), else UTF-8 first, then cp1252, then latin-1
+    (reported)."""
+    for bom, encoding in ((b"\xff\xfe", "utf-16-le"), (b"\xfe\xff", "utf-16-be")):
+        if data.startswith(bom):
+            try:
+                text = data.decode(encoding)   # the BOM stays in the text as U+FEFF
+            except UnicodeDecodeError as exc:
+                raise InputError(display_path, f"invalid {encoding.upper()} text at byte "
+                                 f"{exc.start}") from None
+            return SourceText.from_text(text, display_path, encoding)
     bad = next((i for i, b in enumerate(data[:65536]) if b in _BINARY_BYTES), None)
     if bad is not None:
         line = data.count(b"\n", 0, bad) + 1

@@ -8,10 +8,11 @@ Several tasks run in a process pool of two workers (the machine's cores).
 from __future__ import annotations
 
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from ..errors import InputError, RapidcompError
+from ..errors import Errors, InputError, RapidcompError
 from ..progress import Progress
 from ..rapid.task import TaskSource
 from . import report
@@ -142,22 +143,29 @@ def run(spec: JobSpec) -> JobOutcome:
 
 
 def run_all(specs: list[JobSpec], workers: int = 2) -> list[JobOutcome]:
-    """Run jobs (in parallel when there are several); the first bad input
-    raises after all jobs ended."""
+    """Run jobs (in parallel when there are several); after all ended, the
+    bad inputs of every job are raised together."""
     if len(specs) == 1 or workers <= 1:
         return [run(s) for s in specs]
-    with ProcessPoolExecutor(max_workers=min(workers, len(specs))) as pool:
-        futures = [pool.submit(run, s) for s in specs]
-        outcomes = []
-        error = None
-        for f in futures:
-            try:
-                outcomes.append(f.result())
-            except RapidcompError as exc:
-                error = error or exc
-        if error is not None:
-            raise error
-        return outcomes
+    errors: list[RapidcompError] = []
+    outcomes = []
+    try:
+        with ProcessPoolExecutor(max_workers=min(workers, len(specs))) as pool:
+            futures = [pool.submit(run, s) for s in specs]
+            for spec, f in zip(specs, futures):
+                try:
+                    outcomes.append(f.result())
+                except RapidcompError as exc:
+                    errors.append(exc)
+                except BrokenProcessPool:
+                    errors.append(RapidcompError(
+                        f"{spec.source.input}: the worker process compensating it died (out of "
+                        "memory?); nothing written"))
+    except BrokenProcessPool:  # raised again when the pool shuts down
+        pass
+    if errors:
+        raise errors[0] if len(errors) == 1 else Errors(errors)
+    return outcomes
 
 
 def copies(source: TaskSource, output: str, written: set[str]) -> list[tuple[str, bytes]]:
