@@ -11,8 +11,9 @@ from the numbers rounded to float32 as the controller stores them:
 * a robtarget: base_M_flange = base_M_world . uframe . oframe . D . target
   . tframe^-1 (D the active program displacement, in the object frame);
   with configuration supervision on, the solution in the confdata's
-  quadrants (within 0.01 deg) on its cfx branch; with it off, of all the
-  solutions within the joint limits, the one nearest the current joints.
+  quadrants (within 0.01 deg) on its cfx branch; with it off, and for a
+  MoveC circle point, of all the solutions within the joint limits, the
+  one nearest the current joints.
 
 Only the syntax tree and literal decoding of rapidcomp are used (parse.py,
 values.py: tested on their own) and the closed-form IK (checked against
@@ -209,7 +210,10 @@ class Controller:
                 wobj_M_target = self.disp * wobj_M_target
             pose = (self.world_M_base(rt.ext).inverse() * self.frame(mo.wobj, "wobj")
                     * wobj_M_target * self.frame(mo.tool, "tool").inverse())
-            supervised = self.confj if spec.interpolation == "joint" else self.confl
+            # A circle point is passed on the way: the configuration follows
+            # from where the robot is (its confdata is not read).
+            supervised = (self.confj if spec.interpolation == "joint" else self.confl) \
+                and t.role != "cir"
             self.q = self.joints(pose, rt, supervised)
             self.out.append(Executed(where, line, mo.instruction, "rob", self.q.copy(), pose,
                                      self.disp is not None))

@@ -258,22 +258,50 @@ ENDMODULE""")
     assert r.reason.startswith("tool tGun is not declared in the given modules (give the whole task")
 
 
-def test_array_reached_on_two_configurations_is_one_failure_not_a_wrong_value():
+def test_an_element_reached_on_two_configurations_gets_two_values():
+    """p{1} named by a literal index after two different wrist positions
+    (ConfJ off): two solutions, so two jointtargets."""
     t = task(f"""MODULE A
     CONST robtarget p{{2}}:=[{P1_BAD},{P4}];
     CONST jointtarget jA:=[[41.85,44.63,25.88,43.53,-75.61,-13.29],{EXT}];
     CONST jointtarget jB:=[[41.85,44.63,25.88,-136.47,75.61,166.71],{EXT}];
     PROC main()
-        ConfL\\Off;
+        ConfJ\\Off;
         MoveAbsJ jA, v100, fine, tool0;
-        MoveL p{{1}}, v100, fine, tool0;
+        MoveJ p{{1}}, v100, fine, tool0;
         MoveAbsJ jB, v100, fine, tool0;
-        MoveL p{{1}}, v100, fine, tool0;
+        MoveJ p{{1}}, v100, fine, tool0;
     ENDPROC
 ENDMODULE""")
     rows = rows_of(t)
-    assert rows[8].status == rows[10].status == "not compensated"
-    assert "p{1} is reached on different configurations (lines 8, 10)" in rows[8].reason
+    assert rows[8].status == rows[10].status == "compensated"
+    assert rows[8].action == "MoveJ -> MoveAbsJ jt_p_1" and rows[10].action == "MoveJ -> MoveAbsJ jt_p_1_2"
+    assert abs(rows[8].nominal_deg[3] - rows[10].nominal_deg[3]) == pytest.approx(180, abs=0.1)
+
+
+def test_a_walked_array_element_on_two_configurations_is_one_failure_not_a_wrong_value():
+    """The same FOR loop walks p after two different wrist positions: one
+    jointtarget array cannot hold both solutions of its first element."""
+    t = task(f"""MODULE A
+    CONST robtarget p{{2}}:=[{P1_BAD},{P1_BAD}];
+    CONST jointtarget jA:=[[41.85,44.63,25.88,43.53,-75.61,-13.29],{EXT}];
+    CONST jointtarget jB:=[[41.85,44.63,25.88,-136.47,75.61,166.71],{EXT}];
+    PROC main()
+        ConfJ\\Off;
+        MoveAbsJ jA, v100, fine, tool0;
+        Walk;
+        MoveAbsJ jB, v100, fine, tool0;
+        Walk;
+    ENDPROC
+    PROC Walk()
+        FOR i FROM 1 TO 2 DO
+            MoveJ p{{i}}, v100, fine, tool0;
+        ENDFOR
+    ENDPROC
+ENDMODULE""")
+    rows = [r for r in fix(t, SOLVER, "absj").rows if r.instruction == "MoveJ"]
+    assert {r.status for r in rows} == {"not compensated"}
+    assert "different configurations" in rows[0].reason or "depends on which move" in rows[0].reason
 
 
 def test_check_is_fixs_plan():

@@ -167,7 +167,8 @@ def test_module_alone_names_the_missing_tool_and_the_folder_compensates(tmp_path
     # declarations in the module that uses them.
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.md", "m.mod"]
     text = (tmp_path / "m.mod").read_text()
-    assert "LOCAL CONST jointtarget jt_pPlace{6}" in text
+    assert "LOCAL CONST jointtarget jt_pPlace_offs{6}" in text   # MoveJ -> MoveAbsJ
+    assert "LOCAL CONST robtarget pPlace_c{6}" in text           # MoveL stays straight
     parse_file(tmp_path / "m.mod")
 
 
@@ -264,7 +265,7 @@ def test_backup_with_a_track(tmp_path):
     assert len(rows) == 12  # 10 stations, MoveAbsJ jStart twice
     # MoveAbsJ keeps the track value of the robtarget it replaces.
     text = (out / "RAPID/TASK1/PROGMOD/Track.mod").read_text()
-    assert "jt_pSt5_2 := [[" in text and "],[1600,9E+09" in text
+    assert "jt_pSt5_1 := [[" in text and "],[1600,9E+09" in text
 
 
 def test_backup_task_selection(tmp_path):

@@ -109,8 +109,26 @@ def test_robodk_comma_before_optional_argument(fixtures_dir):
 
 
 def test_non_literal_inline_target_is_reported_not_guessed():
-    pf = parse_text("MODULE m\nPROC p()\nMoveL [[x,0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tool0;\n"
-                    "MoveL [[0,0,0],[1,0,0,0],[0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tool0;\nENDPROC\nENDMODULE\n")
-    a, b = pf.module.motions
+    pf = parse_text("MODULE m\nPROC p()\nMoveL [[x,0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tool0;\nENDPROC\nENDMODULE\n")
+    (a,) = pf.module.motions
     assert a.targets[0].value is None and "inline robtarget.1.1 is not a literal" in a.targets[0].issue
-    assert b.targets[0].value is None and "3 components, expected 4" in b.targets[0].issue
+
+
+@pytest.mark.parametrize("value, col, message", [
+    ("[[0,0,0],[1,0,0,0],[0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", 26,
+     "inline robtarget.3 has 3 components, expected 4 (the robtarget of MoveL)"),
+    ("[[0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", 8,
+     "inline robtarget.1 has 2 components, expected 3"),
+    ("[[0,0,0],[1,0,0,0],[0,0,0,\"a\"],[9E9,9E9,9E9,9E9,9E9,9E9]]", 33,
+     "inline robtarget.3.4 is not a number"),
+    ("[[0,0,1E999],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", 13,
+     "component 1E999 is beyond what a RAPID num holds"),
+    ("[[0,0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E40]]", 57,
+     "component 9E40 is beyond what a RAPID num holds"),
+])
+def test_a_value_no_controller_loads_is_bad_input_at_its_place(value, col, message):
+    from rapidcomp.errors import InputError
+    with pytest.raises(InputError) as e:
+        parse_text(f"MODULE m\nPROC p()\nMoveL {value}, v100, fine, tool0;\nENDPROC\nENDMODULE\n",
+                   "m.mod")
+    assert (e.value.line, e.value.col) == (3, col) and message in e.value.message

@@ -155,10 +155,12 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, st
               help="Output module (default PROGRAM_comp.mod beside the input) or, for a task "
                    "folder, program file or backup, the output folder (default PROGRAM_comp "
                    "beside it); a folder when several programs are given.")
-@click.option("--emit", type=click.Choice(["absj", "robtarget"]), default="absj",
+@click.option("--emit", type=click.Choice(["auto", "absj", "robtarget"]), default="auto",
               show_default=True,
-              help="absj: MoveJ/MoveL become MoveAbsJ on new jointtargets; robtarget: every "
-                   "instruction keeps its kind, robtarget values are rewritten.")
+              help="auto: MoveJ becomes MoveAbsJ on a new jointtarget, MoveL and the rest keep "
+                   "their kind (straight lines stay straight) with compensated robtargets; "
+                   "absj: MoveL becomes MoveAbsJ too; robtarget: every instruction keeps its "
+                   "kind.")
 @click.option("--report", default=None, type=click.Path(dir_okay=False),
               help="Markdown review report (default: the output's name with .md).")
 @click.option("--no-report", is_flag=True, help="Write no Markdown report.")

@@ -7,11 +7,14 @@ deformed robot's) -> place (group uses by where their value is written)
 -> edit (span edits per module) -> verify (parse the output again and
 evaluate every written value with float32 numbers) -> rows and report.
 
-Modes. absj: MoveJ/MoveL become MoveAbsJ on a new jointtarget (except where
-program displacement may be active, which MoveAbsJ ignores); other
-instructions get compensated robtargets. robtarget: every instruction keeps
-its kind; robtargets become the pose the ideal controller must be given so
-that its own IK lands on the compensated joints.
+Modes. auto (default): MoveJ becomes MoveAbsJ on a new jointtarget, every
+other instruction keeps its kind (a MoveL keeps its straight line) and gets
+a compensated robtarget. absj: MoveL becomes MoveAbsJ too. robtarget:
+every instruction keeps its kind. A compensated robtarget is the pose the
+ideal controller must be given so that its own IK lands on the compensated
+joints. Never MoveAbsJ where program displacement may be active (MoveAbsJ
+ignores it), where the controller may choose the configuration otherwise
+than assumed, or for PERS targets (place.mode_of).
 """
 
 from __future__ import annotations
@@ -66,7 +69,7 @@ class FixResult:
         return out
 
 
-def fix(task: Task, solver: Solver, mode: str = "absj", timings: dict | None = None,
+def fix(task: Task, solver: Solver, mode: str = "auto", timings: dict | None = None,
         track=(), output_names: dict | None = None, start=None) -> FixResult:
     """Compensate the modules of `task` (its context modules supply data
     only). Targets that cannot be compensated keep their text and are

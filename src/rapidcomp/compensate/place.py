@@ -20,17 +20,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..kinematics.ik import Solver
+from ..kinematics.ik import Solver, Warn
 from ..rapid.model import Declaration, Module
 from .plan import Plan
 from .solve import SAME_DEG, Solved
 from .targets import Source, TargetUse, compose_pose, invert_pose
 
-MODES = ("absj", "robtarget")
+MODES = ("auto", "absj", "robtarget")
 # Optional arguments MoveJ/MoveL share with MoveAbsJ (RAPID Instructions
 # manual); anything else (\Corr) keeps the instruction as it is.
 ABSJ_OPTIONALS = frozenset({"conc", "id", "v", "t", "z", "inpos", "wobj", "tload"})
 TO_ABSJ = frozenset({"movej", "movel"})
+# Which instructions each mode turns into MoveAbsJ.
+ABSJ_FROM = {"auto": frozenset({"movej"}), "absj": TO_ABSJ, "robtarget": frozenset()}
 
 
 @dataclass(eq=False)
@@ -49,6 +51,7 @@ class Group:
     names: dict = field(default_factory=dict)     # element (or "array") -> new name
     local: bool = True               # a new declaration is LOCAL to its module
     slots: dict = field(default_factory=dict)     # unreached element -> (joints, what)
+    rows_seen: dict = field(default_factory=dict)  # element -> first solved row (grouping)
 
     @property
     def decl(self) -> Declaration | None:
@@ -61,17 +64,20 @@ class Group:
 
 def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved) -> str:
     """absj: the use becomes a MoveAbsJ; rob: a robtarget is written; joint:
-    a jointtarget of a MoveAbsJ is written. A move that program
-    displacement may shift, or whose configuration the controller may
-    choose otherwise than assumed, stays a robtarget move: MoveAbsJ would
-    fix both."""
+    a jointtarget of a MoveAbsJ is written. auto converts MoveJ only (a
+    MoveL keeps its straight line), absj MoveJ and MoveL. A move that
+    program displacement may shift, whose configuration the controller may
+    choose otherwise than assumed, or whose target is PERS data (changed
+    at run time by ModPos or another task) stays a robtarget move:
+    MoveAbsJ would fix all three."""
     if u.kind == "jointtarget":
         return "joint"
     m = u.motion
-    if (mode == "absj" and m.spec.name.lower() in TO_ABSJ
-            and all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional)
+    name = m.spec.name.lower()
+    if (name in (ABSJ_FROM[mode]) and all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional)
             and not plan.may_be_displaced(u)
-            and solved.picks[solved.row[u.key]].caution is None):
+            and solved.picks[solved.row[u.key]].caution is None
+            and not (u.source.decl is not None and u.source.decl.storage == "PERS")):
         return "absj"
     return "rob"
 
@@ -98,21 +104,19 @@ def element_label(g: Group, k) -> str:
 
 
 def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
-    if mode not in MODES:
-        raise ValueError(f"mode must be one of {MODES}")
+    """Uses that share one written value. FOR-walked array uses form one
+    group per array (one value per element); any other use joins it when
+    its solution there is the same, else groups by its own solution (a
+    target reached on two solutions needs two values)."""
     file_index = {id(pf): i for i, pf in enumerate(plan.files)}
     by_key: dict = {}
     out: list[Group] = []
-    for u in solved.uses:
+    loop_first = sorted(solved.uses, key=lambda u: not u.source.by_loop)
+    for u in loop_first:
         src = u.source
         m = mode_of(u, mode, plan, solved)
         row = solved.row[u.key]
         q = solved.nominal.q_deg[row]
-        # A target reached on two solutions needs two values: its solution
-        # is part of the key. Not for arrays: one array holds one value per
-        # element (a conflict there is reported by _elements).
-        sig = (None if m == "joint" or src.element is not None or np.isnan(q).any()
-               else tuple(np.round(q, 3)))
         if src.decl is not None and file_index[id(src.home)] < plan.n_written:
             home = (file_index[id(src.home)], src.home_module)
         else:
@@ -120,16 +124,31 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
         where = (("decl", id(src.decl)) if src.decl is not None
                  else ("inline", u.key[0], src.ref.span))
         context = (None, None) if m == "joint" else (u.tool[0], u.wobj[0])
-        key = (m, where, _call_key(src), *context, home[0], id(home[1]), sig)
+        base = (m, where, _call_key(src), *context, home[0], id(home[1]))
+        if src.by_loop or m == "joint":
+            key = base + (None,)
+        else:
+            array = by_key.get(base + (None,))
+            if array is not None and src.element in array.rows_seen and _same(
+                    solved, array.rows_seen[src.element], row):
+                key = base + (None,)
+            else:
+                key = base + (None if np.isnan(q).any() else tuple(np.round(q, 3)),)
         g = by_key.get(key)
         if g is None:
             g = by_key[key] = Group(m, src, u.tool, u.wobj, home)
             out.append(g)
         g.uses.append(u)
+        g.rows_seen.setdefault(src.element, row)
     for g in out:
         _elements(g, solved)
         g.local = all(u.module is g.home_module for u in g.uses)
     return out
+
+
+def _same(solved: Solved, a: int, b: int) -> bool:
+    qa, qb = solved.nominal.q_deg[a], solved.nominal.q_deg[b]
+    return not (np.isnan(qa).any() or np.isnan(qb).any()) and np.linalg.norm(qa - qb) <= SAME_DEG
 
 
 def _elements(g: Group, solved: Solved) -> None:
@@ -142,12 +161,12 @@ def _elements(g: Group, solved: Solved) -> None:
         if first is None:
             seen[k] = row
             continue
-        a, b = solved.nominal.q_deg[first], solved.nominal.q_deg[row]
-        if (g.failure is None and not (np.isnan(a).any() or np.isnan(b).any())
-                and np.linalg.norm(a - b) > SAME_DEG):
+        if g.failure is None and solved.ok(first) and solved.ok(row) and not _same(
+                solved, first, row):
             lines = sorted({x.line for x in g.uses if x.source.element == k})
             g.failure = (f"{element_label(g, k)} is reached on different configurations "
-                         f"(lines {', '.join(map(str, lines))}); one value cannot serve both", k)
+                         f"(lines {', '.join(map(str, lines))}); one array element cannot hold "
+                         "both values", k)
     g.elements = sorted(seen) if g.array else list(seen)
     g.rows = seen
     if g.failure is None:
@@ -156,12 +175,24 @@ def _elements(g: Group, solved: Solved) -> None:
             if not solved.ok(i):
                 g.failure = (solved.reason(i), k)
                 break
+            if g.mode == "rob" and solved.deformed.warnings[i] & Warn.ORIENTATION_LEFT:
+                g.failure = (
+                    f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
+                    "compensation needs a J4/J6 split a robtarget cannot carry (the "
+                    "controller's IK chooses the split itself): a MoveAbsJ can "
+                    "(--emit absj for a MoveL)", k)
+                break
 
 
 def place(plan: Plan, gs: list[Group]) -> None:
+    """Inline values are edited inline; MoveAbsJ targets are new
+    declarations; a declaration is edited in place by the group (the one
+    with most uses) when every reference to it belongs to its groups and
+    none failed (a failed group keeps reading the old value); the other
+    groups get new declarations. A PERS target is shared data: a copy
+    would not follow changes to it, which the report says."""
     refs: dict[str, set] = {}
     decl_count: dict[str, int] = {}
-    file_index = {id(pf): i for i, pf in enumerate(plan.files)}
     for fi, pf in enumerate(plan.files):
         for m in pf.modules:
             for name, rs in plan.resolver.usages[id(m)].refs.items():
@@ -171,20 +202,33 @@ def place(plan: Plan, gs: list[Group]) -> None:
     consumed = {(u.key[0], u.source.ref.span)
                 for g in gs if g.mode == "absj" and g.failure is None and g.decl is not None
                 for u in g.uses}
+    by_decl: dict[int, list[Group]] = {}
+    for g in gs:
+        if g.decl is not None:
+            by_decl.setdefault(id(g.decl), []).append(g)
     for g in gs:
         if g.failure is not None:
             continue
         if g.decl is None:
             g.placement = "inline"
-            continue
-        if g.mode == "absj":
+        elif g.mode == "absj":
             g.placement = "new"
+    file_index = {id(pf): i for i, pf in enumerate(plan.files)}
+    for decl_groups in by_decl.values():
+        writable = [g for g in decl_groups if g.failure is None and g.mode != "absj"]
+        if not writable:
             continue
-        name = g.decl.name.lower()
-        mine = {(u.key[0], u.source.ref.span) for u in g.uses}
-        exclusive = (file_index[id(g.src.home)] < plan.n_written and decl_count.get(name) == 1
+        d = writable[0].decl
+        name = d.name.lower()
+        mine = {(u.key[0], u.source.ref.span) for g in decl_groups if g.mode != "absj"
+                for u in g.uses}
+        exclusive = (file_index[id(writable[0].src.home)] < plan.n_written
+                     and decl_count.get(name) == 1
+                     and all(g.failure is None for g in decl_groups)
                      and refs.get(name, set()) - consumed == mine)
-        g.placement = "in place" if exclusive else "new"
+        writable.sort(key=lambda g: -len(g.uses))
+        for n, g in enumerate(writable):
+            g.placement = "in place" if exclusive and n == 0 else "new"
 
 
 def fill_slots(plan: Plan, solver: Solver, gs: list[Group]) -> None:

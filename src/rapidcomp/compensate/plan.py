@@ -13,10 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..rapid.model import ParsedFile
-from .flow import BOTH, OFF, ON, Flow, State, analyse
+from .flow import ON, UNKNOWN, Flow, State, analyse
 from .targets import EXTAX_UNUSED, Resolver, TargetUse
-
-UNKNOWN = State(BOTH, BOTH, frozenset((OFF, ON)), None)
 
 
 @dataclass(frozen=True)
@@ -47,7 +45,7 @@ class Plan:
                     self.uses.extend(self.resolver.resolve(pf, m, motion, (fi, mi)))
                     mi += 1
         self.by_key = {u.key: u for u in self.uses}
-        self.flow: Flow = analyse(self.files, self.n_written, self.resolver)
+        self.flow: Flow = analyse(self.files, self.n_written, self.resolver, bool(track))
 
     def state(self, u: TargetUse) -> State:
         """The motion state before a use (unknown where the flow never

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..kinematics.frames import DEG
 from ..kinematics.ik import WARN_TEXT, Warn
-from .place import ABSJ_OPTIONALS, TO_ABSJ, Group, element_label
+from .place import ABSJ_FROM, ABSJ_OPTIONALS, Group, element_label
 from .plan import Plan
 from .solve import Solved
 from .targets import EXTAX_UNUSED, TargetUse
@@ -108,12 +108,17 @@ def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, 
     if g is not None:
         if g.mode == "absj" and u.motion.spec.name == "MoveL":
             warnings = warnings + (LINEAR_WARNING,)
-        elif g.mode == "rob" and u.motion.spec.name.lower() in TO_ABSJ and mode == "absj":
+        elif g.mode == "rob" and mode is not None and u.motion.spec.name.lower() in ABSJ_FROM[mode]:
             extra = ", ".join("\\" + a.name for a in u.motion.optional
                               if a.name.lower() not in ABSJ_OPTIONALS)
             if extra:
                 warnings = warnings + (f"kept as {u.motion.instruction}: {extra} has no "
                                        "MoveAbsJ equivalent",)
+        if g.placement == "new" and g.decl is not None and g.decl.storage == "PERS":
+            warnings = warnings + (f"{g.decl.name} is PERS: this move now reads a CONST "
+                                   "copy, which changes to it at run time (ModPos, another "
+                                   "task) no longer reach",)
+    warnings = warnings + u.notes
     if pick.caution is not None:
         warnings = warnings + (pick.caution,)
     if not np.isnan(solved.displacement_um_per_mm[i]):

@@ -74,17 +74,19 @@ def _conf_text(c) -> str:
 
 class Pick(NamedTuple):
     """A nominal solution and how it was chosen. kind: "joint" (as
-    written), "conf" (by confdata), "closest" (closest to the joints of row
-    `pred`); failure: why there is none."""
+    written), "conf" (by confdata), "closest" (closest to the joints
+    `prev`); failure: why there is none."""
 
     q: np.ndarray | None
     rule: str | None
     failure: str | None
     kind: str | None = None
-    pred: int | None = None   # "closest": the row it is closest to (None: --start)
-    # The controller might choose otherwise (supervision not known): the
-    # move stays a robtarget move, so its configuration stays the
-    # controller's choice, and the report says what was assumed.
+    prev: np.ndarray | None = None   # "closest": the joints it is closest to
+    line: int | None = None          # "closest": the line of that move (None: --start)
+    # The controller might choose otherwise than assumed (supervision or
+    # position not known): the move stays a robtarget move, so its
+    # configuration stays the controller's choice, and the report says what
+    # was assumed.
     caution: str | None = None
 
 
@@ -92,8 +94,24 @@ def _fail(why: str) -> Pick:
     return Pick(None, None, why)
 
 
+def _distinct(picks: list[Pick]) -> list[Pick]:
+    out: list[Pick] = []
+    for p in picks:
+        if not any(np.linalg.norm(p.q - o.q) <= SAME_DEG for o in out):
+            out.append(p)
+    return out
+
+
 class _Chooser:
-    """The nominal solution of each robtarget use, in flow order."""
+    """The nominal solutions of each robtarget use, in flow order.
+
+    A use reached from different places may be reached on different
+    solutions: each use has the set of solutions it can take (solutions of
+    its predecessors propagate), and one representative is compensated.
+    Solutions that differ only by whole turns of J1/J4/J6 need the same
+    correction; the move then stays a robtarget move (the controller keeps
+    each run's turn). Other differences: not compensated, unless the
+    confdata decides where supervision may be on (then with a caution)."""
 
     def __init__(self, plan: Plan, solver: Solver, uses: list[TargetUse], rows: dict,
                  start: np.ndarray | None = None):
@@ -112,14 +130,18 @@ class _Chooser:
         n = len(uses)
         self.q = np.full((n, 6), np.nan)
         self.picks: list = [None] * n
+        self.sols: list = [[] for _ in range(n)]
         for i, u in enumerate(uses):
             if u.kind == "jointtarget":
                 self.q[i] = u.joints_deg
                 self.picks[i] = Pick(self.q[i], "as written (MoveAbsJ)", None, "joint")
+                self.sols[i] = [self.picks[i]]
         first = next((u for u in plan.order() if u.kind == "jointtarget" and u.reason is None),
                      None)
         self.first_joint = self.rows[first.key] if first is not None else None
         self.order = [self.rows[u.key] for u in plan.order() if u.key in self.rows]
+        scale = (solver.joint_map.scale if solver.joint_map is not None else np.zeros(6))
+        self.scaled = [j for j in (0, 3, 5) if scale[j] != 0]
         self._speculate()
 
     # ------------------------------------------------------------ speed
@@ -150,7 +172,7 @@ class _Chooser:
             if u.kind != "robtarget":
                 continue
             st = self.plan.state(u)
-            if OFF not in st.supervision(u.motion.spec.interpolation):
+            if OFF not in st.supervision(u.motion.spec.interpolation) and u.role != "cir":
                 continue
             if st.last is not None and len(st.last) == 1:
                 (pk,) = st.last
@@ -163,14 +185,14 @@ class _Chooser:
             if i >= 0 and np.isnan(self.spec[i]).any() and run and j == run[-1]:
                 run.append(i)
                 continue
-            self._follow(run)
+            self._follow_run(run)
             run = [i] if i >= 0 and np.isnan(self.spec[i]).any() and j >= 0 else []
         sel = [i for i in need if self.pred1[i] >= 0 and not np.isnan(self.spec[self.pred1[i]]).any()]
         if sel:
             ks = [self.rob_row[i] for i in sel]
             self.off_spec[sel] = self.solver.closest(self.cands[ks], self.spec[self.pred1[sel]])
 
-    def _follow(self, run: list[int]) -> None:
+    def _follow_run(self, run: list[int]) -> None:
         if not run or np.isnan(self.spec[self.pred1[run[0]]]).any():
             return
         k0 = self.rob_row[run[0]]
@@ -191,104 +213,163 @@ class _Chooser:
             return Pick(b.q_deg[k], rule, None, "conf")
         return Pick(None, rule, f"nominal: {b.reason(k)}")
 
-    def _closest_to(self, i: int, j: int, rule: str) -> Pick:
-        if self.pred1[i] == j and np.array_equal(self.q[j], self.spec[j]):
+    def _closest_to(self, i: int, prev: np.ndarray, line: int | None, rule: str,
+                    j: int = -1) -> Pick:
+        if j >= 0 and self.pred1[i] == j and np.array_equal(prev, self.spec[j]):
             q = self.off_spec[i]      # computed in the batch from these very joints
         else:
             k = self.rob_row[i]
-            q = self.solver.closest(self.cands[k][None], self.q[j][None])[0]
+            q = self.solver.closest(self.cands[k][None], prev[None])[0]
         if np.isnan(q).any():
             return _fail("nominal: no solution within the joint limits")
-        return Pick(q, rule, None, "closest", j)
+        return Pick(q, rule, None, "closest", prev, line)
 
     def _unknown_start(self, i: int, flag: str) -> Pick:
-        """The first move after an unknown position, supervision off."""
+        """The first move after an unknown position, supervision off: the
+        solution closest to --start when it is given; else its confdata
+        where that names a valid solution, else the solution closest to the
+        program's first jointtarget, both assumed (with a caution)."""
         u = self.uses[i]
         c = _conf_text(u.conf)
+        if self.start is not None:
+            return self._closest_to(i, self.start, None, f"closest to --start ({flag}\\Off)")
+        assumed = (f"{flag}\\Off and the robot's position before this move is not known here: "
+                   "{what} is assumed (the controller takes the solution closest to where the "
+                   "robot is); kept a robtarget move")
         pick = self._by_conf(i, f"confdata; position before unknown ({flag}\\Off)")
         if pick.q is not None:
-            return pick
-        if self.start is not None:
-            k = self.rob_row[i]
-            q = self.solver.closest(self.cands[k][None], self.start[None])[0]
-            if np.isnan(q).any():
-                return _fail("nominal: no solution within the joint limits")
-            return Pick(q, f"closest to --start: position before unknown, confdata names no "
-                           f"solution ({flag}\\Off)", None, "closest", None)
+            return pick._replace(caution=assumed.format(what="the solution of its confdata"))
         j = self.first_joint
         if j is None:
             return _fail(f"{flag}\\Off and the position before it is unknown: its confdata {c} "
                          f"names no solution ({pick.failure}) and the program has no "
                          "jointtarget to start from (say where the robot starts with --start)")
         ju = self.uses[j]
-        return self._closest_to(i, j, f"closest to {ju.label} (line {ju.line}), the first "
-                                      "jointtarget: position before unknown, confdata names no "
-                                      f"solution ({flag}\\Off)")
+        return self._closest_to(
+            i, self.q[j], ju.line, f"closest to {ju.label} (line {ju.line}), the first "
+            f"jointtarget: position before unknown ({flag}\\Off)")._replace(
+            caution=assumed.format(what=f"the solution closest to {ju.label}"))
 
-    def _off(self, i: int, preds, flag: str) -> Pick:
-        """The pick with supervision off."""
+    def _follow(self, i: int, preds, flag: str) -> tuple[list[Pick], str | None]:
+        """The solutions closest to every solution of every move that may
+        run before (supervision off, and every circle point)."""
         if preds is None:
-            return self._unknown_start(i, flag)
-        picks = []
+            p = self._unknown_start(i, flag)
+            return ([p], None) if p.q is not None else ([], p.failure)
+        out = []
         unknown = False
         for pk in sorted(preds):
             j = self.rows.get(pk)
-            if j is None or np.isnan(self.q[j]).any():
+            if j is None or not self.sols[j]:
                 unknown = True        # not resolved, failed, or not chosen yet
                 continue
-            picks.append(self._closest_to(i, j, ""))
+            for s in self.sols[j]:
+                p = self._closest_to(i, s.q, self.uses[j].line, "", j)
+                if p.q is None:
+                    return [], p.failure
+                if s.caution is not None:
+                    p = p._replace(caution=f"follows line {self.uses[j].line}, whose "
+                                           "configuration is assumed: kept a robtarget move")
+                out.append(p)
         if unknown:
-            start = self._unknown_start(i, flag)
-            if not picks:
-                return start
-            picks.append(start)
-        fails = [p for p in picks if p.q is None]
-        if fails:
-            return fails[0]
-        lines = sorted({self.uses[p.pred].line for p in picks if p.kind == "closest"})
-        if any(np.linalg.norm(p.q - picks[0].q) > SAME_DEG for p in picks[1:]):
-            return _fail(f"{flag}\\Off: the controller takes the solution closest to where the "
-                         "robot is, and that depends on which move ran before it (lines "
-                         f"{line_ranges(lines)})")
-        where = f"line {line_ranges(lines)}" + (" or an unknown start" if unknown else "")
-        return picks[0]._replace(rule=f"closest to {where} ({flag}\\Off)")
+            p = self._unknown_start(i, flag)
+            if p.q is None:
+                return [], p.failure
+            out.append(p)
+        return _distinct(out), None
 
-    def choose(self, i: int) -> Pick:
+    def _turns_only(self, sols: list[Pick]) -> bool:
+        """Solutions on one configuration, J1/J4/J6 differing by whole turns
+        only (the same correction, unless the profile scales those joints)."""
+        a = sols[0].q
+        for s in sols[1:]:
+            d = s.q - a
+            if np.any(np.abs(d[[1, 2, 4]]) > SAME_DEG):
+                return False
+            turns = d[[0, 3, 5]] / 360.0
+            if np.any(np.abs(turns - np.round(turns)) > SAME_DEG):
+                return False
+            if any(abs(d[j]) > SAME_DEG for j in self.scaled):
+                return False
+        return True
+
+    def _one(self, sols: list[Pick], rule: str, flag: str) -> tuple[list[Pick], Pick]:
+        """The representative of a use's solutions (closest rule)."""
+        lines = sorted({p.line for p in sols if p.line is not None})
+        where = line_ranges(lines) if lines else ""
+        first = sols[0]
+        if len(sols) == 1:
+            if first.rule:
+                return sols, first
+            return sols, first._replace(rule=rule.format(where=f"line {where}"))
+        if self._turns_only(sols):
+            turns = ", ".join("J" + str(j + 1) for j in (0, 3, 5)
+                              if np.ptp([p.q[j] for p in sols]) > SAME_DEG)
+            rep = first._replace(rule=rule.format(where=f"lines {where}"), caution=(
+                f"reached with {turns} whole turns apart in different runs (after lines "
+                f"{where}): kept a robtarget move so the controller keeps each run's turn"))
+            return sols, rep
+        # Not compensated; its solutions still tell the moves after it where
+        # the robot may be.
+        return sols, _fail(f"{flag}\\Off: the controller takes the solution closest to where "
+                           "the robot is, and that depends on which move ran before it (lines "
+                           f"{where})")
+
+    def choose(self, i: int) -> tuple[list[Pick], Pick]:
+        """(the solutions a use may take, the one compensated)."""
         u = self.uses[i]
         flag = _flag(u)
         st = self.plan.state(u)
+        if u.role == "cir":
+            # The circle point is passed on the way from the previous move:
+            # its configuration follows from there, its confdata is not read.
+            sols, why = self._follow(i, st.last, flag)
+            if not sols:
+                return [], _fail(why)
+            return self._one(sols, "circle point: closest to {where}", flag)
         sup = st.supervision(u.motion.spec.interpolation)
         c = _conf_text(u.conf)
         if OFF not in sup:
-            return self._by_conf(i, f"confdata ({flag}\\On)")
-        off = self._off(i, st.last, flag)
+            p = self._by_conf(i, f"confdata ({flag}\\On)")
+            return ([p] if p.q is not None else []), p
+        off, off_fail = self._follow(i, st.last, flag)
         if ON not in sup:
-            return off
+            if not off:
+                return [], _fail(off_fail)
+            return self._one(off, f"closest to {{where}} ({flag}\\Off)", flag)
         on = self._by_conf(i, f"confdata ({flag} on or off: the same solution)")
         if on.q is not None:
-            if off.q is not None and np.linalg.norm(on.q - off.q) <= SAME_DEG:
-                return on
-            other = ("" if off.q is None else " (J" + ", J".join(
-                f"{j + 1} {off.q[j]:.1f}" for j in range(6)) + ")")
-            return on._replace(
+            sols = _distinct([on] + off)
+            if len(sols) == 1:
+                return sols, on
+            if self._turns_only(sols):
+                return sols, on._replace(caution=(
+                    f"{flag} may be on or off here; the solutions it may take differ by whole "
+                    "turns only: kept a robtarget move so the controller keeps each run's turn"))
+            other = next((p.q for p in off if np.linalg.norm(p.q - on.q) > SAME_DEG), None)
+            other = "" if other is None else " (J" + ", J".join(
+                f"{j + 1} {other[j]:.1f}" for j in range(6)) + ")"
+            return sols, on._replace(
                 rule=f"confdata ({flag} may be on or off here)",
                 caution=(f"{flag} may be on or off here (not known statically): compensated on "
                          "the solution of the programmed confdata and kept a robtarget move; if "
                          f"{flag} is off when it runs, the controller takes the solution closest "
                          f"to the previous position{other}, for which this correction is not "
                          "made"))
-        if off.q is not None:
-            return off._replace(rule=f"{off.rule}; its confdata names no solution, so {flag} "
-                                     "is off here")
-        return _fail(f"{flag} may be on or off here (not known statically): on, the confdata "
-                     f"{c} names no solution ({on.failure}); off, {off.failure}")
+        if off:
+            sols, rep = self._one(off, f"closest to {{where}} ({flag}\\Off)", flag)
+            if rep.q is None:
+                return sols, rep
+            return sols, rep._replace(rule=f"{rep.rule}; its confdata names no solution, so "
+                                           f"{flag} is off here")
+        return [], _fail(f"{flag} may be on or off here (not known statically): on, the "
+                         f"confdata {c} names no solution ({on.failure}); off, {off_fail}")
 
     def run(self) -> None:
-        order = self.order
         done = set()
         pending = []
         succ: dict[int, list[int]] = {}
-        for i in order:
+        for i in self.order:
             u = self.uses[i]
             if u.kind != "robtarget":
                 done.add(i)
@@ -303,24 +384,31 @@ class _Chooser:
             done.add(i)
         # Loops: a move whose predecessor comes later in the flow (the last
         # move of a loop body before its first) is chosen again once that
-        # one is known, and the change propagates.
+        # one is known, and a change propagates.
         updates: dict[int, int] = {}
         work = list(dict.fromkeys(pending))
         while work:
             i = work.pop(0)
-            before = self.q[i].copy()
+            before = [p.q for p in self.sols[i]], self.q[i].copy()
             self._set(i)
-            if not np.allclose(before, self.q[i], atol=SAME_DEG, equal_nan=True):
+            after = [p.q for p in self.sols[i]]
+            if len(after) != len(before[0]) or any(
+                    np.linalg.norm(a - b) > SAME_DEG for a, b in zip(after, before[0])) or not \
+                    np.allclose(before[1], self.q[i], atol=SAME_DEG, equal_nan=True):
                 updates[i] = updates.get(i, 0) + 1
                 if updates[i] > 3:
                     self.q[i] = np.nan
+                    self.sols[i] = []
                     self.picks[i] = _fail("the closest solution does not settle around the "
                                           "loop this move is in")
                     continue
                 work.extend(j for j in succ.get(i, []) if j not in work)
 
     def _set(self, i: int) -> None:
-        pick = self.choose(i)
+        sols, pick = self.choose(i)
+        if len(sols) > 8:
+            sols, pick = [], _fail("reached on more than 8 configurations")
+        self.sols[i] = sols
         self.q[i] = pick.q if pick.q is not None else np.nan
         self.picks[i] = pick
 

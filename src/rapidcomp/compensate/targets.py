@@ -21,6 +21,7 @@ a name no given module declares), which fails the compensation.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -29,10 +30,15 @@ import numpy as np
 from ..kinematics.frames import DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z
 from ..rapid import ast as A
 from ..rapid.model import Declaration, Module, Motion, ParsedFile
+from ..rapid.motions import BUILTIN_INSTRUCTIONS
 from ..rapid.refs import names_in, usage
 from ..rapid.values import DecodeIssue, JointTarget, Pose, RobTarget, ToolData, WobjData, decode
 
 IDENTITY_POSE = (np.eye(3), np.zeros(3))
+# A quaternion further than this from unit length is reported when normalised.
+QUAT_TOLERANCE = 1e-3
+# confdata: cf1, cf4, cf6 count quarter turns (|cf| <= 8 is +-720 deg); cfx 0..7.
+MAX_QUADRANT = 8
 # External axis values at or above this are "not used" (RAPID writes 9E9).
 EXTAX_UNUSED = 8.9e9
 # A FOR loop walking more iterations than this is not expanded.
@@ -87,6 +93,7 @@ class TargetUse:
     module: Module | None = None
     ext: tuple[float, ...] = ()  # external axes of the target as written
     key: tuple = ()            # (file index, motion index in the file, role, env)
+    notes: tuple[str, ...] = ()  # what was assumed of its values (a quaternion normalised)
 
 
 class Unresolved(NamedTuple):
@@ -143,8 +150,10 @@ class Resolver:
         self.params: dict[tuple[int, str], set[str]] = {}
         self.home: dict[int, ParsedFile] = {}
         self.home_module: dict[int, Module] = {}
-        self.writes: dict[str, tuple[ParsedFile, A.Span]] = {}
+        self.writes: dict[str, tuple[ParsedFile, A.Span, str]] = {}   # name -> where, how
         self.usages: dict[int, object] = {}   # id(Module) -> refs.Usage
+        self._notes: list[str] = []             # of the use being resolved
+        self.any_write = None                   # a SetDataVal with a computed name
         for pf in files:
             for m in pf.modules:
                 mid = id(m)
@@ -167,14 +176,33 @@ class Resolver:
                     us = usage(m.node)
                 self.usages[mid] = us
                 for name, spans in us.writes.items():
-                    self.writes.setdefault(name, (pf, spans[0]))
+                    self.writes.setdefault(name, (pf, spans[0], "assigned"))
+        if writes or usages is None:
+            self._call_writes(files)
 
     def _num(self, values) -> np.ndarray:
         a = np.asarray(values, float)
         return a.astype(np.float32).astype(float) if self.float32 else a
 
-    def _pose(self, pose: Pose):
-        return quat_wxyz_to_matrix(self._num(pose.quat_wxyz)), self._num(pose.xyz)
+    def _pose(self, pose: Pose, pf: ParsedFile, what: str):
+        q = self._quaternion(pose.quat_wxyz, pose.rot[0].span.start, pf, what)
+        return quat_wxyz_to_matrix(q), self._num(pose.xyz)
+
+    def _quaternion(self, q, offset: int, pf: ParsedFile, what: str) -> np.ndarray:
+        """A quaternion of a value a move uses: none with no rotation (bad
+        input); one far from unit length normalised, with a note (the
+        controller would complain about it)."""
+        q = self._num(q)
+        norm = math.sqrt(float(q @ q))
+        if not norm > 1e-6:
+            raise pf.source.error(offset, f"{what}: the orientation [{', '.join(f'{v:g}' for v in q)}] "
+                                          "is not a rotation (norm 0); expected a unit quaternion")
+        if abs(norm - 1.0) > QUAT_TOLERANCE and not self.float32:
+            line = pf.line(A.Span(offset, offset))
+            self._notes.append(f"{what} ({pf.source.display_path}:{line}): quaternion norm "
+                               f"{norm:.6f}, not 1 (the controller expects a unit quaternion); "
+                               "normalised")
+        return q / norm if abs(norm - 1.0) > 1e-12 else q
 
     def lookup(self, name: str, module: Module, routine: str | None):
         """The declaration a name means in a routine of a module, None when
@@ -196,12 +224,16 @@ class Resolver:
         if not found:
             return d
         # Global data of one name in two modules: the controller refuses to
-        # load the task (PERS of one type are one shared object: allowed).
-        if len(found) > 1 and not all(x.storage == "PERS" and x.type == found[0].type
-                                      for x in found):
+        # load the task. PERS of one type are one shared object: allowed, but
+        # which initial value it holds depends on the load order unless they
+        # are all the same.
+        if len(found) > 1 and not (all(x.storage == "PERS" and x.type == found[0].type
+                                       for x in found) and _same_values(found, self.home)):
             where = ", ".join(f"{self.home[id(x)].source.display_path}:"
                               f"{self.home[id(x)].line(x.span)}" for x in found)
-            return Unresolved(f"{name} is declared globally more than once ({where})", True)
+            what = ("PERS with different values" if all(x.storage == "PERS" for x in found)
+                    else "globally more than once")
+            return Unresolved(f"{name} is declared {what} ({where})", True)
         return d if d is not None else found[0]
 
     # ------------------------------------------------------------ tool / wobj
@@ -224,42 +256,112 @@ class Resolver:
             return Unresolved(f"{what} {expr.name} has no literal value "
                               f"({d.issue or 'run-time data'})")
         written = self._written(d)
-        return Unresolved(written) if written else d.value
+        return Unresolved(written) if written else d
+
+    def _call_writes(self, files) -> None:
+        """Data a call may change: arguments of INOUT/VAR/PERS parameters of
+        the given routines, of procedures no given module declares (they
+        may change them) and of late-bound calls; SetDataVal's named data
+        (with a computed name: any data)."""
+        routines: dict = {}
+        for pf in files:
+            for m in pf.modules:
+                for r in m.routines:
+                    routines.setdefault((id(m), r.name.lower()), r.node)
+                    if r.node.scope != "LOCAL":
+                        routines.setdefault(r.name.lower(), r.node)
+        self.any_write = None
+        for pf in files:
+            for m in pf.modules:
+                us = self.usages.get(id(m))
+                for call in (us.calls if us is not None else ()):
+                    if isinstance(call, A.LateCall):
+                        self._args_written(pf, call.args, None, "passed to a late-bound call")
+                        continue
+                    name = call.name.lower()
+                    if name in ("setdataval", "setalldataval"):
+                        first = next((a for a in call.args if a.kind == "pos"), None)
+                        if name == "setdataval" and first is not None and isinstance(
+                                first.value, A.Str):
+                            self.writes.setdefault(first.value.value.lower(),
+                                                   (pf, call.span, "set by SetDataVal"))
+                        elif self.any_write is None:
+                            self.any_write = (pf, call.span, call.name)
+                        continue
+                    node = routines.get((id(m), name)) or routines.get(name)
+                    if node is not None:
+                        self._args_written(pf, call.args, node.params,
+                                           f"passed to {node.name}, which may change it")
+                    elif name not in BUILTIN_INSTRUCTIONS:
+                        self._args_written(pf, call.args, None,
+                                           f"passed to {call.name}, which no given module "
+                                           "declares (it may change it)")
+
+    def _args_written(self, pf, args, params, how: str) -> None:
+        required = [p for p in params if not p.optional] if params is not None else None
+        k = 0
+        for a in args:
+            if a.value is None or not isinstance(a.value, A.Ref):
+                if a.kind in ("pos",):
+                    k += 1
+                continue
+            if params is None:
+                written = True
+            elif a.kind == "pos":
+                p = required[k] if k < len(required) else None
+                written = p is not None and p.access in ("INOUT", "VAR", "PERS")
+            else:
+                p = next((p for p in params if p.name.lower() == (a.name or "").lower()), None)
+                written = p is not None and p.access in ("INOUT", "VAR", "PERS")
+            if a.kind == "pos":
+                k += 1
+            if written:
+                self.writes.setdefault(a.value.name.lower(), (pf, a.span, how))
 
     def _written(self, d: Declaration) -> str | None:
-        if d.storage == "CONST" or d.name.lower() not in self.writes:
+        if d.storage == "CONST":
             return None
-        pf, span = self.writes[d.name.lower()]
-        return f"{d.name} is assigned at run time ({pf.source.display_path}:{pf.line(span)})"
+        if d.name.lower() in self.writes:
+            pf, span, how = self.writes[d.name.lower()]
+            return f"{d.name} is {how} at run time ({pf.source.display_path}:{pf.line(span)})"
+        if self.any_write is not None:
+            pf, span, name = self.any_write
+            return (f"{d.name} may be changed at run time by {name} with a name computed at run "
+                    f"time ({pf.source.display_path}:{pf.line(span)})")
+        return None
 
     def tool(self, expr, module, routine: str):
         """(key, tframe as (R, p)), or Unresolved."""
         if expr is None:
             return Unresolved("no tool argument", True)
-        t = self._data(expr, module, routine, "tool0", ToolData, "tool")
-        if isinstance(t, Unresolved):
-            return t
-        if t is None:
+        d = self._data(expr, module, routine, "tool0", ToolData, "tool")
+        if isinstance(d, Unresolved):
+            return d
+        if d is None:
             return "tool0", IDENTITY_POSE
+        t = d.value
         if t.robhold.value is not True:
             return Unresolved(f"tool {expr.name} is a stationary tool (robhold FALSE)")
-        return expr.name.lower(), self._pose(t.tframe)
+        return expr.name.lower(), self._pose(t.tframe, self.home[id(d)], f"tool {d.name}")
 
     def wobj(self, expr, module, routine: str):
         """(key, uframe . oframe as (R, p)), or Unresolved."""
         if expr is None:
             return "wobj0", IDENTITY_POSE
-        w = self._data(expr, module, routine, "wobj0", WobjData, "work object")
-        if isinstance(w, Unresolved):
-            return w
-        if w is None:
+        d = self._data(expr, module, routine, "wobj0", WobjData, "work object")
+        if isinstance(d, Unresolved):
+            return d
+        if d is None:
             return "wobj0", IDENTITY_POSE
+        w = d.value
         if w.robhold.value is not False:
             return Unresolved(f"work object {expr.name} is held by the robot (stationary tool "
                               "set-up)")
         if w.ufprog.value is not True or w.ufmec.value != "":
             return Unresolved(f"work object {expr.name} is coordinated with a mechanical unit")
-        return expr.name.lower(), compose_pose(self._pose(w.uframe), self._pose(w.oframe))
+        pf = self.home[id(d)]
+        return expr.name.lower(), compose_pose(self._pose(w.uframe, pf, f"work object {d.name}"),
+                                               self._pose(w.oframe, pf, f"work object {d.name}"))
 
     def world_M_base(self, record) -> tuple | Unresolved:
         """The robot base in the world frame for a target's external axes:
@@ -276,7 +378,7 @@ class Resolver:
         return np.eye(3), d
 
     # ------------------------------------------------------------ targets
-    def _source(self, expr, module, routine: str, env: dict[str, int], outer=None):
+    def _source(self, pf, expr, module, routine: str, env: dict[str, int], outer=None):
         """The Source of a target expression, or Unresolved."""
         whole = outer if outer is not None else expr
         if isinstance(expr, A.Ref):
@@ -305,33 +407,37 @@ class Resolver:
                 idx = []
                 by_loop = False
                 for e in expr.selectors[0].indices:
-                    k = self.integer(e, module, routine)
-                    if k is not None:
-                        idx.append(k)
-                    elif isinstance(e, A.Ref) and not e.selectors and e.name.lower() in env:
+                    # A FOR loop's variable hides data of the same name.
+                    if isinstance(e, A.Ref) and not e.selectors and e.name.lower() in env:
                         idx.append(env[e.name.lower()])
                         by_loop = True
+                    elif (k := self.integer(e, module, routine)) is not None:
+                        idx.append(k)
                     else:
                         return Unresolved(f"index of {expr.name} is not a literal or the "
                                           "variable of an enclosing FOR loop with constant bounds")
                 if len(idx) != len(d.dims):
-                    return Unresolved(f"{expr.name} has {len(d.dims)} dimensions, indexed with "
-                                      f"{len(idx)}", True)
+                    raise pf.source.error(expr.span.start, f"{expr.name} has {len(d.dims)} "
+                                          f"dimensions, indexed with {len(idx)}")
                 flat = 0
-                for k, dim in zip(idx, d.dims):
+                for k, dim, e in zip(idx, d.dims, expr.selectors[0].indices):
                     if not 1 <= k <= dim:
-                        return Unresolved(f"index {k} of {expr.name} is outside 1..{dim}", True)
+                        loop = "" if not by_loop else (
+                            f" (a FOR loop walks it to {k}; the array has {dim} elements)")
+                        raise pf.source.error(e.span.start, f"index {k} of {expr.name} is outside "
+                                              f"1..{dim}{loop}: the controller stops here with "
+                                              "ERR_INDEX")
                     flat = flat * dim + (k - 1)
                 return Source(d.value[flat], d, home, flat, by_loop, expr, whole, None, None, None,
                               home_m)
             return Unresolved(f"{expr.name} with components is not a target")
         if isinstance(expr, A.Call) and expr.name.lower() in ("offs", "reltool") and outer is None:
-            return self._offset(expr, module, routine, env)
+            return self._offset(pf, expr, module, routine, env)
         if isinstance(expr, (A.Agg, A.NumAgg)):
             return Unresolved("inline aggregate is not a literal value")
         return Unresolved("the target is computed at run time")
 
-    def _offset(self, call: A.Call, module, routine: str, env):
+    def _offset(self, pf, call: A.Call, module, routine: str, env):
         pos = [a.value for a in call.args if a.kind == "pos"]
         if len(pos) != 4 or not all(isinstance(v, A.Num) for v in pos[1:]):
             return Unresolved(f"{call.name} arguments are not literal numbers")
@@ -339,10 +445,12 @@ class Resolver:
             try:
                 record = decode("robtarget", pos[0], f"{call.name} robtarget")
             except DecodeIssue as exc:
+                if exc.illegal:
+                    raise pf.source.error(exc.span.start, exc.reason) from None
                 return Unresolved(exc.reason)
             base = Source(record, None, None, None, False, pos[0], call, None, None, None)
         else:
-            base = self._source(pos[0], module, routine, env, outer=call)
+            base = self._source(pf, pos[0], module, routine, env, outer=call)
         if isinstance(base, Unresolved):
             return base
         if not isinstance(base.record, RobTarget):
@@ -363,9 +471,13 @@ class Resolver:
         return Source(base.record, base.decl, base.home, base.element, base.by_loop, base.ref,
                       call, call, rot, d, base.home_module)
 
-    def target_pose(self, src: Source):
-        """wobj_M_target of a robtarget source, with Offs/RelTool applied."""
-        R = quat_wxyz_to_matrix(self._num(src.record.quat_wxyz))
+    def target_pose(self, src: Source, pf: ParsedFile | None = None):
+        """wobj_M_target of a robtarget source, with Offs/RelTool applied
+        (pf: the file of an inline target)."""
+        home = src.home if src.home is not None else pf
+        where = f"{src.decl.name}" if src.decl is not None else "the inline robtarget"
+        R = quat_wxyz_to_matrix(self._quaternion(
+            src.record.quat_wxyz, src.record.span.start + src.record.regs[3][0], home, where))
         p = self._num(src.record.xyz)
         if src.call is None:
             return R, p
@@ -385,19 +497,21 @@ class Resolver:
         if isinstance(expr, A.Ref) and not expr.selectors:
             d = self.lookup(expr.name, module, routine)
             if isinstance(d, Declaration) and d.storage == "CONST" and d.type == "num":
-                return self.integer(d.node.init, module, None)
+                # Its value's names are those of the module that declares it.
+                return self.integer(d.node.init, self.home_module[id(d)], None)
         return None
 
-    def loop_range(self, loop, module, routine: str) -> range | None:
+    def loop_range(self, loop, module, routine: str, bounded: bool = True) -> range | None:
         """The values a FOR loop walks when its bounds are constant (None
-        when they are not, or when it walks more than the limit)."""
+        when they are not, or, when bounded, when it walks more than the
+        limit)."""
         start = self.integer(loop.start, module, routine)
         stop = self.integer(loop.stop, module, routine)
         step = 1 if loop.step is None else self.integer(loop.step, module, routine)
         if start is None or stop is None or not step:
             return None
         r = range(start, stop + (1 if step > 0 else -1), step)
-        return r if len(r) <= MAX_LOOP_ITERATIONS else None
+        return r if len(r) <= MAX_LOOP_ITERATIONS or not bounded else None
 
     def resolve(self, pf: ParsedFile, module: Module, motion: Motion,
                 index: tuple[int, int] = (0, 0)) -> list[TargetUse]:
@@ -409,7 +523,7 @@ class Resolver:
                 continue
             kind = "jointtarget" if motion.spec.joint_space else "robtarget"
             inline = isinstance(t.expr, (A.Agg, A.NumAgg))
-            for env in self._loop_envs(module, motion, names_in(t.expr)):
+            for env in self._loop_envs(pf, module, motion, names_in(t.expr)):
                 label = pf.text(t.expr) if not inline else "inline"
                 if env:
                     label += " [" + ", ".join(f"{k}={v}" for k, v in env.items()) + "]"
@@ -417,16 +531,21 @@ class Resolver:
                                      index + (t.role, tuple(sorted(env.items())))))
         return out
 
-    def _loop_envs(self, module, motion: Motion, names: set[str]) -> list[dict[str, int]]:
+    def _loop_envs(self, pf, module, motion: Motion, names: set[str]) -> list[dict[str, int]]:
         """One environment per iteration of the enclosing FOR loops whose
         variable the target expression uses."""
         envs: list[dict[str, int]] = [{}]
         for lp in motion.loops:
             if lp.var is None or lp.var.lower() not in names:
                 continue
-            values = self.loop_range(lp, module, motion.routine)
+            values = self.loop_range(lp, module, motion.routine, bounded=False)
             if values is None:
                 continue  # the target stays unresolved and says why
+            if len(envs) * len(values) > MAX_LOOP_ITERATIONS:
+                raise pf.source.error(lp.span.start, f"FOR {lp.var} walks {len(values)} "
+                                      f"iterations here; rapidcomp follows at most "
+                                      f"{MAX_LOOP_ITERATIONS} target uses of one move (no "
+                                      "array holds more targets)")
             envs = [{**e, lp.var.lower(): v} for e in envs for v in values]
         return envs
 
@@ -447,6 +566,7 @@ class Resolver:
     def _use(self, pf, module, motion, t, kind, label, env, key) -> TargetUse:
         line = pf.line(motion.span)
         envt = key[3]
+        self._notes = []
 
         def fail(why: Unresolved):
             return TargetUse(motion, t.role, label, line, kind, None, None, None, None,
@@ -461,7 +581,7 @@ class Resolver:
         elif t.issue:
             src = Unresolved(t.issue)
         else:
-            src = self._source(t.expr, module, motion.routine, env)
+            src = self._source(pf, t.expr, module, motion.routine, env)
         if isinstance(src, Unresolved):
             if src.blocked and kind == "robtarget" and src.reason.endswith(f"({MISSING_HINT})"):
                 return fail(self._all_missing(src, module, motion))
@@ -483,11 +603,40 @@ class Resolver:
         base = self.world_M_base(src.record)
         if isinstance(base, Unresolved):
             return fail(base)
+        self._confdata(src, pf)
         Rf, pf_ = compose_pose(compose_pose(invert_pose(base), compose_pose(
-            wobj[1], self.target_pose(src))), invert_pose(tool[1]))
+            wobj[1], self.target_pose(src, pf))), invert_pose(tool[1]))
         return TargetUse(motion, t.role, label, line, kind, Rf, pf_, src.record.conf, None, None,
                          src, tool, wobj, envt, file=pf, module=module, ext=src.record.ext,
-                         key=key)
+                         key=key, notes=tuple(self._notes))
+
+    def _confdata(self, src: Source, pf: ParsedFile) -> None:
+        """confdata of a robtarget a move uses: whole numbers, cfx one of
+        the 8 configurations, quadrant counts within two turns."""
+        record = src.record
+        home = src.home if src.home is not None else pf
+        for i, name in enumerate(("cf1", "cf4", "cf6", "cfx")):
+            v = record.values[7 + i]
+            s, _ = record.regs[7 + i]
+            where = record.span.start + s
+            what = src.decl.name if src.decl is not None else "the inline robtarget"
+            if not float(v).is_integer():
+                raise home.source.error(where, f"{what}: confdata {name} is {record.texts[7 + i]}, "
+                                        "expected a whole number")
+            if name == "cfx" and not 0 <= v <= 7:
+                raise home.source.error(where, f"{what}: confdata cfx is {record.texts[7 + i]}, "
+                                        "expected 0..7 (the configuration: 4 x shoulder, 2 x "
+                                        "elbow, 1 x wrist)")
+            if name != "cfx" and abs(v) > MAX_QUADRANT:
+                raise home.source.error(where, f"{what}: confdata {name} is {record.texts[7 + i]}, "
+                                        f"expected a quadrant count of a joint angle (within "
+                                        f"+-{MAX_QUADRANT}, i.e. +-{90 * MAX_QUADRANT} deg)")
+
+
+def _same_values(decls, home) -> bool:
+    texts = {"".join(home[id(d)].text(d.node.init).split()) if d.node.init is not None else ""
+             for d in decls}
+    return len(texts) == 1
 
 
 def _missing_name(reason: str) -> str:

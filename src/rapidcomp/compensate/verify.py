@@ -79,14 +79,15 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
         p = np.array([outs[i].p for i in rob])
         conf = np.array([outs[i].conf for i in rob])
         by_conf = solver.solve_nominal(R, p, conf).q_deg
-        # Supervision off: the solution closest to the joints the previous
-        # move was compensated to (its written value differs from them by
-        # float32 rounding, ~1e-6 deg: no solution is that close to another).
+        # Supervision off (and circle points): the solution closest to the
+        # joints the previous move's nominal solution has (its compensated
+        # joints are within the joint-change bound of them: no other
+        # solution is that close).
         closest = [n for n, i in enumerate(rob) if solved.picks[i].kind == "closest"]
         got = by_conf
         if closest:
             sel = [rob[n] for n in closest]
-            prev = np.array([_previous(solved, solved.picks[i].pred) for i in sel])
+            prev = np.array([solved.picks[i].prev for i in sel])
             got = by_conf.copy()
             got[closest] = solver.closest(solver.candidates(R[closest], p[closest]), prev)
         for n, i in enumerate(rob):
@@ -104,11 +105,3 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
     return out
 
 
-
-def _previous(solved: Solved, j: int | None) -> np.ndarray:
-    """The joints a move without supervision starts from: the previous
-    move's compensated ones (its nominal ones if it is not compensated), or
-    the --start joints."""
-    if j is None:
-        return solved.start
-    return solved.deformed.q_deg[j] if solved.ok(j) else solved.nominal.q_deg[j]

@@ -124,6 +124,8 @@ class IKBatch:
         if s == Status.UNREACHABLE:
             return f"out of reach by {d:.3f} mm"
         if s == Status.NO_CONFIGURATION:
+            if j < 0:
+                return "confdata asks for a configuration (cfx) no solution has"
             return (f"confdata asks for a J{j + 1} quadrant no solution has "
                     f"(nearest solution {d:.4f} deg outside it)")
         if s == Status.JOINT_LIMIT:
@@ -131,7 +133,11 @@ class IKBatch:
         if s == Status.NOT_CONVERGED:
             return f"did not converge (residual {d:.3g} mm)"
         if s == Status.JOINT_JUMP:
-            return f"J{j + 1} would move {d:.4f} deg, more than the allowed bound"
+            near = (j in (3, 5) and self.q_deg is not None and not np.isnan(self.q_deg[i, 4])
+                    and abs(self.q_deg[i, 4]) < 5.0)
+            return (("near the wrist singularity (J5 ~ 0, where only J4 + J6 is defined): "
+                     if near else "")
+                    + f"J{j + 1} would move {d:.4f} deg, more than the allowed bound")
         return "the solution is on another configuration branch (cfx changed)"
 
     def warning_texts(self, i: int) -> tuple[str, ...]:

@@ -25,6 +25,18 @@ _FAST_ITEM = re.compile(
     r"|([A-Za-z][A-Za-z0-9_]*)")
 
 
+_INF = float("inf")
+
+
+class NumberOutOfRange(Exception):
+    """A number literal beyond every RAPID numeric type (num, dnum)."""
+
+    def __init__(self, pos: int, text: str):
+        super().__init__(text)
+        self.pos = pos
+        self.text = text
+
+
 def number_value(text: str) -> float:
     """Value of a RAPID num literal in any spelling the kernel allows."""
     if len(text) > 2 and text[0] == "0" and text[1] in "xXoObB":
@@ -371,7 +383,10 @@ class NodeBuilder:
 
     def num(self, c):
         t = c[0]
-        return A.Num(number_value(t.value), t.value, Span(t.start_pos, t.end_pos))
+        value = number_value(t.value)
+        if value in (_INF, -_INF):
+            raise NumberOutOfRange(t.start_pos, t.value)
+        return A.Num(value, t.value, Span(t.start_pos, t.end_pos))
 
     def string(self, c):
         t = c[0]

@@ -83,7 +83,12 @@ def motion_spec(name: str) -> MotionSpec | None:
 # until PDispOff; it does not apply to MoveAbsJ.
 DISPLACEMENT_ON = frozenset({"pdispon", "pdispset"})
 DISPLACEMENT_OFF = frozenset({"pdispoff"})
+# An external axis offset moves a track that carries the robot: with a
+# track, these displace robtarget moves too.
+TRACK_OFFSET_ON = frozenset({"eoffson", "eoffsset"})
 SUPERVISION = frozenset({"confj", "confl"})
+# Calls whose routine is chosen at run time (like %...%).
+UNKNOWN_TARGET_CALLS = frozenset({"callbyvar"})
 # These move the arm other than to a programmed target: the robot's
 # position after them is not known statically.
 MOVES_OTHERWISE = frozenset(n.lower() for n in (
@@ -97,7 +102,7 @@ MOVES_OTHERWISE = frozenset(n.lower() for n in (
 # of the given modules is treated as unknown (it may do either).
 BUILTIN_INSTRUCTIONS = frozenset(n.lower() for n in (
     "AccSet", "ActEventBuffer", "ActUnit", "Add", "AliasCamera", "AliasIO", "AliasIOReset",
-    "BitClear", "BitSet", "BookErrNo", "Break", "CallByVar", "CamFlush", "CamGetParameter",
+    "BitClear", "BitSet", "BookErrNo", "Break", "CamFlush", "CamGetParameter",
     "CamGetResult", "CamLoadJob", "CamReqImage", "CamSetExposure", "CamSetParameter",
     "CamSetProgramMode", "CamSetRunMode", "CamStartLoadJob", "CamWaitLoadJob", "CancelLoad",
     "CapAPTrSetup", "CheckProgRef", "CirPathMode", "Clear", "ClearIOBuff", "ClearPath",
@@ -107,7 +112,7 @@ BUILTIN_INSTRUCTIONS = frozenset(n.lower() for n in (
     "DropWObj", "EGMActJoint", "EGMActMove", "EGMActPose", "EGMGetId", "EGMReset",
     "EGMSetupAI", "EGMSetupAO", "EGMSetupGI", "EGMSetupLTAPP", "EGMSetupUC", "EGMStop",
     "EOffsOff", "EOffsOn", "EOffsSet", "EraseModule", "ErrLog", "ErrRaise", "ErrWrite",
-    "ExitCycle", "FricIdInit", "FricIdEvaluate", "FricIdSetFricLevels", "GetDataVal",
+    "FricIdInit", "FricIdEvaluate", "FricIdSetFricLevels", "GetDataVal",
     "GetJointData", "GetSysData", "GetTrapData", "GripLoad", "HollowWristReset", "IDelete",
     "IDisable", "IEnable", "IError", "Incr", "InvertDO", "IOBusStart", "IOBusState",
     "IODisable", "IOEnable", "IPers", "IRMQMessage", "ISignalAI", "ISignalAO", "ISignalDI",

@@ -7,6 +7,7 @@ from pathlib import Path
 from ..errors import InputError
 from ..source import SourceText, read_source
 from . import ast as A
+from .build import NumberOutOfRange
 from .grammar import compiled, engine
 from .lalr import LexFailure, ParseFailure
 from .model import Declaration, Loop, Module, Motion, ParsedFile, RoutineInfo, TargetArg
@@ -36,6 +37,9 @@ def parse_source(source: SourceText) -> ParsedFile:
             raise source.error(exc.pos, f"unexpected character {ch!r}: not part of RAPID") from None
         except ParseFailure as exc:
             raise _syntax_error(source, exc) from None
+        except NumberOutOfRange as exc:
+            raise source.error(exc.pos, f"number {exc.text} is out of range (a num holds "
+                               "+-3.4E38, a dnum +-1.8E308)") from None
         modules = tuple(_build_module(source, node) for node in nodes)
     finally:
         if was_enabled:
@@ -68,7 +72,8 @@ def _dims(dims, consts) -> tuple[int | None, ...]:
     return tuple(out)
 
 
-def _declaration(decl: A.DataDecl, routine: str | None, consts) -> Declaration:
+def _declaration(source: SourceText, decl: A.DataDecl, routine: str | None,
+                 consts) -> Declaration:
     type_ = decl.type_name.lower()
     dims = _dims(decl.dims, consts)
     value = None
@@ -85,11 +90,14 @@ def _declaration(decl: A.DataDecl, routine: str | None, consts) -> Declaration:
                 else:
                     value = decode(type_, decl.init, decl.name)
             except DecodeIssue as exc:
+                if exc.illegal:
+                    raise source.error(exc.span.start, f"{exc.reason} (a {type_} value)") \
+                        from None
                 issue = exc.reason
     return Declaration(decl, routine, type_, dims, value, issue)
 
 
-def _motion(call: A.ProcCall, spec, routine: str, loops) -> Motion:
+def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops) -> Motion:
     positional = [a for a in call.args if a.kind in ("pos", "named")]
     slots = dict(zip(spec.roles, (a.value for a in positional)))  # first of each role
     targets = []
@@ -101,6 +109,9 @@ def _motion(call: A.ProcCall, spec, routine: str, loops) -> Motion:
                 try:
                     value = decode(kind, arg.value, f"inline {kind}")
                 except DecodeIssue as exc:
+                    if exc.illegal:
+                        raise source.error(exc.span.start, f"{exc.reason} (the {kind} of "
+                                           f"{call.name})") from None
                     issue = exc.reason
             targets.append(TargetArg(role, arg.value, value, issue))
     wobj = None
@@ -115,32 +126,32 @@ def _motion(call: A.ProcCall, spec, routine: str, loops) -> Motion:
                   slots.get("tool"), wobj, tuple(optional))
 
 
-def _walk(stmts, routine: str, loops: list, out: list) -> None:
+def _walk(source, stmts, routine: str, loops: list, out: list) -> None:
     for s in stmts:
         t = type(s)
         if t is A.ProcCall:
             spec = motion_spec(s.name)
             if spec is not None:
-                out.append(_motion(s, spec, routine, loops))
+                out.append(_motion(source, s, spec, routine, loops))
         elif t is A.For:
             loops.append(Loop(s.var, s.start, s.stop, s.step, s.span))
-            _walk(s.body, routine, loops, out)
+            _walk(source, s.body, routine, loops, out)
             loops.pop()
         elif t is A.While:
             loops.append(Loop(None, None, None, None, s.span))
-            _walk(s.body, routine, loops, out)
+            _walk(source, s.body, routine, loops, out)
             loops.pop()
         elif t is A.If:
             for _, body in s.branches:
-                _walk(body, routine, loops, out)
-            _walk(s.orelse, routine, loops, out)
+                _walk(source, body, routine, loops, out)
+            _walk(source, s.orelse, routine, loops, out)
         elif t is A.CompactIf:
-            _walk((s.stmt,), routine, loops, out)
+            _walk(source, (s.stmt,), routine, loops, out)
         elif t is A.Test:
             for _, body in s.cases:
-                _walk(body, routine, loops, out)
+                _walk(source, body, routine, loops, out)
             if s.default:
-                _walk(s.default, routine, loops, out)
+                _walk(source, s.default, routine, loops, out)
 
 
 def _build_module(source: SourceText, node: A.ModuleNode) -> Module:
@@ -152,14 +163,14 @@ def _build_module(source: SourceText, node: A.ModuleNode) -> Module:
     aliases = []
     for item in node.items:
         if isinstance(item, A.DataDecl):
-            decls.append(_declaration(item, None, consts))
+            decls.append(_declaration(source, item, None, consts))
         elif isinstance(item, A.Routine):
             routines.append(RoutineInfo(item))
             for d in item.decls:
-                decls.append(_declaration(d, item.name, consts))
-            _walk(item.body, item.name, [], motions)
+                decls.append(_declaration(source, d, item.name, consts))
+            _walk(source, item.body, item.name, [], motions)
             for h in item.handlers:
-                _walk(h.body, item.name, [], motions)
+                _walk(source, h.body, item.name, [], motions)
         elif isinstance(item, A.RecordDecl):
             records.append(item)
         elif isinstance(item, A.AliasDecl):

@@ -28,6 +28,16 @@ def _field_names(cls: type) -> tuple[str, ...]:
 class Usage:
     refs: dict[str, list[A.Ref]]          # lower-case name -> every reference
     writes: dict[str, list[A.Span]]       # lower-case name -> assignments / search results
+    calls: tuple = ()                     # ProcCall/LateCall: arguments may be written
+
+
+# Built-in instructions that write an argument: name -> its position among
+# the required arguments (RAPID Instructions manual). GetSysData fills a
+# tool or work object with the current one; the calibrations fill a tool.
+WRITING_BUILTINS = {
+    "getdataval": 1, "readanybin": 1, "unpackrawbytes": 2, "getsysdata": 0,
+    "mtooltcpcalib": 4, "stooltcpcalib": 3, "mtoolrotcalib": 2, "stoolrotcalib": 3,
+}
 
 
 def _nodes(root):
@@ -48,6 +58,7 @@ def _nodes(root):
 def usage(module: A.ModuleNode) -> Usage:
     refs: dict[str, list[A.Ref]] = {}
     writes: dict[str, list[A.Span]] = {}
+    calls = []
     for node in _nodes(module.items):
         t = type(node)
         if t is A.Ref:
@@ -56,12 +67,21 @@ def usage(module: A.ModuleNode) -> Usage:
             writes.setdefault(node.target.name.lower(), []).append(node.span)
         elif t is A.ProcCall:
             spec = motion_spec(node.name)
-            if spec is not None and "search" in spec.roles:
-                positional = [a for a in node.args if a.kind in ("pos", "named")]
-                for role, arg in zip(spec.roles, positional):
-                    if role == "search" and isinstance(arg.value, A.Ref):
-                        writes.setdefault(arg.value.name.lower(), []).append(arg.span)
-    return Usage(refs, writes)
+            positional = [a for a in node.args if a.kind in ("pos", "named")]
+            if spec is not None:
+                if "search" in spec.roles:
+                    for role, arg in zip(spec.roles, positional):
+                        if role == "search" and isinstance(arg.value, A.Ref):
+                            writes.setdefault(arg.value.name.lower(), []).append(arg.span)
+                continue
+            k = WRITING_BUILTINS.get(node.name.lower())
+            if k is not None and k < len(positional) and isinstance(positional[k].value, A.Ref):
+                writes.setdefault(positional[k].value.name.lower(), []).append(
+                    positional[k].span)
+            calls.append(node)
+        elif t is A.LateCall:
+            calls.append(node)
+    return Usage(refs, writes, tuple(calls))
 
 
 def names_in(expr) -> set[str]:

@@ -23,10 +23,21 @@ class Field(NamedTuple):
 
 
 class DecodeIssue(Exception):
-    def __init__(self, reason: str, span: Span):
+    """A value that is not decoded. illegal: it cannot be a value of its
+    type at all (a position of 2 numbers, a string where a number goes, a
+    number no RAPID num can hold): the controller would refuse the module.
+    Otherwise it is legal RAPID whose value is not literal (a named
+    constant, an expression): known only at run time."""
+
+    def __init__(self, reason: str, span: Span, illegal: bool = False):
         super().__init__(reason)
         self.reason = reason
         self.span = span
+        self.illegal = illegal
+
+
+# A RAPID num is a 32-bit float.
+NUM_MAX = 3.4028234663852886e38
 
 
 @dataclass(frozen=True, slots=True)
@@ -191,17 +202,29 @@ def _items(expr) -> tuple | None:
     return None
 
 
+_LITERALS = (A.Num, A.Str, A.Bool, A.Agg, A.NumAgg)
+
+
+def _number(value: float, text: str, span: Span, where: str) -> Field:
+    if not abs(value) <= NUM_MAX:
+        raise DecodeIssue(f"{where} is {text}, beyond what a RAPID num holds (+-3.4E38)", span,
+                          True)
+    return Field(value, text, span)
+
+
 def _leaf(kind: str, expr, where: str) -> Field:
     if kind == "n":
         if isinstance(expr, A.Num):
-            return Field(expr.value, expr.text, expr.span)
+            return _number(expr.value, expr.text, expr.span, where)
         if (isinstance(expr, A.Unary) and expr.op in "+-" and isinstance(expr.operand, A.Num)):
             value = -expr.operand.value if expr.op == "-" else expr.operand.value
-            return Field(value, expr.op + expr.operand.text, expr.span)
+            return _number(value, expr.op + expr.operand.text, expr.span, where)
     elif kind == "b" and isinstance(expr, A.Bool):
         return Field(expr.value, "TRUE" if expr.value else "FALSE", expr.span)
     elif kind == "s" and isinstance(expr, A.Str):
         return Field(expr.value, expr.value, expr.span)
+    if isinstance(expr, _LITERALS):   # a literal of another kind: a type error
+        raise DecodeIssue(f"{where} is not {_LEAF_NAMES[kind]}", expr.span, True)
     raise DecodeIssue(f"{where} is not a literal ({_LEAF_NAMES[kind]} expected)", expr.span)
 
 
@@ -210,10 +233,13 @@ def _walk(shape, expr, where: str):
         return _leaf(shape, expr, where)
     items = _items(expr)
     if items is None:
+        if isinstance(expr, _LITERALS):
+            raise DecodeIssue(f"{where} is not an aggregate of {len(shape)} components",
+                              expr.span, True)
         raise DecodeIssue(f"{where} is not a literal aggregate", expr.span)
     if len(items) != len(shape):
         raise DecodeIssue(f"{where} has {len(items)} components, expected {len(shape)}",
-                          expr.span)
+                          expr.span, True)
     return tuple(_walk(s, e, f"{where}.{i + 1}") for i, (s, e) in enumerate(zip(shape, items)))
 
 
@@ -234,7 +260,14 @@ def _compact(t: str, expr, where: str) -> Record:
         m = _FAST[t].fullmatch(expr.text)
         if m is not None:
             texts = m.groups()
-            return cls(tuple(map(float, texts)), texts, m.regs[1:], expr.span)
+            values = tuple(map(float, texts))
+            if not all(abs(v) <= NUM_MAX for v in values):
+                k = next(i for i, v in enumerate(values) if not abs(v) <= NUM_MAX)
+                s, e = m.regs[k + 1]
+                raise DecodeIssue(f"{where} component {texts[k]} is beyond what a RAPID num "
+                                  "holds (+-3.4E38)",
+                                  Span(expr.span.start + s, expr.span.start + e), True)
+            return cls(values, texts, m.regs[1:], expr.span)
     nested = _walk(SHAPES[t], expr, where)
     fields = [f for group in nested for f in group]
     base = expr.span.start
@@ -275,9 +308,11 @@ def decode_array(type_name: str, expr, dims: tuple[int, ...], where: str):
         return (decode(type_name, expr, where),)
     items = _items(expr)
     if items is None:
-        raise DecodeIssue(f"{where} is not a literal array aggregate", expr.span)
+        raise DecodeIssue(f"{where} is not a literal array aggregate", expr.span,
+                          isinstance(expr, _LITERALS))
     if len(items) != dims[0]:
-        raise DecodeIssue(f"{where} has {len(items)} elements, declared {dims[0]}", expr.span)
+        raise DecodeIssue(f"{where} has {len(items)} elements, declared {dims[0]}", expr.span,
+                          True)
     out: list = []
     for i, item in enumerate(items):
         out.extend(decode_array(type_name, item, dims[1:], f"{where}{{{i + 1}}}"))

@@ -6,9 +6,9 @@ MODULE MainModule
         MoveAbsJ jHome\NoEOffs, v1000, z50, tGripper;
         Pick;
         FOR i FROM 1 TO 5 DO
-            MoveJ Offs(pPlace_offs_c{i},0,0,60), v1000, z20, tGripper\WObj:=wTable;
+            MoveJ Offs(pPlace{i},0,0,60), v1000, z20, tGripper\WObj:=wTable;
             MoveL pPlace_c{i}, v200, fine, tGripper\WObj:=wTable;
-            MoveL Offs(pPlace_offs_c{i},0,0,60), v1000, z20, tGripper\WObj:=wTable;
+            MoveL Offs(pPlace{i},0,0,60), v1000, z20, tGripper\WObj:=wTable;
         ENDFOR
         MoveExtJ jTurn, vrot50, fine;
         Glue;
@@ -26,7 +26,7 @@ MODULE MainModule
     ENDPROC
 
     PROC Glue()
-        MoveJ pGlue{1}, v500, z10, tGlue\WObj:=wFixture;
+        MoveJ pGlue_1_c, v500, z10, tGlue\WObj:=wFixture;
         FOR k FROM 2 TO 8 DO
             MoveL pGlue{k}, v100, z1, tGlue\WObj:=wFixture;
         ENDFOR
