@@ -67,11 +67,12 @@ class Executed:
 
 
 class Controller:
-    def __init__(self, files, robot, track=None, start_deg=None, confj=True):
+    def __init__(self, files, robot, track=None, start_deg=None, confj=True, base=None):
         self.files = files
         self.robot = robot
         self.ik = Solver(robot)
         self.track = track or {}          # external axis index -> unit vector (world)
+        self.base = base if base is not None else pin.SE3.Identity()   # world_M_base
         self.decls = {}
         self.procs = {}
         for pf in files:
@@ -118,7 +119,7 @@ class Controller:
         d = np.zeros(3)
         for k, u in self.track.items():
             d += f32(ext[k]) * np.asarray(u, float)
-        return pin.SE3(np.eye(3), d)
+        return pin.SE3(np.eye(3), d) * self.base
 
     def robtarget(self, expr, env, inline) -> tuple[pin.SE3, RobTarget]:
         if isinstance(expr, A.Call):        # Offs(p, dx, dy, dz)

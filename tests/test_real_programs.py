@@ -240,6 +240,23 @@ def test_program_file_is_the_task_and_the_folder_with_a_stale_copy_is_refused(tm
     assert not (tmp_path / "g2").exists()
 
 
+def test_a_robot_base_away_from_the_world_frame(tmp_path):
+    """--base: robtargets are world coordinates, the arm solves them from
+    its base frame; the controller model with the same base lands them."""
+    out = tmp_path / "glue"
+    base = (10.0, -5.0, 3.0, 0.999848, 0.0, 0.0, 0.017452)   # 2 deg about z
+    r = rapidcomp("fix", TASKS / "glue" / "Glue.pgf", "--profile", FIXTURES / "warm.csv",
+                  "-o", out, "--base", ",".join(map(str, base)), "--json", tmp_path / "g.json")
+    assert "14 of 14 target uses compensated" in r.stdout
+    doc = json.loads((tmp_path / "g.json").read_text())
+    assert doc["robot base"].startswith("--base 10,-5,3,")
+    names = ["GlueData.mod", "GlueMain.mod"]
+    from controller import se3
+    base_se3 = pin.SE3(se3(base[:3], base[3:]).rotation, np.array(base[:3]))
+    rows = evaluate(parsed(TASKS / "glue", names), parsed(out, names), base=base_se3)
+    assert len(rows) == 14
+
+
 # ---------------------------------------------------------------- backup, robot on a track
 
 def test_backup_with_a_track(tmp_path):

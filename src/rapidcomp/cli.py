@@ -76,6 +76,11 @@ def _model_options(f):
                      help="External axis eax_AXIS (a..f) carries the robot along that world "
                           "axis, in mm, e.g. a:x (repeatable). Default: external axes do not "
                           "move the robot's base."),
+        click.option("--base", default=None, metavar="X,Y,Z,Q1,Q2,Q3,Q4",
+                     callback=_floats(7, "X,Y,Z in mm and a unit quaternion Q1..Q4"),
+                     help="The robot's base frame in the world (mm, quaternion w,x,y,z), as in "
+                          "the controller's configuration. Default: a backup's SYSPAR/MOC.cfg, "
+                          "else the world frame."),
         click.option("--start", default=None, metavar="J1,...,J6",
                      callback=_floats(6, "J1,...,J6 in degrees"),
                      help="Where the robot is when the program leaves its position unknown "
@@ -113,7 +118,7 @@ def inspect(program: str, as_json: bool) -> None:
 @click.argument("program", type=click.Path())
 @_model_options
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
-def check(program, profile, with_modules, tasks, robot, force, limits, track, start,
+def check(program, profile, with_modules, tasks, robot, force, limits, track, base, start,
           as_json) -> None:
     """Predict each target's error on the warm robot; rewrite nothing.
 
@@ -123,7 +128,7 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, st
 
     from .compensate.check import check as run_check
     from .compensate.check import render_text
-    from .compensate.job import load_solver, load_task
+    from .compensate.job import load_solver, load_task, robot_base
     from .compensate.targets import parse_track
     from .rapid.task import tasks_of
     try:
@@ -133,8 +138,8 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, st
                 raise RapidcompError(f"{m}: no such file")
         solver = load_solver(profile, robot, force, limits)
         tracked = parse_track(track)
-        results = [run_check(load_task(s, with_modules), solver, tracked, start)
-                   for s in sources]
+        results = [run_check(load_task(s, with_modules), solver, tracked, start,
+                             robot_base(s, base)[0]) for s in sources]
         results = [replace(r, notes=s.notes + r.notes) for r, s in zip(results, sources)]
     except RapidcompError as exc:
         _fail(exc)
@@ -171,7 +176,7 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, st
                    "(they stay as they were and are listed).")
 @click.option("-q", "--quiet", is_flag=True, help="No summary on stdout.")
 def fix(programs, profile, output, emit, report, no_report, json_path, with_modules, tasks,
-        robot, force, limits, track, start, allow_partial, quiet) -> None:
+        robot, force, limits, track, base, start, allow_partial, quiet) -> None:
     """Write a compensated copy of each PROGRAM and a review report.
 
     Exit code 0: all statically known targets compensated; 1: some could not
@@ -181,7 +186,7 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
     from .compensate.report import summary_lines
     try:
         specs = _fix_specs(programs, profile, output, emit, report, no_report, json_path,
-                           with_modules, tasks, robot, force, limits, track, start)
+                           with_modules, tasks, robot, force, limits, track, start, base)
         outcomes = run_all(specs)
         files = [(path, data) for o in outcomes for path, data in o.files]
         done = {path for path, _ in files}
@@ -220,7 +225,7 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
 
 
 def _fix_specs(programs, profile, output, emit, report, no_report, json_path, with_modules,
-               tasks, robot, force, limits, track, start):
+               tasks, robot, force, limits, track, start, base):
     """One JobSpec per task, with output paths checked: never an input,
     never two jobs on one file, never inside an input folder."""
     from pathlib import Path
@@ -283,7 +288,7 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
                     raise RapidcompError(f"{path}: would overwrite an input or another output")
                 seen.add(real)
             specs.append(JobSpec(t, out, rep, json_path, profile, robot, tuple(with_modules),
-                                 emit, force, tuple(limits), tuple(track), start))
+                                 emit, force, tuple(limits), tuple(track), start, base))
     return specs
 
 

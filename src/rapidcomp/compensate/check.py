@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..kinematics.ik import Solver
+from .place import groups
 from .plan import Plan, Task
 from .rows import UNTOUCHED, UseRow, summary, use_rows
 from .solve import solve
@@ -33,10 +34,14 @@ class CheckResult:
         return summary(list(self.rows), OK, FAILED)
 
 
-def check(task: Task, solver: Solver, track=(), start=None) -> CheckResult:
-    plan = Plan(task, track)
+def check(task: Task, solver: Solver, track=(), start=None, base=None) -> CheckResult:
+    plan = Plan(task, track, base)
     solved = solve(plan, solver, start)
-    rows = use_rows(plan, solved, statuses=(OK, FAILED))
+    # fix's groups (with its default --emit): an array element that cannot
+    # be compensated fails its array there, and check says so too.
+    gs = groups(plan, solved, "auto")
+    group_of = {u.key: g for g in gs for u in g.uses}
+    rows = use_rows(plan, solved, group_of=group_of, statuses=(OK, FAILED))
     return CheckResult(task.name, tuple(rows), tuple(plan.notes()))
 
 

@@ -7,6 +7,7 @@ Several tasks run in a process pool of two workers (the machine's cores).
 
 from __future__ import annotations
 
+import os
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, replace
@@ -14,7 +15,7 @@ from pathlib import Path
 
 from ..errors import Errors, InputError, RapidcompError
 from ..progress import Progress
-from ..rapid.task import TaskSource
+from ..rapid.task import TaskSource, tasks_of
 from . import report
 from .fix import FixResult, fix
 from .plan import Task
@@ -34,6 +35,7 @@ class JobSpec:
     limits: tuple[str, ...] = ()
     track: tuple[str, ...] = ()
     start: tuple[float, ...] | None = None
+    base: tuple[float, ...] | None = None       # --base X,Y,Z,Q1..Q4
     progress: bool | None = None
 
     @property
@@ -46,6 +48,19 @@ class JobOutcome:
     spec: JobSpec
     result: FixResult
     files: tuple[tuple[str, bytes], ...]   # (path, bytes) to write
+
+
+def robot_base(source: TaskSource, given) -> tuple:
+    """(world_M_base as (R, p) or None, what the report says of it): --base,
+    else a backup's SYSPAR/MOC.cfg, else the world frame."""
+    from .targets import parse_base
+    if given is not None:
+        return parse_base(given), "--base " + ",".join(f"{v:g}" for v in given)
+    if source.base is not None:
+        (x, y, z), q = source.base
+        return (parse_base((x, y, z, *q)),
+                f"({x:g}, {y:g}, {z:g}) mm, [{', '.join(f'{v:g}' for v in q)}] (SYSPAR/MOC.cfg)")
+    return None, "the world frame (assumed; --base sets another)"
 
 
 def default_output(path: str, folder: bool = False) -> str:
@@ -80,19 +95,44 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
     the --with modules; a module name twice in a task is refused, as the
     controller refuses to load it."""
     from ..rapid.parse import parse_file
-    files = [parse_file(source.root / rel, rel) for rel in source.modules]
+    files = [_parse(source, rel) for rel in source.modules]
     seen: dict[str, str] = {}
     for pf in files:
         for m in pf.modules:
             first = seen.setdefault(m.name.lower(), pf.source.display_path)
             if first != pf.source.display_path:
-                raise InputError(pf.source.display_path,
+                raise InputError(_shown(source, pf.source.display_path),
                                  f"module {m.name} is also in {first}: a task holds each module "
                                  "once (the controller refuses to load it twice); give the "
                                  "program file (.pgf) or a folder without the copy",
                                  pf.line(m.node.name_span))
-    context = [parse_file(m) for m in with_modules]
-    return Task(source.task or source.name, tuple(files), tuple(context))
+    mine = {os.path.realpath(source.root / rel) for rel in source.modules}
+    context = [parse_file(m) for m in with_modules if os.path.realpath(m) not in mine]
+    observers = []
+    if source.kind == "backup":
+        # PERS data are shared between tasks: the other tasks' writes count.
+        for other in tasks_of(source.input, motion_only=False):
+            if other.task != source.task:
+                observers += [_parse(other, rel) for rel in other.modules]
+    return Task(source.task or source.name, tuple(files), tuple(context), tuple(observers))
+
+
+def _parse(source: TaskSource, rel: str):
+    """A module of a task, named by its path inside the task (reports
+    carry no absolute paths); a bad module is reported by the path the
+    user can open."""
+    from ..rapid.parse import parse_file
+    try:
+        return parse_file(source.root / rel, rel)
+    except InputError as exc:
+        if not source.is_folder:
+            raise
+        raise InputError(_shown(source, rel), exc.message, exc.line, exc.col,
+                         exc.source_line) from None
+
+
+def _shown(source: TaskSource, rel: str) -> str:
+    return str(source.root / rel) if source.is_folder else rel
 
 
 def output_path(spec: JobSpec, rel: str) -> Path:
@@ -110,8 +150,9 @@ def run(spec: JobSpec) -> JobOutcome:
     solver = load_solver(spec.profile, spec.robot, spec.force, spec.limits)
     progress.stage("compensating")
     names = {} if src.is_folder else {src.modules[0]: Path(spec.output).name}
+    base, base_text = robot_base(src, spec.base)
     result = fix(task, solver, spec.mode, track=parse_track(spec.track), output_names=names,
-                 start=spec.start)
+                 start=spec.start, base=base)
     if src.notes:
         result = replace(result, notes=src.notes + result.notes)
     progress.stage("writing")
@@ -123,6 +164,7 @@ def run(spec: JobSpec) -> JobOutcome:
         "with": ", ".join(Path(m).name for m in spec.with_modules) or "-",
         "joint limits": ", ".join(spec.limits) or "robot defaults",
     }
+    meta["robot base"] = base_text
     if spec.track:
         meta["track"] = ", ".join(spec.track)
     if spec.start:

@@ -207,6 +207,7 @@ def place(plan: Plan, gs: list[Group]) -> None:
         if g.decl is not None:
             by_decl.setdefault(id(g.decl), []).append(g)
     for g in gs:
+        g.placement, g.names, g.slots = None, {}, {}
         if g.failure is not None:
             continue
         if g.decl is None:

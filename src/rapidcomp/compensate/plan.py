@@ -24,6 +24,9 @@ class Task:
     name: str
     files: tuple[ParsedFile, ...]
     context: tuple[ParsedFile, ...] = ()
+    # Modules of the controller's other tasks: their writes to PERS data
+    # count (PERS are shared between tasks), nothing else of them does.
+    observers: tuple[ParsedFile, ...] = ()
 
     @property
     def all_files(self) -> list[ParsedFile]:
@@ -31,11 +34,12 @@ class Task:
 
 
 class Plan:
-    def __init__(self, task: Task, track=()):
+    def __init__(self, task: Task, track=(), base=None):
         self.task = task
         self.files = task.all_files
         self.n_written = len(task.files)
-        self.resolver = Resolver(self.files, track=track)
+        self.resolver = Resolver(self.files, track=track, base=base,
+                                 observers=task.observers)
         self.track = tuple(track)
         self.uses: list[TargetUse] = []
         for fi, pf in enumerate(task.files):

@@ -60,6 +60,7 @@ def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
     (written_conf: use key -> the confdata written, None where no robtarget
     is written)."""
     ok_label, fail_label = statuses
+    tracked = {k for k, _ in plan.track}
     out = []
     for u in plan.uses:
         base = dict(file=u.file.source.display_path, line=u.line,
@@ -72,12 +73,12 @@ def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
                               warnings=(), reason=u.reason))
             continue
         out.append(_row(solved, u, base, group_of, actions, verified, mode, written_conf,
-                        ok_label, fail_label))
+                        ok_label, fail_label, tracked))
     return out
 
 
 def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, written_conf,
-         ok_label, fail_label) -> UseRow:
+         ok_label, fail_label, tracked) -> UseRow:
     i = solved.row[u.key]
     pick = solved.picks[i]
     nominal, deformed = solved.nominal, solved.deformed
@@ -97,14 +98,14 @@ def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, 
         why = reason if fk == u.source.element else (
             f"{element_label(g, fk)} of the same group: {reason}")
     if why is not None:
-        why = _hint(why, u)
+        why = _hint(why, u, tracked)
         return UseRow(**base, status=fail_label, rule=pick.rule, action=None,
                       nominal_deg=_t(qn) if has_q else None, compensated_deg=None,
                       delta_deg=None, error_um=error[0], error_deg=error[1], residual_um=None,
                       residual_deg=None, conf_before=conf_before, conf_after=None,
                       warnings=d_warnings, reason=why)
     qc = deformed.q_deg[i]
-    warnings = _warnings(solved, i, u, g, d_warnings)
+    warnings = _warnings(solved, i, u, d_warnings)
     if g is not None:
         if g.mode == "absj" and u.motion.spec.name == "MoveL":
             warnings = warnings + (LINEAR_WARNING,)
@@ -121,6 +122,12 @@ def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, 
     warnings = warnings + u.notes
     if pick.caution is not None:
         warnings = warnings + (pick.caution,)
+    after = _conf_after(solved, i, u, written_conf)
+    if written_conf is not None and after is not None and after != conf_before:
+        changed = [f"{n} {a} -> {b}" for n, a, b in zip(("cf1", "cf4", "cf6", "cfx"),
+                                                          conf_before, after) if a != b]
+        warnings = warnings + ("confdata rewritten (" + ", ".join(changed) + "): the "
+                               "compensated joints lie in another quadrant",)
     if not np.isnan(solved.displacement_um_per_mm[i]):
         warnings = warnings + (displacement_warning(solved.displacement_um_per_mm[i]),)
     if verified is not None:
@@ -131,7 +138,7 @@ def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, 
                   action=actions.get(u.key) if actions is not None else None,
                   nominal_deg=_t(qn), compensated_deg=_t(qc), delta_deg=_t(qc - qn),
                   error_um=error[0], error_deg=error[1], residual_um=res[0], residual_deg=res[1],
-                  conf_before=conf_before, conf_after=_conf_after(solved, i, u, written_conf),
+                  conf_before=conf_before, conf_after=after,
                   warnings=warnings, reason=None)
 
 
@@ -144,19 +151,17 @@ def _conf_after(solved: Solved, i: int, u: TargetUse, written_conf):
     return tuple(int(c) for c in solved.conf_after[i])
 
 
-def _warnings(solved: Solved, i: int, u: TargetUse, g, texts) -> tuple[str, ...]:
-    """The solver's warnings that matter for this use: a quadrant change
-    only where a robtarget with supervision on is written (confdata changes
-    there); the orientation left over at the wrist singularity with its
-    amount."""
-    writes_conf = u.kind == "robtarget" and (g is None or g.mode == "rob")
+def _warnings(solved: Solved, i: int, u: TargetUse, texts) -> tuple[str, ...]:
+    """The solver's warnings that matter for this use: not its quadrant
+    change (a written confdata that changes is said by the row's confdata
+    columns and a note of its own); the orientation left over at the wrist
+    singularity with its amount."""
     left = WARN_TEXT[Warn.ORIENTATION_LEFT] in texts
     out = []
     for text in texts:
-        if left and text == WARN_TEXT[Warn.WRIST_SINGULAR]:
+        if text == WARN_TEXT[Warn.QUADRANT_CHANGED]:
             continue
-        if text == WARN_TEXT[Warn.QUADRANT_CHANGED] and not (
-                writes_conf and solved.picks[i].kind != "closest"):
+        if left and text == WARN_TEXT[Warn.WRIST_SINGULAR]:
             continue
         if text == WARN_TEXT[Warn.ORIENTATION_LEFT]:
             text = (f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
@@ -167,11 +172,11 @@ def _warnings(solved: Solved, i: int, u: TargetUse, g, texts) -> tuple[str, ...]
     return tuple(out)
 
 
-def _hint(reason: str, u: TargetUse) -> str:
+def _hint(reason: str, u: TargetUse, tracked) -> str:
     """A target out of reach that carries external axis values the tool
     assumes do not move the base: say what to check."""
     if reason.startswith("nominal: out of reach") and any(
-            abs(v) < EXTAX_UNUSED for v in u.ext):
+            abs(v) < EXTAX_UNUSED for k, v in enumerate(u.ext) if k not in tracked):
         return (reason + " (its external axes are assumed not to move the robot's base; if "
                 "one is a track, say so with --track)")
     return reason

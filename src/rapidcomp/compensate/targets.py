@@ -3,8 +3,9 @@
 base_M_flange = base_M_world . world_M_uframe . uframe_M_oframe . oframe_M_tcp
                 . tframe^-1
 
-base_M_world is the identity unless a track axis carries the robot (--track:
-the base moves by the axis value along a world axis). tool0 and wobj0 are
+world_M_base is the robot's base frame in the world (--base, or a backup's
+SYSPAR/MOC.cfg; the identity by default), moved along a world axis by a
+track axis value when a track carries the robot (--track). tool0 and wobj0 are
 built in; tooldata/wobjdata come from the task's modules or from --with
 modules. Names are looked up as the controller does: the routine's own data
 and parameters, then the module's data (LOCAL included), then the global
@@ -112,6 +113,22 @@ def invert_pose(a):
     return a[0].T, -a[0].T @ a[1]
 
 
+def parse_base(values) -> tuple | None:
+    """`--base X,Y,Z,Q1,Q2,Q3,Q4`: world_M_base, mm and a quaternion in
+    RAPID order (w, x, y, z)."""
+    from ..errors import RapidcompError
+    if values is None:
+        return None
+    q = np.asarray(values[3:], float)
+    n = float(np.linalg.norm(q))
+    if not n > 1e-6:
+        raise RapidcompError("--base: the orientation Q1..Q4 is not a rotation (norm 0)")
+    if abs(n - 1.0) > QUAT_TOLERANCE:
+        raise RapidcompError(f"--base: the orientation Q1..Q4 has norm {n:.6f}; expected a unit "
+                             "quaternion (w, x, y, z)")
+    return quat_wxyz_to_matrix(q / n), np.asarray(values[:3], float)
+
+
 def parse_track(specs) -> tuple[tuple[int, np.ndarray], ...]:
     """`--track AXIS:x|y|z` options: eax_<AXIS> carries the robot base along
     that world axis (mm; -x etc. for the opposite sense). Returns
@@ -141,9 +158,11 @@ class Resolver:
     float, as the controller stores it (used to verify written output)."""
 
     def __init__(self, files: list[ParsedFile], float32: bool = False,
-                 usages: dict | None = None, writes: bool = True, track=()):
+                 usages: dict | None = None, writes: bool = True, track=(), base=None,
+                 observers=()):
         self.float32 = float32
         self.track = tuple(track)
+        self.base = base if base is not None else IDENTITY_POSE   # world_M_base at track 0
         self.globals: dict[str, list[Declaration]] = {}
         self.module_decls: dict[tuple[int, str], Declaration] = {}
         self.routine_decls: dict[tuple[int, str, str], Declaration] = {}
@@ -179,6 +198,7 @@ class Resolver:
                     self.writes.setdefault(name, (pf, spans[0], "assigned"))
         if writes or usages is None:
             self._call_writes(files)
+            self._other_tasks(observers)
 
     def _num(self, values) -> np.ndarray:
         a = np.asarray(values, float)
@@ -257,6 +277,17 @@ class Resolver:
                               f"({d.issue or 'run-time data'})")
         written = self._written(d)
         return Unresolved(written) if written else d
+
+    def _other_tasks(self, observers) -> None:
+        """PERS data are shared with the controller's other tasks: what
+        those write is written here too."""
+        if not observers:
+            return
+        pers = {name for name, ds in self.globals.items() if any(d.storage == "PERS" for d in ds)}
+        other = Resolver(list(observers), writes=True)
+        for name, (pf, span, how) in other.writes.items():
+            if name in pers:
+                self.writes.setdefault(name, (pf, span, f"{how} in another task"))
 
     def _call_writes(self, files) -> None:
         """Data a call may change: arguments of INOUT/VAR/PERS parameters of
@@ -365,9 +396,9 @@ class Resolver:
 
     def world_M_base(self, record) -> tuple | Unresolved:
         """The robot base in the world frame for a target's external axes:
-        moved along the track axes (--track), else the identity."""
+        the base frame, moved along the track axes (--track)."""
         if not self.track:
-            return IDENTITY_POSE
+            return self.base
         ext = self._num(record.ext)
         d = np.zeros(3)
         for k, u in self.track:
@@ -375,7 +406,7 @@ class Resolver:
                 return Unresolved(f"the target has no value for track axis eax_{AXES[k]} "
                                   "(9E9) but --track says it carries the robot", True)
             d = d + ext[k] * u
-        return np.eye(3), d
+        return self.base[0], self.base[1] + d
 
     # ------------------------------------------------------------ targets
     def _source(self, pf, expr, module, routine: str, env: dict[str, int], outer=None):

@@ -47,7 +47,7 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
     files += list(plan.task.context)
     # Run-time writes were ruled out on the input; the output adds none.
     res = Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
-                   track=plan.track)
+                   track=plan.track, base=plan.resolver.base)
     wanted = set(keys)
     motions = {k[:2] for k in keys}
     found = {}

@@ -40,6 +40,9 @@ class TaskSource:
     modules: tuple[str, ...]   # relative POSIX paths of the task's modules
     task: str | None = None    # controller task name (backups)
     notes: tuple[str, ...] = ()
+    # world_M_base of a backup's robot from SYSPAR/MOC.cfg: ((x, y, z) mm,
+    # (q1, q2, q3, q4)), None when the backup does not set one.
+    base: tuple | None = None
 
     @property
     def is_folder(self) -> bool:
@@ -52,8 +55,16 @@ def is_module(path: Path) -> bool:
 
 
 def _modules_below(folder: Path, display: str) -> list[str]:
-    found = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*")
-                   if p.is_file() and is_module(p) and not _hidden(p.relative_to(folder)))
+    found = []
+    for p in folder.rglob("*"):
+        if not is_module(p) or _hidden(p.relative_to(folder)):
+            continue
+        if p.is_symlink() and not p.exists():
+            raise InputError(f"{display}/{p.relative_to(folder).as_posix()}",
+                             "a link to a file that does not exist")
+        if p.is_file():
+            found.append(p.relative_to(folder).as_posix())
+    found.sort()
     if len(found) > MAX_MODULES:
         raise RapidcompError(f"{display}: {len(found)} module files below it; a task holds "
                              f"at most {MAX_MODULES} (give the task's own folder)")
@@ -64,15 +75,17 @@ def _hidden(rel: Path) -> bool:
     return any(part.startswith(".") for part in rel.parts)
 
 
-def tasks_of(path: str | Path, task_names: tuple[str, ...] = ()) -> list[TaskSource]:
-    """The tasks a command-line argument stands for."""
+def tasks_of(path: str | Path, task_names: tuple[str, ...] = (),
+             motion_only: bool = True) -> list[TaskSource]:
+    """The tasks a command-line argument stands for (of a backup, its
+    motion tasks; every task with motion_only=False)."""
     p = Path(path)
     shown = str(path)
     if not p.exists():
         raise RapidcompError(f"{shown}: no such file or folder")
     if p.is_dir():
         if (p / "RAPID").is_dir():
-            return _backup(p, shown, task_names)
+            return _backup(p, shown, task_names, motion_only)
         if task_names:
             raise RapidcompError(f"--task picks tasks of a controller backup; {shown} is a "
                                  "folder without RAPID/<TASK>/")
@@ -134,61 +147,79 @@ def _line_of(text: str, needle: str) -> int | None:
 _TASK_LINE = re.compile(r"^>>(TASK\d+):\s*\(([^,)]*)", re.MULTILINE)
 
 
-def _backup(root: Path, shown: str, wanted: tuple[str, ...]) -> list[TaskSource]:
+def _backup(root: Path, shown: str, wanted: tuple[str, ...],
+            motion_only: bool = True) -> list[TaskSource]:
     folders = sorted(d for d in (root / "RAPID").iterdir() if d.is_dir())
-    names = _backinfo_names(root)
-    motion = _motion_tasks(root)
-    tasks, skipped = [], []
+    names = _backinfo_names(root, shown)
+    motion = _motion_tasks(root, shown)
+    base = _base_frame(root, shown)
+    tasks, skipped, other = [], [], []
     for d in folders:
         name = names.get(d.name.upper(), d.name)
         mods = _modules_below(d, f"{shown}/RAPID/{d.name}")
         rel = [f"RAPID/{d.name}/{m}" for m in mods]
         if not rel:
             continue
+        task = TaskSource(name, "backup", root, root, tuple(rel), name, base=base)
         if motion is not None and name.upper() not in motion:
             skipped.append(f"task {name} (RAPID/{d.name}) is not a motion task "
                            "(SYSPAR/SYS.cfg): not compensated")
-            continue
-        tasks.append(TaskSource(name, "backup", root, root, tuple(rel), name))
+            other.append(task)
+            if motion_only:
+                continue
+        tasks.append(task)
     if wanted:
         chosen = []
         for w in wanted:
             hit = [t for t in tasks if w.upper() in (t.task.upper(),
                                                      t.modules[0].split("/")[1].upper())]
             if not hit:
+                if any(w.upper() in (t.task.upper(), t.modules[0].split("/")[1].upper())
+                       for t in other):
+                    raise RapidcompError(f"--task {w}: {w} is not a motion task "
+                                         "(SYSPAR/SYS.cfg); nothing to compensate there")
                 have = ", ".join(t.task for t in tasks) or "none"
                 raise RapidcompError(f"--task {w}: no motion task of that name in {shown} "
                                      f"(motion tasks: {have})")
             chosen += [t for t in hit if t not in chosen]
         tasks = chosen
+    if motion is None and motion_only:
+        skipped.append("SYSPAR/SYS.cfg says nothing of the tasks: every task holding modules "
+                       "is treated as a motion task")
     if not tasks:
         raise RapidcompError(f"{shown}: a controller backup without a motion task holding "
                              "modules under RAPID/")
     if skipped:
-        tasks[0] = TaskSource(tasks[0].name, tasks[0].kind, tasks[0].input, tasks[0].root,
-                              tasks[0].modules, tasks[0].task, tuple(skipped))
+        t = tasks[0]
+        tasks[0] = TaskSource(t.name, t.kind, t.input, t.root, t.modules, t.task,
+                              tuple(skipped), t.base)
     return tasks
 
 
-def _read_text(path: Path) -> str | None:
+def _read_text(path: Path, shown: str | None = None) -> str | None:
+    """A configuration file's text; None when it does not exist; a file
+    that exists but cannot be read is bad input."""
+    if not path.exists():
+        return None
     try:
         return path.read_bytes().decode("latin-1")
-    except OSError:
-        return None
+    except OSError as exc:
+        raise InputError(f"{shown}/{path.parent.name}/{path.name}" if shown else str(path),
+                         f"cannot read: {exc.strerror or exc}") from None
 
 
-def _backinfo_names(root: Path) -> dict[str, str]:
+def _backinfo_names(root: Path, shown: str) -> dict[str, str]:
     """TASKn folder -> task name, from `>>TASK1: (T_ROB1,...)` lines."""
-    text = _read_text(root / "BACKINFO" / "backinfo.txt") or ""
+    text = _read_text(root / "BACKINFO" / "backinfo.txt", shown) or ""
     return {m.group(1).upper(): m.group(2).strip() or m.group(1)
             for m in _TASK_LINE.finditer(text)}
 
 
-def _motion_tasks(root: Path) -> set[str] | None:
+def _motion_tasks(root: Path, shown: str) -> set[str] | None:
     """Upper-case names of the motion tasks in SYSPAR/SYS.cfg (CAB_TASKS
     instances with -MotionTask), or None when the file says nothing about
     tasks."""
-    text = _read_text(root / "SYSPAR" / "SYS.cfg")
+    text = _read_text(root / "SYSPAR" / "SYS.cfg", shown)
     if text is None or "CAB_TASKS:" not in text:
         return None
     section = text.split("CAB_TASKS:", 1)[1]
@@ -203,3 +234,38 @@ def _motion_tasks(root: Path) -> set[str] | None:
         if name and flag and (flag.group(1) is None or flag.group(1).upper() in ("YES", "TRUE")):
             out.add(name.group(1).upper())
     return out
+
+
+_MOC_KEYS = ("base_frame_pos_x", "base_frame_pos_y", "base_frame_pos_z", "base_frame_orient_u0",
+             "base_frame_orient_u1", "base_frame_orient_u2", "base_frame_orient_u3")
+
+
+def _base_frame(root: Path, shown: str) -> tuple | None:
+    """The robot's base frame in the world from SYSPAR/MOC.cfg (ROBOT
+    instances: -base_frame_pos_x/y/z in metres, -base_frame_orient_u0..u3
+    a quaternion w, x, y, z). None when no robot sets one (the identity);
+    several robots with different base frames: give --base."""
+    text = _read_text(root / "SYSPAR" / "MOC.cfg", shown)
+    if text is None or "ROBOT:" not in text:
+        return None
+    section = text.split("ROBOT:", 1)[1]
+    end = re.search(r"^[A-Z_]+:", section, re.MULTILINE)
+    if end:
+        section = section[:end.start()]
+    frames = set()
+    for line in re.sub(r"\\[ \t]*\r?\n", " ", section).splitlines():
+        if "-name" not in line:
+            continue
+        vals = []
+        for k, default in zip(_MOC_KEYS, (0, 0, 0, 1, 0, 0, 0)):
+            m = re.search(rf"-{k}\s+(-?[\d.eE+-]+)", line)
+            vals.append(float(m.group(1)) if m else float(default))
+        frames.add(tuple(vals))
+    frames.discard((0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0))
+    if not frames:
+        return None
+    if len(frames) > 1:
+        raise RapidcompError(f"{shown}/SYSPAR/MOC.cfg: several robots with different base "
+                             "frames; say which is this task's with --base X,Y,Z,Q1,Q2,Q3,Q4")
+    (v,) = frames
+    return (v[0] * 1000.0, v[1] * 1000.0, v[2] * 1000.0), v[3:]

@@ -7,7 +7,7 @@ MODULE CellData
     ! Tray offset measured by the camera before each pick.
     PERS pose pdTray:=[[2.5,-1.25,0],[1,0,0,0]];
     ! Home and park: the wrist straight (J5 = 0 and 0.2 deg).
-    CONST jointtarget jHome:=[[-0.002702,0.012189,-0.017715,0.417328,0.008478,-0.428129],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+    CONST jointtarget jHome:=[[-0.002694,0.012189,-0.017685,-0.005332,0.008272,-0.005415],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
     CONST jointtarget jPark:=[[-89.985974,-30.012344,29.995598,-0.131597,0.208667,0.114718],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
     ! Positioner (eax_a) turned to 90 deg; the robot does not move.
     CONST jointtarget jTurn:=[[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09],[90,9E+09,9E+09,9E+09,9E+09,9E+09]];
