@@ -124,10 +124,11 @@ def test_cell_spare_slot_blocks_nothing(cell):
     data = (out / "CellData.mod").read_text()
     if mode == "absj":
         # The new jointtarget arrays keep a valid value in the spare slot.
-        assert "jt_pPlace{6} := [" in data
-        block = data.split("jt_pPlace{6} := [")[1].split("];")[0]
+        assert "jt_pPlace{6}:=[" in data
+        block = data.split("jt_pPlace{6}:=[")[1].split("];")[0]
         assert block.strip().splitlines()[-1].strip().startswith("[[0,0,0,0,0,0],[9E+09")
-        assert any("pPlace{6}: [0,0,0,0,0,0], the calibration position" in n for n in doc["notes"])
+        assert any(n.startswith("jt_pPlace: elements no executed move reaches (pPlace{6}) hold "
+                                "[0,0,0,0,0,0], the calibration position") for n in doc["notes"])
     # The spare slot itself is left as written.
     assert "[[0,0,0],[0,0,0,0],[0,0,0,0],[9E+09" in data
 
@@ -282,7 +283,7 @@ def test_backup_with_a_track(tmp_path):
     assert len(rows) == 12  # 10 stations, MoveAbsJ jStart twice
     # MoveAbsJ keeps the track value of the robtarget it replaces.
     text = (out / "RAPID/TASK1/PROGMOD/Track.mod").read_text()
-    assert "jt_pSt5_1 := [[" in text and "],[1600,9E+09" in text
+    assert "jt_pSt5_1:=[[" in text and "],[1600,9E+09" in text
 
 
 def test_backup_task_selection(tmp_path):

@@ -72,10 +72,10 @@ def _model_options(f):
         click.option("--force", is_flag=True, help="Accept profile values beyond 5 mm / 1 deg."),
         click.option("--limit", "limits", multiple=True, metavar="JOINT=LO:HI",
                      help="Override a joint limit in degrees, e.g. J5=-120:120 (repeatable)."),
-        click.option("--track", "track", multiple=True, metavar="AXIS:x|y|z",
+        click.option("--track", "track", multiple=True, metavar="AXIS:[-]x|y|z",
                      help="External axis eax_AXIS (a..f) carries the robot along that world "
-                          "axis, in mm, e.g. a:x (repeatable). Default: external axes do not "
-                          "move the robot's base."),
+                          "axis (-x: against it), in mm, e.g. a:x (repeatable). Default: "
+                          "external axes do not move the robot's base."),
         click.option("--base", default=None, metavar="X,Y,Z,Q1,Q2,Q3,Q4",
                      callback=_floats(7, "X,Y,Z in mm and a unit quaternion Q1..Q4"),
                      help="The robot's base frame in the world (mm, quaternion w,x,y,z), as in "
@@ -215,12 +215,13 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
         sys.exit(EXIT_PARTIAL)
     _write(files)
     if not quiet:
+        shown: list[str] = []
         for o in outcomes:
-            shown = [p for p, _ in o.files if not o.spec.source.is_folder
-                     or not p.startswith(o.spec.output)]
-            if o.spec.source.is_folder:
-                shown.insert(0, o.spec.output + os.sep)
-            click.echo("wrote " + ", ".join(shown))
+            if o.spec.source.is_folder and o.spec.output + os.sep not in shown:
+                shown.append(o.spec.output + os.sep)
+            shown += [p for p, _ in o.files if not o.spec.source.is_folder
+                      or not p.startswith(o.spec.output + os.sep)]
+        click.echo("wrote " + ", ".join(shown))
     sys.exit(EXIT_PARTIAL if failed else EXIT_OK)
 
 
@@ -269,6 +270,8 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
             if real_out == f or real_out.startswith(f + os.sep):
                 raise RapidcompError(f"{out}: is inside the input folder {program}; write the "
                                      "output beside it")
+        if src.is_folder:
+            _check_output_folder(out, src)
         for t in ts:
             if no_report:
                 rep = None
@@ -290,6 +293,29 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
             specs.append(JobSpec(t, out, rep, json_path, profile, robot, tuple(with_modules),
                                  emit, force, tuple(limits), tuple(track), start, base))
     return specs
+
+
+def _check_output_folder(out: str, src) -> None:
+    """A task folder, program file or backup is written as a folder: not
+    over a file, not into a folder that holds other things (a run into the
+    output folder of an earlier run is fine: every file there is one it
+    writes again)."""
+    from pathlib import Path
+
+    from .compensate.job import layout
+    from .rapid.task import is_module
+    p = Path(out)
+    if is_module(p) or p.is_file():
+        raise RapidcompError(f"-o {out}: {src.input} is written as a folder (its layout kept); "
+                             "give a folder name")
+    if p.is_dir():
+        mine = set(layout(src))
+        other = sorted(f.relative_to(p).as_posix() for f in p.rglob("*")
+                       if f.is_file() and f.relative_to(p).as_posix() not in mine)
+        if other:
+            raise RapidcompError(f"-o {out}: the folder exists and holds files this run would "
+                                 f"not write ({', '.join(other[:3])}"
+                                 + (", ..." if len(other) > 3 else "") + "); give a new folder")
 
 
 def _campaign_options(f):

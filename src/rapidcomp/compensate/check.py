@@ -48,15 +48,16 @@ def check(task: Task, solver: Solver, track=(), start=None, base=None) -> CheckR
 def render_text(result: CheckResult) -> str:
     rows = result.rows
     several = len({r.file for r in rows}) > 1
+    places = [f"{r.file}:{r.line}" if several else str(r.line) for r in rows]
+    w = max([6] + [len(p) for p in places])
     out = [f"{result.program}: predicted error on the warm robot, per target",
-           f"{'line':>6}  {'instruction':<10} {'target':<28} {'error um':>9} {'error deg':>9} "
+           f"{'line':>{w}}  {'instruction':<10} {'target':<28} {'error um':>9} {'error deg':>9} "
            f"{'after um':>9} {'after deg':>9}  status"]
-    for r in rows:
+    for r, where in zip(rows, places):
         def f(x, fmt):
             return format(x, fmt) if x is not None else "-"
         note = r.reason or ("; ".join(r.warnings) if r.warnings else "")
-        where = f"{r.file}:{r.line}" if several else str(r.line)
-        out.append(f"{where:>6}  {r.instruction:<10} {r.target[:28]:<28} "
+        out.append(f"{where:>{w}}  {r.instruction:<10} {r.target[:28]:<28} "
                    f"{f(r.error_um, '9.1f')} {f(r.error_deg, '9.4f')} {f(r.residual_um, '9.1e')} "
                    f"{f(r.residual_deg, '9.1e')}  {r.status}" + (f" [{r.rule}]" if r.rule else "")
                    + (f": {note}" if note else ""))

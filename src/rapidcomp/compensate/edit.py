@@ -175,10 +175,26 @@ class Editor:
     def declare(self, g: Group, type_name: str, name: str, dims: str, value: str) -> None:
         fi, end, nl, indent, in_routine = self._anchor(g)
         scope = "" if in_routine or not g.local else "LOCAL "
-        decl = f"{scope}CONST {type_name} {name}{dims} := {value};"
+        decl = f"{scope}CONST {type_name} {name}{dims}{self._assign(g, fi)}{value};"
         self.inserts.setdefault((fi, end), []).append(decl)
         self.insert_nl[(fi, end)] = nl
         self.insert_indent[(fi, end)] = indent
+
+    def _assign(self, g: Group, fi: int) -> str:
+        """':=' spaced as in the declaration the new one comes from (else
+        as in the module's first declaration with a value)."""
+        text = self.text(fi)
+        nodes = [g.decl.node] if g.decl is not None and g.src.home_module is g.home_module else []
+        nodes += [it for it in g.home_module.node.items
+                  if isinstance(it, A.DataDecl) and it.init is not None]
+        for node in nodes[:1]:
+            head = text[node.span.start:node.init.span.start]
+            if head.endswith(" := "):
+                return " := "
+            if head.endswith(":= "):
+                return ":= "
+            return ":="
+        return " := "
 
     def array_value(self, g: Group, nl: str, indent: str, texts: dict) -> str:
         dims = g.decl.dims

@@ -174,8 +174,14 @@ def _notes(rows: list[UseRow], gs: list[P.Group]) -> list[str]:
     for g in gs:
         if g.slots:
             name = g.names.get("array", "the new jointtarget array")
-            notes.append(f"{name}: slots no executed move reaches hold "
-                         + "; ".join(what for _, (_, what) in sorted(g.slots.items())))
+            by_what: dict[str, list[int]] = {}
+            for k, (_, what) in sorted(g.slots.items()):
+                by_what.setdefault(what, []).append(k)
+            notes.append(f"{name}: elements no executed move reaches ("
+                         + ", ".join(P.element_label(g, k) for k in sorted(g.slots))
+                         + ") hold " + "; ".join(
+                             f"{what} ({', '.join(P.element_label(g, k) for k in ks)})"
+                             if len(by_what) > 1 else what for what, ks in by_what.items()))
     return notes
 
 

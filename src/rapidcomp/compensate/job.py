@@ -210,10 +210,11 @@ def run_all(specs: list[JobSpec], workers: int = 2) -> list[JobOutcome]:
     return outcomes
 
 
-def copies(source: TaskSource, output: str, written: set[str]) -> list[tuple[str, bytes]]:
-    """Files of a folder input that are not modules of a compensated task,
-    copied so the output has the input's layout: a backup whole (it must
-    restore), a program file's .pgf, a task folder's .pgf files."""
+def layout(source: TaskSource) -> list[str]:
+    """Relative paths of everything written for a folder input: its tasks'
+    modules and the files copied so the output has the input's layout (a
+    backup whole, so it restores; a program file's .pgf; a task folder's
+    .pgf files)."""
     if not source.is_folder:
         return []
     root = source.root
@@ -223,12 +224,18 @@ def copies(source: TaskSource, output: str, written: set[str]) -> list[tuple[str
         paths = [source.input]
     else:
         paths = [p for p in root.rglob("*.pgf") if p.is_file()]
+    rels = {p.relative_to(root).as_posix() for p in paths} | set(source.modules)
+    return sorted(rels)
+
+
+def copies(source: TaskSource, output: str, written: set[str]) -> list[tuple[str, bytes]]:
+    """The files of layout() that no job writes, copied byte for byte."""
     out = []
-    for p in sorted(paths):
-        rel = p.relative_to(root).as_posix()
+    for rel in layout(source):
         dest = str(Path(output) / rel)
         if dest in written:
             continue
+        p = source.root / rel
         try:
             out.append((dest, p.read_bytes()))
         except OSError as exc:

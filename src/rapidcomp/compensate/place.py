@@ -263,13 +263,11 @@ def fill_slots(plan: Plan, solver: Solver, gs: list[Group]) -> None:
         valid[i] = True
     nominal, deformed = solver.compensate(R, p, conf)
     for i, (g, k) in enumerate(want):
-        label = element_label(g, k)
         if valid[i] and deformed.success[i]:
-            g.slots[k] = (deformed.q_deg[i], f"{label}: its own compensated joints")
+            g.slots[k] = (deformed.q_deg[i], "the compensated joints of their robtargets")
         elif valid[i] and nominal.success[i]:
-            g.slots[k] = (nominal.q_deg[i], f"{label}: its nominal joints (not compensated: "
-                                            f"{deformed.reason(i)})")
+            g.slots[k] = (nominal.q_deg[i], "the nominal joints of their robtargets (these "
+                                            "cannot be compensated)")
         else:
-            why = nominal.reason(i) if valid[i] else "not a valid pose"
-            g.slots[k] = (np.zeros(6), f"{label}: [0,0,0,0,0,0], the calibration position "
-                                       f"(its robtarget has no solution: {why})")
+            g.slots[k] = (np.zeros(6), "[0,0,0,0,0,0], the calibration position (their "
+                                       "robtargets have no solution)")

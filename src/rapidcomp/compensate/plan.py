@@ -84,11 +84,13 @@ class Plan:
                            if abs(v) < EXTAX_UNUSED})
             tracked = {"abcdef"[k] for k, _ in self.track}
             free = [a for a in axes if a not in tracked]
-            lines = line_ranges(sorted({u.line for u in active}))
+            files = sorted({u.file.source.display_path for u in active})
+            lines = "; ".join(f"{f} lines " + line_ranges(sorted(
+                {u.line for u in active if u.file.source.display_path == f})) for f in files)
             if free:
                 out.append(
                     f"{len(active)} target uses carry external axis values (eax_"
-                    f"{', eax_'.join(free)}; lines {lines}): assumed not to move the robot's "
+                    f"{', eax_'.join(free)}; {lines}): assumed not to move the robot's "
                     "base (as with a positioner); they are copied as written. If an axis "
                     "carries the robot, say so with --track AXIS:x|y|z.")
             if tracked & set(axes):

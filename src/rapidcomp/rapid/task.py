@@ -114,8 +114,8 @@ def _pgf(p: Path, shown: str) -> TaskSource:
         root = ET.fromstring(data)
     except ET.ParseError as exc:
         line, col = exc.position
-        raise InputError(shown, f"not a program file: {exc.msg if hasattr(exc, 'msg') else exc}",
-                         line, col + 1) from None
+        what = re.sub(r": line \d+, column \d+$", "", str(exc))
+        raise InputError(shown, f"not a program file (XML: {what})", line, col + 1) from None
     if root.tag != "Program":
         raise InputError(shown, f"expected a <Program> element, found <{root.tag}>", 1)
     text = data.decode("utf-8", "replace")
