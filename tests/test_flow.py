@@ -317,3 +317,245 @@ def test_check_is_fixs_plan():
         assert (a.line, a.target, a.rule, a.nominal_deg, a.compensated_deg, a.error_um) == (
             b.line, b.target, b.rule, b.nominal_deg, b.compensated_deg, b.error_um)
         assert (a.status, b.status) in {("compensable", "compensated"), ("untouched", "untouched")}
+
+
+# ---------------------------------------------------------------- what else changes the state
+
+def test_callbyvar_and_unknown_procedures_make_everything_unknown():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    VAR num n:=1;
+    PROC main()
+        CallByVar "Mode", n;
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+    PROC Mode1()
+        ConfL\\Off;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    s = st[(6, "to")]
+    assert s.confl == {"on", "off"} and s.pdisp == {"on", "off"} and s.last is None
+    assert any("CallByVar" in n for n in plan.notes())
+
+
+def test_main_restarts_from_where_its_cycle_ends():
+    """Continuous run: main starts again without resetting supervision or
+    displacement, so its first move may run displaced."""
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        MoveJ p1, v100, fine, tool0;
+        PDispSet [[0,0,20],[1,0,0,0]];
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    assert st[(4, "to")].pdisp == {"on", "off"}
+    rows = rows_of(t)
+    assert rows[4].action == "robtarget p1 rewritten in place"    # never a MoveAbsJ
+
+
+def test_exitcycle_ends_the_cycle():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    VAR num n:=0;
+    PROC main()
+        MoveJ p1, v100, fine, tool0;
+        IF n > 0 THEN
+            MoveL p1, v100, fine, tool0;
+            ConfJ\\Off;
+            ExitCycle;
+        ENDIF
+        MoveJ p1, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    line = {u.key: u.line for u in plan.uses}
+    assert {line[k] for k in st[(11, "to")].last} == {5}   # ExitCycle does not fall through
+    assert st[(5, "to")].confj == {"on", "off"}             # ... main starts again after it
+
+
+def test_recursion_records_its_moves_as_unknown():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    VAR num n:=0;
+    PROC main()
+        Cycle;
+    ENDPROC
+    PROC Cycle()
+        MoveL p1, v100, fine, tool0;
+        ConfL\\Off;
+        PDispSet [[10,0,0],[1,0,0,0]];
+        IF n < 3 Cycle;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    s = st[(8, "to")]
+    assert s.confl == {"on", "off"} and s.pdisp == {"on", "off"}
+    assert any("call themselves: Cycle" in n for n in plan.notes())
+
+
+def test_an_error_handler_that_switches_supervision_is_followed():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        Probe;
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+    PROC Probe()
+        MoveL p1, v100, fine, tool0;
+    ERROR
+        ConfL\\Off;
+        RETURN;
+    ENDPROC
+ENDMODULE""")
+    _, st = states(t)
+    assert st[(5, "to")].confl == {"on", "off"}
+
+
+def test_retry_resumes_the_body_with_what_the_handler_switched():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        MoveL p1, v100, fine, tool0;
+        MoveL p1, v100, fine, tool0;
+    ERROR
+        PDispSet [[5,0,0],[1,0,0,0]];
+        RETRY;
+    ENDPROC
+ENDMODULE""")
+    _, st = states(t)
+    assert st[(4, "to")].pdisp == {"on", "off"}
+
+
+def test_a_trap_that_switches_supervision_makes_it_unknown_everywhere():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    VAR intnum iStop;
+    PROC main()
+        CONNECT iStop WITH trStop;
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+    TRAP trStop
+        ConfL\\Off;
+    ENDTRAP
+ENDMODULE""")
+    plan, st = states(t)
+    assert st[(6, "to")].confl == {"on", "off"}
+    assert any("TRAP" in n for n in plan.notes())
+
+
+def test_goto_labels_and_test_cases():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    VAR num n:=0;
+    PROC main()
+        TEST n
+        CASE 1:
+            ConfL\\Off;
+        DEFAULT:
+            ConfL\\On;
+        ENDTEST
+        MoveL p1, v100, fine, tool0;
+        again:
+        MoveL p1, v100, fine, tool0;
+        IF n < 2 GOTO again;
+    ENDPROC
+ENDMODULE""")
+    _, st = states(t)
+    assert st[(11, "to")].confl == {"on", "off"}
+    assert st[(13, "to")].last is None              # a GOTO may jump to the label
+
+
+def test_data_changed_by_calls_is_a_run_time_value():
+    """Writes that are not assignments: an INOUT parameter of a given
+    routine, a procedure no given module declares, GetDataVal and
+    SetDataVal (with a literal name; with a computed one, any data)."""
+    t = task(f"""MODULE A
+    PERS robtarget pA:={P1};
+    PERS robtarget pB:={P1};
+    PERS robtarget pC:={P1};
+    PERS robtarget pD:={P1};
+    CONST robtarget pE:={P1};
+    PROC main()
+        Shift pA, 50;
+        VisionUpdate pB;
+        GetDataVal "x", pC;
+        SetDataVal "pD", pA;
+        MoveL pA, v100, fine, tool0;
+        MoveL pB, v100, fine, tool0;
+        MoveL pC, v100, fine, tool0;
+        MoveL pD, v100, fine, tool0;
+        MoveL pE, v100, fine, tool0;
+    ENDPROC
+    PROC Shift(INOUT robtarget p, num dz)
+        p.trans.z := p.trans.z + dz;
+    ENDPROC
+ENDMODULE""")
+    rows = rows_of(t)
+    assert "pA is passed to Shift, which may change it at run time (M0.mod:8)" == rows[12].reason
+    assert "passed to VisionUpdate, which no given module declares" in rows[13].reason
+    assert "pC is assigned at run time" in rows[14].reason
+    assert "pD is set by SetDataVal at run time" in rows[15].reason
+    assert rows[16].status == "compensated"                   # CONST: never written
+    assert {rows[k].status for k in (12, 13, 14, 15)} == {"untouched"}
+
+
+def test_a_loop_variable_hides_a_constant_of_the_same_name():
+    t = task(f"""MODULE A
+    CONST num i:=3;
+    CONST robtarget p{{3}}:=[{P1},{P1},{P1}];
+    PROC main()
+        FOR i FROM 1 TO 2 DO
+            MoveL p{{i}}, v100, fine, tool0;
+        ENDFOR
+    ENDPROC
+ENDMODULE""")
+    plan = Plan(t)
+    assert sorted(u.label for u in plan.uses) == ["p{i} [i=1]", "p{i} [i=2]"]
+    assert sorted(u.source.element for u in plan.uses) == [0, 1]
+
+
+def test_pers_with_different_values_in_two_modules_is_not_guessed():
+    t = task(f"""MODULE A
+    PERS robtarget pT:={P1};
+    PROC main()
+        MoveL pT, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""", f"""MODULE B
+    PERS robtarget pT:={P4};
+ENDMODULE""")
+    r = rows_of(t)[4]
+    assert r.status == "not compensated" and "declared PERS with different values" in r.reason
+
+
+def test_pers_targets_stay_robtarget_moves_and_copies_say_so():
+    t = task(f"""MODULE A
+    PERS robtarget pT:={P1};
+    PROC main()
+        MoveJ pT, v100, fine, tool0;
+        MoveJ Offs(pT,0,0,50), v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    rows = rows_of(t)
+    assert rows[4].action == "robtarget pT rewritten in place"
+    assert rows[5].action == "new robtarget pT_offs_c"
+    assert any("pT is PERS" in w for w in rows[5].warnings)
+
+
+def test_a_robtarget_at_the_wrist_singularity_is_refused_with_the_reason_not_a_crash():
+    """RobotStudio's home robtarget [515,0,712] is exactly at J5 = 0: its
+    compensation needs a J4/J6 split no robtarget carries. As MoveJ in the
+    default mode it becomes a MoveAbsJ, which can."""
+    home = f"[[515,0,712],[0.707107,0,0.707107,0],[0,0,0,0],{EXT}]"
+    t = task(f"""MODULE A
+    CONST robtarget pHome:={home};
+    PROC main()
+        MoveL pHome, v100, fine, tool0;
+        MoveJ pHome, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    rows = rows_of(t, "auto")
+    assert rows[4].status == "not compensated" and "J4/J6 split" in rows[4].reason
+    assert rows[5].status == "compensated" and rows[5].action.startswith("MoveJ -> MoveAbsJ")

@@ -78,7 +78,7 @@ def evaluate(inp, out, track=None, displaced_um=1.0, **controller):
 CELL = ["CellData.mod", "MainModule.mod"]
 
 
-@pytest.fixture(scope="module", params=["absj", "robtarget"])
+@pytest.fixture(scope="module", params=["auto", "absj", "robtarget"])
 def cell(request, tmp_path_factory):
     out = tmp_path_factory.mktemp(request.param) / "cell_comp"
     r = rapidcomp("fix", TASKS / "cell", "--profile", FIXTURES / "warm.csv", "-o", out,
@@ -96,6 +96,10 @@ def test_cell_task_lands_every_move_on_its_pose(cell):
         # Displaced moves stay robtarget moves (MoveAbsJ is not displaced).
         assert [y.instruction for x, y, _, _ in rows if x.displaced] == ["MoveJ", "MoveL", "MoveL"]
         assert instructions.count("MoveAbsJ") == 29 - 3
+    elif mode == "auto":
+        # MoveJ becomes MoveAbsJ (not the displaced one); every MoveL stays.
+        assert [(x.instruction, y.instruction) for x, y, _, _ in rows
+                if x.instruction != y.instruction] == [("MoveJ", "MoveAbsJ")] * 6
     else:
         assert "MoveAbsJ" not in [y.instruction for x, y, _, _ in rows if x.kind == "rob"]
     # The displaced pick: the error of the undisplaced correction stays

@@ -128,3 +128,49 @@ def test_urdf_arm_profile_rows_may_name_joints_j1_to_j6():
         parse_profile(dup, "p.csv", joint_names=names)
     with pytest.raises(InputError, match="J1..J6"):
         parse_profile(text + "J7,0,0,0,0,0,0\n", "p.csv", joint_names=names)
+
+
+def test_a_backup_robot_base_frame_and_other_tasks_writes(tmp_path):
+    """SYSPAR/MOC.cfg's base frame is the robot's; a PERS target another
+    task writes is a run-time value here too."""
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    (bk / "SYSPAR" / "MOC.cfg").write_text(
+        "MOC:CFG_1.0:6:0::\n#\nROBOT:\n\n      -name \"ROB_1\" -use_robot_type \"ROB1_140\"\\\n"
+        "      -base_frame_pos_x 0.1 -base_frame_pos_y -0.02 -base_frame_pos_z 0\\\n"
+        "      -base_frame_orient_u0 1 -base_frame_orient_u1 0 -base_frame_orient_u2 0\\\n"
+        "      -base_frame_orient_u3 0\n")
+    (b,) = tasks_of(bk)
+    assert b.base == ((100.0, -20.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+    r = run("check", bk, "--profile", WARM, "--track", "a:x", "--json")
+    doc = json.loads(r.output)
+    assert doc["summary"]["target_uses"] == 12
+    # The other task writes the tool: every robtarget move is then untouched.
+    comm = bk / "RAPID" / "TASK2" / "PROGMOD" / "Comm.mod"
+    comm.write_text(comm.read_text().replace("Incr nTick;", "Incr nTick;\n"
+                    "            tProbe.tframe.trans.z := 96;").replace(
+                    "    VAR num nTick:=0;", "    VAR num nTick:=0;\n    PERS tooldata tProbe;"))
+    r = run("check", bk, "--profile", WARM, "--track", "a:x", "--json")
+    doc = json.loads(r.output)
+    untouched = doc["summary"]["untouched"]
+    assert list(untouched) == [
+        "tProbe is assigned in another task at run time (RAPID/TASK2/PROGMOD/Comm.mod:8)"]
+
+
+def test_output_folders_are_new_or_our_own(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    r = run("fix", TASKS / "cell", "--profile", WARM, "-o", out)
+    assert r.exit_code == 2 and "holds files this run would not write (notes.txt)" in r.output
+    r = run("fix", TASKS / "cell", "--profile", WARM, "-o", tmp_path / "o.mod")
+    assert r.exit_code == 2 and "give a folder name" in r.output
+    r = run("fix", TASKS / "cell", "--profile", WARM, "-o", tmp_path / "again", "-q")
+    assert r.exit_code == 0
+    r = run("fix", TASKS / "cell", "--profile", WARM, "-o", tmp_path / "again", "-q")
+    assert r.exit_code == 0     # a run into its own earlier output folder
+
+
+def test_with_a_module_of_the_task_is_read_once():
+    r = run("check", TASKS / "cell", "--with", TASKS / "cell" / "CellData.mod", "--profile", WARM)
+    assert r.exit_code == 0 and "more than once" not in r.output

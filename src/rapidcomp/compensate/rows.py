@@ -88,7 +88,7 @@ def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, 
              else (None, None))
     # confdata is a robtarget's: a MoveAbsJ has none.
     conf_before = tuple(int(c) for c in u.conf) if u.conf is not None else None
-    d_warnings = deformed.warning_texts(i) if has_q else ()
+    d_warnings = _warnings(solved, i, u, deformed.warning_texts(i)) if has_q else ()
     g: Group | None = group_of.get(u.key) if group_of is not None else None
     why = None
     if not solved.ok(i):
@@ -105,7 +105,7 @@ def _row(solved: Solved, u: TargetUse, base, group_of, actions, verified, mode, 
                       residual_deg=None, conf_before=conf_before, conf_after=None,
                       warnings=d_warnings, reason=why)
     qc = deformed.q_deg[i]
-    warnings = _warnings(solved, i, u, d_warnings)
+    warnings = d_warnings
     if g is not None:
         if g.mode == "absj" and u.motion.spec.name == "MoveL":
             warnings = warnings + (LINEAR_WARNING,)
