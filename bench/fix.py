@@ -71,7 +71,7 @@ def one(n: int) -> dict:
     """Run one size in this process; returns figures."""
     from rapidcomp.compensate import report
     from rapidcomp.compensate.fix import fix
-    from rapidcomp.compensate.job import load_solver
+    from rapidcomp.compensate.load import load_solver
     from rapidcomp.compensate.plan import Task
     from rapidcomp.rapid.grammar import engine
     from rapidcomp.rapid.parse import parse_text

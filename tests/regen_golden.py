@@ -14,7 +14,7 @@ from pathlib import Path
 
 from rapidcomp.compensate import report
 from rapidcomp.compensate.fix import fix
-from rapidcomp.compensate.job import load_solver
+from rapidcomp.compensate.load import load_solver
 from rapidcomp.compensate.plan import Task
 from rapidcomp.rapid.inspect import render_text, report as inspect_report
 from rapidcomp.rapid.parse import parse_file
@@ -57,7 +57,7 @@ def fix_golden(case: str) -> tuple[bytes, str]:
 
 def task_golden(case: str) -> tuple[dict[str, bytes], str]:
     """({module path: after bytes}, report.md text) of a task case."""
-    from rapidcomp.compensate.job import load_task
+    from rapidcomp.compensate.load import load_task
     from rapidcomp.rapid.task import tasks_of
     folder, mode = TASK_CASES[case]
     (source,) = tasks_of(ROOT / "fixtures" / "tasks" / folder)

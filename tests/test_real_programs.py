@@ -297,3 +297,23 @@ def test_backup_task_selection(tmp_path):
     r = rapidcomp("check", TASKS / "backup_irbt", "--profile", FIXTURES / "warm.csv",
                   "--task", "TASK1", "--track", "a:x")
     assert r.stdout.startswith("T_ROB1: predicted error")
+
+
+def test_the_readme_task_commands_run_as_written(tmp_path):
+    """The three commands of the README's 'Whole tasks' section, on a copy
+    of fixtures/ (default outputs beside the inputs)."""
+    import shutil
+    shutil.copytree(FIXTURES, tmp_path / "fixtures")
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("## Whole tasks")[1].split("```sh")[1].split("```")[0]
+    commands = [line.split("#")[0].split() for line in section.strip().splitlines()]
+    assert len(commands) == 3
+    for cmd in commands:
+        assert cmd[0] == "rapidcomp"
+        r = subprocess.run([sys.executable, "-m", "rapidcomp", *cmd[1:]], cwd=tmp_path,
+                           capture_output=True, text=True)
+        assert r.returncode == 0, (cmd, r.stdout, r.stderr)
+    t = tmp_path / "fixtures" / "tasks"
+    assert (t / "cell_comp" / "MainModule.mod").is_file() and (t / "cell_comp.md").is_file()
+    assert (t / "glue" / "Glue_comp" / "Glue.pgf").is_file()
+    assert (t / "backup_irbt_comp" / "SYSPAR" / "SYS.cfg").is_file()

@@ -128,7 +128,7 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, ba
 
     from .compensate.check import check as run_check
     from .compensate.check import render_text
-    from .compensate.job import load_solver, load_task, robot_base
+    from .compensate.load import load_solver, load_task, robot_base
     from .compensate.targets import parse_track
     from .rapid.task import tasks_of
     try:
@@ -250,7 +250,9 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
         for t in ts:
             inputs.update(os.path.realpath(t.root / m) for m in t.modules)
             inputs.add(os.path.realpath(t.input))
-            if t.is_folder:
+            # A folder's or backup's output inside it would be read back as
+            # part of the task next time; a program file names its modules.
+            if t.kind in ("folder", "backup"):
                 folders.append(os.path.realpath(t.root))
     specs = []
     seen: set[str] = set()

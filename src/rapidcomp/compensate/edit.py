@@ -13,6 +13,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..edits import SpanEdit
+from ..kinematics.conf import quadrant_miss
 from ..errors import InternalError
 from ..rapid import ast as A
 from ..rewrite import records
@@ -20,7 +21,7 @@ from ..rewrite.names import NameAllocator
 from .place import Group, element_label, multi_index
 from .plan import Plan
 from .solve import Solved
-from .targets import Source, base_pose, compose_pose, invert_pose
+from .targets import Source, base_pose, wobj_target
 
 
 class Values:
@@ -61,8 +62,7 @@ class Values:
         src = self.source(g, k)
         flange = (s.flange_R[i], s.flange_p[i])
         base = self.plan.resolver.world_M_base(src.record)
-        target = compose_pose(compose_pose(invert_pose(g.wobj[1]), compose_pose(base, flange)),
-                              g.tool[1])
+        target = wobj_target(base, g.wobj[1], flange, g.tool[1])
         written = np.array(src.record.conf)
         if all(s.picks[s.row[u.key]].kind == "closest" for u in g.uses):
             conf = written       # supervision is off for every use: confdata is not read
@@ -70,8 +70,7 @@ class Values:
             conf = np.array(s.conf_after[i])
             q = s.deformed.q_deg[i]
             for col, cf in ((0, 0), (3, 1), (5, 2)):
-                lo = 90.0 * written[cf]
-                if lo - self.tol <= q[col] <= lo + 90.0 + self.tol:
+                if quadrant_miss(q[col], written[cf]) <= self.tol:
                     conf[cf] = written[cf]
         return (*base_pose(src, target), conf)
 
@@ -134,7 +133,6 @@ class Editor:
         self.insert_nl: dict[tuple[int, int], str] = {}
         self.insert_indent: dict[tuple[int, int], str] = {}
         self.actions: dict = {}                                # use key -> what was done
-        self.file_index = {id(pf): i for i, pf in enumerate(plan.files)}
 
     def text(self, fi: int) -> str:
         return self.plan.files[fi].source.text
@@ -227,7 +225,7 @@ class Editor:
         if g.placement == "in place" or (g.placement == "inline" and g.mode != "absj"):
             for k in g.elements:
                 record = vals.source(g, k).record
-                fi = (self.file_index[id(g.src.home)] if g.decl is not None
+                fi = (self.plan.file_index[id(g.src.home)] if g.decl is not None
                       else g.uses[0].key[0])
                 for e in records.field_edits(record, texts[k],
                                              f"{element_label(g, k)} compensated"):

@@ -1,13 +1,13 @@
-"""One `rapidcomp fix` job per task: load, compensate, render outputs in
-memory. Files are written by the caller, all at once (atomic.py), and only
-when every job succeeded: bad input anywhere means no output anywhere.
+"""One `rapidcomp fix` job per task: load (load.py), compensate, render
+outputs in memory. Files are written by the caller, all at once
+(atomic.py), and only when every job succeeded: bad input anywhere means no
+output anywhere.
 
 Several tasks run in a process pool of two workers (the machine's cores).
 """
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, replace
@@ -15,10 +15,10 @@ from pathlib import Path
 
 from ..errors import Errors, InputError, RapidcompError
 from ..progress import Progress
-from ..rapid.task import TaskSource, tasks_of
+from ..rapid.task import TaskSource
 from . import report
 from .fix import FixResult, fix
-from .plan import Task
+from .load import load_solver, load_task, robot_base
 
 
 @dataclass(frozen=True)
@@ -50,89 +50,12 @@ class JobOutcome:
     files: tuple[tuple[str, bytes], ...]   # (path, bytes) to write
 
 
-def robot_base(source: TaskSource, given) -> tuple:
-    """(world_M_base as (R, p) or None, what the report says of it): --base,
-    else a backup's SYSPAR/MOC.cfg, else the world frame."""
-    from .targets import parse_base
-    if given is not None:
-        return parse_base(given), "--base " + ",".join(f"{v:g}" for v in given)
-    if source.base is not None:
-        (x, y, z), q = source.base
-        return (parse_base((x, y, z, *q)),
-                f"({x:g}, {y:g}, {z:g}) mm, [{', '.join(f'{v:g}' for v in q)}] (SYSPAR/MOC.cfg)")
-    return None, "the world frame (assumed; --base sets another)"
-
-
 def default_output(path: str, folder: bool = False) -> str:
     p = Path(path)
     if folder:
         base = p.parent / p.stem if p.suffix.lower() == ".pgf" else p
         return str(base.with_name(base.name + "_comp"))
     return str(p.with_name(p.stem + "_comp" + p.suffix))
-
-
-def load_robot(robot: str | None, limits=()):
-    from ..kinematics.robot import irb140, load_urdf, override_limits
-    if robot is None or robot.lower() == "irb140":
-        return override_limits(irb140(), limits)
-    return override_limits(load_urdf(robot), limits)
-
-
-def load_solver(profile: str, robot: str | None, force: bool, limits=()):
-    from ..kinematics.analytic import UnsupportedGeometry
-    from ..kinematics.ik import Solver
-    from ..kinematics.profile import deform, read_profile
-    nominal = load_robot(robot, limits)
-    prof = read_profile(profile, force=force, joint_names=nominal.joint_names)
-    try:
-        return Solver(nominal, deform(nominal, prof))
-    except UnsupportedGeometry as exc:
-        raise RapidcompError(f"{robot}: {exc}") from exc
-
-
-def load_task(source: TaskSource, with_modules=()) -> Task:
-    """Parse the task's modules (named by their path inside the task) and
-    the --with modules; a module name twice in a task is refused, as the
-    controller refuses to load it."""
-    from ..rapid.parse import parse_file
-    files = [_parse(source, rel) for rel in source.modules]
-    seen: dict[str, str] = {}
-    for pf in files:
-        for m in pf.modules:
-            first = seen.setdefault(m.name.lower(), pf.source.display_path)
-            if first != pf.source.display_path:
-                raise InputError(_shown(source, pf.source.display_path),
-                                 f"module {m.name} is also in {first}: a task holds each module "
-                                 "once (the controller refuses to load it twice); give the "
-                                 "program file (.pgf) or a folder without the copy",
-                                 pf.line(m.node.name_span))
-    mine = {os.path.realpath(source.root / rel) for rel in source.modules}
-    context = [parse_file(m) for m in with_modules if os.path.realpath(m) not in mine]
-    observers = []
-    if source.kind == "backup":
-        # PERS data are shared between tasks: the other tasks' writes count.
-        for other in tasks_of(source.input, motion_only=False):
-            if other.task != source.task:
-                observers += [_parse(other, rel) for rel in other.modules]
-    return Task(source.task or source.name, tuple(files), tuple(context), tuple(observers))
-
-
-def _parse(source: TaskSource, rel: str):
-    """A module of a task, named by its path inside the task (reports
-    carry no absolute paths); a bad module is reported by the path the
-    user can open."""
-    from ..rapid.parse import parse_file
-    try:
-        return parse_file(source.root / rel, rel)
-    except InputError as exc:
-        if not source.is_folder:
-            raise
-        raise InputError(_shown(source, rel), exc.message, exc.line, exc.col,
-                         exc.source_line) from None
-
-
-def _shown(source: TaskSource, rel: str) -> str:
-    return str(source.root / rel) if source.is_folder else rel
 
 
 def output_path(spec: JobSpec, rel: str) -> Path:

@@ -24,7 +24,7 @@ from ..kinematics.ik import Solver, Warn
 from ..rapid.model import Declaration, Module
 from .plan import Plan
 from .solve import SAME_DEG, Solved
-from .targets import Source, TargetUse, compose_pose, invert_pose
+from .targets import Source, TargetUse, flange_pose
 
 MODES = ("auto", "absj", "robtarget")
 # Optional arguments MoveJ/MoveL share with MoveAbsJ (RAPID Instructions
@@ -108,7 +108,7 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
     group per array (one value per element); any other use joins it when
     its solution there is the same, else groups by its own solution (a
     target reached on two solutions needs two values)."""
-    file_index = {id(pf): i for i, pf in enumerate(plan.files)}
+    file_index = plan.file_index
     by_key: dict = {}
     out: list[Group] = []
     loop_first = sorted(solved.uses, key=lambda u: not u.source.by_loop)
@@ -214,7 +214,7 @@ def place(plan: Plan, gs: list[Group]) -> None:
             g.placement = "inline"
         elif g.mode == "absj":
             g.placement = "new"
-    file_index = {id(pf): i for i, pf in enumerate(plan.files)}
+    file_index = plan.file_index
     for decl_groups in by_decl.values():
         writable = [g for g in decl_groups if g.failure is None and g.mode != "absj"]
         if not writable:
@@ -257,8 +257,7 @@ def fill_slots(plan: Plan, solver: Solver, gs: list[Group]) -> None:
         if not isinstance(base, tuple):
             R[i], p[i] = np.eye(3), np.zeros(3)
             continue
-        R[i], p[i] = compose_pose(compose_pose(invert_pose(base), compose_pose(
-            g.wobj[1], plan.resolver.target_pose(src))), invert_pose(g.tool[1]))
+        R[i], p[i] = flange_pose(base, g.wobj[1], plan.resolver.target_pose(src), g.tool[1])
         conf[i] = record.conf
         valid[i] = True
     nominal, deformed = solver.compensate(R, p, conf)

@@ -49,15 +49,13 @@ class Plan:
                     self.uses.extend(self.resolver.resolve(pf, m, motion, (fi, mi)))
                     mi += 1
         self.by_key = {u.key: u for u in self.uses}
+        self.file_index = {id(pf): i for i, pf in enumerate(self.files)}
         self.flow: Flow = analyse(self.files, self.n_written, self.resolver, bool(track))
 
     def state(self, u: TargetUse) -> State:
         """The motion state before a use (unknown where the flow never
         reached it)."""
         return self.flow.before.get(u.key, UNKNOWN)
-
-    def supervision(self, u: TargetUse) -> frozenset:
-        return self.state(u).supervision(u.motion.spec.interpolation)
 
     def may_be_displaced(self, u: TargetUse) -> bool:
         return ON in self.state(u).pdisp

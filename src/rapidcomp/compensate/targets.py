@@ -28,6 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..errors import RapidcompError
 from ..kinematics.frames import DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z
 from ..rapid import ast as A
 from ..rapid.model import Declaration, Module, Motion, ParsedFile
@@ -113,10 +114,22 @@ def invert_pose(a):
     return a[0].T, -a[0].T @ a[1]
 
 
+def flange_pose(base, wobj, target, tool):
+    """base_M_flange = base_M_world . world_M_wobj . wobj_M_target . tcp_M_flange
+    (base: world_M_base; wobj: uframe . oframe; tool: tframe)."""
+    return compose_pose(compose_pose(invert_pose(base), compose_pose(wobj, target)),
+                        invert_pose(tool))
+
+
+def wobj_target(base, wobj, flange, tool):
+    """wobj_M_target that puts the flange at base_M_flange (flange_pose's
+    inverse)."""
+    return compose_pose(compose_pose(invert_pose(wobj), compose_pose(base, flange)), tool)
+
+
 def parse_base(values) -> tuple | None:
     """`--base X,Y,Z,Q1,Q2,Q3,Q4`: world_M_base, mm and a quaternion in
     RAPID order (w, x, y, z)."""
-    from ..errors import RapidcompError
     if values is None:
         return None
     q = np.asarray(values[3:], float)
@@ -133,7 +146,6 @@ def parse_track(specs) -> tuple[tuple[int, np.ndarray], ...]:
     """`--track AXIS:x|y|z` options: eax_<AXIS> carries the robot base along
     that world axis (mm; -x etc. for the opposite sense). Returns
     ((axis index, unit vector), ...)."""
-    from ..errors import RapidcompError
     out = []
     for spec in specs or ():
         axis, _, direction = spec.strip().lower().partition(":")
@@ -635,8 +647,7 @@ class Resolver:
         if isinstance(base, Unresolved):
             return fail(base)
         self._confdata(src, pf)
-        Rf, pf_ = compose_pose(compose_pose(invert_pose(base), compose_pose(
-            wobj[1], self.target_pose(src, pf))), invert_pose(tool[1]))
+        Rf, pf_ = flange_pose(base, wobj[1], self.target_pose(src, pf), tool[1])
         return TargetUse(motion, t.role, label, line, kind, Rf, pf_, src.record.conf, None, None,
                          src, tool, wobj, envt, file=pf, module=module, ext=src.record.ext,
                          key=key, notes=tuple(self._notes))

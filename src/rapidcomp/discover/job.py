@@ -31,7 +31,7 @@ class Outcome:
 
 
 def _load(robot: str | None, profile: str | None, force: bool, payload):
-    from ..compensate.job import load_robot
+    from ..compensate.load import load_robot
     nominal = load_robot(robot)
     if profile:
         prof = read_profile(profile, force=force, joint_names=nominal.joint_names)

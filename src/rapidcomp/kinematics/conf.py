@@ -18,6 +18,14 @@ def quadrant(angle_deg) -> np.ndarray:
     return np.floor(np.asarray(angle_deg, float) / 90.0).astype(int)
 
 
+def quadrant_miss(angle_deg, cf) -> np.ndarray:
+    """How far (deg) an angle lies outside quadrant cf, [90 cf, 90 cf + 90]
+    (0 inside)."""
+    lo = 90.0 * np.asarray(cf, float)
+    a = np.asarray(angle_deg, float)
+    return np.maximum(0.0, np.maximum(lo - a, a - (lo + 90.0)))
+
+
 def wrap_pi(a) -> np.ndarray:
     """Angles wrapped into (-pi, pi]."""
     a = np.asarray(a, float)

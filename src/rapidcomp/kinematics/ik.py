@@ -19,7 +19,7 @@ import numpy as np
 
 from .analytic import ArmGeometry, solve_branches
 from .chain import Chain
-from .conf import confdata, wrap_pi
+from .conf import confdata, quadrant_miss, wrap_pi
 from .frames import DEG, rotation_log
 from .robot import RobotModel
 
@@ -211,9 +211,7 @@ class Solver:
         the quadrant conf names (cf1, cf4, cf6)."""
         out = np.zeros(len(q_deg), dtype=bool)
         for col, cf in ((0, 0), (3, 1), (5, 2)):
-            lo = 90.0 * conf[:, cf]
-            miss = np.maximum(lo - q_deg[:, col], q_deg[:, col] - (lo + 90.0))
-            out |= miss > self.options.quadrant_tol_deg
+            out |= quadrant_miss(q_deg[:, col], conf[:, cf]) > self.options.quadrant_tol_deg
         return out
 
     def _mark_limits(self, q_deg, status, detail, djoint) -> None:
@@ -267,14 +265,7 @@ class Solver:
             status[fail] = Status.NO_CONFIGURATION
             detail[fail] = miss[fail]
             djoint[fail] = col
-        # Axes without a turn counter in confdata (J2, J3, J5) take the turn
-        # that lies within their limits (J3 of the IRB 140 spans -230..+50).
-        for col in (1, 2, 4):
-            for shift in (-360.0, 360.0):
-                moved = qd[:, col] + shift
-                better = ((qd[:, col] < self.lower[col]) | (qd[:, col] > self.upper[col])) & (
-                    moved >= self.lower[col]) & (moved <= self.upper[col])
-                qd[:, col] = np.where(better, moved, qd[:, col])
+        qd = self._uncounted_turns(qd)
         self._mark_limits(qd, status, detail, djoint)
         # Joint-limit failures keep their angles (the report shows them).
         has_q = (status == Status.OK) | (status == Status.JOINT_LIMIT)
@@ -480,6 +471,13 @@ class Solver:
             a = np.where(a > hi[col], a - 360.0, a)
             a = np.where(a < lo[col], a + 360.0, a)
             c[..., col] = a
+        return self._uncounted_turns(c)
+
+    def _uncounted_turns(self, c: np.ndarray) -> np.ndarray:
+        """Axes without a turn counter in confdata (J2, J3, J5) take the
+        turn that lies within their limits (J3 of the IRB 140 spans
+        -230..+50): c (..., 6) deg, in place and returned."""
+        lo, hi = self.lower, self.upper
         for col in (1, 2, 4):
             for shift in (-360.0, 360.0):
                 moved = c[..., col] + shift
