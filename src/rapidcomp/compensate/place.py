@@ -23,7 +23,7 @@ import numpy as np
 from ..kinematics.ik import Solver, Warn
 from ..rapid.model import Declaration, Module
 from .plan import Plan
-from .solve import SAME_DEG, Solved
+from .solve import SAME_DEG, Solved, solve_slots
 from .targets import Source, TargetUse, flange_pose
 
 MODES = ("auto", "absj", "robtarget")
@@ -260,13 +260,5 @@ def fill_slots(plan: Plan, solver: Solver, gs: list[Group]) -> None:
         R[i], p[i] = flange_pose(base, g.wobj[1], plan.resolver.target_pose(src), g.tool[1])
         conf[i] = record.conf
         valid[i] = True
-    nominal, deformed = solver.compensate(R, p, conf)
-    for i, (g, k) in enumerate(want):
-        if valid[i] and deformed.success[i]:
-            g.slots[k] = (deformed.q_deg[i], "the compensated joints of their robtargets")
-        elif valid[i] and nominal.success[i]:
-            g.slots[k] = (nominal.q_deg[i], "the nominal joints of their robtargets (these "
-                                            "cannot be compensated)")
-        else:
-            g.slots[k] = (np.zeros(6), "[0,0,0,0,0,0], the calibration position (their "
-                                       "robtargets have no solution)")
+    for (g, k), slot in zip(want, solve_slots(solver, R, p, conf, valid)):
+        g.slots[k] = slot

@@ -458,6 +458,25 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
                   disp, start)
 
 
+def solve_slots(solver: Solver, R, p, conf, valid) -> list[tuple[np.ndarray, str]]:
+    """Joints for array slots no executed move reaches (they need some
+    valid value): compensated where the slot's robtarget solves by its
+    confdata, else its nominal joints, else the calibration position; with
+    what each is."""
+    nominal, deformed = solver.compensate(R, p, conf)
+    out = []
+    for i in range(len(valid)):
+        if valid[i] and deformed.success[i]:
+            out.append((deformed.q_deg[i], "the compensated joints of their robtargets"))
+        elif valid[i] and nominal.success[i]:
+            out.append((nominal.q_deg[i], "the nominal joints of their robtargets (these "
+                                          "cannot be compensated)"))
+        else:
+            out.append((np.zeros(6), "[0,0,0,0,0,0], the calibration position (their "
+                                     "robtargets have no solution)"))
+    return out
+
+
 def _displacement_sensitivity(solver: Solver, q_deg: np.ndarray) -> np.ndarray:
     """um of TCP error per mm of program displacement, per row.
 
