@@ -4,6 +4,7 @@ in one place: 0 ok, 1 some targets not compensated, 2 bad input."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 
@@ -40,8 +41,9 @@ def main() -> None:
     """Thermal compensation of ABB RAPID programs (IRC5, IRB 140)."""
 
 
-def _floats(count: int, what: str):
-    """A click callback: "X,Y,Z" -> a tuple of `count` floats."""
+def _floats(count: int, what: str, limits=None):
+    """A click callback: "X,Y,Z" -> a tuple of `count` finite floats, each
+    within limits[i] = (lo, hi) when given."""
     def parse(ctx, param, value):
         if value is None:
             return None
@@ -49,9 +51,27 @@ def _floats(count: int, what: str):
             vals = tuple(float(v) for v in value.split(","))
         except ValueError:
             vals = ()
-        if len(vals) != count or not all(v == v and abs(v) != float("inf") for v in vals):
+        if len(vals) != count or not all(math.isfinite(v) for v in vals):
             raise click.BadParameter(f"expected {what} ({count} numbers separated by commas)")
+        for v, (lo, hi) in zip(vals, limits or ()):
+            if not lo <= v <= hi:
+                raise click.BadParameter(f"{v:g} is out of range: expected {what}, each "
+                                         f"within {lo:g}..{hi:g}")
         return vals
+    return parse
+
+
+def _number(lo: float, hi: float, what: str, open_low: bool = False):
+    """A click callback: one finite number in lo..hi (lo excluded when
+    open_low)."""
+    def parse(ctx, param, value):
+        if value is None:
+            return None
+        ok = math.isfinite(value) and (lo < value if open_low else lo <= value) and value <= hi
+        if not ok:
+            low = f"> {lo:g}" if open_low else f">= {lo:g}"
+            raise click.BadParameter(f"{value:g}: expected {what} {low} and <= {hi:g}")
+        return value
     return parse
 
 
@@ -77,12 +97,13 @@ def _model_options(f):
                           "axis (-x: against it), in mm, e.g. a:x (repeatable). Default: "
                           "external axes do not move the robot's base."),
         click.option("--base", default=None, metavar="X,Y,Z,Q1,Q2,Q3,Q4",
-                     callback=_floats(7, "X,Y,Z in mm and a unit quaternion Q1..Q4"),
+                     callback=_floats(7, "X,Y,Z in mm and a unit quaternion Q1..Q4",
+                                      [(-1e5, 1e5)] * 3 + [(-1.0, 1.0)] * 4),
                      help="The robot's base frame in the world (mm, quaternion w,x,y,z), as in "
                           "the controller's configuration. Default: a backup's SYSPAR/MOC.cfg, "
                           "else the world frame."),
         click.option("--start", default=None, metavar="J1,...,J6",
-                     callback=_floats(6, "J1,...,J6 in degrees"),
+                     callback=_floats(6, "J1,...,J6 in degrees", [(-720.0, 720.0)] * 6),
                      help="Where the robot is when the program leaves its position unknown "
                           "(deg): moves without configuration supervision whose confdata names "
                           "no solution take the solution closest to it. Default: the program's "
@@ -327,9 +348,13 @@ def _campaign_options(f):
         click.option("--profile", default=None, type=click.Path(dir_okay=False),
                      help="Profile CSV of the model (plain or extended); default: none."),
         click.option("--robot", default=None, help="irb140 (default) or a URDF file."),
-        click.option("--tool", default="0,0,0", callback=_floats(3, "X,Y,Z in mm"),
-                     help="Measuring point in the flange frame, mm (default: flange origin)."),
-        click.option("--payload", default=None, callback=_floats(4, "KG,CX,CY,CZ"),
+        click.option("--tool", default="0,0,0",
+                     callback=_floats(3, "X,Y,Z in mm", [(-2000.0, 2000.0)] * 3),
+                     help="Measuring point in the flange frame, mm, each within +-2000 (default: "
+                          "flange origin)."),
+        click.option("--payload", default=None,
+                     callback=_floats(4, "KG,CX,CY,CZ (kg, mm)",
+                                      [(0.0, 1000.0)] + [(-2000.0, 2000.0)] * 3),
                      help="Load on the flange during the measurement: kg and centre of mass "
                           "in the flange frame, mm (gravity compliance)."),
         click.option("--force", is_flag=True, help="Accept profile values beyond the sanity "
@@ -354,7 +379,9 @@ def _write_outcome(outcome, quiet: bool) -> None:
 @click.argument("measured", type=click.Path(dir_okay=False))
 @_campaign_options
 @click.option("--sigma", type=float, default=None,
-              help="Measurement noise, standard deviation per axis in mm (default: estimated).")
+              callback=_number(0.0, 10.0, "a standard deviation in mm", open_low=True),
+              help="Measurement noise, standard deviation per axis in mm, > 0 and <= 10 "
+                   "(default: estimated).")
 @click.option("--report", "report_path", default=None, type=click.Path(dir_okay=False),
               help="Markdown report: residual analysis and one table per step.")
 @click.option("--json", "json_path", default=None, type=click.Path(dir_okay=False),
@@ -391,8 +418,9 @@ def discover(measured, profile, robot, tool, payload, force, sigma, report_path,
               help="A catalogue effect and its values in its parameters' units, e.g. "
                    "joint_offset:J2=0.01 (repeatable).")
 @click.option("--noise", type=float, default=0.005, show_default=True,
-              help="Gaussian noise, standard deviation per axis in mm.")
-@click.option("--seed", type=int, default=0, show_default=True,
+              callback=_number(0.0, 10.0, "a standard deviation in mm"),
+              help="Gaussian noise, standard deviation per axis in mm, 0..10.")
+@click.option("--seed", type=click.IntRange(0, 2 ** 32 - 1), default=0, show_default=True,
               help="Random seed (noise and random:N poses).")
 @click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False),
               help="Also write the detectability table as Markdown.")

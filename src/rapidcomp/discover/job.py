@@ -17,9 +17,14 @@ from . import plot, report
 from .effects import catalogue, to_profile
 from .measured import format_measured, read_joints, read_measured
 from .model import ParamModel
+from .plausible import writable
 from .points import cube_points, random_points
 from .select import Discovery, discover
 from .simulate import add_noise, detectability, parse_effect_values, simulate_positions
+
+
+MIN_DISTINCT_POSES = 6
+MAX_RANDOM_POINTS = 100_000
 
 
 @dataclass(frozen=True)
@@ -68,10 +73,15 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
         raise RapidcompError(f"--sigma {sigma}: expected a positive standard deviation in mm")
     nominal, prof = _load(robot, profile, force, payload)
     data = read_measured(measured)
+    distinct = len(np.unique(np.round(data.q_deg, 6), axis=0))
+    if distinct < MIN_DISTINCT_POSES:
+        raise RapidcompError(f"{measured}: {len(data)} rows but {distinct} distinct pose(s); "
+                             f"discover needs at least {MIN_DISTINCT_POSES} different poses "
+                             "(a base frame alone has 6 parameters)")
     model = ParamModel(nominal, prof, data.q_deg, tool)
     effects = catalogue(nominal)
     d = discover(model, data, effects, sigma)
-    notes = []
+    notes = _beyond_limits(data, nominal)
     if data.ignored_columns:
         notes.append(f"{Path(measured).name}: column(s) {', '.join(data.ignored_columns)} "
                      "ignored")
@@ -95,7 +105,15 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
     if json_path:
         files.append((json_path, report.as_json(d).encode("utf-8")))
     if out_profile:
-        new = to_profile(nominal, prof, d.named_values())
+        values = d.named_values()
+        kept = {e: v for e, v in values.items() if writable(e, e.user(v))}
+        for e in values:
+            if e not in kept:
+                notes.append(f"{e.id} is not written into {Path(out_profile).name}: at "
+                             f"{', '.join(f'{k}={x:.4g}' for k, x in e.user(values[e]).items())} "
+                             "it is an error of the measurement set-up (frame registration, "
+                             "measuring point), not of the robot")
+        new = to_profile(nominal, prof, kept)
         comments = [f"written by rapidcomp discover from {Path(measured).name} "
                     f"(base profile: {Path(profile).name if profile else 'none'})",
                     "effects: " + (", ".join(s.effect.id for s in d.steps) or "none")]
@@ -108,6 +126,18 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
     return Outcome(tuple(report.summary_lines(d)), tuple(notes), tuple(files), d)
 
 
+def _beyond_limits(data, robot) -> list[str]:
+    lo, hi = np.asarray(robot.lower_deg), np.asarray(robot.upper_deg)
+    out = []
+    for name, q in zip(data.names, data.q_deg):
+        bad = [f"J{j + 1} {q[j]:g}" for j in range(len(q)) if not lo[j] <= q[j] <= hi[j]]
+        if bad:
+            out.append(f"point {name}: {', '.join(bad)} beyond the model's joint limits")
+    if len(out) > 5:
+        out = out[:5] + [f"... {len(out) - 5} more points beyond the joint limits"]
+    return out
+
+
 def point_set(spec: str, robot, seed: int):
     """`cube`, `random:N` or a CSV of joints."""
     if spec == "cube":
@@ -117,8 +147,9 @@ def point_set(spec: str, robot, seed: int):
             count = int(spec.split(":", 1)[1]) if ":" in spec else 80
         except ValueError:
             count = 0
-        if count < 1:
-            raise RapidcompError(f"--points {spec}: expected random:N with N a positive count")
+        if not 1 <= count <= MAX_RANDOM_POINTS:
+            raise RapidcompError(f"--points {spec}: expected random:N with 1 <= N <= "
+                                 f"{MAX_RANDOM_POINTS} (a campaign measures hundreds of poses)")
         return random_points(robot, count, seed)
     if not os.path.isfile(spec):
         raise RapidcompError(f"--points {spec}: expected cube, random:N or a CSV file of joints "
@@ -136,7 +167,7 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
         raise RapidcompError(f"--noise {noise}: expected a standard deviation >= 0 in mm")
     nominal, prof = _load(robot, profile, force, payload)
     cat = catalogue(nominal)
-    values = parse_effect_values(cat, effects)
+    values = parse_effect_values(cat, effects, force)
     names, q = point_set(points, nominal, seed)
     exact = simulate_positions(nominal, prof, values, q, tool)
     xyz = add_noise(exact, noise, seed) if noise > 0 else exact

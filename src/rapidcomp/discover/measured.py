@@ -20,6 +20,10 @@ from ..errors import InputError
 JOINT_COLUMNS = ("j1", "j2", "j3", "j4", "j5", "j6")
 COLUMNS = ("point",) + JOINT_COLUMNS + ("x", "y", "z")
 MIN_POINTS = 3
+# Values no measurement of a robot has: a joint beyond two turns, a
+# position beyond 100 m (wrong units, a corrupt row).
+MAX_JOINT_DEG = 720.0
+MAX_POSITION_MM = 1e5
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +65,12 @@ def parse_table(text: str, source: str, columns, numeric, min_rows: int):
                 raise InputError(source, f"{col} is {cell!r}, expected a number", line) from None
             if not math.isfinite(v):
                 raise InputError(source, f"{col} is {cell}, expected a finite number", line)
+            if col in JOINT_COLUMNS and abs(v) > MAX_JOINT_DEG:
+                raise InputError(source, f"{col} is {cell}, expected a joint angle in degrees "
+                                 f"(|{col}| <= {MAX_JOINT_DEG:g})", line)
+            if col in ("x", "y", "z") and abs(v) > MAX_POSITION_MM:
+                raise InputError(source, f"{col} is {cell}, expected a position in mm "
+                                 f"(|{col}| <= {MAX_POSITION_MM:g})", line)
             vals.append(v)
         names.append(name)
         values.append(vals)

@@ -25,7 +25,7 @@ Statistics (README "How discover decides"):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -34,6 +34,7 @@ from .effects import Effect
 from .fit import Fit, fit, min_norm_rss
 from .measured import Measurements
 from .model import ParamModel
+from .plausible import implausible
 from .residuals import Analysis, analyse
 from .stats import chi2_ppf, chi2_sf
 
@@ -42,6 +43,10 @@ STRONG_BIC = 10.0
 NOISE_QUANTILE = 0.99
 EQUIVALENT_QUANTILE = 0.99
 MIN_NOISE_DOF = 10
+# An implausible fit leaving less than this share of what the best
+# plausible one leaves (100x better) means the model and the data are far
+# apart: nothing more is named.
+FAR_APART = 0.01
 
 
 @dataclass(frozen=True)
@@ -52,6 +57,7 @@ class Candidate:
     heldout_mm: float
     p_value: float
     delta_bic: float          # BIC(model + candidate) - BIC(model): negative is better
+    implausible: str | None = None   # the fit needs values no real robot has
 
 
 @dataclass(frozen=True)
@@ -88,6 +94,7 @@ class Discovery:
     final_fit: Fit
     start_fit: Fit
     effects: tuple[Effect, ...]
+    implausible: tuple[str, ...] = ()   # strong fits refused as values no robot has
 
     @property
     def initial_rms_mm(self) -> float:
@@ -121,6 +128,16 @@ class _Scored:
     candidate: Candidate
     strong: bool
     order: int
+    blocked: str | None = None      # strong evidence, but for values no robot has
+
+
+def _implausible(f: Fit) -> str | None:
+    """Why a fit's values are beyond a real robot (plausible.py), or None."""
+    for i, (e, v) in enumerate(zip(f.effects, f.values)):
+        why = implausible(e, e.user(v), first=(i == 0))
+        if why is not None:
+            return why
+    return None
 
 
 class _Selector:
@@ -163,7 +180,11 @@ class _Selector:
             cand = Candidate(e.id, e.size, f.rms_mm, f.heldout_rms_mm(), p,
                              _bic(f, self.sigma, self.n) - bic0)
             strong = p < ALPHA / m and cand.delta_bic <= -STRONG_BIC and cand.heldout_mm < held0
-            out.append(_Scored(e, f, cand, strong, order))
+            why = _implausible(f)
+            if why is not None:
+                cand = replace(cand, implausible=why)
+            out.append(_Scored(e, f, cand, strong and why is None, order,
+                               why if strong and why is not None else None))
         out.sort(key=lambda s: (s.candidate.delta_bic, s.order))
         self._scored[id(current)] = (current, out)
         return out
@@ -197,7 +218,8 @@ class _Selector:
                     if f.id in named or f.size >= e.size:
                         continue
                     g = self.fit(rest + (f,), start + (np.zeros(f.size),))
-                    if g.success and _equivalent(g, current, self.sigma):
+                    if g.success and _equivalent(g, current, self.sigma) and \
+                            _implausible(g) is None:
                         options.append((f.size, g.rss, order, f, g))
                 if options:
                     _, _, _, f, g = min(options, key=lambda o: o[:3])
@@ -291,9 +313,20 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     start = sel.fit(())
     current = start
     swapped: dict[str, list[str]] = {}
+    blocked: list[str] = []
     while _noise_p(current, sigma, n) < 1 - NOISE_QUANTILE:
-        chosen = sel.pick(sel.score(current))
+        scored = sel.score(current)
+        # A fit that would take away most of what is left, with values no
+        # robot has: the data and the model are far apart, and whatever
+        # small plausible effect fits next would be an artefact of that.
+        plausible = min([x.fit.rss for x in scored if x.strong] or [current.rss])
+        far = [x.blocked for x in scored if x.blocked and x.fit.rss < FAR_APART * plausible]
+        if far:
+            blocked = far[:3]
+            break
+        chosen = sel.pick(scored)
         if chosen is None:
+            blocked = [s.blocked for s in scored if s.blocked][:3]
             break
         current = sel.simplify(chosen.fit, swapped)
     sel.score(start)   # the not-identifiable list is made on the first scoring (cached)
@@ -301,10 +334,10 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     noise_p = _noise_p(current, sigma, n)
     initial = analyse(data.names, data.q_deg, meas, start.residuals, model.robot.joint_names)
     final = analyse(data.names, data.q_deg, meas, current.residuals, model.robot.joint_names)
-    verdict, text = _verdict(steps, current, sigma, noise_p, sigma_mm is None)
+    verdict, text = _verdict(steps, current, sigma, noise_p, sigma_mm is None, blocked)
     return Discovery(len(data), sigma, source, initial, final, start.heldout_rms_mm(),
                      tuple(steps), verdict, text, noise_p, tuple(sel.not_identifiable.items()),
-                     current, start, effects)
+                     current, start, effects, tuple(blocked))
 
 
 def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:
@@ -312,10 +345,18 @@ def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:
     return abs(a.rss - b.rss) / sigma ** 2 <= chi2_ppf(EQUIVALENT_QUANTILE, dk)
 
 
-def _verdict(steps, current: Fit, sigma: float, noise_p: float, estimated: bool):
+def _verdict(steps, current: Fit, sigma: float, noise_p: float, estimated: bool,
+             blocked=()):
     s_um = sigma * 1000
     at_noise = noise_p >= 1 - NOISE_QUANTILE
     est = " (estimated)" if estimated else ""
+    if not at_noise and blocked:
+        return "unexplained", (
+            f"The model and the data are far apart: the residuals (RMS "
+            f"{current.rms_mm * 1000:.1f} um) are explained only by values no real robot has "
+            f"({'; '.join(blocked)}). Likely causes: the measuring point is not given "
+            "(--tool X,Y,Z in the flange frame), the data are not in millimetres or not in the "
+            "robot's base frame, or the robot model (--robot) is not the robot measured.")
     if at_noise and not steps:
         return "noise", (f"The residuals (RMS {current.rms_mm * 1000:.1f} um) are consistent with "
                          f"measurement noise of {s_um:.1f} um per axis{est} "

@@ -27,14 +27,16 @@ from ..kinematics.profile import ThermalProfile, deform
 from ..kinematics.robot import RobotModel
 from .effects import Effect, find, to_profile
 from .model import ZERO_COLUMN, ParamModel
+from .plausible import implausible
 from .select import ALPHA, STRONG_BIC
 from .stats import chi2_ppf, ncx2_lambda_for_power
 
 POWER = 0.9
 
 
-def parse_effect_values(effects, specs) -> dict[Effect, np.ndarray]:
-    """`--effect ID=V[,V...]` options, values in the parameters' user units."""
+def parse_effect_values(effects, specs, force: bool = False) -> dict[Effect, np.ndarray]:
+    """`--effect ID=V[,V...]` options, values in the parameters' user units
+    (within what a real robot has, plausible.py, unless force)."""
     out: dict[Effect, np.ndarray] = {}
     for spec in specs:
         if "=" not in spec:
@@ -50,6 +52,9 @@ def parse_effect_values(effects, specs) -> dict[Effect, np.ndarray]:
                                  + ", ".join(e.params))
         if e.kind == "gravity_compliance" and vals[0] < 0:
             raise RapidcompError(f"--effect {spec}: a compliance is >= 0")
+        why = implausible(e, dict(zip(e.params, vals)), first=True)
+        if why is not None and not force:
+            raise RapidcompError(f"--effect {spec}: {why}; --force simulates it anyway")
         if e in out:
             raise RapidcompError(f"--effect {spec}: {e.id} given twice")
         out[e] = e.internal(vals)

@@ -46,9 +46,16 @@ from .robot import RobotModel
 
 COLUMNS = ("joint", "dx_mm", "dy_mm", "dz_mm", "rx_deg", "ry_deg", "rz_deg")
 EXTRA_COLUMNS = ("offset_deg", "scale", "compliance_deg_per_nm", "mass_kg")
+# What a real robot's errors can be (the profile reader's bounds and the
+# plausibility rule of discover, discover/plausible.py): a joint frame
+# shifted by at most 5 mm, a frame or joint angle turned by at most 1 deg, a
+# gear ratio or link length off by at most 0.5 %, a joint yielding to
+# gravity by at most 0.01 deg per N m; the base and flange (measuring-point)
+# frames by at most 10 mm.
 MAX_SHIFT_MM = 5.0
+MAX_FRAME_SHIFT_MM = 10.0
 MAX_ROTATION_DEG = 1.0
-MAX_SCALE = 0.01
+MAX_SCALE = 5e-3
 MAX_COMPLIANCE_DEG_PER_NM = 0.01
 
 
@@ -197,9 +204,10 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
 
 
 def _check_size(source, line, key, d, r, extra) -> None:
-    if math.hypot(*d) > MAX_SHIFT_MM:
+    limit = MAX_FRAME_SHIFT_MM if key in ("base", "flange") else MAX_SHIFT_MM
+    if math.hypot(*d) > limit:
         raise InputError(source, f"{key} shift of {math.hypot(*d):.3f} mm exceeds "
-                         f"{MAX_SHIFT_MM} mm (thermal shifts are microns; use --force "
+                         f"{limit} mm (thermal shifts are microns; use --force "
                          "if this is intended)", line)
     rot = max(abs(a) for a in (*r, extra["offset_deg"]))
     if rot > MAX_ROTATION_DEG:

@@ -9,6 +9,7 @@ in rapidcomp mutates a RobotModel's pin.Model; a deformed model is a copy
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -155,7 +156,8 @@ def override_limits(robot: RobotModel, specs) -> RobotModel:
         except ValueError:
             raise RapidcompError(f"--limit {spec}: expected JOINT=LOWER:UPPER in degrees with "
                                  f"JOINT one of {', '.join(robot.joint_names)}") from None
-        if not lo < hi:
-            raise RapidcompError(f"--limit {spec}: the lower limit must be below the upper one")
+        if not (math.isfinite(lo) and math.isfinite(hi) and -720 <= lo < hi <= 720):
+            raise RapidcompError(f"--limit {spec}: expected LOWER < UPPER, finite degrees "
+                                 "within -720..720")
         lower[k], upper[k] = lo, hi
     return robot.with_limits(lower, upper)
