@@ -39,6 +39,8 @@ from ..rapid.values import DecodeIssue, JointTarget, Pose, RobTarget, ToolData, 
 IDENTITY_POSE = (np.eye(3), np.zeros(3))
 # A quaternion further than this from unit length is reported when normalised.
 QUAT_TOLERANCE = 1e-3
+MAX_POSITION_MM = 1e5
+MAX_JOINT_DEG = 1e5
 # confdata: cf1, cf4, cf6 count quarter turns (|cf| <= 8 is +-720 deg); cfx 0..7.
 MAX_QUADRANT = 8
 # External axis values at or above this are "not used" (RAPID writes 9E9).
@@ -218,7 +220,17 @@ class Resolver:
 
     def _pose(self, pose: Pose, pf: ParsedFile, what: str):
         q = self._quaternion(pose.quat_wxyz, pose.rot[0].span.start, pf, what)
-        return quat_wxyz_to_matrix(q), self._num(pose.xyz)
+        return quat_wxyz_to_matrix(q), self._position(pose.xyz, pose.trans[0].span.start, pf,
+                                                      what)
+
+    def _position(self, xyz, offset: int, pf: ParsedFile, what: str) -> np.ndarray:
+        """A position a move uses: within 100 m (nothing in a robot cell is
+        further; a larger number is a unit or data error)."""
+        p = self._num(xyz)
+        if not np.all(np.abs(p) <= MAX_POSITION_MM):
+            raise pf.source.error(offset, f"{what}: the position [{', '.join(f'{v:g}' for v in p)}] "
+                                          f"mm is beyond {MAX_POSITION_MM:g} mm of the robot")
+        return p
 
     def _quaternion(self, q, offset: int, pf: ParsedFile, what: str) -> np.ndarray:
         """A quaternion of a value a move uses: none with no rotation (bad
@@ -498,7 +510,8 @@ class Resolver:
             return base
         if not isinstance(base.record, RobTarget):
             return Unresolved(f"{call.name} of a non-robtarget", True)
-        d = self._num([v.value for v in pos[1:]])
+        d = self._position([v.value for v in pos[1:]], pos[1].span.start, pf,
+                           f"the {call.name} displacement")
         rot = np.eye(3)
         if call.name.lower() == "reltool":
             for a in call.args:
@@ -506,7 +519,11 @@ class Resolver:
                     if not isinstance(a.value, A.Num):
                         return Unresolved("RelTool rotation is not a literal number")
                     f = {"rx": rot_x, "ry": rot_y, "rz": rot_z}[a.name.lower()]
-                    rot = rot @ f(float(self._num(a.value.value)) * DEG)
+                    angle = float(self._num(a.value.value))
+                    if not abs(angle) <= 1e5:
+                        raise pf.source.error(a.value.span.start, f"RelTool \\{a.name} is "
+                                              f"{a.value.text} deg: not an angle")
+                    rot = rot @ f(angle * DEG)
                 elif a.kind != "pos":
                     return Unresolved(f"RelTool argument \\{a.name} is not supported")
         elif any(a.kind != "pos" for a in call.args):
@@ -521,7 +538,8 @@ class Resolver:
         where = f"{src.decl.name}" if src.decl is not None else "the inline robtarget"
         R = quat_wxyz_to_matrix(self._quaternion(
             src.record.quat_wxyz, src.record.span.start + src.record.regs[3][0], home, where))
-        p = self._num(src.record.xyz)
+        p = self._position(src.record.xyz, src.record.span.start + src.record.regs[0][0], home,
+                           where)
         if src.call is None:
             return R, p
         if src.call.name.lower() == "offs":
@@ -633,6 +651,12 @@ class Resolver:
             if not isinstance(src.record, JointTarget):
                 return fail(Unresolved("not a jointtarget", True))
             joints = tuple(float(v) for v in self._num(src.record.joints))
+            for i, v in enumerate(joints):
+                if not abs(v) <= MAX_JOINT_DEG:
+                    home = src.home if src.home is not None else pf
+                    raise home.source.error(src.record.span.start + src.record.regs[i][0],
+                                            f"J{i + 1} is {src.record.texts[i]} deg: not a "
+                                            f"joint angle (|J| <= {MAX_JOINT_DEG:g})")
             return TargetUse(motion, t.role, label, line, kind, None, None, None, joints, None,
                              src, env=envt, file=pf, module=module, ext=src.record.ext, key=key)
         if not isinstance(src.record, RobTarget):

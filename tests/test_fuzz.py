@@ -1,0 +1,283 @@
+"""Bad input, as a tester makes it: seeded mutations of the fixtures through
+parse -> fix -> report, and a table of bad command lines for every command.
+
+Only rapidcomp's own errors may come out (RapidcompError: a message with a
+place, exit 2); a run that exits 2 writes nothing; inputs are never
+modified. The mutation test is bounded in time (a few thousand mutants)
+and seeded: the same mutants every run, as many as the time allows.
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import re
+import stat
+import time
+
+import pytest
+from click.testing import CliRunner
+
+from rapidcomp.cli import main
+from rapidcomp.compensate import report
+from rapidcomp.compensate.fix import fix
+from rapidcomp.compensate.plan import Task
+from rapidcomp.errors import InternalError, RapidcompError
+from rapidcomp.kinematics.ik import Solver
+from rapidcomp.kinematics.profile import deform, read_profile
+from rapidcomp.kinematics.robot import irb140
+from rapidcomp.rapid.parse import parse_text
+
+from conftest import FIXTURES
+
+WARM = FIXTURES / "warm.csv"
+SOURCES = [FIXTURES / "paper_front.mod", FIXTURES / "rapid" / "robodk.mod",
+           FIXTURES / "rapid" / "handwritten_cp1252.mod",
+           FIXTURES / "rapid" / "robotstudio_crlf.mod",
+           FIXTURES / "tasks" / "cell" / "MainModule.mod",
+           FIXTURES / "tasks" / "glue" / "GlueData.mod"]
+REFUSALS = FIXTURES.parent / "tests" / "golden" / "fix" / "refusals" / "before.mod"
+# Numbers a tester types where a number goes.
+ODD_NUMBERS = ["1e308", "-1e308", "1E999", "9E+99999", "0", "-0", "1e-320", "3.5E38", "9E9",
+               "123456789012345678901234567890", "0.5", "-7", "2147483648"]
+ODD_AGGREGATES = ["[0,0,0,0]", "[0,0,0,9]", "[0,0,0,1e308]", "[1,2]", "[0,0,0,0,0,0,0]",
+                  "[\"a\",0,0,0]", "[[0,0,0],[0,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"]
+NUMBER = re.compile(r"(?<![A-Za-z_])[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
+BUDGET_S = 18.0
+MAX_MUTANTS = 4000
+
+
+def _mutate(rng: random.Random, text: str) -> str:
+    kind = rng.randrange(7)
+    if kind == 0 and text:                       # bytes: delete, insert, replace
+        i = rng.randrange(len(text))
+        ch = rng.choice(["", rng.choice("[]{}(),;:=\\\"!%<>-+.0123456789eEabc \n\t")])
+        return text[:i] + ch + text[i + rng.randrange(2):]
+    lines = text.splitlines(keepends=True)
+    if kind == 1 and lines:                      # lines: drop, duplicate, swap
+        i, j = rng.randrange(len(lines)), rng.randrange(len(lines))
+        op = rng.randrange(3)
+        if op == 0:
+            del lines[i]
+        elif op == 1:
+            lines.insert(j, lines[i])
+        else:
+            lines[i], lines[j] = lines[j], lines[i]
+        return "".join(lines)
+    numbers = list(NUMBER.finditer(text))
+    if kind in (2, 3, 4) and numbers:            # a number out of range
+        m = rng.choice(numbers)
+        return text[:m.start()] + rng.choice(ODD_NUMBERS) + text[m.end():]
+    aggs = [m for m in re.finditer(r"\[[^\[\]]*\]", text)]
+    if kind == 5 and aggs:                       # an aggregate of another shape
+        m = rng.choice(aggs)
+        return text[:m.start()] + rng.choice(ODD_AGGREGATES) + text[m.end():]
+    words = [m for m in re.finditer(r"[A-Za-z_]\w*", text)]
+    if words:                                    # a name swapped for another
+        a, b = rng.choice(words), rng.choice(words)
+        return text[:a.start()] + b.group() + text[a.end():]
+    return text
+
+
+@pytest.fixture(scope="module")
+def solver():
+    robot = irb140()
+    return Solver(robot, deform(robot, read_profile(WARM)))
+
+
+def test_mutants_raise_only_rapidcomps_own_errors(solver):
+    rng = random.Random(20261122)
+    texts = [(p.name, p.read_bytes().decode("utf-8", "replace")) for p in SOURCES
+             if p.exists()] + [("refusals.mod", REFUSALS.read_text())]
+    counts = {"mutants": 0, "parsed": 0, "rejected": 0, "compensated": 0, "internal": 0}
+    start = time.perf_counter()
+    while counts["mutants"] < MAX_MUTANTS and time.perf_counter() - start < BUDGET_S:
+        name, text = texts[counts["mutants"] % len(texts)]
+        mutant = text
+        for _ in range(rng.randint(1, 3)):
+            mutant = _mutate(rng, mutant)
+        counts["mutants"] += 1
+        try:
+            pf = parse_text(mutant, name)
+            counts["parsed"] += 1
+            mode = ("auto", "absj", "robtarget")[counts["mutants"] % 3]
+            result = fix(Task(name, (pf,)), solver, mode)
+            report.markdown(result, {"mode": mode})
+            report.as_json(result, {"mode": mode})
+            counts["compensated"] += 1
+        except InternalError:
+            counts["internal"] += 1
+        except RapidcompError as exc:
+            counts["rejected"] += 1
+            assert str(exc)
+    print(counts)
+    assert counts["mutants"] >= 500 and counts["parsed"] >= 100
+    assert counts["internal"] == 0
+
+
+def test_mutants_through_the_command_line_write_nothing_on_bad_input(tmp_path):
+    rng = random.Random(7)
+    src = (FIXTURES / "paper_front.mod").read_text()
+    runner = CliRunner()
+    codes = set()
+    for n in range(40):
+        mutant = src
+        for _ in range(rng.randint(1, 2)):
+            mutant = _mutate(rng, mutant)
+        prog = tmp_path / f"m{n}.mod"
+        prog.write_text(mutant)
+        before = prog.read_bytes()
+        out = tmp_path / f"out{n}"
+        r = runner.invoke(main, ["fix", str(prog), "--profile", str(WARM), "-o",
+                                 str(out / "m.mod")])
+        assert isinstance(r.exception, SystemExit) or r.exception is None, r.output
+        assert r.exit_code in (0, 1, 2), r.output
+        codes.add(r.exit_code)
+        assert prog.read_bytes() == before
+        if r.exit_code in (1, 2):
+            assert not out.exists(), r.output
+        if r.exit_code == 2:
+            assert r.output.strip(), "a bad input says why"
+    assert 2 in codes
+
+
+def _bad_module(tmp_path, old: str, new: str) -> str:
+    text = (FIXTURES / "paper_front.mod").read_text()
+    assert old in text
+    p = tmp_path / "bad.mod"
+    p.write_text(text.replace(old, new, 1))
+    return str(p)
+
+
+P4 = "[[400,-150,250],[0.707107,0,0.707107,0],[-1,-1,0,1]"
+
+
+# (args, exit code, a fragment of the message); {tmp} is a fresh folder,
+# {mod:OLD=>NEW} paper_front.mod with OLD replaced by NEW.
+BAD = [
+    (["fix", "nothing.mod", "--profile", "{warm}"], 2, "nothing.mod: no such file"),
+    (["fix", "{paper}", "--profile", "nothing.csv"], 2, "nothing.csv: no such file"),
+    (["fix", "{paper}", "--profile", "{warm}", "--limit", "J5=a:b"], 2, "--limit J5=a:b"),
+    (["fix", "{paper}", "--profile", "{warm}", "--limit", "J5=-1e400:5"], 2, "--limit"),
+    (["fix", "{paper}", "--profile", "{warm}", "--start", "1,2"], 2, "J1,...,J6"),
+    (["fix", "{paper}", "--profile", "{warm}", "--start", "0,0,0,0,0,5000"], 2, "out of range"),
+    (["fix", "{paper}", "--profile", "{warm}", "--base", "0,0,0,0,0,0,0"], 2, "not a rotation"),
+    (["fix", "{paper}", "--profile", "{warm}", "--track", "q:z"], 2, "--track q:z"),
+    (["fix", "{paper}", "--profile", "{warm}", "--task", "T_ROB1"], 2, "--task picks tasks"),
+    (["fix", "{mod:[0.707107,0,0.707107,0],[-1,-1,0,1]=>[0,0,0,0],[-1,-1,0,1]}", "--profile",
+      "{warm}"], 2, "is not a rotation (norm 0)"),
+    (["fix", "{mod:[-1,-1,0,1]=>[-1,-1,0,9]}", "--profile", "{warm}"], 2, "cfx is 9, expected 0..7"),
+    (["fix", "{mod:[-1,-1,0,1]=>[-1,-1,0,1e308]}", "--profile", "{warm}"], 2,
+     "component 1e308 is beyond what a RAPID num holds"),
+    (["fix", "{mod:[400,-150,250]=>[400,-150,3E38]}", "--profile", "{warm}"], 2,
+     "mm is beyond 100000 mm of the robot"),
+    (["fix", "{mod:[400,-150,250]=>[400,-150]}", "--profile", "{warm}"], 2,
+     "has 2 components, expected 3"),
+    (["fix", "{mod:FOR i FROM 1 TO NROW=>FOR i FROM 1 TO 9E9}", "--profile", "{warm}"], 2,
+     "walks 9000000000 iterations"),
+    (["fix", "{mod:FOR i FROM 1 TO NROW=>FOR i FROM 1 TO 4}", "--profile", "{warm}"], 2,
+     "index 4 of pRow is outside 1..3"),
+    (["fix", "{mod:[400,-150,250]=>[400,-150,1E999]}", "--profile", "{warm}"], 2,
+     "component 1E999 is beyond what a RAPID num holds"),
+    (["fix", "{mod:TO NROW DO=>TO 1E999 DO}", "--profile", "{warm}"], 2,
+     "number 1E999 is out of range"),
+    (["check", "{paper}", "--profile", "{badprofile}"], 2, "unknown joint 'J9'"),
+    (["check", "{tmp}", "--profile", "{warm}"], 2, "no module files"),
+    (["inspect", "{binary}"], 2, "binary or encrypted module"),
+    (["discover", "{same}"], 2, "1 distinct pose(s)"),
+    (["discover", "{far}"], 2, "x is 1e300, expected a position in mm"),
+    (["discover", "{spin}"], 2, "j1 is 5000, expected a joint angle"),
+    (["discover", "{measured}", "--sigma", "0"], 2, "expected a standard deviation"),
+    (["discover", "{measured}", "--sigma", "inf"], 2, "expected a standard deviation"),
+    (["discover", "{measured}", "--tool", "0,0,1e9"], 2, "out of range"),
+    (["simulate", "-o", "{tmp}/m.csv", "--seed", "-1"], 2, "-1 is not in the range"),
+    (["simulate", "-o", "{tmp}/m.csv", "--noise", "inf"], 2, "expected a standard deviation"),
+    (["simulate", "-o", "{tmp}/m.csv", "--effect", "joint_offset:J2=1e6"], 2,
+     "needs 1e+06 deg"),
+    (["simulate", "-o", "{tmp}/m.csv", "--points", "random:100000000"], 2,
+     "1 <= N <= 100000"),
+]
+
+
+def _arg(a: str, tmp_path) -> str:
+    if a.startswith("{mod:"):
+        old, new = a[5:-1].split("=>")
+        return _bad_module(tmp_path, old, new)
+    table = {"{warm}": str(WARM), "{paper}": str(FIXTURES / "paper_front.mod"),
+             "{measured}": str(FIXTURES / "measured.csv"), "{tmp}": str(tmp_path / "empty")}
+    if a == "{badprofile}":
+        p = tmp_path / "bad.csv"
+        p.write_text("joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg\nJ9,0,0,0,0,0,0\n")
+        return str(p)
+    if a == "{binary}":
+        p = tmp_path / "enc.mod"
+        p.write_bytes(b"\x00\x01\x02MODULE")
+        return str(p)
+    if a in ("{same}", "{far}", "{spin}"):
+        rows = (FIXTURES / "measured.csv").read_text().splitlines()
+        head = [r for r in rows if r.startswith("point")]
+        body = [r for r in rows if r and r[0].isalnum() and not r.startswith("point")]
+        if a == "{same}":
+            body = [f"P{k}," + body[0].split(",", 1)[1] for k in range(1, 30)]
+        elif a == "{far}":
+            body[3] = ",".join(body[3].split(",")[:7] + ["1e300"] + body[3].split(",")[8:])
+        else:
+            body[3] = ",".join(body[3].split(",")[:1] + ["5000"] + body[3].split(",")[2:])
+        p = tmp_path / "m.csv"
+        p.write_text("\n".join(head + body) + "\n")
+        return str(p)
+    for k, v in table.items():
+        a = a.replace(k, v)
+    return a
+
+
+@pytest.mark.parametrize("args, code, fragment", BAD, ids=[" ".join(b[0])[:60] for b in BAD])
+def test_bad_command_lines(args, code, fragment, tmp_path):
+    (tmp_path / "empty").mkdir()
+    argv = [_arg(a, tmp_path) for a in args]
+    out = tmp_path / "out"
+    if argv[0] in ("fix",):
+        argv += ["-o", str(out / "o.mod")] if "-o" not in argv else []
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    r = CliRunner().invoke(main, argv)
+    assert r.exception is None or isinstance(r.exception, SystemExit), r.output
+    assert r.exit_code == code, r.output
+    assert fragment in r.output, r.output
+    assert "Traceback" not in r.output
+    after = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    assert after == before            # nothing written, nothing changed
+
+
+def test_unwritable_output_is_a_clean_error(tmp_path):
+    """An output under a file (as a read-only or full disk does, an OS
+    error at write time): the path and the reason, exit 2, nothing left."""
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("x")
+    r = CliRunner().invoke(main, ["fix", str(FIXTURES / "paper_front.mod"), "--profile",
+                                  str(WARM), "-o", str(blocker / "x.mod")])
+    assert r.exit_code == 2 and "cannot write" in r.output and str(blocker) in r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file.txt"]
+
+
+def test_several_programs_report_every_bad_one(tmp_path):
+    a = tmp_path / "a.mod"
+    b = tmp_path / "b.mod"
+    a.write_text("MODULE a\n  PROC p()\n    MoveL [[1,2],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,"
+                 "9E9,9E9,9E9]],v100,fine,tool0;\n  ENDPROC\nENDMODULE\n")
+    b.write_text("MODULE 2b\nENDMODULE\n")
+    r = CliRunner().invoke(main, ["fix", str(a), str(b), str(FIXTURES / "paper_front.mod"),
+                                  "--profile", str(WARM), "-o", str(tmp_path / "out")])
+    assert r.exit_code == 2
+    assert "a.mod:3:12:" in r.output and "b.mod:1:8:" in r.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_written_files_follow_the_umask(tmp_path):
+    old = os.umask(0o027)
+    try:
+        r = CliRunner().invoke(main, ["fix", str(FIXTURES / "paper_front.mod"), "--profile",
+                                      str(WARM), "-o", str(tmp_path / "p.mod")])
+    finally:
+        os.umask(old)
+    assert r.exit_code == 0
+    assert stat.S_IMODE((tmp_path / "p.mod").stat().st_mode) == 0o640
