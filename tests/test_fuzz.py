@@ -281,3 +281,40 @@ def test_written_files_follow_the_umask(tmp_path):
         os.umask(old)
     assert r.exit_code == 0
     assert stat.S_IMODE((tmp_path / "p.mod").stat().st_mode) == 0o640
+
+
+def test_utf16_modules_are_read_and_written_as_they_came(tmp_path):
+    """RobotStudio can save a module as UTF-16: decoded, compensated, and
+    written back in UTF-16 with its byte order mark."""
+    text = (FIXTURES / "paper_front.mod").read_text()
+    prog = tmp_path / "u16.mod"
+    prog.write_bytes(("\ufeff" + text).encode("utf-16-le"))
+    r = CliRunner().invoke(main, ["fix", str(prog), "--profile", str(WARM), "--emit",
+                                  "robtarget", "-o", str(tmp_path / "o.mod")])
+    assert r.exit_code == 0, r.output
+    data = (tmp_path / "o.mod").read_bytes()
+    assert data.startswith(b"\xff\xfe")
+    out = data.decode("utf-16-le")
+    assert out.startswith("\ufeffMODULE PaperFront") and out != "\ufeff" + text
+
+
+def test_a_spreadsheet_profile_with_semicolons_and_decimal_commas_is_read(tmp_path):
+    from rapidcomp.kinematics.profile import read_profile as read
+    plain = (FIXTURES / "warm.csv").read_text()
+    lines = [ln if ln.startswith("#") else ln.replace(",", ";") for ln in plain.splitlines()]
+    lines = [ln if ln.startswith(("#", "joint")) else ln.replace(".", ",") for ln in lines]
+    p = tmp_path / "excel.csv"
+    p.write_text("\n".join(lines) + "\n")
+    assert read(p).displacements == read(FIXTURES / "warm.csv").displacements
+
+
+def test_a_quaternion_off_unit_length_is_normalised_with_a_warning(tmp_path):
+    prog = _bad_module(tmp_path, "[400,-150,250],[0.707107,0,0.707107,0]",
+                       "[400,-150,250],[0.71,0,0.71,0]")
+    r = CliRunner().invoke(main, ["fix", prog, "--profile", str(WARM), "--json",
+                                  str(tmp_path / "r.json"), "-o", str(tmp_path / "o.mod")])
+    assert r.exit_code == 0, r.output
+    import json
+    rows = json.loads((tmp_path / "r.json").read_text())["targets"]
+    warned = [w for row in rows for w in row["warnings"] if "quaternion norm" in w]
+    assert warned and "p4 (bad.mod:9): quaternion norm 1.004092, not 1" in warned[0]
