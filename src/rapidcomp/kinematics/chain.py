@@ -9,6 +9,7 @@ Pinocchio to 1e-12 mm.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -88,11 +89,11 @@ class Chain:
             ps[:, i] = p
         return Rs, ps
 
-    @property
+    @cached_property
     def _identity(self) -> tuple[bool, ...]:
         return tuple(bool(np.array_equal(r, np.eye(3))) for r in self.rot)
 
-    @property
+    @cached_property
     def _axis_index(self) -> tuple[int, ...]:
         """0/1/2 for joints about x/y/z, -1 for other axes."""
         out = []
