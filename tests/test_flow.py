@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from rapidcomp.compensate.check import check
+from rapidcomp.compensate.flow import PROGRAM_START
 from rapidcomp.compensate.fix import fix
 from rapidcomp.compensate.plan import Plan, Task
 from rapidcomp.kinematics.ik import Solver
@@ -129,7 +130,7 @@ def test_routines_nobody_calls_are_entries_with_unknown_state():
     ENDPROC
 ENDMODULE""")
     plan, st = states(t)
-    assert st[(7, "to")].confl == {"on", "off"} and st[(7, "to")].last is None
+    assert st[(7, "to")].confl == {"on", "off"} and st[(7, "to")].last == {PROGRAM_START}
     assert st[(7, "to")].pdisp == {"off"}   # nothing given switches it on
     assert any("Service" in n and "not called" in n for n in plan.notes())
 
@@ -166,7 +167,10 @@ def test_unknown_supervision_valid_confdata_other_closest_stays_a_robtarget_move
     """Service is entered from outside the given modules: ConfL may be on or
     off. Its confdata is valid but from P1 the closest solution of P4 is
     another: compensated on the confdata's solution, kept as MoveL (the
-    controller keeps choosing), and the report says what was assumed."""
+    controller keeps choosing), and the report says what was assumed. The
+    first move: where the robot stands when Service starts is not known, so
+    with ConfL off the controller might choose another solution: kept a
+    robtarget move too, with a caution."""
     t = task(f"""MODULE A
     PROC Service()
         MoveL {P1}, v100, fine, tool0;
@@ -175,7 +179,8 @@ def test_unknown_supervision_valid_confdata_other_closest_stays_a_robtarget_move
 ENDMODULE""")
     rows = rows_of(t)
     assert rows[3].rule == "confdata (ConfL on or off: the same solution)"
-    assert rows[3].action.startswith("MoveL -> MoveAbsJ")
+    assert rows[3].action == "inline robtarget rewritten"
+    assert any("where the robot stands is not known" in w for w in rows[3].warnings)
     r = rows[4]
     assert r.status == "compensated" and r.rule == "confdata (ConfL may be on or off here)"
     assert r.action == "inline robtarget rewritten"
@@ -496,7 +501,7 @@ ENDMODULE""")
     rows = rows_of(t)
     assert "pA is passed to Shift, which may change it at run time (M0.mod:8)" == rows[12].reason
     assert "passed to VisionUpdate, which no given module declares" in rows[13].reason
-    assert "pC is assigned at run time" in rows[14].reason
+    assert "pC is filled by GetDataVal at run time" in rows[14].reason
     assert "pD is set by SetDataVal at run time" in rows[15].reason
     assert rows[16].status == "compensated"                   # CONST: never written
     assert {rows[k].status for k in (12, 13, 14, 15)} == {"untouched"}

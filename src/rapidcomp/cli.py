@@ -104,10 +104,11 @@ def _model_options(f):
                           "else the world frame."),
         click.option("--start", default=None, metavar="J1,...,J6",
                      callback=_floats(6, "J1,...,J6 in degrees", [(-720.0, 720.0)] * 6),
-                     help="Where the robot is when the program leaves its position unknown "
-                          "(deg): moves without configuration supervision whose confdata names "
-                          "no solution take the solution closest to it. Default: the program's "
-                          "first jointtarget."),
+                     help="Where the robot stands when the program starts (deg; main, or a "
+                          "routine nothing given calls): its first move, if without "
+                          "configuration supervision, takes the solution closest to it. "
+                          "Default: its confdata, else the program's first jointtarget "
+                          "(assumed)."),
     ]):
         f = option(f)
     return f

@@ -8,25 +8,31 @@ arguments, and all of them depend on what ran before it:
   circular ones): on at program start, changed by ConfJ/ConfL \\On|\\Off,
   kept across routine calls. Off, the controller takes the solution closest
   to where the robot is;
-* program displacement (PDispOn/PDispSet ... PDispOff; with a track,
-  EOffsOn/EOffsSet too): robtarget moves are displaced, MoveAbsJ is not;
+* program displacement (PDispOn/PDispSet ... PDispOff) and, with a track
+  carrying the robot, the external axis offset (EOffsOn/EOffsSet ...
+  EOffsOff): robtarget moves are displaced, MoveAbsJ is not;
 * where the robot is: the previous move's target.
 
 This walks the task from main through routine calls (each call site with
 its own state), IF/TEST branches (joined), FOR loops with constant bounds
 (unrolled, so an array walked by a loop is a chain of moves) and other
-loops (to a fixed point). It is sound where it must guess: main is walked
+loops (to a fixed point); functions of the given modules are walked where
+an expression calls them. It is sound where it must guess: main is walked
 again from the state its cycle ends in (continuous run restarts main
 without resetting), a routine that calls itself has its moves recorded in
 the unknown state, an error handler starts where any statement of its
-routine may have left off and what it leaves behind flows on, a TRAP that
-switches supervision or displacement makes them unknown everywhere, and a
-call whose target is not known statically (%...%, CallByVar, a procedure
-no given module declares) makes everything unknown after it.
+routine or of a routine it calls may have left off and what it leaves
+behind flows on (after RETRY/TRYNEXT, into every statement of the body,
+to a fixed point), a label may be reached from any GOTO (unknown state),
+a TRAP that switches supervision or displacement, or calls something not
+known statically, makes that unknown everywhere, and a call whose target
+is not known statically (%...%, CallByVar, a procedure or function no
+given module declares) makes everything unknown after it.
 
 Per target use it records the state before it: each component is the set
 of values it may have, and the previous move as the set of uses that may
-have run last (None: unknown).
+have run last (None: unknown; PROGRAM_START: the program starts there,
+where --start says the robot is; RESUME: where an error stopped it).
 """
 
 from __future__ import annotations
@@ -35,13 +41,19 @@ from dataclasses import dataclass, field, replace
 
 from ..rapid import ast as A
 from ..rapid.model import Module, ParsedFile
-from ..rapid.motions import (BUILTIN_INSTRUCTIONS, DISPLACEMENT_OFF, DISPLACEMENT_ON,
-                             MOVES_OTHERWISE, SUPERVISION, TRACK_OFFSET_ON, UNKNOWN_TARGET_CALLS,
-                             motion_spec)
-from ..rapid.refs import names_in
+from ..rapid.motions import (BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS, DISPLACEMENT_OFF,
+                             DISPLACEMENT_ON, MOVES_OTHERWISE, SUPERVISION, TRACK_OFFSET_OFF,
+                             TRACK_OFFSET_ON, UNKNOWN_TARGET_CALLS, motion_spec)
+from ..rapid.refs import calls_in, names_in
 
 ON, OFF = "on", "off"
 BOTH = frozenset((ON, OFF))
+# Not moves, in State.last: the program starts here (the robot is where
+# --start says, else unknown), and: where an error stopped the robot.
+PROGRAM_START = ("program start",)
+RESUME = ("resume",)
+# A call whose routine is not known statically (in the names of calls).
+LATE = "%late-bound call%"
 # Statement visits (loops unrolled, routines walked per call site) beyond
 # which the flow is not followed: everything is then unknown.
 MAX_VISITS = 3_000_000
@@ -52,6 +64,7 @@ class State:
     confj: frozenset
     confl: frozenset
     pdisp: frozenset
+    eoffs: frozenset           # external axis offset (displaces only with a track)
     last: frozenset | None     # use keys that may have run last; None: unknown position
 
     def join(self, other: "State | None") -> "State":
@@ -59,17 +72,22 @@ class State:
             return self
         last = None if self.last is None or other.last is None else self.last | other.last
         return State(self.confj | other.confj, self.confl | other.confl,
-                     self.pdisp | other.pdisp, last)
+                     self.pdisp | other.pdisp, self.eoffs | other.eoffs, last)
 
     def supervision(self, interpolation: str) -> frozenset:
         return self.confj if interpolation == "joint" else self.confl
 
-    def flags(self) -> tuple:
-        return (self.confj, self.confl, self.pdisp)
+    @property
+    def may_be_displaced(self) -> bool:
+        return ON in self.pdisp or ON in self.eoffs
 
 
-START = State(frozenset((ON,)), frozenset((ON,)), frozenset((OFF,)), None)
-UNKNOWN = State(BOTH, BOTH, frozenset((OFF, ON)), None)
+_ON, _OFF = frozenset((ON,)), frozenset((OFF,))
+START = State(_ON, _ON, _OFF, _OFF, frozenset((PROGRAM_START,)))
+UNKNOWN = State(BOTH, BOTH, BOTH, BOTH, None)
+# No flags at all: walked from this, a handler's RETRY state holds only what
+# the handler itself switches.
+_SWITCHES = State(frozenset(), frozenset(), frozenset(), frozenset(), frozenset((RESUME,)))
 
 
 def join(*states):
@@ -86,6 +104,9 @@ class Flow:
     order: list = field(default_factory=list)    # use keys, first visit first
     notes: list = field(default_factory=list)
     unknown_calls: dict = field(default_factory=dict)  # name -> "file:line" of the first call
+    # The state of a use the walk never reached: as a routine entered from
+    # outside (its supervision and position unknown).
+    entry: State = UNKNOWN
 
 
 class _TooLarge(Exception):
@@ -103,15 +124,26 @@ class _Routine:
 @dataclass
 class _Frame:
     """One walk of a routine: the call stack, the states its RETURNs and
-    RETRYs leave, and the join of every state inside it (where an error
-    handler may start)."""
+    RETRYs leave, the join of every state inside it and inside what it
+    calls (where an error handler may start), and the floor: what a
+    RETRY may bring back before any statement of the body."""
 
     rt: _Routine
     stack: tuple
+    floor: State | None = None
     returns: list = field(default_factory=list)
     retries: list = field(default_factory=list)
     inside: State | None = None
-    exit_cycle: bool = False
+
+    def absorb(self, st: State | None) -> None:
+        # Only the flags: where an error handler starts, the position is
+        # unknown anyway (and a union of positions would grow with the body).
+        if st is None:
+            return
+        if self.inside is None:
+            self.inside = replace(st, last=None)
+        elif not _within(st, self.inside):
+            self.inside = self.inside.join(replace(st, last=None))
 
 
 class _Walker:
@@ -129,6 +161,7 @@ class _Walker:
         self.glob: dict[str, _Routine] = {}
         self.motion_index: dict[tuple[int, int], int] = {}
         self.target_names: dict[tuple[int, int], list] = {}
+        self.functions: dict[int, tuple] = {}     # id(statement) -> its expressions' calls
         self.routines: list[_Routine] = []
         for fi, pf in enumerate(files):
             mi = 0
@@ -144,24 +177,33 @@ class _Walker:
                     self.target_names[(fi, mi)] = [
                         (t.role, names_in(t.expr)) for t in mo.targets if t.role != "search"]
                     mi += 1
-        self.displacing = DISPLACEMENT_ON | (TRACK_OFFSET_ON if track else frozenset())
 
     def callee(self, module: Module, name: str) -> _Routine | None:
         return self.local.get((id(module), name.lower())) or self.glob.get(name.lower())
 
+    def known(self, rt: _Routine, name: str) -> bool:
+        """A call the flow can follow: a built-in or a given routine."""
+        return name != LATE and name not in UNKNOWN_TARGET_CALLS and (
+            name in BUILTIN_INSTRUCTIONS or name in BUILTIN_FUNCTIONS
+            or motion_spec(name) is not None or self.callee(rt.module, name) is not None)
+
     # ------------------------------------------------------------ entry
     def run(self) -> Flow:
         called = set()
-        has_pdisp = False
+        names = set()
         for rt in self.routines:
             for name in _called_names(rt.node):
-                if name in self.displacing:
-                    has_pdisp = True
+                names.add(name)
                 c = self.callee(rt.module, name)
                 if c is not None and c is not rt:
                     called.add(id(c.node))
-        pdisp_entry = frozenset((OFF, ON)) if has_pdisp else frozenset((OFF,))
-        entry = State(BOTH, BOTH, pdisp_entry, None)
+        has_pdisp = bool(names & DISPLACEMENT_ON)
+        has_eoffs = self.track and bool(names & TRACK_OFFSET_ON)
+        # A routine entered from outside: supervision unknown, displacement
+        # unknown where something switches it on; the program starts there.
+        entry = State(BOTH, BOTH, BOTH if has_pdisp else _OFF, BOTH if has_eoffs else _OFF,
+                      frozenset((PROGRAM_START,)))
+        self.flow.entry = replace(entry, last=None)
         main = next((rt for rt in self.routines if rt.fi < self.n_written
                      and rt.node.kind == "PROC" and rt.node.name.lower() == "main"), None)
         others = [rt for rt in self.routines if rt is not main and id(rt.node) not in called]
@@ -169,7 +211,7 @@ class _Walker:
             if main is not None:
                 self.main(main)
             for rt in others:
-                self.routine(rt, entry, ())
+                self.routine(rt, entry, (), None)
         except _TooLarge:
             self.flow = Flow(notes=[f"the task's control flow is too large to follow (more than "
                                     f"{MAX_VISITS} statement visits): configuration supervision, "
@@ -183,54 +225,66 @@ class _Walker:
     def main(self, main: _Routine) -> None:
         """main from program start; then again from the state a cycle ends
         in (continuous run restarts main without resetting supervision or
-        displacement), until nothing new is reached."""
+        displacement, the robot where the cycle left it), until nothing new
+        is reached."""
         state = START
         for _ in range(4):
             self.cycle_ends = []
-            out = self.routine(main, state, ())
+            out = self.routine(main, state, (), None)
             ends = join(out, *self.cycle_ends)
             if ends is None:
                 return
-            nxt = state.join(replace(ends, last=None))
+            nxt = state.join(ends)
             if nxt == state:
                 return
             state = nxt
 
     def interrupts(self, others: list[_Routine]) -> None:
         """A TRAP may run between any two statements: what it switches
-        (supervision, displacement) is unknown everywhere."""
+        (supervision, displacement) is unknown everywhere; a TRAP that calls
+        something not known statically may switch anything."""
         switched: set[str] = set()
         for rt in others:
             if rt.node.kind != "TRAP":
                 continue
-            for name in self._reachable_calls(rt):
+            for r, name in self._reachable_calls(rt):
                 if name in SUPERVISION:
                     switched.add(name)
-                elif name in self.displacing or name in DISPLACEMENT_OFF:
+                elif name in DISPLACEMENT_ON or name in DISPLACEMENT_OFF:
                     switched.add("pdisp")
+                elif name in TRACK_OFFSET_ON or name in TRACK_OFFSET_OFF:
+                    switched.add("eoffs")
+                elif not self.known(r, name):
+                    switched.update(("confj", "confl", "pdisp", "eoffs"))
+        if not self.track:
+            switched.discard("eoffs")
         if not switched:
             return
-        widen = {k: (BOTH if k != "pdisp" else frozenset((OFF, ON))) for k in switched}
+        widen = {k: BOTH for k in switched}
         for key, st in self.flow.before.items():
             self.flow.before[key] = replace(st, **widen)
+        self.flow.entry = replace(self.flow.entry, **widen)
+        what = {"confj": "ConfJ", "confl": "ConfL", "pdisp": "program displacement",
+                "eoffs": "the external axis offset"}
         self.flow.notes.append("an interrupt routine (TRAP) switches "
-                               + ", ".join(sorted(k if k != "pdisp" else "program displacement"
-                                                  for k in switched))
-                               + ": it may run anywhere, so that state is unknown everywhere")
+                               + ", ".join(what[k] for k in sorted(switched))
+                               + " (or calls what may): it may run anywhere, so that state is "
+                                 "unknown everywhere")
 
-    def _reachable_calls(self, rt: _Routine) -> set[str]:
-        seen, names, todo = set(), set(), [rt]
+    def _reachable_calls(self, rt: _Routine) -> set:
+        """(routine, name) of every call reachable from rt."""
+        seen, out, todo = set(), set(), [rt]
         while todo:
             r = todo.pop()
             if id(r.node) in seen:
                 continue
             seen.add(id(r.node))
             for name in _called_names(r.node):
-                names.add(name)
+                out.add((r, name))
                 c = self.callee(r.module, name)
                 if c is not None:
                     todo.append(c)
-        return names
+        return out
 
     def notes(self, others: list[_Routine], has_pdisp: bool) -> None:
         moving = [rt for rt in others if rt.fi < self.n_written and _has_motion(rt.node)]
@@ -240,7 +294,8 @@ class _Walker:
             self.flow.notes.append(
                 f"not called by any given routine, so entered from outside what was given "
                 f"(PP to routine, another module, an interrupt or a late-bound call): {names}; "
-                f"followed with configuration supervision{disp} and the robot position unknown"
+                f"followed with configuration supervision{disp} unknown and the robot where "
+                "the program starts (--start, else unknown)"
                 + ("" if has_pdisp else "; no given module switches program displacement "
                    "on, so none is assumed"))
         if self.recursed:
@@ -256,59 +311,99 @@ class _Walker:
                 "and the robot position are treated as unknown")
 
     # ------------------------------------------------------------ routines
-    def routine(self, rt: _Routine, state: State, stack: tuple) -> State | None:
+    def routine(self, rt: _Routine, state: State, stack: tuple,
+                caller: _Frame | None) -> State | None:
+        """The state a routine leaves, entered in `state`; what happens
+        inside it joins the caller's inside (an error it does not handle
+        goes to the caller's handler)."""
         key = (id(rt.node), state)
-        if key in self.memo:
-            return self.memo[key]
-        if id(rt.node) in stack:
-            # Recursion: this entry's state is not followed into the body;
-            # its moves are recorded once more with everything unknown.
-            if id(rt.node) not in self.recursed:
-                self.recursed.add(id(rt.node))
-                self.routine(rt, UNKNOWN, ())
-            return state.join(UNKNOWN)
-        frame = _Frame(rt, stack + (id(rt.node),))
-        out = self.walk(rt.node.body, state, {}, frame)
-        exit_state = join(out, *frame.returns)
+        hit = self.memo.get(key)
+        if hit is None:
+            if id(rt.node) in stack:
+                # Recursion: this entry's state is not followed into the body;
+                # its moves are recorded once more with everything unknown.
+                if id(rt.node) not in self.recursed:
+                    self.recursed.add(id(rt.node))
+                    self.routine(rt, UNKNOWN, (), None)
+                hit = (state.join(UNKNOWN), UNKNOWN)
+            else:
+                hit = self._body(rt, state, stack + (id(rt.node),))
+                self.memo[key] = hit
+        exit_state, inside = hit
+        if caller is not None:
+            caller.absorb(inside)
+        return exit_state
+
+    def _body(self, rt: _Routine, state: State, stack: tuple) -> tuple:
+        """(exit state, inside) of a routine's walk with its handlers."""
         for h in rt.node.handlers:
             if h.kind != "ERROR":
                 # BACKWARD and UNDO run only when stepping backwards or
                 # leaving the routine: their moves in the unknown state.
-                self.walk(h.body, UNKNOWN, {}, _Frame(rt, frame.stack))
-                continue
-            # An error may stop the routine at any statement: the handler
-            # starts from there, the robot wherever it stopped.
-            hframe = _Frame(rt, frame.stack)
-            start = replace(frame.inside or state, last=None)
-            h_out = self.walk(h.body, start, {}, hframe)
-            exit_state = join(exit_state, h_out, *hframe.returns)
-            retry = join(*hframe.retries)
-            if retry is not None and not _within(retry, frame.inside or state):
-                # RETRY/TRYNEXT resume the body with what the handler switched.
-                again = self.walk(rt.node.body, state.join(replace(retry, last=state.last)), {},
-                                  frame)
-                exit_state = join(exit_state, again, *frame.returns)
-        self.memo[key] = exit_state
-        return exit_state
+                self.walk(h.body, UNKNOWN, {}, _Frame(rt, stack))
+        handlers = [h for h in rt.node.handlers if h.kind == "ERROR"]
+        floor = None
+        for attempt in range(9):
+            frame = _Frame(rt, stack, floor)
+            out = self.walk(rt.node.body, state, {}, frame)
+            exit_state = join(out, *frame.returns)
+            inside = frame.inside
+            retries = []
+            for h in handlers:
+                # An error may stop the routine at any statement (of it or of
+                # what it calls): the handler starts from there, the robot
+                # wherever it stopped.
+                hframe = _Frame(rt, stack)
+                start = replace(frame.inside or state, last=frozenset((RESUME,)))
+                h_out = self.walk(h.body, start, {}, hframe)
+                exit_state = join(exit_state, h_out, *hframe.returns)
+                inside = join(inside, hframe.inside)
+                if hframe.retries:
+                    # What the handler switches on its way to RETRY/TRYNEXT:
+                    # walked again from no flags at all, what it may set.
+                    eframe = _Frame(rt, stack)
+                    self.walk(h.body, _SWITCHES, {}, eframe)
+                    retries += eframe.retries
+            retry = join(*retries)
+            if retry is None:
+                break
+            # RETRY/TRYNEXT resume the body at (or after) the statement that
+            # failed, in its state plus what the handler may have switched;
+            # the robot resumes from where it stopped (on the path the body
+            # describes) unless the handler moved it.
+            last = None if retry.last is None else retry.last - {RESUME}
+            nxt = replace(retry, last=last)
+            nxt = nxt if floor is None else floor.join(nxt)
+            if attempt == 7:
+                nxt = replace(UNKNOWN, last=None)
+            if floor is not None and nxt == floor:
+                break
+            floor = nxt
+        return exit_state, inside
 
     def walk(self, stmts, st: State | None, env: dict, frame: _Frame) -> State | None:
         for s in stmts:
+            t = type(s)
             if st is None:
-                return None
-            # Only the flags: where an error handler starts, the position is
-            # unknown anyway (and a union of positions would grow with the body).
-            if frame.inside is None:
-                frame.inside = replace(st, last=None)
-            elif not _within(st, frame.inside):
-                frame.inside = frame.inside.join(st)
+                if t is A.Simple and s.kind == "LABEL":
+                    # Reached by a GOTO only.
+                    st = replace(UNKNOWN, last=None)
+                continue
+            if frame.floor is not None:
+                st = st.join(frame.floor)
+            frame.absorb(st)
             self.visits += 1
             if self.visits > MAX_VISITS:
                 raise _TooLarge
-            t = type(s)
+            fcalls = self.functions.get(id(s))
+            if fcalls is None:
+                fcalls = self.functions[id(s)] = _function_calls(s)
+            for name in fcalls:
+                st = self.function(name, s, st, frame)
             if t is A.ProcCall:
                 st = self.call(s, st, env, frame)
             elif t is A.LateCall:
-                st = self.unknown_call("%late-bound call%", s, frame)
+                st = self.unknown_call(LATE, s, frame)
             elif t is A.If:
                 outs = [self.walk(body, st, env, frame) for _, body in s.branches]
                 outs.append(self.walk(s.orelse, st, env, frame) if s.orelse else st)
@@ -365,7 +460,18 @@ class _Walker:
         rt = frame.rt
         self.flow.unknown_calls.setdefault(name, f"{rt.pf.source.display_path}:"
                                                  f"{rt.pf.line(s.span)}")
+        frame.absorb(UNKNOWN)
         return UNKNOWN
+
+    def function(self, name: str, s, st: State, frame: _Frame) -> State:
+        """A function an expression of statement s calls (not a built-in)."""
+        callee = self.callee(frame.rt.module, name)
+        if callee is None:
+            return self.unknown_call(name, s, frame)
+        out = self.routine(callee, st, frame.stack, frame)
+        # A function that never returns normally raises: the statement does
+        # not complete, but its handler's paths are followed from inside.
+        return out if out is not None else st
 
     def call(self, s: A.ProcCall, st: State, env: dict, frame: _Frame) -> State | None:
         rt = frame.rt
@@ -375,15 +481,19 @@ class _Walker:
             return self.motion(s, spec, st, env, rt)
         if name in SUPERVISION:
             flags = {a.name.lower() for a in s.args if a.kind == "opt"}
-            value = frozenset((OFF,)) if "off" in flags else frozenset((ON,)) if "on" in flags \
-                else None
+            value = _OFF if "off" in flags else _ON if "on" in flags else None
             if value is None:
                 return st
             return replace(st, **{name: value})
-        if name in self.displacing:
-            return replace(st, pdisp=frozenset((ON,)))
+        if name in DISPLACEMENT_ON:
+            return replace(st, pdisp=_ON)
         if name in DISPLACEMENT_OFF:
-            return replace(st, pdisp=frozenset((OFF,)))
+            return replace(st, pdisp=_OFF)
+        if name in TRACK_OFFSET_ON:
+            # Without a track carrying the robot the offset moves other axes.
+            return replace(st, eoffs=_ON) if self.track else st
+        if name in TRACK_OFFSET_OFF:
+            return replace(st, eoffs=_OFF)
         if name == "exitcycle":
             # The cycle ends here and main starts again (see main()).
             self.cycle_ends.append(st)
@@ -394,8 +504,7 @@ class _Walker:
             return self.unknown_call(s.name, s, frame)
         callee = self.callee(rt.module, name)
         if callee is not None:
-            out = self.routine(callee, st, frame.stack)
-            return out
+            return self.routine(callee, st, frame.stack, frame)
         if name in BUILTIN_INSTRUCTIONS:
             return st
         return self.unknown_call(s.name, s, frame)
@@ -425,18 +534,55 @@ class _Walker:
 
 def _within(a: State, b: State) -> bool:
     """a's flags are among b's."""
-    return a.confj <= b.confj and a.confl <= b.confl and a.pdisp <= b.pdisp
+    return (a.confj <= b.confj and a.confl <= b.confl and a.pdisp <= b.pdisp
+            and a.eoffs <= b.eoffs)
+
+
+def _heads(s) -> tuple:
+    """The expressions a statement evaluates itself (not its bodies)."""
+    t = type(s)
+    if t is A.Assign:
+        return (s.target, s.value)
+    if t is A.ProcCall:
+        return s.args
+    if t is A.LateCall:
+        return (s.proc, s.args)
+    if t is A.If:
+        return tuple(c for c, _ in s.branches)
+    if t is A.CompactIf or t is A.While:
+        return (s.cond,)
+    if t is A.For:
+        return (s.start, s.stop, s.step)
+    if t is A.Test:
+        return (s.expr,) + tuple(v for values, _ in s.cases for v in values)
+    if t is A.Simple:
+        return (s.expr,)
+    return ()
+
+
+def _function_calls(s) -> tuple:
+    """Names of the functions (not built-ins) a statement's own expressions
+    call, each once."""
+    out: dict = {}
+    for c in calls_in(_heads(s)):
+        if c.name.lower() not in BUILTIN_FUNCTIONS:
+            out.setdefault(c.name.lower(), c.name)
+    return tuple(out.values())
 
 
 def _called_names(node: A.Routine):
-    """Lower-case names of the procedures a routine calls (statically)."""
+    """Lower-case names of the procedures and functions a routine calls
+    (statically; LATE for a late-bound call)."""
     stack = [node.body] + [h.body for h in node.handlers]
     while stack:
         stmts = stack.pop()
         for s in stmts:
             t = type(s)
+            yield from (name.lower() for name in _function_calls(s))
             if t is A.ProcCall:
                 yield s.name.lower()
+            elif t is A.LateCall:
+                yield LATE
             elif t is A.If:
                 stack.extend(body for _, body in s.branches)
                 stack.append(s.orelse)

@@ -82,6 +82,8 @@ def robot_base(source: TaskSource, given) -> tuple:
     from .targets import parse_base
     if given is not None:
         return parse_base(given), "--base " + ",".join(f"{v:g}" for v in given)
+    if source.base_problem is not None:
+        raise RapidcompError(source.base_problem)
     if source.base is not None:
         (x, y, z), q = source.base
         return (parse_base((x, y, z, *q)),

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import InputError
 from ..kinematics.ik import Solver, Warn
 from ..rapid.model import Declaration, Module
 from .plan import Plan
@@ -167,14 +168,15 @@ def _elements(g: Group, solved: Solved) -> None:
             g.failure = (f"{element_label(g, k)} is reached on different configurations "
                          f"(lines {', '.join(map(str, lines))}); one array element cannot hold "
                          "both values", k)
+    # Any use of the group that fails fails the group (its value is shared).
+    bad = next((u for u in g.uses if not solved.ok(solved.row[u.key])), None)
+    if g.failure is None and bad is not None:
+        g.failure = (solved.reason(solved.row[bad.key]), bad.source.element)
     g.elements = sorted(seen) if g.array else list(seen)
     g.rows = seen
     if g.failure is None:
         for k in g.elements:
             i = seen[k]
-            if not solved.ok(i):
-                g.failure = (solved.reason(i), k)
-                break
             if g.mode == "rob" and solved.deformed.warnings[i] & Warn.ORIENTATION_LEFT:
                 g.failure = (
                     f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
@@ -188,9 +190,11 @@ def place(plan: Plan, gs: list[Group]) -> None:
     """Inline values are edited inline; MoveAbsJ targets are new
     declarations; a declaration is edited in place by the group (the one
     with most uses) when every reference to it belongs to its groups and
-    none failed (a failed group keeps reading the old value); the other
-    groups get new declarations. A PERS target is shared data: a copy
-    would not follow changes to it, which the report says."""
+    none failed (a failed group keeps reading the old value) and no other
+    task of the controller refers to it (a PERS is shared: the value would
+    change for that task too); the other groups get new declarations. A
+    PERS target is shared data: a copy would not follow changes to it,
+    which the report says."""
     refs: dict[str, set] = {}
     decl_count: dict[str, int] = {}
     for fi, pf in enumerate(plan.files):
@@ -225,6 +229,7 @@ def place(plan: Plan, gs: list[Group]) -> None:
                 for u in g.uses}
         exclusive = (file_index[id(writable[0].src.home)] < plan.n_written
                      and decl_count.get(name) == 1
+                     and name not in plan.resolver.shared
                      and all(g.failure is None for g in decl_groups)
                      and refs.get(name, set()) - consumed == mine)
         writable.sort(key=lambda g: -len(g.uses))
@@ -257,7 +262,14 @@ def fill_slots(plan: Plan, solver: Solver, gs: list[Group]) -> None:
         if not isinstance(base, tuple):
             R[i], p[i] = np.eye(3), np.zeros(3)
             continue
-        R[i], p[i] = flange_pose(base, g.wobj[1], plan.resolver.target_pose(src), g.tool[1])
+        try:
+            target = plan.resolver.target_pose(src)
+        except InputError:
+            # A slot no move reaches holds a value no move could use (a
+            # position beyond reach of reason): the calibration position.
+            R[i], p[i] = np.eye(3), np.zeros(3)
+            continue
+        R[i], p[i] = flange_pose(base, g.wobj[1], target, g.tool[1])
         conf[i] = record.conf
         valid[i] = True
     for (g, k), slot in zip(want, solve_slots(solver, R, p, conf, valid)):

@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..rapid.model import ParsedFile
-from .flow import ON, UNKNOWN, Flow, State, analyse
+from .flow import Flow, State, analyse
 from .targets import EXTAX_UNUSED, Resolver, TargetUse
 
 
@@ -53,12 +53,12 @@ class Plan:
         self.flow: Flow = analyse(self.files, self.n_written, self.resolver, bool(track))
 
     def state(self, u: TargetUse) -> State:
-        """The motion state before a use (unknown where the flow never
-        reached it)."""
-        return self.flow.before.get(u.key, UNKNOWN)
+        """The motion state before a use (where the flow never reached it:
+        as entered from outside)."""
+        return self.flow.before.get(u.key, self.flow.entry)
 
     def may_be_displaced(self, u: TargetUse) -> bool:
-        return ON in self.state(u).pdisp
+        return self.state(u).may_be_displaced
 
     def order(self) -> list[TargetUse]:
         """Uses in the order the controller reaches them first; uses the

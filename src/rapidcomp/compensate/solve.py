@@ -28,7 +28,7 @@ import numpy as np
 from ..kinematics.conf import confdata
 from ..kinematics.frames import DEG
 from ..kinematics.ik import IKBatch, Solver, Status
-from .flow import OFF, ON
+from .flow import OFF, ON, PROGRAM_START
 from .plan import Plan, line_ranges
 from .targets import TargetUse
 
@@ -95,10 +95,15 @@ def _fail(why: str) -> Pick:
 
 
 def _distinct(picks: list[Pick]) -> list[Pick]:
+    """One pick per solution; a solution reached by an assumption keeps
+    its caution whichever way it came first."""
     out: list[Pick] = []
     for p in picks:
-        if not any(np.linalg.norm(p.q - o.q) <= SAME_DEG for o in out):
+        k = next((n for n, o in enumerate(out) if np.linalg.norm(p.q - o.q) <= SAME_DEG), None)
+        if k is None:
             out.append(p)
+        elif out[k].caution is None and p.caution is not None:
+            out[k] = out[k]._replace(caution=p.caution)
     return out
 
 
@@ -131,11 +136,14 @@ class _Chooser:
         self.q = np.full((n, 6), np.nan)
         self.picks: list = [None] * n
         self.sols: list = [[] for _ in range(n)]
+        self.chosen: set[int] = set()   # rows whose solutions are set
+        self.unsettled: set[int] = set()  # rows whose closest solution does not settle
         for i, u in enumerate(uses):
             if u.kind == "jointtarget":
                 self.q[i] = u.joints_deg
                 self.picks[i] = Pick(self.q[i], "as written (MoveAbsJ)", None, "joint")
                 self.sols[i] = [self.picks[i]]
+                self.chosen.add(i)
         first = next((u for u in plan.order() if u.kind == "jointtarget" and u.reason is None),
                      None)
         self.first_joint = self.rows[first.key] if first is not None else None
@@ -224,26 +232,30 @@ class _Chooser:
             return _fail("nominal: no solution within the joint limits")
         return Pick(q, rule, None, "closest", prev, line)
 
-    def _unknown_start(self, i: int, flag: str) -> Pick:
-        """The first move after an unknown position, supervision off: the
-        solution closest to --start when it is given; else its confdata
-        where that names a valid solution, else the solution closest to the
-        program's first jointtarget, both assumed (with a caution)."""
+    def _unknown_start(self, i: int, flag: str, at_start: bool) -> Pick:
+        """The first move after an unknown position, supervision off: at
+        program start, the solution closest to --start when it is given;
+        else its confdata where that names a valid solution, else the
+        solution closest to the program's first jointtarget, both assumed
+        (with a caution)."""
         u = self.uses[i]
         c = _conf_text(u.conf)
-        if self.start is not None:
+        if at_start and self.start is not None:
             return self._closest_to(i, self.start, None, f"closest to --start ({flag}\\Off)")
-        assumed = (f"{flag}\\Off and the robot's position before this move is not known here: "
-                   "{what} is assumed (the controller takes the solution closest to where the "
-                   "robot is); kept a robtarget move")
+        where = ("the program starts here and where the robot stands is not known" if at_start
+                 else "the robot's position before this move is not known here")
+        assumed = (f"{flag}\\Off and {where}: {{what}} is assumed (the controller takes the "
+                   "solution closest to where the robot is); kept a robtarget move")
         pick = self._by_conf(i, f"confdata; position before unknown ({flag}\\Off)")
         if pick.q is not None:
             return pick._replace(caution=assumed.format(what="the solution of its confdata"))
         j = self.first_joint
         if j is None:
+            hint = (" (say where the robot starts with --start)" if at_start else
+                    " (after a call, search or error the flow cannot follow)")
             return _fail(f"{flag}\\Off and the position before it is unknown: its confdata {c} "
                          f"names no solution ({pick.failure}) and the program has no "
-                         "jointtarget to start from (say where the robot starts with --start)")
+                         f"jointtarget to start from{hint}")
         ju = self.uses[j]
         return self._closest_to(
             i, self.q[j], ju.line, f"closest to {ju.label} (line {ju.line}), the first "
@@ -252,16 +264,20 @@ class _Chooser:
 
     def _follow(self, i: int, preds, flag: str) -> tuple[list[Pick], str | None]:
         """The solutions closest to every solution of every move that may
-        run before (supervision off, and every circle point)."""
-        if preds is None:
-            p = self._unknown_start(i, flag)
-            return ([p], None) if p.q is not None else ([], p.failure)
-        out = []
-        unknown = False
-        for pk in sorted(preds):
+        run before (supervision off, and every circle point). A move not
+        chosen yet (later in a loop) adds nothing now: it is chosen, and
+        this one again, until nothing changes."""
+        picks, unknown, start, pending = [], preds is None, False, False
+        for pk in preds or ():
+            if pk == PROGRAM_START:
+                start = True
+                continue
             j = self.rows.get(pk)
-            if j is None or not self.sols[j]:
-                unknown = True        # not resolved, failed, or not chosen yet
+            if j is None or (j in self.chosen and not self.sols[j]):
+                unknown = True        # not resolved, failed, or where an error stopped it
+                continue
+            if j not in self.chosen:
+                pending = True
                 continue
             for s in self.sols[j]:
                 p = self._closest_to(i, s.q, self.uses[j].line, "", j)
@@ -270,13 +286,16 @@ class _Chooser:
                 if s.caution is not None:
                     p = p._replace(caution=f"follows line {self.uses[j].line}, whose "
                                            "configuration is assumed: kept a robtarget move")
-                out.append(p)
-        if unknown:
-            p = self._unknown_start(i, flag)
-            if p.q is None:
-                return [], p.failure
-            out.append(p)
-        return _distinct(out), None
+                picks.append(p)
+        if pending and not (picks or unknown or start):
+            start = True              # a loop entered from nowhere else: provisional
+        for at_start, flag_on in ((True, start), (False, unknown)):
+            if flag_on:
+                p = self._unknown_start(i, flag, at_start)
+                if p.q is None:
+                    return [], p.failure
+                picks.append(p)
+        return _distinct(picks), None
 
     def _turns_only(self, sols: list[Pick]) -> bool:
         """Solutions on one configuration, J1/J4/J6 differing by whole turns
@@ -341,7 +360,7 @@ class _Chooser:
         if on.q is not None:
             sols = _distinct([on] + off)
             if len(sols) == 1:
-                return sols, on
+                return sols, on._replace(caution=sols[0].caution)
             if self._turns_only(sols):
                 return sols, on._replace(caution=(
                     f"{flag} may be on or off here; the solutions it may take differ by whole "
@@ -366,22 +385,19 @@ class _Chooser:
                          f"confdata {c} names no solution ({on.failure}); off, {off_fail}")
 
     def run(self) -> None:
-        done = set()
         pending = []
         succ: dict[int, list[int]] = {}
         for i in self.order:
             u = self.uses[i]
             if u.kind != "robtarget":
-                done.add(i)
                 continue
             preds = self.plan.state(u).last or ()
             pred_rows = [self.rows[k] for k in preds if k in self.rows]
             for j in pred_rows:
                 succ.setdefault(j, []).append(i)
-            if any(j not in done for j in pred_rows):
+            if any(j not in self.chosen for j in pred_rows):
                 pending.append(i)
             self._set(i)
-            done.add(i)
         # Loops: a move whose predecessor comes later in the flow (the last
         # move of a loop body before its first) is chosen again once that
         # one is known, and a change propagates.
@@ -397,20 +413,26 @@ class _Chooser:
                     np.allclose(before[1], self.q[i], atol=SAME_DEG, equal_nan=True):
                 updates[i] = updates.get(i, 0) + 1
                 if updates[i] > 3:
+                    self.unsettled.add(i)
                     self.q[i] = np.nan
                     self.sols[i] = []
                     self.picks[i] = _fail("the closest solution does not settle around the "
                                           "loop this move is in")
+                    # Those after it now start from an unknown position.
+                    work.extend(j for j in succ.get(i, []) if j not in work and j != i)
                     continue
                 work.extend(j for j in succ.get(i, []) if j not in work)
 
     def _set(self, i: int) -> None:
+        if i in self.unsettled:
+            return
         sols, pick = self.choose(i)
         if len(sols) > 8:
             sols, pick = [], _fail("reached on more than 8 configurations")
         self.sols[i] = sols
         self.q[i] = pick.q if pick.q is not None else np.nan
         self.picks[i] = pick
+        self.chosen.add(i)
 
 
 def solve(plan: Plan, solver: Solver, start=None) -> Solved:

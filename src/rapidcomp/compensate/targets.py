@@ -32,8 +32,8 @@ from ..errors import RapidcompError
 from ..kinematics.frames import DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z
 from ..rapid import ast as A
 from ..rapid.model import Declaration, Module, Motion, ParsedFile
-from ..rapid.motions import BUILTIN_INSTRUCTIONS
 from ..rapid.refs import names_in, usage
+from ..rapid.writes import Writes, task_writes
 from ..rapid.values import DecodeIssue, JointTarget, Pose, RobTarget, ToolData, WobjData, decode
 
 IDENTITY_POSE = (np.eye(3), np.zeros(3))
@@ -183,10 +183,12 @@ class Resolver:
         self.params: dict[tuple[int, str], set[str]] = {}
         self.home: dict[int, ParsedFile] = {}
         self.home_module: dict[int, Module] = {}
-        self.writes: dict[str, tuple[ParsedFile, A.Span, str]] = {}   # name -> where, how
+        self.writes = Writes({}, None)         # what the task changes at run time
+        self.pers_anything: str | None = None  # another task may change any PERS
+        self.shared: frozenset = frozenset()   # PERS names other tasks refer to
         self.usages: dict[int, object] = {}   # id(Module) -> refs.Usage
         self._notes: list[str] = []             # of the use being resolved
-        self.any_write = None                   # a SetDataVal with a computed name
+        self._guarded: set = set()              # FOR variables of the use behind a condition
         for pf in files:
             for m in pf.modules:
                 mid = id(m)
@@ -208,11 +210,8 @@ class Resolver:
                         continue
                     us = usage(m.node)
                 self.usages[mid] = us
-                for name, spans in us.writes.items():
-                    self.writes.setdefault(name, (pf, spans[0], "assigned"))
         if writes or usages is None:
-            self._call_writes(files)
-            self._other_tasks(observers)
+            self._task_writes(files, observers)
 
     def _num(self, values) -> np.ndarray:
         a = np.asarray(values, float)
@@ -302,88 +301,37 @@ class Resolver:
         written = self._written(d)
         return Unresolved(written) if written else d
 
-    def _other_tasks(self, observers) -> None:
-        """PERS data are shared with the controller's other tasks: what
-        those write is written here too."""
+    def _task_writes(self, files, observers) -> None:
+        """What the task may change at run time, and what the controller's
+        other tasks may change of its PERS data (shared between tasks);
+        which PERS the other tasks refer to (editing their value in place
+        would change it for them too)."""
+        self.writes = task_writes(files, self.usages)
         if not observers:
             return
         pers = {name for name, ds in self.globals.items() if any(d.storage == "PERS" for d in ds)}
-        other = Resolver(list(observers), writes=True)
-        for name, (pf, span, how) in other.writes.items():
+        theirs = {id(m): usage(m.node) for pf in observers for m in pf.modules}
+        other = task_writes(list(observers), theirs)
+        by_name = dict(self.writes.by_name)
+        for name, (pf, span, how) in other.by_name.items():
             if name in pers:
-                self.writes.setdefault(name, (pf, span, f"{how} in another task"))
-
-    def _call_writes(self, files) -> None:
-        """Data a call may change: arguments of INOUT/VAR/PERS parameters of
-        the given routines, of procedures no given module declares (they
-        may change them) and of late-bound calls; SetDataVal's named data
-        (with a computed name: any data)."""
-        routines: dict = {}
-        for pf in files:
-            for m in pf.modules:
-                for r in m.routines:
-                    routines.setdefault((id(m), r.name.lower()), r.node)
-                    if r.node.scope != "LOCAL":
-                        routines.setdefault(r.name.lower(), r.node)
-        self.any_write = None
-        for pf in files:
-            for m in pf.modules:
-                us = self.usages.get(id(m))
-                for call in (us.calls if us is not None else ()):
-                    if isinstance(call, A.LateCall):
-                        self._args_written(pf, call.args, None, "passed to a late-bound call")
-                        continue
-                    name = call.name.lower()
-                    if name in ("setdataval", "setalldataval"):
-                        first = next((a for a in call.args if a.kind == "pos"), None)
-                        if name == "setdataval" and first is not None and isinstance(
-                                first.value, A.Str):
-                            self.writes.setdefault(first.value.value.lower(),
-                                                   (pf, call.span, "set by SetDataVal"))
-                        elif self.any_write is None:
-                            self.any_write = (pf, call.span, call.name)
-                        continue
-                    node = routines.get((id(m), name)) or routines.get(name)
-                    if node is not None:
-                        self._args_written(pf, call.args, node.params,
-                                           f"passed to {node.name}, which may change it")
-                    elif name not in BUILTIN_INSTRUCTIONS:
-                        self._args_written(pf, call.args, None,
-                                           f"passed to {call.name}, which no given module "
-                                           "declares (it may change it)")
-
-    def _args_written(self, pf, args, params, how: str) -> None:
-        required = [p for p in params if not p.optional] if params is not None else None
-        k = 0
-        for a in args:
-            if a.value is None or not isinstance(a.value, A.Ref):
-                if a.kind in ("pos",):
-                    k += 1
-                continue
-            if params is None:
-                written = True
-            elif a.kind == "pos":
-                p = required[k] if k < len(required) else None
-                written = p is not None and p.access in ("INOUT", "VAR", "PERS")
-            else:
-                p = next((p for p in params if p.name.lower() == (a.name or "").lower()), None)
-                written = p is not None and p.access in ("INOUT", "VAR", "PERS")
-            if a.kind == "pos":
-                k += 1
-            if written:
-                self.writes.setdefault(a.value.name.lower(), (pf, a.span, how))
+                by_name.setdefault(name, (pf, span, f"{how} in another task"))
+        self.writes = Writes(by_name, self.writes.anything)
+        if other.anything is not None and pers:
+            pf, span, what = other.anything
+            self.pers_anything = (f"may be changed at run time by {what} with a name computed at "
+                                  f"run time in another task ({pf.source.display_path}:"
+                                  f"{pf.line(span)}; PERS data are shared between tasks)")
+        self.shared = frozenset(name for name in pers
+                                if any(name in us.refs for us in theirs.values()))
 
     def _written(self, d: Declaration) -> str | None:
         if d.storage == "CONST":
             return None
-        if d.name.lower() in self.writes:
-            pf, span, how = self.writes[d.name.lower()]
-            return f"{d.name} is {how} at run time ({pf.source.display_path}:{pf.line(span)})"
-        if self.any_write is not None:
-            pf, span, name = self.any_write
-            return (f"{d.name} may be changed at run time by {name} with a name computed at run "
-                    f"time ({pf.source.display_path}:{pf.line(span)})")
-        return None
+        why = self.writes.why(d.name)
+        if why is None and d.storage == "PERS" and self.pers_anything is not None:
+            why = f"{d.name} {self.pers_anything}"
+        return why
 
     def tool(self, expr, module, routine: str):
         """(key, tframe as (R, p)), or Unresolved."""
@@ -461,11 +409,13 @@ class Resolver:
                     return Unresolved(f"{expr.name} is not an array", True)
                 idx = []
                 by_loop = False
+                guarded = False
                 for e in expr.selectors[0].indices:
                     # A FOR loop's variable hides data of the same name.
                     if isinstance(e, A.Ref) and not e.selectors and e.name.lower() in env:
                         idx.append(env[e.name.lower()])
                         by_loop = True
+                        guarded = guarded or e.name.lower() in self._guarded
                     elif (k := self.integer(e, module, routine)) is not None:
                         idx.append(k)
                     else:
@@ -479,6 +429,13 @@ class Resolver:
                     if not 1 <= k <= dim:
                         loop = "" if not by_loop else (
                             f" (a FOR loop walks it to {k}; the array has {dim} elements)")
+                        if guarded:
+                            # A condition in the loop may keep the move from
+                            # running there: the program may well be right.
+                            return Unresolved(
+                                f"index {k} of {expr.name} is outside 1..{dim}{loop}; a "
+                                "condition in the loop holds the move, so it may never run "
+                                "there (if it did, the controller would stop with ERR_INDEX)")
                         raise pf.source.error(e.span.start, f"index {k} of {expr.name} is outside "
                                               f"1..{dim}{loop}: the controller stops here with "
                                               "ERR_INDEX")
@@ -559,7 +516,7 @@ class Resolver:
             d = self.lookup(expr.name, module, routine)
             if isinstance(d, Declaration) and d.storage == "CONST" and d.type == "num":
                 # Its value's names are those of the module that declares it.
-                return self.integer(d.node.init, self.home_module[id(d)], None)
+                return self.integer(d.node.init, self.home_module[id(d)], d.routine)
         return None
 
     def loop_range(self, loop, module, routine: str, bounded: bool = True) -> range | None:
@@ -628,6 +585,7 @@ class Resolver:
         line = pf.line(motion.span)
         envt = key[3]
         self._notes = []
+        self._guarded = {lp.var.lower() for lp in motion.loops if lp.guarded and lp.var}
 
         def fail(why: Unresolved):
             return TargetUse(motion, t.role, label, line, kind, None, None, None, None,

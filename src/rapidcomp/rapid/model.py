@@ -24,6 +24,9 @@ class Loop:
     stop: A.Expr | None
     step: A.Expr | None
     span: Span
+    # An IF, TEST or WHILE inside the loop holds the move: it may not run
+    # for every value of the variable.
+    guarded: bool = False
 
 
 @dataclass(frozen=True, slots=True)

@@ -86,6 +86,7 @@ DISPLACEMENT_OFF = frozenset({"pdispoff"})
 # An external axis offset moves a track that carries the robot: with a
 # track, these displace robtarget moves too.
 TRACK_OFFSET_ON = frozenset({"eoffson", "eoffsset"})
+TRACK_OFFSET_OFF = frozenset({"eoffsoff"})
 SUPERVISION = frozenset({"confj", "confl"})
 # Calls whose routine is chosen at run time (like %...%).
 UNKNOWN_TARGET_CALLS = frozenset({"callbyvar"})
@@ -149,3 +150,43 @@ BUILTIN_INSTRUCTIONS = frozenset(n.lower() for n in (
     "WriteBin", "WriteBlock", "WriteCfgData", "WriteRawBytes", "WriteStrBin", "WriteVar",
     "WZBoxDef", "WZCylDef", "WZDisable", "WZDOSet", "WZEnable", "WZFree", "WZHomeJointDef",
     "WZLimJointDef", "WZLimSup", "WZSphDef"))
+# RAPID functions (Technical reference manual - RAPID Functions). They
+# neither move the arm nor switch supervision or displacement; those that
+# write an argument are in writes.WRITING_BUILTINS. A function call to a
+# name that is neither one of these nor a function of the given modules is
+# treated as an unknown call.
+BUILTIN_FUNCTIONS = frozenset(n.lower() for n in (
+    "Abs", "AbsDnum", "ACos", "ACosDnum", "AInput", "AND", "AOutput", "ArgName", "ASin",
+    "ASinDnum", "ATan", "ATan2", "ATan2Dnum", "ATanDnum", "BitAnd", "BitAndDnum", "BitCheck",
+    "BitCheckDnum", "BitLSh", "BitLShDnum", "BitNeg", "BitNegDnum", "BitOr", "BitOrDnum",
+    "BitRSh", "BitRShDnum", "BitXOr", "BitXOrDnum", "ByteToStr", "CalcJointT", "CalcRobT",
+    "CalcRotAxFrameZ", "CalcRotAxisFrame", "CamGetExposure", "CamGetLoadedJob", "CamGetName",
+    "CamNumberOfResults", "CDate", "CJointT", "ClkRead", "CorrRead", "Cos", "CosDnum",
+    "CPos", "CRobT", "CSpeedOverride", "CTime", "CTool", "CWObj", "DecToHex", "DefAccFrame",
+    "DefDFrame", "DefFrame", "Dim", "DInput", "Distance", "DnumToNum", "DnumToStr",
+    "DotProd", "DOutput", "EGMGetState", "EulerZYX", "EventType", "ExecHandler",
+    "ExecLevel", "Exp", "FileSize", "FileTime", "FSSize", "GetAxisDistance",
+    "GetAxisMoveTime", "GetMaxNumberOfCyclicBool", "GetMecUnitName", "GetModalPayLoadMode",
+    "GetMotorTorque", "GetNextCyclicBool", "GetNextMechUnit", "GetNextSym",
+    "GetNumberOfCyclicBool", "GetServiceInfo", "GetSignalOrigin", "GetSysInfo",
+    "GetTaskName", "GetTime", "GetTSPStatus", "GetUASUserName", "GInput", "GInputDnum",
+    "GOutput", "GOutputDnum", "HexToDec", "IndInpos", "IndSpeed", "IOUnitState", "IsBrakeCheckActive",
+    "IsCyclicBool", "IsFile", "IsLeadThrough", "IsMechUnitActive", "IsPers", "IsStopMoveAct",
+    "IsStopStateEvent", "IsSyncMoveOn", "IsSysId", "IsVar", "MaxExtLinearSpeed",
+    "MaxExtReorientSpeed", "MaxRobReorientSpeed", "MaxRobSpeed", "MirPos", "ModExist",
+    "ModTime", "MotionPlannerNo", "NonMotionMode", "NOrient", "NumToDnum", "NumToStr",
+    "Offs", "OpMode", "OrientZYX", "ORobT", "ParIdPosValid", "ParIdRobValid",
+    "PathLevel", "PathRecValidBwd", "PathRecValidFwd", "PFRestart", "PoseInv", "PoseMult",
+    "PoseVect", "Pow", "PowDnum", "PPMovedInManMode", "Present", "ProgMemFree",
+    "PrxGetMaxRecordpos", "RawBytesLen", "ReadBin", "ReadDir", "ReadMotor", "ReadNum",
+    "ReadStr", "ReadStrBin", "ReadVar", "RelTool", "RemainingRetries", "RMQGetSlotName",
+    "RobName", "RobOS", "Round", "RoundDnum", "RunMode", "SafetyControllerGetChecksum",
+    "SafetyControllerGetSWVersion", "SafetyControllerGetUserChecksum", "Sin", "SinDnum",
+    "SocketGetStatus", "SocketPeek", "Sqrt", "SqrtDnum", "STCalcForce", "STCalcTorque",
+    "STIsCalib", "STIsClosed", "STIsIndGun", "STIsOpen", "StrDigCalc", "StrDigCmp",
+    "StrFind", "StrLen", "StrMap", "StrMatch", "StrMemb", "StrOrder", "StrPart",
+    "StrToByte", "StrToVal", "Tan", "TanDnum", "TaskRunMec", "TaskRunRob", "TasksInSync",
+    "TestAndSet", "TestDI", "TestSignRead", "TextGet", "TextTabFreeToUse", "TextTabGet",
+    "TriggDataValid", "Trunc", "TruncDnum", "Type", "UIAlphaEntry", "UIClientExist",
+    "UIDnumEntry", "UIDnumTune", "UIListView", "UIMessageBox", "UINumEntry", "UINumTune",
+    "ValidIO", "ValToStr", "VectMagn"))

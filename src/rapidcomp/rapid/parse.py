@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from ..errors import InputError
@@ -126,32 +127,36 @@ def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops) -> 
                   slots.get("tool"), wobj, tuple(optional))
 
 
-def _walk(source, stmts, routine: str, loops: list, out: list) -> None:
+def _walk(source, stmts, routine: str, loops: list, out: list, cond: int = 0) -> None:
+    """Motions in statement order. cond: how many of the enclosing loops
+    hold a condition (IF, TEST, WHILE) around the statements: a move
+    behind one may not run for every value of their variables."""
     for s in stmts:
         t = type(s)
         if t is A.ProcCall:
             spec = motion_spec(s.name)
             if spec is not None:
-                out.append(_motion(source, s, spec, routine, loops))
+                guarded = [replace(lp, guarded=k < cond) for k, lp in enumerate(loops)]
+                out.append(_motion(source, s, spec, routine, guarded))
         elif t is A.For:
             loops.append(Loop(s.var, s.start, s.stop, s.step, s.span))
-            _walk(source, s.body, routine, loops, out)
+            _walk(source, s.body, routine, loops, out, cond)
             loops.pop()
         elif t is A.While:
             loops.append(Loop(None, None, None, None, s.span))
-            _walk(source, s.body, routine, loops, out)
+            _walk(source, s.body, routine, loops, out, len(loops))
             loops.pop()
         elif t is A.If:
             for _, body in s.branches:
-                _walk(source, body, routine, loops, out)
-            _walk(source, s.orelse, routine, loops, out)
+                _walk(source, body, routine, loops, out, len(loops))
+            _walk(source, s.orelse, routine, loops, out, len(loops))
         elif t is A.CompactIf:
-            _walk(source, (s.stmt,), routine, loops, out)
+            _walk(source, (s.stmt,), routine, loops, out, len(loops))
         elif t is A.Test:
             for _, body in s.cases:
-                _walk(source, body, routine, loops, out)
+                _walk(source, body, routine, loops, out, len(loops))
             if s.default:
-                _walk(source, s.default, routine, loops, out)
+                _walk(source, s.default, routine, loops, out, len(loops))
 
 
 def _build_module(source: SourceText, node: A.ModuleNode) -> Module:

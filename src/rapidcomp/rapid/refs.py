@@ -28,16 +28,8 @@ def _field_names(cls: type) -> tuple[str, ...]:
 class Usage:
     refs: dict[str, list[A.Ref]]          # lower-case name -> every reference
     writes: dict[str, list[A.Span]]       # lower-case name -> assignments / search results
-    calls: tuple = ()                     # ProcCall/LateCall: arguments may be written
-
-
-# Built-in instructions that write an argument: name -> its position among
-# the required arguments (RAPID Instructions manual). GetSysData fills a
-# tool or work object with the current one; the calibrations fill a tool.
-WRITING_BUILTINS = {
-    "getdataval": 1, "readanybin": 1, "unpackrawbytes": 2, "getsysdata": 0,
-    "mtooltcpcalib": 4, "stooltcpcalib": 3, "mtoolrotcalib": 2, "stoolrotcalib": 3,
-}
+    calls: tuple = ()                     # ProcCall/LateCall/Call: arguments may be written
+                                          # (see writes.py)
 
 
 def _nodes(root):
@@ -74,14 +66,15 @@ def usage(module: A.ModuleNode) -> Usage:
                         if role == "search" and isinstance(arg.value, A.Ref):
                             writes.setdefault(arg.value.name.lower(), []).append(arg.span)
                 continue
-            k = WRITING_BUILTINS.get(node.name.lower())
-            if k is not None and k < len(positional) and isinstance(positional[k].value, A.Ref):
-                writes.setdefault(positional[k].value.name.lower(), []).append(
-                    positional[k].span)
             calls.append(node)
-        elif t is A.LateCall:
+        elif t is A.LateCall or t is A.Call:
             calls.append(node)
     return Usage(refs, writes, tuple(calls))
+
+
+def calls_in(expr):
+    """The function calls in an expression (nested ones too)."""
+    return [node for node in _nodes(expr) if type(node) is A.Call]
 
 
 def names_in(expr) -> set[str]:

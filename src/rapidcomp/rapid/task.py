@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import re
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import InputError, RapidcompError
@@ -43,6 +43,9 @@ class TaskSource:
     # world_M_base of a backup's robot from SYSPAR/MOC.cfg: ((x, y, z) mm,
     # (q1, q2, q3, q4)), None when the backup does not set one.
     base: tuple | None = None
+    # Why the backup cannot tell the base frame (several robots): an error
+    # unless --base says it.
+    base_problem: str | None = None
 
     @property
     def is_folder(self) -> bool:
@@ -152,7 +155,6 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
     folders = sorted(d for d in (root / "RAPID").iterdir() if d.is_dir())
     names = _backinfo_names(root, shown)
     motion = _motion_tasks(root, shown)
-    base = _base_frame(root, shown)
     tasks, skipped, other = [], [], []
     for d in folders:
         name = names.get(d.name.upper(), d.name)
@@ -160,7 +162,7 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
         rel = [f"RAPID/{d.name}/{m}" for m in mods]
         if not rel:
             continue
-        task = TaskSource(name, "backup", root, root, tuple(rel), name, base=base)
+        task = TaskSource(name, "backup", root, root, tuple(rel), name)
         if motion is not None and name.upper() not in motion:
             skipped.append(f"task {name} (RAPID/{d.name}) is not a motion task "
                            "(SYSPAR/SYS.cfg): not compensated")
@@ -189,11 +191,15 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
     if not tasks:
         raise RapidcompError(f"{shown}: a controller backup without a motion task holding "
                              "modules under RAPID/")
-    if skipped:
-        t = tasks[0]
-        tasks[0] = TaskSource(t.name, t.kind, t.input, t.root, t.modules, t.task,
-                              tuple(skipped), t.base)
-    return tasks
+    groups = motion if motion is not None else {t.task.upper(): None for t in tasks}
+    frames = _base_frames(root, shown, groups)
+    out = []
+    for n, t in enumerate(tasks):
+        frame = frames.get(t.task.upper())
+        out.append(replace(t, notes=tuple(skipped) if n == 0 else (),
+                           base=frame if not isinstance(frame, str) else None,
+                           base_problem=frame if isinstance(frame, str) else None))
+    return out
 
 
 def _read_text(path: Path, shown: str | None = None) -> str | None:
@@ -215,57 +221,87 @@ def _backinfo_names(root: Path, shown: str) -> dict[str, str]:
             for m in _TASK_LINE.finditer(text)}
 
 
-def _motion_tasks(root: Path, shown: str) -> set[str] | None:
-    """Upper-case names of the motion tasks in SYSPAR/SYS.cfg (CAB_TASKS
-    instances with -MotionTask), or None when the file says nothing about
-    tasks."""
-    text = _read_text(root / "SYSPAR" / "SYS.cfg", shown)
-    if text is None or "CAB_TASKS:" not in text:
-        return None
-    section = text.split("CAB_TASKS:", 1)[1]
+def _cfg_instances(text: str | None, type_name: str) -> list[dict[str, str | None]]:
+    """The instances of one type of a controller configuration file
+    (`TYPE:` then lines of `-attribute value`, continued with a backslash):
+    lower-case attribute -> value (None for a flag without one)."""
+    if text is None:
+        return []
+    start = re.search(rf"^{type_name}:", text, re.MULTILINE)
+    if start is None:
+        return []
+    section = text[start.end():]
     # The section ends at the next type line ("NAME:" at the start of a line).
     end = re.search(r"^[A-Z_]+:", section, re.MULTILINE)
     if end:
         section = section[:end.start()]
-    out = set()
+    out = []
     for line in re.sub(r"\\[ \t]*\r?\n", " ", section).splitlines():
-        name = re.search(r'-Name\s+"([^"]+)"', line)
-        flag = re.search(r'-MotionTask(?:\s+"?(\w+)"?)?', line)
-        if name and flag and (flag.group(1) is None or flag.group(1).upper() in ("YES", "TRUE")):
-            out.add(name.group(1).upper())
+        pairs = re.findall(r'(?:^|\s)-(\w+)(?:[ \t]+("[^"]*"|[^\s"-]\S*|-[\d.]\S*))?', line)
+        if pairs:
+            out.append({k.lower(): (v.strip('"') if v else None) for k, v in pairs})
+    return out
+
+
+def _motion_tasks(root: Path, shown: str) -> dict[str, str | None] | None:
+    """Upper-case names of the motion tasks in SYSPAR/SYS.cfg (CAB_TASKS
+    instances with -MotionTask) -> their mechanical unit group (lower
+    case, None when not given), or None when the file says nothing about
+    tasks."""
+    text = _read_text(root / "SYSPAR" / "SYS.cfg", shown)
+    instances = _cfg_instances(text, "CAB_TASKS")
+    if not instances:
+        return None
+    out = {}
+    for inst in instances:
+        name = inst.get("name")
+        if name is None or "motiontask" not in inst:
+            continue
+        flag = inst["motiontask"]
+        if flag is None or flag.upper() in ("YES", "TRUE"):
+            group = inst.get("usemechanicalunitgroup")
+            out[name.upper()] = group.lower() if group else None
     return out
 
 
 _MOC_KEYS = ("base_frame_pos_x", "base_frame_pos_y", "base_frame_pos_z", "base_frame_orient_u0",
              "base_frame_orient_u1", "base_frame_orient_u2", "base_frame_orient_u3")
+_IDENTITY = (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
 
 
-def _base_frame(root: Path, shown: str) -> tuple | None:
-    """The robot's base frame in the world from SYSPAR/MOC.cfg (ROBOT
-    instances: -base_frame_pos_x/y/z in metres, -base_frame_orient_u0..u3
-    a quaternion w, x, y, z). None when no robot sets one (the identity);
-    several robots with different base frames: give --base."""
+def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None]) -> dict:
+    """Each motion task's robot base frame in the world from SYSPAR/MOC.cfg:
+    the task's mechanical unit group (SYS.cfg) names its ROBOT
+    (MECHANICAL_UNIT_GROUP -robot), whose -base_frame_pos_x/y/z (metres)
+    and -base_frame_orient_u0..u3 (quaternion w, x, y, z) place it. Task
+    name (upper case) -> ((x, y, z) mm, (q1..q4)), None (the world frame),
+    or the reason it cannot be told (several robots, no link to one)."""
     text = _read_text(root / "SYSPAR" / "MOC.cfg", shown)
-    if text is None or "ROBOT:" not in text:
-        return None
-    section = text.split("ROBOT:", 1)[1]
-    end = re.search(r"^[A-Z_]+:", section, re.MULTILINE)
-    if end:
-        section = section[:end.start()]
-    frames = set()
-    for line in re.sub(r"\\[ \t]*\r?\n", " ", section).splitlines():
-        if "-name" not in line:
+    robots = {}
+    for inst in _cfg_instances(text, "ROBOT"):
+        if inst.get("name") is None:
             continue
         vals = []
-        for k, default in zip(_MOC_KEYS, (0, 0, 0, 1, 0, 0, 0)):
-            m = re.search(rf"-{k}\s+(-?[\d.eE+-]+)", line)
-            vals.append(float(m.group(1)) if m else float(default))
-        frames.add(tuple(vals))
-    frames.discard((0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0))
-    if not frames:
-        return None
-    if len(frames) > 1:
-        raise RapidcompError(f"{shown}/SYSPAR/MOC.cfg: several robots with different base "
-                             "frames; say which is this task's with --base X,Y,Z,Q1,Q2,Q3,Q4")
-    (v,) = frames
-    return (v[0] * 1000.0, v[1] * 1000.0, v[2] * 1000.0), v[3:]
+        for k, default in zip(_MOC_KEYS, _IDENTITY):
+            try:
+                vals.append(float(inst.get(k) or default))
+            except ValueError:
+                raise InputError(f"{shown}/SYSPAR/MOC.cfg", f"ROBOT {inst['name']}: -{k} "
+                                 f"{inst.get(k)} is not a number") from None
+        robots[inst["name"].lower()] = None if tuple(vals) == _IDENTITY else (
+            (vals[0] * 1000.0, vals[1] * 1000.0, vals[2] * 1000.0), tuple(vals[3:]))
+    robot_of = {inst["name"].lower(): (inst.get("robot") or "").lower()
+                for inst in _cfg_instances(text, "MECHANICAL_UNIT_GROUP") if inst.get("name")}
+    out: dict = {}
+    for task, group in groups_of.items():
+        robot = robot_of.get(group or "")
+        if robot in robots:
+            out[task] = robots[robot]
+        elif len(set(robots.values())) <= 1:
+            out[task] = next(iter(robots.values()), None)
+        else:
+            out[task] = (f"{shown}/SYSPAR/MOC.cfg: several robots with different base frames "
+                         f"and nothing links task {task} to one (SYS.cfg -UseMechanicalUnitGroup, "
+                         "MOC.cfg MECHANICAL_UNIT_GROUP -robot); say where this task's robot "
+                         "stands with --base X,Y,Z,Q1,Q2,Q3,Q4")
+    return out

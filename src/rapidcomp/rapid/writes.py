@@ -1,0 +1,120 @@
+"""Which data a task may change while it runs, and where.
+
+A target whose data is changed at run time is not a static value: the
+compensation of its literal would be wrong the moment it changes. Data is
+changed by an assignment, a search instruction's result, a built-in
+instruction or function that fills an argument (GetDataVal, StrToVal, ...),
+an argument passed to an INOUT/VAR/PERS parameter of a given routine, any
+argument of a routine no given module declares or of a late-bound call
+(they may change it), SetDataVal by name, and, with a name computed at run
+time, SetDataVal/SetAllDataVal may change anything.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from . import ast as A
+from .model import ParsedFile
+from .motions import BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS
+from .refs import Usage
+
+# Built-in instructions and functions that write an argument: name -> the
+# positions among the required arguments it writes (RAPID Instructions and
+# Functions manuals). GetSysData fills a tool or work object with the
+# current one; the calibrations fill a tool.
+WRITING_BUILTINS = {
+    "getdataval": (1,), "readanybin": (1,), "unpackrawbytes": (2,), "getsysdata": (0,),
+    "mtooltcpcalib": (4,), "stooltcpcalib": (3,), "mtoolrotcalib": (2,), "stoolrotcalib": (3,),
+    "strtoval": (1,), "getnextsym": (0, 1), "testandset": (0,),
+}
+
+
+@dataclass(frozen=True)
+class Writes:
+    by_name: dict            # lower-case name -> (ParsedFile, Span, how it is written)
+    anything: tuple | None   # (ParsedFile, Span, instruction) writing a name computed at run time
+
+    def why(self, name: str) -> str | None:
+        """Why data of this name may change at run time, or None."""
+        hit = self.by_name.get(name.lower())
+        if hit is not None:
+            pf, span, how = hit
+            return f"{name} is {how} at run time ({pf.source.display_path}:{pf.line(span)})"
+        if self.anything is not None:
+            pf, span, what = self.anything
+            return (f"{name} may be changed at run time by {what} with a name computed at run "
+                    f"time ({pf.source.display_path}:{pf.line(span)})")
+        return None
+
+
+def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
+    """usages: id(Module) -> refs.Usage of every module of files."""
+    routines: dict = {}
+    for pf in files:
+        for m in pf.modules:
+            for r in m.routines:
+                routines.setdefault((id(m), r.name.lower()), r.node)
+                if r.node.scope != "LOCAL":
+                    routines.setdefault(r.name.lower(), r.node)
+    by_name: dict = {}
+    anything = None
+    for pf in files:
+        for m in pf.modules:
+            us: Usage | None = usages.get(id(m))
+            if us is None:
+                continue
+            for name, spans in us.writes.items():
+                by_name.setdefault(name, (pf, spans[0], "assigned"))
+            for call in us.calls:
+                if isinstance(call, A.LateCall):
+                    _args_written(by_name, pf, call.args, None, "passed to a late-bound call")
+                    continue
+                name = call.name.lower()
+                if name in ("setdataval", "setalldataval"):
+                    first = next((a for a in call.args if a.kind == "pos"), None)
+                    if name == "setdataval" and first is not None and isinstance(
+                            first.value, A.Str):
+                        by_name.setdefault(first.value.value.lower(),
+                                           (pf, call.span, "set by SetDataVal"))
+                    elif anything is None:
+                        anything = (pf, call.span, call.name)
+                    continue
+                node = routines.get((id(m), name)) or routines.get(name)
+                if node is not None:
+                    _args_written(by_name, pf, call.args, node.params,
+                                  f"passed to {node.name}, which may change it")
+                elif name in WRITING_BUILTINS:
+                    positional = [a for a in call.args if a.kind in ("pos", "named")]
+                    for k in WRITING_BUILTINS[name]:
+                        if k < len(positional) and isinstance(positional[k].value, A.Ref):
+                            by_name.setdefault(positional[k].value.name.lower(),
+                                               (pf, positional[k].span, f"filled by {call.name}"))
+                elif name not in BUILTIN_INSTRUCTIONS and name not in BUILTIN_FUNCTIONS:
+                    kind = "function " if isinstance(call, A.Call) else ""
+                    _args_written(by_name, pf, call.args, None,
+                                  f"passed to {kind}{call.name}, which no given module "
+                                  "declares (it may change it)")
+    return Writes(by_name, anything)
+
+
+def _args_written(by_name: dict, pf, args, params, how: str) -> None:
+    required = [p for p in params if not p.optional] if params is not None else None
+    k = 0
+    for a in args:
+        if a.value is None or not isinstance(a.value, A.Ref):
+            if a.kind == "pos":
+                k += 1
+            continue
+        if params is None:
+            written = True
+        elif a.kind == "pos":
+            p = required[k] if k < len(required) else None
+            written = p is not None and p.access in ("INOUT", "VAR", "PERS")
+        else:
+            p = next((p for p in params if p.name.lower() == (a.name or "").lower()), None)
+            written = p is not None and p.access in ("INOUT", "VAR", "PERS")
+        if a.kind == "pos":
+            k += 1
+        if written:
+            by_name.setdefault(a.value.name.lower(), (pf, a.span, how))

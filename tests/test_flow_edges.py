@@ -1,0 +1,362 @@
+"""Edges of the flow analysis and of what counts as a run-time value: error
+handlers and what they switch, labels, functions in expressions, TRAPs
+calling what is not known, the external axis offset, FOR indices behind a
+condition, --start only where the program starts, PERS shared with other
+tasks, base frames of several robots. Each case is a small program whose
+controller behaviour is stated in its test."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+
+from rapidcomp.compensate.fix import fix
+from rapidcomp.compensate.flow import PROGRAM_START, RESUME
+from rapidcomp.compensate.plan import Plan, Task
+from rapidcomp.rapid.parse import parse_text
+from rapidcomp.rapid.task import tasks_of
+
+from test_flow import EXT, P1, P1_BAD, SOLVER, rows_of, states, task
+from test_tasks import TASKS, WARM, run
+
+ON, OFF, BOTH = {"on"}, {"off"}, {"on", "off"}
+
+
+def test_an_error_in_a_callee_reaches_the_callers_handler_with_the_callees_state():
+    """Sub switches ConfL off and may fail (no handler of its own): main's
+    handler then runs with ConfL off, though main itself never switches."""
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        Sub;
+        ConfL\\On;
+        MoveL p1, v100, fine, tool0;
+    ERROR
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+    PROC Sub()
+        ConfL\\Off;
+        WaitTime 1;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    assert st[(8, "to")].confl == BOTH
+    assert st[(8, "to")].last == {RESUME}    # wherever the error stopped the robot
+
+
+def test_retry_brings_what_the_handler_switches_into_every_statement():
+    """The handler switches ConfL off and retries: the failed statement may
+    be any of the body's, so every move may run with ConfL off; a handler
+    that switches nothing changes nothing."""
+    body = """    PROC main()
+        MoveL p1, v100, fine, tool0;
+        WaitDI di1, 1;
+        MoveL p1, v100, fine, tool0;
+    ERROR
+        {handler}
+        RETRY;
+    ENDPROC"""
+    for handler, want in (("ConfL\\Off;", BOTH), ("TPWrite \"again\";", ON)):
+        t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+{body.format(handler=handler)}
+ENDMODULE""")
+        plan, st = states(t)
+        assert st[(4, "to")].confl == want and st[(6, "to")].confl == want, handler
+        # The robot resumes where it stopped: the moves keep their order.
+        assert {plan.by_key[k].line for k in st[(6, "to")].last} == {4}
+    # A switch later in the body does not reach back: the first move can
+    # only be retried in the state it runs in (EXIT: no second cycle).
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        MoveL p1, v100, fine, tool0;
+        WaitDI di1, 1;
+        ConfL\\Off;
+        MoveL p1, v100, fine, tool0;
+        EXIT;
+    ERROR
+        RETRY;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    assert st[(4, "to")].confl == ON and st[(7, "to")].confl == OFF
+
+
+def test_a_label_after_an_unconditional_goto_is_reached():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        GOTO later;
+        MoveL p1, v100, fine, tool0;
+        later:
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    assert (5, "to") not in {(plan.by_key[k].line, k[2]) for k in plan.flow.before}
+    assert st[(7, "to")].confl == BOTH and st[(7, "to")].last is None
+
+
+def test_functions_called_in_expressions_are_followed():
+    """A FUNC of the module that switches ConfL off, called in an IF
+    condition: the move after it runs with ConfL off; a function no given
+    module declares may do anything."""
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        IF Ready() THEN
+            MoveL p1, v100, fine, tool0;
+        ENDIF
+        IF VendorCheck(1) MoveL p1, v100, fine, tool0;
+    ENDPROC
+    FUNC bool Ready()
+        ConfL\\Off;
+        RETURN TRUE;
+    ENDFUNC
+ENDMODULE""")
+    plan, st = states(t)
+    assert st[(5, "to")].confl == OFF
+    assert st[(7, "to")].confl == BOTH and st[(7, "to")].pdisp == BOTH
+    assert "VendorCheck" in " ".join(plan.notes())
+
+
+def test_a_trap_calling_an_unknown_routine_makes_everything_unknown():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    VAR intnum ir;
+    PROC main()
+        CONNECT ir WITH tr;
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+    TRAP tr
+        VendorRecover;
+    ENDTRAP
+ENDMODULE""")
+    plan, st = states(t)
+    s = st[(6, "to")]
+    assert s.confl == BOTH and s.confj == BOTH and s.pdisp == BOTH
+    assert any("TRAP" in n for n in plan.notes())
+
+
+def test_pdispoff_does_not_end_an_external_axis_offset_on_a_track():
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        EOffsSet [100,0,0,0,0,0];
+        PDispOff;
+        MoveL p1, v100, fine, tool0;
+        EOffsOff;
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    plan = Plan(t, track=((0, np.array([1.0, 0, 0])),))
+    by_line = {u.line: u for u in plan.uses}
+    assert plan.may_be_displaced(by_line[6]) and not plan.may_be_displaced(by_line[8])
+    # Without a track the offset moves other axes: no displacement.
+    plan = Plan(t)
+    assert not plan.may_be_displaced(by_line[6])
+
+
+def test_a_for_index_out_of_range_behind_a_condition_is_not_bad_input():
+    """The condition keeps the move from ever reading p{4}: the program runs
+    on the controller, so it is not refused; that use is untouched and the
+    others are compensated. Without the condition the controller stops with
+    ERR_INDEX: bad input (tested in test_real_programs)."""
+    t = task(f"""MODULE A
+    CONST robtarget p{{3}}:=[{P1},{P1},{P1}];
+    CONST num N:=4;
+    PROC main()
+        FOR i FROM 1 TO N DO
+            IF i <= 3 THEN
+                MoveL p{{i}}, v100, fine, tool0;
+            ENDIF
+        ENDFOR
+    ENDPROC
+ENDMODULE""")
+    rows = fix(t, SOLVER, "auto").rows
+    status = sorted(r.status for r in rows)
+    assert status == ["compensated"] * 3 + ["untouched"]
+    (u,) = [r for r in rows if r.status == "untouched"]
+    assert "index 4 of p is outside 1..3" in u.reason and "ERR_INDEX" in u.reason
+
+
+def test_a_for_bound_may_be_a_const_of_the_routine():
+    t = task(f"""MODULE A
+    CONST robtarget p{{2}}:=[{P1},{P1}];
+    PROC main()
+        CONST num N:=2;
+        FOR i FROM 1 TO N DO
+            MoveL p{{i}}, v100, fine, tool0;
+        ENDFOR
+    ENDPROC
+ENDMODULE""")
+    plan = Plan(t)
+    assert sorted(u.label for u in plan.uses) == ["p{i} [i=1]", "p{i} [i=2]"]
+    assert all(u.reason is None for u in plan.uses)
+
+
+def test_start_is_where_the_program_starts_not_after_an_unknown_call():
+    """ConfL off, placeholder confdata, no jointtarget: the first move takes
+    the solution closest to --start; a move after a call the flow cannot
+    follow has no known position, and --start says nothing about it. (EXIT:
+    the program ends, main does not start again from line 7.)"""
+    t = task(f"""MODULE A
+    PROC main()
+        ConfL\\Off;
+        MoveL {P1_BAD}, v100, fine, tool0;
+        VendorProc;
+        ConfL\\Off;
+        MoveL {P1_BAD}, v100, fine, tool0;
+        EXIT;
+    ENDPROC
+ENDMODULE""")
+    rows = {r.line: r for r in fix(t, SOLVER, "auto", start=[40, 40, 25, 40, -70, -10]).rows}
+    assert rows[4].status == "compensated" and rows[4].rule == "closest to --start (ConfL\\Off)"
+    assert rows[7].status == "not compensated"
+    assert "position before it is unknown" in rows[7].reason
+
+
+def test_main_restarts_from_where_its_cycle_ends():
+    """Continuous run: main's first move also runs after its last one."""
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    CONST robtarget p2:={P1};
+    PROC main()
+        MoveL p1, v100, fine, tool0;
+        MoveL p2, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    lines = {plan.by_key[k].line if k != PROGRAM_START else "start" for k in st[(5, "to")].last}
+    assert lines == {"start", 6}
+
+
+def test_a_use_the_flow_never_reaches_is_in_the_entry_state():
+    """After RETURN: never runs. Nothing in the task switches displacement
+    on, so it is not assumed to be displaced."""
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        RETURN;
+        MoveL p1, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    assert st[(5, "to")].pdisp == OFF and st[(5, "to")].confl == BOTH
+
+
+def test_function_arguments_may_be_written():
+    """StrToVal fills its second argument; a FUNC with an INOUT parameter
+    may change what it is given; a function no given module declares may
+    too. A function's IN argument is not written."""
+    t = task(f"""MODULE A
+    VAR robtarget pA:={P1};
+    VAR robtarget pB:={P1};
+    VAR robtarget pC:={P1};
+    VAR robtarget pD:={P1};
+    VAR bool ok;
+    PROC main()
+        ok := StrToVal("[[0,0,0],[1,0,0,0],[0,0,0,0],{EXT}]", pA);
+        ok := Nudge(pB);
+        ok := VendorFn(pC);
+        ok := Look(pD);
+        MoveL pA, v100, fine, tool0;
+        MoveL pB, v100, fine, tool0;
+        MoveL pC, v100, fine, tool0;
+        MoveL pD, v100, fine, tool0;
+    ENDPROC
+    FUNC bool Nudge(INOUT robtarget p)
+        p.trans.x := p.trans.x + 1;
+        RETURN TRUE;
+    ENDFUNC
+    FUNC bool Look(robtarget p)
+        RETURN p.trans.x > 0;
+    ENDFUNC
+ENDMODULE""")
+    rows = rows_of(t, "auto")
+    assert rows[12].reason == "pA is filled by StrToVal at run time (M0.mod:8)"
+    assert rows[13].reason == "pB is passed to Nudge, which may change it at run time (M0.mod:9)"
+    assert rows[14].reason.startswith("pC is passed to function VendorFn, which no given module "
+                                      "declares (it may change it)")
+    assert rows[15].reason is None and rows[15].status == "compensated"
+
+
+def test_a_pers_target_another_task_reads_is_not_edited_in_place(tmp_path):
+    """PERS data are one object for all tasks: editing the declaration would
+    change what the other task reads; the compensated value goes into a new
+    declaration instead."""
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    track = bk / "RAPID" / "TASK1" / "PROGMOD" / "Track.mod"
+    text = track.read_text().replace("CONST robtarget pSt1_2", "PERS robtarget pSt1_2")
+    track.write_text(text)
+    decl = next(line for line in text.splitlines() if "PERS robtarget pSt1_2" in line)
+    comm = bk / "RAPID" / "TASK2" / "PROGMOD" / "Comm.mod"
+    comm.write_text(comm.read_text().replace(
+        "    VAR num nTick:=0;", f"    VAR num nTick:=0;\n{decl}\n    VAR num nX;").replace(
+        "Incr nTick;", "Incr nTick;\n            nX := pSt1_2.trans.x;"))
+    out = tmp_path / "out"
+    r = run("fix", bk, "--profile", WARM, "--track", "a:x", "-o", out, "--emit", "robtarget")
+    assert r.exit_code == 0, r.output
+    written = (out / track.relative_to(bk)).read_text()
+    assert decl in written                    # the shared declaration is as it was
+    assert "MoveL pSt1_2_c," in written
+    # Unshared, it is edited in place.
+    comm.write_text(comm.read_text().replace("pSt1_2.trans.x", "0").replace(decl, ""))
+    r = run("fix", bk, "--profile", WARM, "--track", "a:x", "-o", tmp_path / "o2", "--emit",
+            "robtarget")
+    written = (tmp_path / "o2" / track.relative_to(bk)).read_text()
+    assert decl not in written and "MoveL pSt1_2," in written
+
+
+def test_backup_base_frame_follows_task_group_robot(tmp_path):
+    """Two robots with different base frames: each task's comes from its
+    mechanical unit group's robot; the identity is a real value too."""
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    sys_cfg = bk / "SYSPAR" / "SYS.cfg"
+    sys_cfg.write_text(sys_cfg.read_text().replace('-UseMechanicalUnitGroup "rob1"',
+                                                   '-UseMechanicalUnitGroup "rob2"'))
+    moc = ("MOC:CFG_1.0:6:0::\n#\nMECHANICAL_UNIT_GROUP:\n\n"
+           "      -name \"rob1\" -robot \"ROB_1\"\n\n      -name \"rob2\" -robot \"ROB_2\"\n#\n"
+           "ROBOT:\n\n      -name \"ROB_1\" -use_robot_type \"ROB1_140\" -base_frame_pos_x 1.5\n\n"
+           "      -name \"ROB_2\" -use_robot_type \"ROB2_140\"\\\n"
+           "      -base_frame_pos_x -0.25 -base_frame_orient_u0 0.707107"
+           " -base_frame_orient_u3 0.707107\n")
+    (bk / "SYSPAR" / "MOC.cfg").write_text(moc)
+    (b,) = tasks_of(bk)
+    assert b.base == ((-250.0, 0.0, 0.0), (0.707107, 0.0, 0.0, 0.707107))
+    (bk / "SYSPAR" / "MOC.cfg").write_text(moc.replace(
+        " -base_frame_pos_x -0.25 -base_frame_orient_u0 0.707107 -base_frame_orient_u3 0.707107",
+        ""))
+    (b,) = tasks_of(bk)
+    assert b.base is None and b.base_problem is None      # ROB_2 sits at the world origin
+    # Nothing links the task to a robot: refused unless --base says it.
+    sys_cfg.write_text(sys_cfg.read_text().replace(' -UseMechanicalUnitGroup "rob2"', ""))
+    (bk / "SYSPAR" / "MOC.cfg").write_text(moc)
+    (b,) = tasks_of(bk)
+    assert b.base_problem is not None and "--base" in b.base_problem
+    r = run("check", bk, "--profile", WARM, "--track", "a:x")
+    assert r.exit_code == 2 and "several robots with different base frames" in r.output
+    r = run("check", bk, "--profile", WARM, "--track", "a:x", "--base", "0,0,0,1,0,0,0")
+    assert r.exit_code == 0, r.output
+
+
+def test_an_array_slot_no_move_reaches_may_hold_an_unusable_value():
+    """p{3} is never used and holds a zero quaternion: its MoveAbsJ slot gets
+    the calibration position instead of refusing the program."""
+    zero = f"[[400,300,250],[0,0,0,0],[0,0,-1,1],{EXT}]"
+    t = Task("t", (parse_text(f"""MODULE A
+    CONST robtarget p{{3}}:=[{P1},{P1},{zero}];
+    PROC main()
+        FOR i FROM 1 TO 2 DO
+            MoveJ p{{i}}, v100, fine, tool0;
+        ENDFOR
+    ENDPROC
+ENDMODULE""", "M0.mod"),))
+    res = fix(t, SOLVER, "auto")
+    assert [r.status for r in res.rows] == ["compensated"] * 2
+    text = res.modules[0].text
+    assert "[[0,0,0,0,0,0]," in text.replace(" ", "")
