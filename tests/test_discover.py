@@ -298,3 +298,51 @@ def test_plot_is_a_png_and_deterministic(tmp_path):
             for _ in range(2)]
     data = [dict(o.files)[str(tmp_path / "p.png")] for o in outs]
     assert data[0].startswith(b"\x89PNG\r\n\x1a\n") and data[0] == data[1]
+
+
+def _cli(*args):
+    from click.testing import CliRunner
+
+    from rapidcomp.cli import main
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def test_a_measuring_point_not_given_is_far_apart(tmp_path):
+    """Measured 150 mm out on the tool, discovered as if at the flange: only
+    values no robot has would explain it; the verdict says the model and the
+    data are far apart and why that may be, and names no effect."""
+    m = tmp_path / "m.csv"
+    assert _cli("simulate", "-o", m, "--tool", "0,0,150", "-q").exit_code == 0
+    r = _cli("discover", m, "--sigma", "0.005", "--json", tmp_path / "d.json")
+    assert r.exit_code == 0
+    doc = json.loads((tmp_path / "d.json").read_text())
+    assert doc["verdict"] == "unexplained" and doc["steps"] == []
+    assert "far apart" in r.output and "--tool X,Y,Z" in r.output
+    assert "tool_offset needs a shift of 150 mm (a real robot: <= 50 mm)" in r.output
+
+
+def test_a_set_up_error_is_named_but_not_written_into_the_profile(tmp_path):
+    """20 mm of measuring point not given: a frame registration error, named
+    (it explains the data) but no thermal profile holds it."""
+    m, p = tmp_path / "m.csv", tmp_path / "p.csv"
+    assert _cli("simulate", "-o", m, "--tool", "0,0,20", "-q").exit_code == 0
+    r = _cli("discover", m, "--sigma", "0.005", "--out-profile", p)
+    assert r.exit_code == 0 and "verdict: explained" in r.output
+    assert "tool_offset is not written into p.csv" in r.output
+    text = p.read_text()
+    assert "# effects: none" in text and "flange" not in text
+
+
+def test_a_profile_row_the_effects_take_past_its_bounds_is_not_written(tmp_path):
+    """The base profile's J2 row is at 4.9 mm; the named displacement would
+    take it past the 5 mm a profile holds (fix would refuse the profile):
+    the effect is named but not written, and the profile still loads."""
+    base, m, p = tmp_path / "base.csv", tmp_path / "m.csv", tmp_path / "p.csv"
+    base.write_text("joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg\nJ2,4.9,0,0,0,0,0\n")
+    assert _cli("simulate", "-o", m, "--profile", base, "--effect",
+                "joint_displacement:J2=0.3,0.2,0.1", "-q").exit_code == 0
+    r = _cli("discover", m, "--profile", base, "--sigma", "0.005", "--out-profile", p)
+    assert r.exit_code == 0 and "step 1: joint_displacement:J2" in r.output
+    assert "joint_displacement:J2 not written into p.csv: with the base profile, row J2 would " \
+           "be beyond what a profile holds (J2 shift of 5.204 mm exceeds 5.0 mm" in r.output
+    assert read_profile(p).get("J2").d_mm[0] == 4.9

@@ -40,7 +40,7 @@ class Values:
 
     def joints(self, g: Group, k) -> np.ndarray:
         if k in g.slots:
-            return g.slots[k][0]
+            return g.slots[k].q_deg
         return self.solved.deformed.q_deg[g.rows[k]]
 
     def robtarget_value(self, g: Group, k):
@@ -185,14 +185,13 @@ class Editor:
         nodes = [g.decl.node] if g.decl is not None and g.src.home_module is g.home_module else []
         nodes += [it for it in g.home_module.node.items
                   if isinstance(it, A.DataDecl) and it.init is not None]
-        for node in nodes[:1]:
-            head = text[node.span.start:node.init.span.start]
-            if head.endswith(" := "):
-                return " := "
-            if head.endswith(":= "):
-                return ":= "
-            return ":="
-        return " := "
+        if not nodes:
+            return " := "
+        head = text[nodes[0].span.start:nodes[0].init.span.start].rstrip("\t ")
+        # The spaces either side of the ':=' as written (at most one each).
+        before = " " if head[:-2].endswith(" ") else ""
+        after = " " if text[nodes[0].init.span.start - 1] == " " else ""
+        return before + ":=" + after
 
     def array_value(self, g: Group, nl: str, indent: str, texts: dict) -> str:
         dims = g.decl.dims

@@ -175,8 +175,8 @@ def _notes(rows: list[UseRow], gs: list[P.Group]) -> list[str]:
         if g.slots:
             name = g.names.get("array", "the new jointtarget array")
             by_what: dict[str, list[int]] = {}
-            for k, (_, what) in sorted(g.slots.items()):
-                by_what.setdefault(what, []).append(k)
+            for k, slot in sorted(g.slots.items()):
+                by_what.setdefault(slot.what, []).append(k)
             notes.append(f"{name}: elements no executed move reaches ("
                          + ", ".join(P.element_label(g, k) for k in sorted(g.slots))
                          + ") hold " + "; ".join(

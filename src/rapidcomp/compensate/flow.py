@@ -40,7 +40,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from ..rapid import ast as A
-from ..rapid.model import Module, ParsedFile
+from ..rapid.model import Module, ParsedFile, RoutineTable
 from ..rapid.motions import (BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS, DISPLACEMENT_OFF,
                              DISPLACEMENT_ON, MOVES_OTHERWISE, SUPERVISION, TRACK_OFFSET_OFF,
                              TRACK_OFFSET_ON, UNKNOWN_TARGET_CALLS, motion_spec)
@@ -157,8 +157,7 @@ class _Walker:
         self.memo: dict = {}
         self.recursed: set = set()
         self.cycle_ends: list = []
-        self.local: dict[tuple[int, str], _Routine] = {}
-        self.glob: dict[str, _Routine] = {}
+        self.table = RoutineTable()
         self.motion_index: dict[tuple[int, int], int] = {}
         self.target_names: dict[tuple[int, int], list] = {}
         self.functions: dict[int, tuple] = {}     # id(statement) -> its expressions' calls
@@ -169,9 +168,7 @@ class _Walker:
                 for r in m.routines:
                     rt = _Routine(fi, pf, m, r.node)
                     self.routines.append(rt)
-                    self.local.setdefault((id(m), r.name.lower()), rt)
-                    if r.node.scope != "LOCAL":
-                        self.glob.setdefault(r.name.lower(), rt)
+                    self.table.add(m, r, rt)
                 for mo in m.motions:
                     self.motion_index[(fi, mo.span.start)] = mi
                     self.target_names[(fi, mi)] = [
@@ -179,7 +176,7 @@ class _Walker:
                     mi += 1
 
     def callee(self, module: Module, name: str) -> _Routine | None:
-        return self.local.get((id(module), name.lower())) or self.glob.get(name.lower())
+        return self.table.find(module, name)
 
     def known(self, rt: _Routine, name: str) -> bool:
         """A call the flow can follow: a built-in or a given routine."""

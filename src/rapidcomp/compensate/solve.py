@@ -480,7 +480,12 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
                   disp, start)
 
 
-def solve_slots(solver: Solver, R, p, conf, valid) -> list[tuple[np.ndarray, str]]:
+class Slot(NamedTuple):
+    q_deg: np.ndarray     # the joints written into the slot
+    what: str             # what they are, for the report
+
+
+def solve_slots(solver: Solver, R, p, conf, valid) -> list[Slot]:
     """Joints for array slots no executed move reaches (they need some
     valid value): compensated where the slot's robtarget solves by its
     confdata, else its nominal joints, else the calibration position; with
@@ -489,13 +494,13 @@ def solve_slots(solver: Solver, R, p, conf, valid) -> list[tuple[np.ndarray, str
     out = []
     for i in range(len(valid)):
         if valid[i] and deformed.success[i]:
-            out.append((deformed.q_deg[i], "the compensated joints of their robtargets"))
+            out.append(Slot(deformed.q_deg[i], "the compensated joints of their robtargets"))
         elif valid[i] and nominal.success[i]:
-            out.append((nominal.q_deg[i], "the nominal joints of their robtargets (these "
-                                          "cannot be compensated)"))
+            out.append(Slot(nominal.q_deg[i], "the nominal joints of their robtargets (these "
+                                              "cannot be compensated)"))
         else:
-            out.append((np.zeros(6), "[0,0,0,0,0,0], the calibration position (their "
-                                     "robtargets have no solution)"))
+            out.append(Slot(np.zeros(6), "[0,0,0,0,0,0], the calibration position (their "
+                                         "robtargets have no solution)"))
     return out
 
 

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import RapidcompError
+from ..errors import InputError, RapidcompError
 from ..kinematics.gravity import Payload
-from ..kinematics.profile import ThermalProfile, format_profile, read_profile
+from ..kinematics.profile import ThermalProfile, format_profile, parse_profile, read_profile
 from . import plot, report
 from .effects import catalogue, to_profile
 from .measured import format_measured, read_joints, read_measured
@@ -113,17 +113,54 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                              f"{', '.join(f'{k}={x:.4g}' for k, x in e.user(values[e]).items())} "
                              "it is an error of the measurement set-up (frame registration, "
                              "measuring point), not of the robot")
-        new = to_profile(nominal, prof, kept)
-        comments = [f"written by rapidcomp discover from {Path(measured).name} "
-                    f"(base profile: {Path(profile).name if profile else 'none'})",
-                    "effects: " + (", ".join(s.effect.id for s in d.steps) or "none")]
-        if any(e.kind == "tool_offset" for e in d.final_fit.effects):
-            comments.append("tool_offset is written into the flange row; if it is an error of "
-                            "the measuring point's mounting, not of the robot, remove it "
-                            "before using this profile with fix")
-        files.append((out_profile, format_profile(new, nominal.joint_names,
-                                                  comments).encode("utf-8")))
+        def comments(kept):
+            out = [f"written by rapidcomp discover from {Path(measured).name} "
+                   f"(base profile: {Path(profile).name if profile else 'none'})",
+                   "effects: " + (", ".join(e.id for e in kept) or "none")]
+            if any(e.kind == "tool_offset" for e in kept):
+                out.append("tool_offset is written into the flange row; if it is an error of "
+                           "the measuring point's mounting, not of the robot, remove it "
+                           "before using this profile with fix")
+            return out
+
+        text = _loadable_profile(nominal, prof, kept, comments, Path(out_profile).name, notes)
+        files.append((out_profile, text.encode("utf-8")))
     return Outcome(tuple(report.summary_lines(d)), tuple(notes), tuple(files), d)
+
+
+def _row_of(e, names) -> str:
+    if e.kind == "base_frame":
+        return "base"
+    if e.kind == "tool_offset" or e.joint is None or e.joint >= len(names):
+        return "flange"
+    return names[e.joint]
+
+
+def _loadable_profile(nominal, prof, kept: dict, comments, name: str, notes: list) -> str:
+    # comments: the profile's comment lines for the effects written.
+    """The profile text with the named effects, every row within what the
+    profile reader accepts without --force (what fix and check load): a row
+    that the base profile and the effects together take past that loses the
+    effects on it, with a note."""
+    names = nominal.joint_names
+    kept = dict(kept)
+    while True:
+        text = format_profile(to_profile(nominal, prof, kept), names, comments(kept))
+        try:
+            parse_profile(text, name, joint_names=names)
+            return text
+        except InputError as exc:
+            row = text.splitlines()[exc.line - 1].split(",")[0] if exc.line else None
+            drop = [e for e in kept if _row_of(e, names) == row]
+            if not drop:
+                notes.append(f"{name}: {exc.message}, as in the base profile: it loads only "
+                             "with --force")
+                return text
+            for e in drop:
+                del kept[e]
+            notes.append(f"{', '.join(e.id for e in drop)} not written into {name}: with the "
+                         f"base profile, row {row} would be beyond what a profile holds "
+                         f"({exc.message})")
 
 
 def _beyond_limits(data, robot) -> list[str]:

@@ -314,6 +314,7 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     current = start
     swapped: dict[str, list[str]] = {}
     blocked: list[str] = []
+    far_apart = False
     while _noise_p(current, sigma, n) < 1 - NOISE_QUANTILE:
         scored = sel.score(current)
         # A fit that would take away most of what is left, with values no
@@ -322,7 +323,7 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
         plausible = min([x.fit.rss for x in scored if x.strong] or [current.rss])
         far = [x.blocked for x in scored if x.blocked and x.fit.rss < FAR_APART * plausible]
         if far:
-            blocked = far[:3]
+            blocked, far_apart = far[:3], True
             break
         chosen = sel.pick(scored)
         if chosen is None:
@@ -334,7 +335,8 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     noise_p = _noise_p(current, sigma, n)
     initial = analyse(data.names, data.q_deg, meas, start.residuals, model.robot.joint_names)
     final = analyse(data.names, data.q_deg, meas, current.residuals, model.robot.joint_names)
-    verdict, text = _verdict(steps, current, sigma, noise_p, sigma_mm is None, blocked)
+    verdict, text = _verdict(steps, current, sigma, noise_p, sigma_mm is None, blocked,
+                             far_apart)
     return Discovery(len(data), sigma, source, initial, final, start.heldout_rms_mm(),
                      tuple(steps), verdict, text, noise_p, tuple(sel.not_identifiable.items()),
                      current, start, effects, tuple(blocked))
@@ -346,11 +348,11 @@ def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:
 
 
 def _verdict(steps, current: Fit, sigma: float, noise_p: float, estimated: bool,
-             blocked=()):
+             blocked=(), far_apart: bool = False):
     s_um = sigma * 1000
     at_noise = noise_p >= 1 - NOISE_QUANTILE
     est = " (estimated)" if estimated else ""
-    if not at_noise and blocked:
+    if not at_noise and far_apart:
         return "unexplained", (
             f"The model and the data are far apart: the residuals (RMS "
             f"{current.rms_mm * 1000:.1f} um) are explained only by values no real robot has "
@@ -367,8 +369,10 @@ def _verdict(steps, current: Fit, sigma: float, noise_p: float, estimated: bool,
                              f"{current.rms_mm * 1000:.1f} um) are consistent with measurement "
                              f"noise of {s_um:.1f} um per axis{est} (chi-square p = "
                              f"{noise_p:.3g}).")
+    refused = ("" if not blocked else
+               f" Fits that would need values no real robot has were not taken ({'; '.join(blocked)}).")
     return "unexplained", (f"The residuals (RMS {current.rms_mm * 1000:.1f} um) stay above "
                            f"measurement noise of {s_um:.1f} um per axis{est} (chi-square p = "
                            f"{noise_p:.3g}) and no catalogue effect explains more with strong "
                            "evidence: the missing effect is outside the catalogue. The residual "
-                           "analysis shows where it concentrates.")
+                           f"analysis shows where it concentrates.{refused}")

@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 DEG = np.pi / 180.0
+# URDF and controller configuration files are in metres.
+MM_PER_M = 1000.0
 
 
 def _quat_matrix_rows(w, x, y, z):

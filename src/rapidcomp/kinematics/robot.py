@@ -17,7 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InputError
-from .frames import DEG, rot_y
+from .frames import DEG, MM_PER_M, rot_y
 
 FLANGE_FRAME = "tool0"
 
@@ -125,12 +125,12 @@ def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
                                     f"found {model.njoints - 1} joints with nq={model.nq}")
     for i in range(1, model.njoints):
         p = model.jointPlacements[i]
-        model.jointPlacements[i] = pin.SE3(p.rotation, p.translation * 1000.0)
+        model.jointPlacements[i] = pin.SE3(p.rotation, p.translation * MM_PER_M)
         inert = model.inertias[i]
-        model.inertias[i] = pin.Inertia(inert.mass, inert.lever * 1000.0,
-                                        inert.inertia * 1e6)
+        model.inertias[i] = pin.Inertia(inert.mass, inert.lever * MM_PER_M,
+                                        inert.inertia * MM_PER_M ** 2)
     for f in model.frames:
-        f.placement = pin.SE3(f.placement.rotation, f.placement.translation * 1000.0)
+        f.placement = pin.SE3(f.placement.rotation, f.placement.translation * MM_PER_M)
     model.gravity = pin.Motion(np.array([0.0, 0.0, -GRAVITY_MM_S2]), np.zeros(3))
     names = [flange] if flange else [FLANGE_FRAME, "flange", "tool_flange", "ee_link"]
     fid = next((model.getFrameId(n) for n in names if model.existFrame(n)), None)

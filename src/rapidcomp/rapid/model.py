@@ -127,3 +127,23 @@ class ParsedFile:
     def text(self, node) -> str:
         span = node.span if hasattr(node, "span") else node
         return self.source.text[span.start:span.end]
+
+
+class RoutineTable:
+    """A task's routines by name, as the controller resolves a call: the
+    calling module's own (LOCAL ones included) first, then the global ones
+    of every module (the first declared)."""
+
+    def __init__(self) -> None:
+        self._local: dict = {}
+        self._global: dict = {}
+
+    def add(self, module: Module, routine: RoutineInfo, value) -> None:
+        name = routine.name.lower()
+        self._local.setdefault((id(module), name), value)
+        if routine.node.scope != "LOCAL":
+            self._global.setdefault(name, value)
+
+    def find(self, module: Module, name: str):
+        name = name.lower()
+        return self._local.get((id(module), name)) or self._global.get(name)

@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import InputError, RapidcompError
+from ..kinematics.frames import MM_PER_M
 
 MODULE_SUFFIXES = (".mod", ".modx", ".sys", ".prg")
 # A folder holding this many module files is not a task someone meant.
@@ -289,7 +290,7 @@ def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None]) -> di
                 raise InputError(f"{shown}/SYSPAR/MOC.cfg", f"ROBOT {inst['name']}: -{k} "
                                  f"{inst.get(k)} is not a number") from None
         robots[inst["name"].lower()] = None if tuple(vals) == _IDENTITY else (
-            (vals[0] * 1000.0, vals[1] * 1000.0, vals[2] * 1000.0), tuple(vals[3:]))
+            (vals[0] * MM_PER_M, vals[1] * MM_PER_M, vals[2] * MM_PER_M), tuple(vals[3:]))
     robot_of = {inst["name"].lower(): (inst.get("robot") or "").lower()
                 for inst in _cfg_instances(text, "MECHANICAL_UNIT_GROUP") if inst.get("name")}
     out: dict = {}

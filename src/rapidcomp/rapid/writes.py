@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from . import ast as A
-from .model import ParsedFile
+from .model import ParsedFile, RoutineTable
 from .motions import BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS
 from .refs import Usage
 
@@ -50,13 +50,11 @@ class Writes:
 
 def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
     """usages: id(Module) -> refs.Usage of every module of files."""
-    routines: dict = {}
+    routines = RoutineTable()
     for pf in files:
         for m in pf.modules:
             for r in m.routines:
-                routines.setdefault((id(m), r.name.lower()), r.node)
-                if r.node.scope != "LOCAL":
-                    routines.setdefault(r.name.lower(), r.node)
+                routines.add(m, r, r.node)
     by_name: dict = {}
     anything = None
     for pf in files:
@@ -80,7 +78,7 @@ def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
                     elif anything is None:
                         anything = (pf, call.span, call.name)
                     continue
-                node = routines.get((id(m), name)) or routines.get(name)
+                node = routines.find(m, name)
                 if node is not None:
                     _args_written(by_name, pf, call.args, node.params,
                                   f"passed to {node.name}, which may change it")
