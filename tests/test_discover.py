@@ -165,7 +165,10 @@ def test_cli_discover_on_the_shipped_example(tmp_path):
              "--report", out[0], "--json", out[1], "--out-profile", out[2])
     assert r.returncode == 0, r.stderr
     doc = json.loads((tmp_path / "r.json").read_text())
-    assert list(doc) == ["initial_rms_mm", "final_rms_mm", "verdict", "steps"]
+    assert list(doc) == ["initial_rms_mm", "final_rms_mm", "verdict", "sigma_mm", "sigma_source",
+                         "outliers", "steps"]
+    assert doc["sigma_mm"] == 0.005 and doc["sigma_source"] == "given (--sigma)"
+    assert doc["outliers"] == []
     assert [list(s) for s in doc["steps"]] == [[
         "effect", "params", "stderr", "rms_before_mm", "rms_after_mm", "alternatives"]] * 2
     # The example hides these two (see the file's first comment line).

@@ -150,16 +150,30 @@ def _failed(effects, x, X, measured, J, free, cond, iterations, reason) -> Fit:
                J.reshape(-1, J.shape[-1]), free, cond, iterations)
 
 
-def min_norm_rss(model: ParamModel, measured: np.ndarray, effects) -> tuple[float, int]:
-    """Residual sum of squares and rank of the fit of all `effects` at once,
-    dependent directions dropped (truncated SVD): the noise estimate's
-    reference when no --sigma is given.
+@dataclass(frozen=True, eq=False)
+class CatalogueFit:
+    """The fit of every effect at once (dependent directions dropped)."""
 
-    One linearized step from zero, and the RSS of the linear model: with
-    ~70 parameters some directions are barely determined, and evaluating
-    the chain at their large values would measure the nonlinearity of the
-    model, not the noise. Effects are microns on a metre-sized arm, so the
-    linearization error (~L theta^2) is far below any tracker's noise.
+    rss: float
+    rank: int
+    residuals: np.ndarray    # (N, 3) mm
+    deleted: np.ndarray      # (N, 3) each point's residual had it not been fitted
+    standardized: np.ndarray  # (N, 3) residuals scaled to the noise's covariance
+
+
+def catalogue_fit(model: ParamModel, measured: np.ndarray, effects) -> CatalogueFit:
+    """The fit of all `effects` at once, dependent directions dropped
+    (truncated SVD): the reference of the noise estimate and of gross
+    errors.
+
+    One linearized step from zero, and the residuals of the linear model:
+    with ~70 parameters some directions are barely determined, and
+    evaluating the chain at their large values would measure the
+    nonlinearity of the model, not the noise. Effects are microns on a
+    metre-sized arm, so the linearization error (~L theta^2) is far below
+    any tracker's noise. Deleted residuals e_i = (I - H_ii)^-1 r_i (H the
+    hat matrix, H_ii a point's 3x3 block): a gross error the many
+    parameters would partly absorb shows at its full size.
     """
     effects = tuple(effects)
     X, J = model.evaluate(effects, _split(np.zeros(sum(e.size for e in effects)), effects))
@@ -169,5 +183,17 @@ def min_norm_rss(model: ParamModel, measured: np.ndarray, effects) -> tuple[floa
     A = A[:, scale >= ZERO_COLUMN] / scale[scale >= ZERO_COLUMN]
     U, S, _ = np.linalg.svd(A, full_matrices=False)
     keep = S >= FULL_RANK_TOL * S[0]
-    fitted = U[:, keep] @ (U[:, keep].T @ r)
-    return float(np.sum((r - fitted) ** 2)), int(keep.sum())
+    Uk = U[:, keep]
+    res = (r - Uk @ (Uk.T @ r)).reshape(-1, 3)
+    Up = Uk.reshape(len(res), 3, -1)
+    H = Up @ np.swapaxes(Up, 1, 2)
+    # A point the fit passes through exactly (H_ii = I) has no deleted
+    # residual to speak of: those directions are left at 0.
+    w, V = np.linalg.eigh(np.eye(3) - H)
+    ok = w > 1e-9
+    inv = np.where(ok, 1.0 / np.where(ok, w, 1.0), 0.0)
+    local = np.einsum("nji,nj->ni", V, res)
+    deleted = np.einsum("nij,nj->ni", V, local * inv)
+    # Cov(r_i) = sigma^2 (I - H_ii): (I - H_ii)^-1/2 r_i has sigma^2 I.
+    standardized = np.einsum("nij,nj->ni", V, local * np.sqrt(inv))
+    return CatalogueFit(float(np.sum(res ** 2)), int(keep.sum()), res, deleted, standardized)

@@ -15,6 +15,7 @@ from ..kinematics.gravity import Payload
 from ..kinematics.profile import ThermalProfile, format_profile, parse_profile, read_profile
 from . import plot, report
 from .effects import catalogue, to_profile
+from .heldout import held_out
 from .measured import format_measured, read_joints, read_measured
 from .model import ParamModel
 from .plausible import writable
@@ -66,9 +67,9 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                  tool=(0.0, 0.0, 0.0), payload=None, sigma: float | None = None,
                  report_path: str | None = None, json_path: str | None = None,
                  plot_path: str | None = None, out_profile: str | None = None,
-                 force: bool = False) -> Outcome:
+                 force: bool = False, test: str | None = None) -> Outcome:
     outputs = [p for p in (report_path, json_path, plot_path, out_profile) if p]
-    _check_outputs(outputs, [measured, profile, robot])
+    _check_outputs(outputs, [measured, profile, robot, test])
     if sigma is not None and not sigma > 0:
         raise RapidcompError(f"--sigma {sigma}: expected a positive standard deviation in mm")
     nominal, prof = _load(robot, profile, force, payload)
@@ -78,10 +79,15 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
         raise RapidcompError(f"{measured}: {len(data)} rows but {distinct} distinct pose(s); "
                              f"discover needs at least {MIN_DISTINCT_POSES} different poses "
                              "(a base frame alone has 6 parameters)")
+    test_data = read_measured(test, min_points=1) if test else None
     model = ParamModel(nominal, prof, data.q_deg, tool)
     effects = catalogue(nominal)
     d = discover(model, data, effects, sigma)
-    notes = _beyond_limits(data, nominal)
+    heldout = (held_out(ParamModel(nominal, prof, test_data.q_deg, tool), test_data,
+                        d.final_fit) if test_data is not None else None)
+    notes = _beyond_limits(data, nominal) + list(d.notes)
+    if test_data is not None:
+        notes += [f"test {n}" for n in _beyond_limits(test_data, nominal)]
     if data.ignored_columns:
         notes.append(f"{Path(measured).name}: column(s) {', '.join(data.ignored_columns)} "
                      "ignored")
@@ -95,15 +101,15 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
     if plot_path:
         if plot.available():
             files.append((plot_path, plot.residual_plot(
-                data.xyz_mm, d.initial_residuals, d.final_fit.residuals,
+                data.xyz_mm[d.kept], d.initial_residuals, d.final_fit.residuals,
                 f"{Path(measured).name}: measured - simulated")))
         else:
             plot_note = plot.MISSING
             notes.append(plot.MISSING)
     if report_path:
-        files.append((report_path, report.markdown(d, meta, plot_note).encode("utf-8")))
+        files.append((report_path, report.markdown(d, meta, plot_note, heldout).encode("utf-8")))
     if json_path:
-        files.append((json_path, report.as_json(d).encode("utf-8")))
+        files.append((json_path, report.as_json(d, heldout).encode("utf-8")))
     if out_profile:
         values = d.named_values()
         kept = {e: v for e, v in values.items() if writable(e, e.user(v))}
@@ -125,7 +131,7 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
 
         text = _loadable_profile(nominal, prof, kept, comments, Path(out_profile).name, notes)
         files.append((out_profile, text.encode("utf-8")))
-    return Outcome(tuple(report.summary_lines(d)), tuple(notes), tuple(files), d)
+    return Outcome(tuple(report.summary_lines(d, heldout)), tuple(notes), tuple(files), d)
 
 
 def _row_of(e, names) -> str:

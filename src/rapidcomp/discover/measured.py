@@ -91,13 +91,13 @@ def read_text(path: str | Path) -> str:
         raise InputError(str(path), "not UTF-8 text") from None
 
 
-def parse_measured(text: str, source: str) -> Measurements:
-    names, values, lines, ignored = parse_table(text, source, COLUMNS, COLUMNS[1:], MIN_POINTS)
+def parse_measured(text: str, source: str, min_points: int = MIN_POINTS) -> Measurements:
+    names, values, lines, ignored = parse_table(text, source, COLUMNS, COLUMNS[1:], min_points)
     return Measurements(source, names, values[:, :6], values[:, 6:], lines, ignored)
 
 
-def read_measured(path: str | Path) -> Measurements:
-    return parse_measured(read_text(path), str(path))
+def read_measured(path: str | Path, min_points: int = MIN_POINTS) -> Measurements:
+    return parse_measured(read_text(path), str(path), min_points)
 
 
 def read_joints(path: str | Path) -> tuple[tuple[str, ...], np.ndarray]:

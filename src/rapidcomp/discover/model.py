@@ -10,6 +10,8 @@ the two agree to 1e-9 mm and that the Jacobian matches central differences.
 
 from __future__ import annotations
 
+import copy
+
 from dataclasses import replace
 
 import numpy as np
@@ -50,6 +52,12 @@ class ParamModel:
     @property
     def size(self) -> int:
         return len(self.q_cmd)
+
+    def subset(self, rows) -> "ParamModel":
+        """The same model on some of its poses (rows: indices)."""
+        out = copy.copy(self)
+        out.q_cmd, out.q0, out.tau_nm = self.q_cmd[rows], self.q0[rows], self.tau_nm[rows]
+        return out
 
     def evaluate(self, effects: tuple[Effect, ...], values, jacobian: bool = True):
         """Positions (N, 3) and, if asked, the Jacobian (N, 3, P) with

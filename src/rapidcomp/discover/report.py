@@ -5,7 +5,9 @@ no paths beyond base names: the same input gives the same bytes."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
+from .heldout import HeldOut
 from .residuals import Analysis
 from .select import Discovery
 from .simulate import Detectability
@@ -19,11 +21,14 @@ def _num(x: float) -> str:
     return f"{x:.4g}"
 
 
-def as_json(d: Discovery) -> str:
+def as_json(d: Discovery, test: HeldOut | None = None) -> str:
     doc = {
         "initial_rms_mm": round(d.initial_rms_mm, 9),
         "final_rms_mm": round(d.final_rms_mm, 9),
         "verdict": d.verdict,
+        "sigma_mm": float(f"{d.sigma_mm:.6g}"),
+        "sigma_source": d.sigma_source,
+        "outliers": [o.point for o in d.outliers],
         "steps": [{"effect": s.effect.id,
                    "params": {k: float(f"{v:.9g}") for k, v in s.params.items()},
                    "stderr": {k: float(f"{v:.3g}") for k, v in s.stderr.items()},
@@ -31,7 +36,32 @@ def as_json(d: Discovery) -> str:
                    "rms_after_mm": round(s.rms_after_mm, 9),
                    "alternatives": list(s.alternatives)} for s in d.steps],
     }
+    if test is not None:
+        doc.update({"test_points": test.points, "test_rms_mm": round(test.rms_mm, 9),
+                    "test_max_mm": round(test.max_mm, 9),
+                    "test_nominal_rms_mm": round(test.nominal_rms_mm, 9),
+                    "test_nominal_max_mm": round(test.nominal_max_mm, 9)})
     return json.dumps(doc, indent=2) + "\n"
+
+
+def _held_out(test: HeldOut) -> list[str]:
+    return ["## Held-out test", "",
+            f"{test.points} poses of {Path(test.source).name}, not used for fitting: the error of "
+            "each model there (3-D distance, measured - model).", "",
+            "| model | RMS um | max um |", "|---|---:|---:|",
+            f"| nominal (no effect named) | {_um(test.nominal_rms_mm)} | "
+            f"{_um(test.nominal_max_mm)} |",
+            f"| final model | {_um(test.rms_mm)} | {_um(test.max_mm)} |", ""]
+
+
+def _outliers(d: Discovery) -> list[str]:
+    out = ["## Gross errors (left out of the fit)", "",
+           "Points far outside the rest (standardized residual of the whole-catalogue fit "
+           "beyond the chi-square(3) quantile at 0.001 / N, robust scale): each is off by its "
+           "residual had it not been fitted.", "",
+           "| point | line | off by um | robust sigmas |", "|---|---:|---:|---:|"]
+    out += [f"| {o.point} | {o.line} | {_um(o.off_mm)} | {o.sigmas:.1f} |" for o in d.outliers]
+    return out + [""]
 
 
 def _analysis(a: Analysis, title: str) -> list[str]:
@@ -56,15 +86,21 @@ def _analysis(a: Analysis, title: str) -> list[str]:
     return out + [""]
 
 
-def markdown(d: Discovery, meta: dict, plot_note: str | None = None) -> str:
+def markdown(d: Discovery, meta: dict, plot_note: str | None = None,
+             test: HeldOut | None = None) -> str:
     out = ["# rapidcomp discover", ""]
     out += [f"- {k}: {v}" for k, v in meta.items()]
-    out += [f"- points: {d.points}",
+    left = f" ({len(d.outliers)} more left out as gross errors)" if d.outliers else ""
+    out += [f"- points: {d.points}{left}",
             f"- noise: {d.sigma_mm * 1000:.2f} um per axis, {d.sigma_source}", "",
             "## Verdict", "", f"**{d.verdict}** — {d.verdict_text}", "",
             f"RMS of the 3-D residuals: {_um(d.initial_rms_mm)} um before, "
             f"{_um(d.final_rms_mm)} um after "
             f"({len(d.steps)} effect{'s' if len(d.steps) != 1 else ''} named).", ""]
+    if test is not None:
+        out += _held_out(test)
+    if d.outliers:
+        out += _outliers(d)
     if d.steps:
         out += ["## Final model", "", "| effect | parameter | value | stderr |",
                 "|---|---|---:|---:|"]
@@ -106,15 +142,22 @@ def markdown(d: Discovery, meta: dict, plot_note: str | None = None) -> str:
     return "\n".join(out)
 
 
-def summary_lines(d: Discovery) -> list[str]:
+def summary_lines(d: Discovery, test: HeldOut | None = None) -> list[str]:
     out = [f"residual RMS {_um(d.initial_rms_mm)} um before, {_um(d.final_rms_mm)} um after; "
            f"noise {d.sigma_mm * 1000:.2f} um per axis ({d.sigma_source.split(' (')[0]})"]
+    if d.outliers:
+        out.append("gross errors left out: " + ", ".join(
+            f"{o.point} (line {o.line}, off by {_um(o.off_mm)} um)" for o in d.outliers))
     for i, s in enumerate(d.steps, 1):
         params = ", ".join(f"{k}={_num(v)}±{_num(s.stderr[k])}" for k, v in s.params.items())
         alt = f"  [alternatives: {', '.join(s.alternatives)}]" if s.alternatives else ""
         out.append(f"step {i}: {s.effect.id}: {params}; RMS {_um(s.rms_before_mm)} -> "
                    f"{_um(s.rms_after_mm)} um{alt}")
     out.append(f"verdict: {d.verdict} — {d.verdict_text}")
+    if test is not None:
+        out.append(f"held-out test ({test.points} poses): RMS {_um(test.rms_mm)} um, max "
+                   f"{_um(test.max_mm)} um (nominal model: RMS {_um(test.nominal_rms_mm)} um, "
+                   f"max {_um(test.nominal_max_mm)} um)")
     return out
 
 

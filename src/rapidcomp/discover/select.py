@@ -26,14 +26,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from itertools import combinations
 
 import numpy as np
 
-from ..errors import RapidcompError
 from .effects import Effect
-from .fit import Fit, fit, min_norm_rss
+from .fit import Fit, fit
 from .measured import Measurements
 from .model import ParamModel
+from .noise import Noise, Structure, noise, structure
+from .outliers import Outlier, screen
 from .plausible import implausible
 from .residuals import Analysis, analyse
 from .stats import chi2_ppf, chi2_sf
@@ -42,11 +44,14 @@ ALPHA = 0.001
 STRONG_BIC = 10.0
 NOISE_QUANTILE = 0.99
 EQUIVALENT_QUANTILE = 0.99
-MIN_NOISE_DOF = 10
 # An implausible fit leaving less than this share of what the best
 # plausible one leaves (100x better) means the model and the data are far
 # apart: nothing more is named.
 FAR_APART = 0.01
+# Candidates per scoring that the exchange of two effects draws from, and
+# the most fits one exchange pass makes.
+EXCHANGE_POOL = 6
+EXCHANGE_FITS = 400
 
 
 @dataclass(frozen=True)
@@ -95,6 +100,11 @@ class Discovery:
     start_fit: Fit
     effects: tuple[Effect, ...]
     implausible: tuple[str, ...] = ()   # strong fits refused as values no robot has
+    noise: Noise | None = None
+    outliers: tuple[Outlier, ...] = ()  # left out of the fit
+    structure: Structure | None = None  # what the joints predict of the final residuals
+    notes: tuple[str, ...] = ()
+    kept: np.ndarray | None = None      # rows of the measured data fitted (outliers left out)
 
     @property
     def initial_rms_mm(self) -> float:
@@ -237,6 +247,47 @@ class _Selector:
                     break
         return current
 
+    def exchange_two(self, current: Fit, swapped: dict[str, list[str]]) -> Fit:
+        """Two named effects may together stand in for two others with fewer
+        parameters (a J3 origin shift and a J2 offset doing an upper-arm
+        elongation's and a J3 offset's work): swap them for the smallest
+        such pair that explains the data equally, until none is left. The
+        pairs tried are made of the candidates that scored best at any step
+        of the search (their top EXCHANGE_POOL), at most EXCHANGE_FITS fits
+        a pass."""
+        pool: dict[str, Effect] = {}
+        for _, scored in self._scored.values():
+            for x in scored[:EXCHANGE_POOL]:
+                pool.setdefault(x.effect.id, x.effect)
+        changed = True
+        while changed and len(current.effects) > 1:
+            changed = False
+            named = {e.id for e in current.effects}
+            options = []
+            budget = EXCHANGE_FITS
+            for i, j in combinations(range(len(current.effects)), 2):
+                a, b = current.effects[i], current.effects[j]
+                keep = [k for k in range(len(current.effects)) if k not in (i, j)]
+                rest = tuple(current.effects[k] for k in keep)
+                start = tuple(current.values[k] for k in keep)
+                for f, g in combinations(pool.values(), 2):
+                    if f.id in named or g.id in named or f.size + g.size >= a.size + b.size:
+                        continue
+                    budget -= 1
+                    if budget < 0:
+                        break
+                    h = self.fit(rest + (f, g), start + (np.zeros(f.size), np.zeros(g.size)))
+                    if h.success and _equivalent(h, current, self.sigma) and \
+                            _implausible(h) is None:
+                        options.append((f.size + g.size, h.rss, f.id, g.id, a, b, f, g, h))
+            if options:
+                *_, a, b, f, g, h = min(options, key=lambda o: o[:4])
+                gone = [a.id, *swapped.pop(a.id, []), b.id, *swapped.pop(b.id, [])]
+                swapped.setdefault(f.id, []).extend(gone)
+                swapped.setdefault(g.id, []).extend(x for x in gone if x not in swapped[f.id])
+                current, changed = h, True
+        return current
+
     def replay(self, start: Fit, chosen: tuple[Effect, ...], swapped) -> tuple[list[Step], Fit]:
         """The steps of the final model from `start` (no effects), in the
         order the data rank them: at each step the best-scoring remaining
@@ -293,22 +344,17 @@ class _Selector:
 
 def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
              sigma_mm: float | None = None) -> Discovery:
+    screened = screen(model, data, effects)
+    if screened.outliers:
+        rows = screened.rows
+        model = model.subset(rows)
+        data = Measurements(data.source, tuple(data.names[i] for i in rows), data.q_deg[rows],
+                            data.xyz_mm[rows], tuple(data.lines[i] for i in rows),
+                            data.ignored_columns)
     n = 3 * len(data)
     meas = data.xyz_mm
-    if sigma_mm is None:
-        rss_full, rank = min_norm_rss(model, meas, effects)
-        dof = n - rank
-        if dof < MIN_NOISE_DOF:
-            raise RapidcompError(
-                f"{len(data)} points leave {dof} degrees of freedom after the whole catalogue "
-                f"({rank} identifiable parameters): too few to estimate the noise; give --sigma "
-                "(the measuring system's standard deviation per axis, mm) or measure more points")
-        sigma = max(math.sqrt(rss_full / dof), 1e-9)
-        source = (f"estimated from the fit of the whole catalogue ({rank} identifiable "
-                  f"parameters, {dof} degrees of freedom)")
-    else:
-        sigma = float(sigma_mm)
-        source = "given (--sigma)"
+    nz = noise(sigma_mm, data.q_deg, meas, screened.full)
+    sigma, source = nz.sigma_mm, nz.source
     sel = _Selector(model, meas, effects, sigma)
     start = sel.fit(())
     current = start
@@ -330,16 +376,27 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
             blocked = [s.blocked for s in scored if s.blocked][:3]
             break
         current = sel.simplify(chosen.fit, swapped)
+    if _noise_p(current, sigma, n) >= 1 - NOISE_QUANTILE:
+        # Only a model that explains the data is worth making smaller.
+        current = sel.exchange_two(current, swapped)
     sel.score(start)   # the not-identifiable list is made on the first scoring (cached)
     steps, current = sel.replay(start, current.effects, swapped)
     noise_p = _noise_p(current, sigma, n)
     initial = analyse(data.names, data.q_deg, meas, start.residuals, model.robot.joint_names)
     final = analyse(data.names, data.q_deg, meas, current.residuals, model.robot.joint_names)
-    verdict, text = _verdict(steps, current, sigma, noise_p, sigma_mm is None, blocked,
-                             far_apart)
+    found = None
+    if nz.kind == "estimated":
+        offsets = tuple(e for e in effects if e.kind == "joint_offset")
+        _, J = model.evaluate(offsets, tuple(np.zeros(1) for _ in offsets))
+        found = structure(data.q_deg, current.residuals, model.robot.joint_names,
+                          {e.joint: J[:, :, i] for i, e in enumerate(offsets)})
+    verdict, text = _verdict(steps, current, sigma, noise_p, nz.kind == "estimated", blocked,
+                             far_apart, found)
+    notes = (screened.note,) if screened.note else ()
     return Discovery(len(data), sigma, source, initial, final, start.heldout_rms_mm(),
                      tuple(steps), verdict, text, noise_p, tuple(sel.not_identifiable.items()),
-                     current, start, effects, tuple(blocked))
+                     current, start, effects, tuple(blocked), nz, screened.outliers, found, notes,
+                     screened.rows)
 
 
 def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:
@@ -348,10 +405,20 @@ def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:
 
 
 def _verdict(steps, current: Fit, sigma: float, noise_p: float, estimated: bool,
-             blocked=(), far_apart: bool = False):
+             blocked=(), far_apart: bool = False, found: Structure | None = None):
     s_um = sigma * 1000
     at_noise = noise_p >= 1 - NOISE_QUANTILE
     est = " (estimated)" if estimated else ""
+    if at_noise and found is not None:
+        named = (f"With {', '.join(s.effect.id for s in steps)} added, the" if steps
+                 else "The")
+        return "unexplained", (
+            f"{named} residuals (RMS {current.rms_mm * 1000:.1f} um) match the noise estimated "
+            f"from the catalogue's own fit ({s_um:.1f} um per axis), but they are not noise: "
+            f"{found.joint}'s angle predicts {found.share:.0%} of them on points it was not "
+            "fitted to (an effect outside the catalogue, such as a cyclic gear error, which "
+            "also inflates that estimate). Give the measuring system's noise with --sigma or "
+            "measure some poses more than once.")
     if not at_noise and far_apart:
         return "unexplained", (
             f"The model and the data are far apart: the residuals (RMS "
@@ -371,6 +438,10 @@ def _verdict(steps, current: Fit, sigma: float, noise_p: float, estimated: bool,
                              f"{noise_p:.3g}).")
     refused = ("" if not blocked else
                f" Fits that would need values no real robot has were not taken ({'; '.join(blocked)}).")
+    if found is not None:
+        refused += (f" {found.joint}'s angle predicts {found.share:.0%} of the residuals on "
+                    "points it was not fitted to: look there first (a cyclic gear error "
+                    f"of {found.joint} shows so).")
     return "unexplained", (f"The residuals (RMS {current.rms_mm * 1000:.1f} um) stay above "
                            f"measurement noise of {s_um:.1f} um per axis{est} (chi-square p = "
                            f"{noise_p:.3g}) and no catalogue effect explains more with strong "
