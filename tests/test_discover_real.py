@@ -121,3 +121,39 @@ def test_held_out_poses_show_the_final_model_and_the_nominal_one(tmp_path):
     md = (tmp_path / "d.md").read_text()
     assert "## Held-out test" in md and "| final model |" in md
     assert "held-out test (20 poses)" in r.output
+
+
+def test_an_effect_the_measuring_point_cannot_see_is_not_identifiable():
+    """A reflector 0.09 mm from the J6 axis: a J6 offset or scale, even at the
+    largest value a robot has, moves it by a micron or two, below the noise:
+    listed as not identifiable, never fitted."""
+    names, q = random_points(ROBOT, 80, 1)
+    tool = np.array([0.09, 0.0, 0.0])
+    xyz = add_noise(simulate_positions(ROBOT, WARM, {}, q, tool), SIGMA, 3)
+    model = ParamModel(ROBOT, WARM, q, tool)
+    d = discover(model, Measurements("sim.csv", names, q, xyz, tuple(range(len(q)))), CAT, SIGMA)
+    hidden = dict(d.not_identifiable)
+    for eid in ("joint_offset:J6", "joint_scale:J6"):
+        assert "its lever there is too small to see it" in hidden[eid], eid
+    assert d.verdict == "noise"
+
+
+def test_cancelling_parameters_are_not_named():
+    """Two effects whose columns are nearly the same direction: the data fix
+    only their difference, the estimates run off together. _cancelling
+    names the pair; an independent pair passes."""
+    from rapidcomp.discover.fit import Fit
+    from rapidcomp.discover.select import _cancelling
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=300)
+    b = rng.normal(size=300)
+    off2, off3 = CAT[[e.id for e in CAT].index("joint_offset:J2")], \
+        CAT[[e.id for e in CAT].index("joint_offset:J3")]
+
+    def fit_with(col2):
+        jac = np.stack([a, col2], axis=1)
+        return Fit((off2, off3), (np.zeros(1), np.zeros(1)), True, None, np.zeros((100, 3)),
+                   jac, np.ones(2, bool), 1.0, 1)
+    why = _cancelling(fit_with(a + 0.01 * b), off3)
+    assert why is not None and "joint_offset:J3.offset_deg and joint_offset:J2.offset_deg" in why
+    assert _cancelling(fit_with(b), off3) is None

@@ -126,10 +126,11 @@ def markdown(d: Discovery, meta: dict, plot_note: str | None = None,
         if s.note:
             out.append(f"Note: {s.note}")
         out += ["", "Candidates at this step (best five):", "",
-                "| effect | params | RMS after um | held out um | p | BIC change |",
-                "|---|---:|---:|---:|---:|---:|"]
+                "| effect | params | RMS after um | held out um | p | BIC change | not named "
+                "because |", "|---|---:|---:|---:|---:|---:|---|"]
         out += [f"| {c.effect} | {c.nparams} | {_um(c.rms_mm)} | {_um(c.heldout_mm)} | "
-                f"{c.p_value:.3g} | {c.delta_bic:.1f} |" for c in s.candidates[:5]]
+                f"{c.p_value:.3g} | {c.delta_bic:.1f} | "
+                f"{c.implausible or c.cancelling or ''} |" for c in s.candidates[:5]]
         out.append("")
     if d.steps:
         out += _analysis(d.final, "Residuals after the final model")

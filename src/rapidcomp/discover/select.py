@@ -36,7 +36,7 @@ from .measured import Measurements
 from .model import ParamModel
 from .noise import Noise, Structure, noise, structure
 from .outliers import Outlier, screen
-from .plausible import implausible
+from .plausible import bounds, implausible
 from .residuals import Analysis, analyse
 from .stats import chi2_ppf, chi2_sf
 
@@ -48,6 +48,9 @@ EQUIVALENT_QUANTILE = 0.99
 # plausible one leaves (100x better) means the model and the data are far
 # apart: nothing more is named.
 FAR_APART = 0.01
+# A candidate whose parameter estimates correlate beyond this with those
+# already named needs cancelling parameters: not named.
+CORRELATION_LIMIT = 0.995
 # Candidates per scoring that the exchange of two effects draws from, and
 # the most fits one exchange pass makes.
 EXCHANGE_POOL = 6
@@ -63,6 +66,7 @@ class Candidate:
     p_value: float
     delta_bic: float          # BIC(model + candidate) - BIC(model): negative is better
     implausible: str | None = None   # the fit needs values no real robot has
+    cancelling: str | None = None    # its parameters cancel those already named
 
 
 @dataclass(frozen=True)
@@ -150,6 +154,50 @@ def _implausible(f: Fit) -> str | None:
     return None
 
 
+def _invisible(e: Effect, cols: np.ndarray, sigma: float) -> str | None:
+    """Why an effect cannot be seen at the measuring point: at the largest
+    value a real robot has, none of its parameters moves any measured point
+    by the noise."""
+    bound_mm, bound_deg, bound_plain = bounds(e)
+    shifts = []
+    for j, (name, to_internal) in enumerate(zip(e.params, e.to_internal)):
+        bound = (bound_mm if name.endswith("_mm") else bound_deg if name.endswith("_deg")
+                 else bound_plain) * abs(to_internal)
+        shifts.append(float(np.max(np.linalg.norm(cols[:, j].reshape(-1, 3), axis=1))) * bound)
+    largest = max(shifts)
+    if largest >= sigma:
+        return None
+    return (f"at the largest value a real robot has it moves the measuring point by at most "
+            f"{largest * 1000:.2g} um at these poses, below the noise ({sigma * 1000:.2g} um): "
+            "its lever there is too small to see it")
+
+
+def _cancelling(f: Fit, e: Effect) -> str | None:
+    """The new effect's parameters cancelling named ones: a correlation of
+    the estimates beyond CORRELATION_LIMIT (the data fix only their
+    difference; both grow without bound together)."""
+    if not f.nparams or len(f.effects) < 2:
+        return None
+    A = f.jac[:, f.free]
+    scale = np.linalg.norm(A, axis=0)
+    _, S, Vt = np.linalg.svd(A / scale, full_matrices=False)
+    C = (Vt.T / S ** 2) @ Vt
+    d = np.sqrt(np.diag(C))
+    corr = C / np.outer(d, d)
+    labels = [f"{x.id}.{p}" for x in f.effects for p in x.params]
+    labels = [lab for lab, free in zip(labels, f.free) if free]
+    mine = [i for i, lab in enumerate(labels) if lab.startswith(e.id + ".")]
+    others = [i for i in range(len(labels)) if i not in mine]
+    if not mine or not others:
+        return None
+    sub = np.abs(corr[np.ix_(mine, others)])
+    i, j = np.unravel_index(int(np.argmax(sub)), sub.shape)
+    if sub[i, j] <= CORRELATION_LIMIT:
+        return None
+    return (f"{labels[mine[i]]} and {labels[others[j]]} cancel each other (their estimates "
+            f"correlate at r = {corr[mine[i], others[j]]:+.4f}, condition number {f.cond:.3g})")
+
+
 class _Selector:
     """One discover run: the data, the noise, and the fits it makes."""
 
@@ -172,13 +220,19 @@ class _Selector:
         named = {e.id for e in current.effects}
         fits = []
         for order, e in enumerate(self.effects):
-            if e.id in named:
+            if e.id in named or e.id in self.not_identifiable:
                 continue
             f = self.fit(current.effects + (e,), current.values + (np.zeros(e.size),))
-            if f.success:
-                fits.append((order, e, f))
-            elif not current.effects:
-                self.not_identifiable[e.id] = f.reason
+            if not f.success:
+                if not current.effects:
+                    self.not_identifiable[e.id] = f.reason
+                continue
+            if not current.effects:
+                hidden = _invisible(e, f.jac[:, -e.size:], self.sigma)
+                if hidden is not None:
+                    self.not_identifiable[e.id] = hidden
+                    continue
+            fits.append((order, e, f))
         m = max(1, len(fits))
         bic0 = _bic(current, self.sigma, self.n)
         held0 = current.heldout_rms_mm()
@@ -193,6 +247,10 @@ class _Selector:
             why = _implausible(f)
             if why is not None:
                 cand = replace(cand, implausible=why)
+            cancel = _cancelling(f, e)
+            if cancel is not None:
+                cand = replace(cand, cancelling=cancel)
+                strong = False
             out.append(_Scored(e, f, cand, strong and why is None, order,
                                why if strong and why is not None else None))
         out.sort(key=lambda s: (s.candidate.delta_bic, s.order))
@@ -229,7 +287,7 @@ class _Selector:
                         continue
                     g = self.fit(rest + (f,), start + (np.zeros(f.size),))
                     if g.success and _equivalent(g, current, self.sigma) and \
-                            _implausible(g) is None:
+                            _implausible(g) is None and _cancelling(g, f) is None:
                         options.append((f.size, g.rss, order, f, g))
                 if options:
                     _, _, _, f, g = min(options, key=lambda o: o[:3])
@@ -278,7 +336,8 @@ class _Selector:
                         break
                     h = self.fit(rest + (f, g), start + (np.zeros(f.size), np.zeros(g.size)))
                     if h.success and _equivalent(h, current, self.sigma) and \
-                            _implausible(h) is None:
+                            _implausible(h) is None and _cancelling(h, f) is None and \
+                            _cancelling(h, g) is None:
                         options.append((f.size + g.size, h.rss, f.id, g.id, a, b, f, g, h))
             if options:
                 *_, a, b, f, g, h = min(options, key=lambda o: o[:4])
