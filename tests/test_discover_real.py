@@ -16,6 +16,7 @@ from rapidcomp.discover.points import random_points
 from rapidcomp.discover.select import discover
 from rapidcomp.discover.simulate import add_noise, parse_effect_values, simulate_positions
 
+from conftest import FIXTURES
 from test_discover import CAT, ROBOT, SIGMA, TOOL, WARM, _cli, _data
 
 
@@ -157,3 +158,44 @@ def test_cancelling_parameters_are_not_named():
     why = _cancelling(fit_with(a + 0.01 * b), off3)
     assert why is not None and "joint_offset:J3.offset_deg and joint_offset:J2.offset_deg" in why
     assert _cancelling(fit_with(b), off3) is None
+
+
+def test_backlash_is_named_from_the_measuring_order():
+    """J2 lags 0.01 deg behind the direction it last moved (0.02 deg of
+    backlash): named as backlash, from the order the poses were measured;
+    not written into a profile (a profile corrects every move alike)."""
+    names, q = random_points(ROBOT, 80, 4)
+    values = parse_effect_values(CAT, ["backlash:J2=0.02"])
+    xyz = add_noise(simulate_positions(ROBOT, WARM, values, q, TOOL), SIGMA, 5)
+    model, data = _case(q, xyz, names)
+    d = discover(model, data, CAT, SIGMA)
+    assert [s.effect.id for s in d.steps] == ["backlash:J2"]
+    assert abs(d.steps[0].params["b_deg"] - 0.02) < 0.001 and d.verdict == "explained"
+
+
+def test_an_approach_column_gives_the_directions(tmp_path):
+    """The same measurements, rows shuffled, with the direction each joint
+    approached from in an `approach` column: the same backlash is named."""
+    names, q = random_points(ROBOT, 80, 4)
+    values = parse_effect_values(CAT, ["backlash:J2=0.02"])
+    xyz = add_noise(simulate_positions(ROBOT, WARM, values, q, TOOL), SIGMA, 5)
+    signs = np.zeros_like(q)
+    for i in range(1, len(q)):
+        step = np.sign(q[i] - q[i - 1])
+        signs[i] = np.where(step != 0, step, signs[i - 1])
+    order = np.random.default_rng(0).permutation(len(q))
+    rows = ["point,j1,j2,j3,j4,j5,j6,x,y,z,approach"]
+    for i in order:
+        code = "".join({1.0: "+", -1.0: "-", 0.0: "0"}[s] for s in signs[i])
+        rows.append(",".join([names[i], *(f"{v:.6f}" for v in q[i]),
+                              *(f"{v:.6f}" for v in xyz[i]), code]))
+    m = tmp_path / "m.csv"
+    m.write_text("\n".join(rows) + "\n")
+    r = _cli("discover", m, "--profile", FIXTURES / "warm.csv", "--sigma", "0.005",
+             "--out-profile", tmp_path / "p.csv")
+    assert r.exit_code == 0, r.output
+    assert "step 1: backlash:J2: b_deg=0.02" in r.output
+    assert "backlash:J2 is not written into p.csv" in r.output
+    m.write_text("\n".join(rows[:3] + [rows[3].rsplit(",", 1)[0] + ",+-x+++"] + rows[4:]) + "\n")
+    r = _cli("discover", m, "--sigma", "0.005")
+    assert r.exit_code == 2 and "m.csv:4: approach is '+-x+++'" in r.output

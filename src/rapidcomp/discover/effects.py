@@ -111,6 +111,8 @@ def catalogue(robot: RobotModel) -> tuple[Effect, ...]:
     for k in range(n):
         out.append(Effect(f"joint_displacement:{names[k]}", "joint_displacement", k,
                           ("dx_mm", "dy_mm", "dz_mm"), (mm, mm, mm), A[k].T.copy()))
+    for k in range(n):
+        out.append(Effect(f"backlash:{names[k]}", "backlash", k, ("b_deg",), (deg,)))
     return tuple(out)
 
 
@@ -136,6 +138,9 @@ def to_profile(robot: RobotModel, profile: ThermalProfile, values) -> ThermalPro
     joint k:  Delta' = (I, eps R_Pk^T s_k) . Delta_k . (R_tilt, d_disp)
     flange:   Delta' = (I, eps R_F^T s_F) . Delta_F . (I, d_tool)
     base:     T . base;  joint terms add.
+
+    Backlash depends on the direction each move approaches its target from,
+    which a profile cannot hold: it is left out (job.py says so).
     """
     chain = Chain.from_robot(robot)
     names = robot.joint_names
@@ -149,6 +154,8 @@ def to_profile(robot: RobotModel, profile: ThermalProfile, values) -> ThermalPro
     base = profile.base.se3()
     for e, v in values.items():
         v = np.asarray(v, float)
+        if e.kind == "backlash":
+            continue
         if e.kind == "base_frame":
             base = pin.SE3(rpy_matrix(*v[3:]), v[:3]) * base
         elif e.kind == "tool_offset":

@@ -80,10 +80,11 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                              f"discover needs at least {MIN_DISTINCT_POSES} different poses "
                              "(a base frame alone has 6 parameters)")
     test_data = read_measured(test, min_points=1) if test else None
-    model = ParamModel(nominal, prof, data.q_deg, tool)
+    model = ParamModel(nominal, prof, data.q_deg, tool, approach=data.approach)
     effects = catalogue(nominal)
     d = discover(model, data, effects, sigma)
-    heldout = (held_out(ParamModel(nominal, prof, test_data.q_deg, tool), test_data,
+    heldout = (held_out(ParamModel(nominal, prof, test_data.q_deg, tool,
+                                   approach=test_data.approach), test_data,
                         d.final_fit) if test_data is not None else None)
     notes = _beyond_limits(data, nominal) + list(d.notes)
     if test_data is not None:
@@ -112,9 +113,14 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
         files.append((json_path, report.as_json(d, heldout).encode("utf-8")))
     if out_profile:
         values = d.named_values()
-        kept = {e: v for e, v in values.items() if writable(e, e.user(v))}
+        kept = {e: v for e, v in values.items()
+                if writable(e, e.user(v)) and e.kind != "backlash"}
         for e in values:
-            if e not in kept:
+            if e.kind == "backlash":
+                notes.append(f"{e.id} is not written into {Path(out_profile).name}: a profile "
+                             "corrects every move alike, backlash depends on the direction each "
+                             "move approaches its target from")
+            elif e not in kept:
                 notes.append(f"{e.id} is not written into {Path(out_profile).name}: at "
                              f"{', '.join(f'{k}={x:.4g}' for k, x in e.user(values[e]).items())} "
                              "it is an error of the measurement set-up (frame registration, "

@@ -1,7 +1,9 @@
-"""Measured-data files: `point,j1,j2,j3,j4,j5,j6,x,y,z`.
+"""Measured-data files: `point,j1,j2,j3,j4,j5,j6,x,y,z[,approach]`.
 
 Joints are the commanded angles (deg), x/y/z the measured position (mm, robot
-base frame) of the measuring point. Lines starting with '#' are comments
+base frame) of the measuring point; rows in the order they were measured
+(each joint's direction of approach, for backlash, comes from that order
+unless an `approach` column gives it). Lines starting with '#' are comments
 (simulate writes its provenance there); extra columns are ignored and
 reported; any bad row is a path:line error.
 """
@@ -20,6 +22,7 @@ from ..errors import InputError
 JOINT_COLUMNS = ("j1", "j2", "j3", "j4", "j5", "j6")
 COLUMNS = ("point",) + JOINT_COLUMNS + ("x", "y", "z")
 MIN_POINTS = 3
+APPROACH = "approach"
 # Values no measurement of a robot has: a joint beyond two turns, a
 # position beyond 100 m (wrong units, a corrupt row).
 MAX_JOINT_DEG = 720.0
@@ -34,6 +37,9 @@ class Measurements:
     xyz_mm: np.ndarray    # (N, 3) measured positions
     lines: tuple[int, ...]
     ignored_columns: tuple[str, ...] = ()
+    # Per pose and joint, the direction it approached the pose from (+1, -1,
+    # 0 not known), from an `approach` column; None: from the measuring order.
+    approach: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.names)
@@ -93,7 +99,27 @@ def read_text(path: str | Path) -> str:
 
 def parse_measured(text: str, source: str, min_points: int = MIN_POINTS) -> Measurements:
     names, values, lines, ignored = parse_table(text, source, COLUMNS, COLUMNS[1:], min_points)
-    return Measurements(source, names, values[:, :6], values[:, 6:], lines, ignored)
+    approach = None
+    if APPROACH in ignored:
+        ignored = tuple(c for c in ignored if c != APPROACH)
+        approach = _approach(text, source)
+    return Measurements(source, names, values[:, :6], values[:, 6:], lines, ignored, approach)
+
+
+def _approach(text: str, source: str) -> np.ndarray:
+    """The `approach` column: per row six signs, one per joint, `+` (the
+    joint last moved in the positive direction before the pose), `-`, or
+    `0` (not known), e.g. `+-0++-`."""
+    header, body = header_and_rows(text, source, COLUMNS)
+    k = header.index(APPROACH)
+    out = []
+    for line, row in body:
+        cell = row[k].strip()
+        if len(cell) != len(JOINT_COLUMNS) or any(c not in "+-0" for c in cell):
+            raise InputError(source, f"approach is {cell!r}, expected one of + - 0 per joint "
+                             f"({len(JOINT_COLUMNS)} characters, e.g. +-0++-)", line)
+        out.append([{"+": 1.0, "-": -1.0, "0": 0.0}[c] for c in cell])
+    return np.array(out)
 
 
 def read_measured(path: str | Path, min_points: int = MIN_POINTS) -> Measurements:

@@ -29,12 +29,27 @@ from .effects import Effect, tilt_rotation
 ZERO_COLUMN = 1e-8
 
 
+def approach_directions(q_deg: np.ndarray) -> np.ndarray:
+    """(N, J): the sign of each joint's last motion before each pose, in the
+    order the poses were measured (the robot moves from one to the next);
+    0 where it is not known (the first pose, a joint that has not moved)."""
+    q = np.asarray(q_deg, float)
+    out = np.zeros_like(q)
+    last = np.zeros(q.shape[1]) if q.ndim == 2 else np.zeros(0)
+    for i in range(1, len(q)):
+        step = np.sign(q[i] - q[i - 1])
+        last = np.where(step != 0, step, last)
+        out[i] = last
+    return out
+
+
 class ParamModel:
     """Measuring point positions (base frame, mm) for N commanded joint
     vectors; `evaluate` adds effects at internal values."""
 
     def __init__(self, robot: RobotModel, profile: ThermalProfile, q_deg: np.ndarray,
-                 tool_mm=(0.0, 0.0, 0.0), payload: Payload | None = None):
+                 tool_mm=(0.0, 0.0, 0.0), payload: Payload | None = None,
+                 approach: np.ndarray | None = None):
         if payload is not None:
             profile = replace(profile, payload=payload)
         self.robot = robot
@@ -48,6 +63,9 @@ class ParamModel:
         self.tau_nm = GravityModel.from_robot(robot, profile.payload).torques_nm(self.q_cmd)
         self.tool = np.asarray(tool_mm, float)
         self.n = len(self.chain.trans)
+        # Each joint's last direction of motion before each pose (backlash).
+        self.direction = (np.asarray(approach, float) if approach is not None
+                          else approach_directions(q_deg))
 
     @property
     def size(self) -> int:
@@ -57,6 +75,7 @@ class ParamModel:
         """The same model on some of its poses (rows: indices)."""
         out = copy.copy(self)
         out.q_cmd, out.q0, out.tau_nm = self.q_cmd[rows], self.q0[rows], self.tau_nm[rows]
+        out.direction = self.direction[rows]
         return out
 
     def evaluate(self, effects: tuple[Effect, ...], values, jacobian: bool = True):
@@ -78,6 +97,8 @@ class ParamModel:
                 q[:, k] += v[0] * self.q_cmd[:, k]
             elif e.kind == "gravity_compliance":
                 q[:, k] += v[0] * self.tau_nm[:, k]
+            elif e.kind == "backlash":
+                q[:, k] += 0.5 * v[0] * self.direction[:, k]
             elif e.kind == "link_elongation":
                 eps[k] += v[0]
             elif e.kind == "axis_tilt":
@@ -114,10 +135,11 @@ class ParamModel:
         cols = []
         for e, v in zip(effects, vals):
             k = e.joint
-            if e.kind in ("joint_offset", "joint_scale", "gravity_compliance"):
+            if e.kind in ("joint_offset", "joint_scale", "gravity_compliance", "backlash"):
                 d = np.cross(z[k], P - origin[k])
                 w = {"joint_offset": 1.0, "joint_scale": self.q_cmd[:, k],
-                     "gravity_compliance": self.tau_nm[:, k]}[e.kind]
+                     "gravity_compliance": self.tau_nm[:, k],
+                     "backlash": 0.5 * self.direction[:, k]}[e.kind]
                 block = [d * np.reshape(w, (-1, 1))]
             elif e.kind == "link_elongation":
                 seg = self.nominal.trans[k] if k < n else self.nominal.flange_trans

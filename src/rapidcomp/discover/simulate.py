@@ -63,7 +63,9 @@ def parse_effect_values(effects, specs, force: bool = False) -> dict[Effect, np.
 
 def simulate_positions(robot: RobotModel, profile: ThermalProfile, values, q_deg: np.ndarray,
                        tool_mm, payload: Payload | None = None) -> np.ndarray:
-    """Measuring point positions (N, 3) of the model robot + profile + effects."""
+    """Measuring point positions (N, 3) of the model robot + profile + effects,
+    the poses measured in the order given (backlash: each joint lags half
+    of it behind the direction it last moved)."""
     if payload is not None:
         profile = replace(profile, payload=payload)
     model = deform(robot, to_profile(robot, profile, values))
@@ -71,11 +73,27 @@ def simulate_positions(robot: RobotModel, profile: ThermalProfile, values, q_deg
     q = np.asarray(q_deg, float) * DEG
     if model.joint_map is not None:
         q = model.joint_map.apply(q)
+    lash = [(e.joint, float(v[0])) for e, v in values.items() if e.kind == "backlash"]
+    if lash:
+        q = q.copy()
+        for k, b in lash:
+            q[:, k] += 0.5 * b * _last_direction(np.asarray(q_deg, float)[:, k])
     tool = np.asarray(tool_mm, float)
     out = np.empty((len(q), 3))
     for i, qi in enumerate(q):
         pin.framesForwardKinematics(model.model, data, qi)
         out[i] = data.oMf[model.flange_frame].act(tool)
+    return out
+
+
+def _last_direction(angles: np.ndarray) -> np.ndarray:
+    """Sign of the last change of one joint before each pose (0 before its
+    first). Written apart from model.approach_directions on purpose: the
+    simulator is the fitting code's independent check."""
+    out = np.zeros(len(angles))
+    for i in range(1, len(angles)):
+        delta = angles[i] - angles[i - 1]
+        out[i] = out[i - 1] if delta == 0 else (1.0 if delta > 0 else -1.0)
     return out
 
 
