@@ -103,7 +103,7 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
         if plot.available():
             files.append((plot_path, plot.residual_plot(
                 data.xyz_mm[d.kept], d.initial_residuals, d.final_fit.residuals,
-                f"{Path(measured).name}: measured - simulated")))
+                f"{Path(measured).name}: measured - simulated", d.sigma_mm)))
         else:
             plot_note = plot.MISSING
             notes.append(plot.MISSING)
