@@ -317,3 +317,46 @@ def test_the_readme_task_commands_run_as_written(tmp_path):
     assert (t / "cell_comp" / "MainModule.mod").is_file() and (t / "cell_comp.md").is_file()
     assert (t / "glue" / "Glue_comp" / "Glue.pgf").is_file()
     assert (t / "backup_irbt_comp" / "SYSPAR" / "SYS.cfg").is_file()
+
+
+@pytest.mark.parametrize("decimals", [6, 9])
+def test_robtargets_taught_with_a_straight_wrist_keep_their_orientation(tmp_path, decimals):
+    """Robtargets taught at J5 = 0 (J4 = J6 = 0, J1 turned), their quaternion
+    written with 6 or 9 decimals (so J5 comes out a few 1e-4 deg off 0 with
+    an arbitrary J4/J6 split), a 150 mm tool: MoveJ becomes MoveAbsJ whose
+    joints, on the warm robot (Pinocchio FK, independent of the solver),
+    put the TCP on the programmed point and the tool within the thermal
+    tilt (< 0.05 deg) of the programmed orientation."""
+    taught = [[-10, 5, 10, 0, 0, 0], [45, 0, 30, 0, 0, 0], [20, 0, 0, 0, 0, 0],
+              [30, -10, 40, 0, 0, 0]]
+    tool = pin.SE3(np.eye(3), np.array([0.0, 0.0, 150.0]))
+    decls, moves = [], []
+    for n, q in enumerate(taught):
+        M = fk(NOMINAL, q) * tool
+        quat = pin.Quaternion(M.rotation)
+        wxyz = [quat.w, quat.x, quat.y, quat.z]
+        cf1 = int(np.floor(q[0] / 90.0))
+        decls.append(f"    CONST robtarget p{n}:=[[{','.join(f'{v:.3f}' for v in M.translation)}],"
+                     f"[{','.join(f'{v:.{decimals}f}' for v in wxyz)}],[{cf1},0,0,0],"
+                     "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];")
+        moves.append(f"        MoveJ p{n}, v100, fine, tProbe;")
+    src = tmp_path / "wrist.mod"
+    src.write_text("MODULE Wrist\n    PERS tooldata tProbe:=[TRUE,[[0,0,150],[1,0,0,0]],"
+                   "[1,[0,0,50],[1,0,0,0],0,0,0]];\n" + "\n".join(decls)
+                   + "\n    PROC main()\n" + "\n".join(moves) + "\n    ENDPROC\nENDMODULE\n")
+    out = tmp_path / "wrist_comp.mod"
+    r = subprocess.run([sys.executable, "-m", "rapidcomp", "fix", str(src), "--profile",
+                        str(FIXTURES / "warm.csv"), "-o", str(out), "--json",
+                        str(tmp_path / "r.json")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    written = parse_file(out)
+    joints = {d.name: d.value for m in written.modules for d in m.declarations
+              if d.type == "jointtarget"}
+    assert len(joints) == len(taught)
+    for n, q in enumerate(taught):
+        want = fk(NOMINAL, q) * tool
+        jt = joints[f"jt_p{n}"]
+        got = fk(WARM, np.asarray(jt.values[:6], float)) * tool
+        assert np.linalg.norm(got.translation - want.translation) * 1000 < 1.0, n
+        tilt = np.degrees(np.linalg.norm(pin.log3(want.rotation.T @ got.rotation)))
+        assert tilt < 0.05, (n, tilt)

@@ -465,8 +465,9 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
     seed = IKBatch(np.where(np.isnan(q_nom), np.nan, seed.q_deg), status, seed.detail,
                    seed.detail_joint, seed.conf, seed.residual_mm, seed.residual_rad,
                    seed.iterations, seed.warnings)
-    deformed = solver.solve_deformed(R, p, seed)
-    err_p, err_r = solver.deformed_pose_error(np.nan_to_num(q_nom) * DEG, R, p)
+    tcp = tcp_of(uses)
+    deformed = solver.solve_deformed(R, p, seed, tcp)
+    err_p, err_r = solver.deformed_pose_error(np.nan_to_num(q_nom) * DEG, R, p, tcp)
     qc = np.nan_to_num(deformed.q_deg) * DEG
     Rn, pn = solver.nominal_chain.fk(qc)
     _, frames = solver.nominal_chain.joint_frames(qc)
@@ -483,6 +484,13 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
 class Slot(NamedTuple):
     q_deg: np.ndarray     # the joints written into the slot
     what: str             # what they are, for the report
+
+
+def tcp_of(uses) -> np.ndarray:
+    """The tool centre point of each use in the flange frame (mm): where
+    errors are measured and what the wrist fallback holds exact."""
+    return np.array([u.tool[1][1] if u.tool is not None else np.zeros(3) for u in uses],
+                    float).reshape(-1, 3)
 
 
 def solve_slots(solver: Solver, R, p, conf, valid) -> list[Slot]:

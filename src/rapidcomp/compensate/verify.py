@@ -19,7 +19,7 @@ from ..kinematics.ik import Solver
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
 from .plan import Plan
-from .solve import Solved
+from .solve import Solved, tcp_of
 from .targets import Resolver
 
 # Acceptance of a written value, after float32 rounding.
@@ -98,7 +98,8 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
                                     f"{u.label}")
             q[i] = got[n]
     qa = np.array([q[i] for i in rows]).reshape(-1, 6)
-    err_p, err_r = solver.deformed_pose_error(qa * DEG, solved.R[rows], solved.p[rows])
+    err_p, err_r = solver.deformed_pose_error(qa * DEG, solved.R[rows], solved.p[rows],
+                                              tcp_of([solved.uses[i] for i in rows]))
     out = {}
     for n, i in enumerate(rows):
         out[solved.uses[i].key] = (float(err_p[n]) * 1000, float(err_r[n]) / DEG)

@@ -59,6 +59,11 @@ WARN_TEXT = {
 }
 
 
+# The largest flange rotation (rad) re-splitting J4/J6 near J5 = 0 may make
+# (a quaternion written with 6 decimals is itself only good to ~2e-6 rad).
+RESPLIT_RAD = 1e-5
+
+
 @dataclass(frozen=True)
 class IKOptions:
     singular_margin_deg: float = 0.5
@@ -77,6 +82,10 @@ class IKOptions:
     # swing J4/J6 beyond the joint-change bound is compensated in position
     # exactly and in orientation as far as the bound allows.
     wrist_fallback_deg: float = 5.0
+    # What the wrist fallback may leave over of the orientation (deg): the
+    # thermal tilt is ~0.01 deg; more is not a thermal correction's leftover
+    # but a wrong target, and the row fails.
+    max_leftover_deg: float = 0.1
 
 
 @dataclass(frozen=True, slots=True)
@@ -251,13 +260,18 @@ class Solver:
         qd = np.nan_to_num(q) / DEG
         warnings = self._singularity_warnings(np.nan_to_num(q), br.wrist)
         # At the wrist singularity only q4 + q6 is defined: place q4 in the
-        # programmed quadrant (nearest 0) and keep the sum.
+        # programmed quadrant (nearest 0) and keep the sum, where that moves
+        # the flange by less than RESPLIT_RAD (a target taught at J5 = 0 and
+        # written with rounded quaternion digits lies a few 1e-4 deg off it,
+        # with an arbitrary split; the controller runs it on its confdata).
         sing = (warnings & Warn.WRIST_SINGULAR).astype(bool)
         if sing.any():
             target4 = np.clip(0.0, 90.0 * conf[:, 1], 90.0 * conf[:, 1] + 89.999)
             shift = np.where(sing, target4 - qd[:, 3], 0.0)
+            # Turning the split by d at J5 = q5 turns the flange by ~|q5 d|.
+            shift = np.where(np.abs(q[:, 4] * shift * DEG) <= RESPLIT_RAD, shift, 0.0)
             qd[:, 3] += shift
-            qd[:, 5] += shift
+            qd[:, 5] -= shift
         for col, cf_col in ((0, 0), (3, 1), (5, 2)):
             angle, miss, ok = _turns(qd[:, col], conf[:, cf_col], self.options.quadrant_tol_deg)
             qd[:, col] = angle
@@ -279,17 +293,29 @@ class Solver:
                        np.zeros(N, dtype=int), warnings)
 
     # ------------------------------------------------------------ deformed
-    def deformed_pose_error(self, q_cmd: np.ndarray, R: np.ndarray, p: np.ndarray):
-        """Flange error (mm, rad) of the deformed robot commanded q_cmd (rad)
-        against the poses R, p."""
+    def deformed_pose_error(self, q_cmd: np.ndarray, R: np.ndarray, p: np.ndarray,
+                            tcp: np.ndarray | None = None):
+        """Error (mm, rad) of the deformed robot commanded q_cmd (rad)
+        against the flange poses R, p: the distance of the TCP (tcp: its
+        position in the flange frame, mm, per row; default the flange) and
+        the rotation angle."""
         q = self.joint_map.apply(q_cmd) if self.joint_map is not None else q_cmd
-        return self.deformed_chain.pose_error(q, R, p)
+        if tcp is None:
+            return self.deformed_chain.pose_error(q, R, p)
+        Rf, pf = self.deformed_chain.fk(q)
+        t = np.asarray(tcp, float).reshape(-1, 3, 1)
+        d = (p + (R @ t)[..., 0]) - (pf + (Rf @ t)[..., 0])
+        return (np.linalg.norm(d, axis=1),
+                np.linalg.norm(rotation_log(R @ np.swapaxes(Rf, 1, 2)), axis=1))
 
-    def solve_deformed(self, R: np.ndarray, p: np.ndarray, seed: IKBatch) -> IKBatch:
+    def solve_deformed(self, R: np.ndarray, p: np.ndarray, seed: IKBatch,
+                       tcp: np.ndarray | None = None) -> IKBatch:
         """Joint angles with which the deformed robot reaches R, p.
 
         Newton's method on the deformed chain from the nominal solution,
-        which is continuous with it: no turn jumps are possible.
+        which is continuous with it: no turn jumps are possible. tcp: the
+        tool centre point in the flange frame (mm) per row, which the wrist
+        fallback keeps exact (default: the flange).
         """
         if self.deformed_chain is None:
             raise ValueError("Solver was built without a deformed model")
@@ -341,7 +367,8 @@ class Solver:
         q_ref = np.nan_to_num(seed.q_deg) * DEG
         if self.joint_map is not None:
             q_ref = np.where(active[:, None], self.joint_map.apply(q_ref), 0.0)
-        leftover = self._wrist_fallback(R, p, q, q_ref, seed, active, res_mm, res_rad)
+        tcp = np.zeros((N, 3)) if tcp is None else np.asarray(tcp, float).reshape(-1, 3)
+        leftover = self._wrist_fallback(R, p, q, q_ref, seed, active, res_mm, res_rad, tcp)
         q_act = q
         if self.joint_map is not None:
             q = np.where(active[:, None], self.joint_map.invert(q_act), 0.0)
@@ -381,11 +408,12 @@ class Solver:
         return IKBatch(q_out, status, detail, djoint, conf, res_mm, res_rad, iters,
                        warnings, change)
 
-    def _wrist_fallback(self, R, p, q, q_ref, seed: IKBatch, active, res_mm, res_rad):
+    def _wrist_fallback(self, R, p, q, q_ref, seed: IKBatch, active, res_mm, res_rad, tcp):
         """Rows near J5 = 0 that the full solve left unconverged or moved
-        J4/J6 beyond the bound: solve again with the position exact and the
-        orientation as close as the joint-change bound allows (in place on
-        q, res_mm, res_rad). Returns the mask of rows solved this way.
+        J4/J6 beyond the bound: solve again with the TCP's position exact
+        and the orientation as close as the joint-change bound allows (in
+        place on q, res_mm, res_rad). Returns the mask of rows solved this
+        way.
 
         At J5 = 0 the axes of J4 and J6 coincide: one direction of rotation
         is reached only by swinging J4 and J6 far. Its share of the thermal
@@ -402,20 +430,21 @@ class Solver:
                        | (change > opt.max_joint_change_deg))
         bound = 0.95 * opt.max_joint_change_deg * DEG
         for i in np.flatnonzero(need):
-            got = self._position_exact(R[i], p[i], q_ref[i], bound)
+            got = self._position_exact(R[i], p[i], q_ref[i], bound, tcp[i])
             if got is None:
                 continue
-            # Only an improvement on the uncompensated joints is taken.
-            Rc, _ = self.deformed_chain.fk(q_ref[i][None])
-            before = float(np.linalg.norm(rotation_log((R[i] @ Rc[0].T)[None])[0]))
-            if got[2] <= max(before, opt.tol_rad):
+            # Holding the TCP exact, the tilt J4/J6 cannot follow may grow a
+            # little over the uncompensated one; beyond the cap it is not a
+            # thermal leftover but a wrong target: not taken.
+            if got[2] <= opt.max_leftover_deg * DEG:
                 q[i], res_mm[i], res_rad[i] = got
                 leftover[i] = res_rad[i] > opt.tol_rad
         return leftover
 
-    def _position_exact(self, R, p, q_ref, bound):
+    def _position_exact(self, R, p, q_ref, bound, tcp):
         """min |orientation error|^2 + mu |q - q_ref|^2 subject to the exact
-        flange position (Gauss-Newton on the KKT system), for mu in decades
+        TCP position (tcp in the flange frame; Gauss-Newton on the KKT
+        system), for mu in decades
         from stiff to soft while the joints stay within `bound` (rad) of
         q_ref. Of those, the stiffest whose orientation error is within
         1e-4 deg of the best: a J4/J6 swing that buys less than that is not
@@ -428,9 +457,12 @@ class Solver:
             q = q_ref.copy()
             for _ in range(40):
                 Rc, pc, J = chain.fk_jacobian(q[None])
-                e_p = p - pc[0]
+                arm = Rc[0] @ tcp
+                e_p = (p + R @ tcp) - (pc[0] + arm)
                 e_w = rotation_log((R @ Rc[0].T)[None])[0]
-                Jp, Jw = J[0, :3], J[0, 3:]
+                # The TCP moves with the flange and turns about it.
+                Jw = J[0, 3:]
+                Jp = J[0, :3] - _skew(arm) @ Jw
                 K = np.zeros((n + 3, n + 3))
                 K[:n, :n] = Jw.T @ Jw + mu * np.eye(n)
                 K[:n, n:] = Jp.T
@@ -441,7 +473,7 @@ class Solver:
                 if np.max(np.abs(dq)) < 1e-13:
                     break
             Rc, pc = chain.fk(q[None])
-            e_p = float(np.linalg.norm(p - pc[0]))
+            e_p = float(np.linalg.norm((p + R @ tcp) - (pc[0] + Rc[0] @ tcp)))
             e_w = float(np.linalg.norm(rotation_log((R @ Rc[0].T)[None])[0]))
             if np.max(np.abs(q - q_ref)) > bound:
                 break
@@ -583,3 +615,8 @@ def solve_deformed_pinocchio(robot: RobotModel, R: np.ndarray, p: np.ndarray,
         J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
         q = q + np.linalg.solve(J, np.concatenate([e_p, e_w]))
     return q / DEG, float(np.linalg.norm(e_p)), float(np.linalg.norm(e_w)), it
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    """[v]x: _skew(v) @ w = v x w."""
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
