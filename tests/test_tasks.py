@@ -174,3 +174,36 @@ def test_output_folders_are_new_or_our_own(tmp_path):
 def test_with_a_module_of_the_task_is_read_once():
     r = run("check", TASKS / "cell", "--with", TASKS / "cell" / "CellData.mod", "--profile", WARM)
     assert r.exit_code == 0 and "more than once" not in r.output
+
+
+def test_a_backup_whose_base_rides_on_a_track_needs_track(tmp_path):
+    """MOC.cfg: ROB_1 -base_frame_moved_by "TRACK_1". Without --track the
+    base position of a robtarget is not known: not compensated, naming the
+    option (no positioner assumption, no MoveAbsJ frozen at the wrong
+    place); with it, everything compensates."""
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    (bk / "SYSPAR" / "MOC.cfg").write_text(
+        "MOC:CFG_1.0:6:0::\n#\nROBOT:\n\n      -name \"ROB_1\" -use_robot_type \"ROB1_140\"\\\n"
+        "      -base_frame_moved_by \"TRACK_1\"\n")
+    r = run("check", bk, "--profile", WARM, "--json")
+    doc = json.loads(r.output)
+    assert r.exit_code == 1
+    assert any("TRACK_1 moves the robot's base" in n and "--track" in n for n in doc["notes"])
+    rob = [t for t in doc["targets"] if t["instruction"] != "MoveAbsJ"]
+    assert rob and all("--track AXIS:x|y|z" in t["reason"] for t in rob)
+    assert doc["summary"]["compensable"] == 12 - len(rob)
+    r = run("check", bk, "--profile", WARM, "--track", "a:x", "--json")
+    assert r.exit_code == 0 and json.loads(r.output)["summary"]["compensable"] == 12
+
+
+def test_moc_values_no_cell_has_are_bad_input(tmp_path):
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    for bad, says in (("-base_frame_pos_x abc", "-base_frame_pos_x abc is not a number"),
+                      ("-base_frame_pos_x 1e300", "within 100 m"),
+                      ("-base_frame_orient_u0 0.5", "is not a unit quaternion")):
+        (bk / "SYSPAR" / "MOC.cfg").write_text(
+            f"MOC:CFG_1.0:6:0::\n#\nROBOT:\n\n      -name \"ROB_1\" {bad}\n")
+        r = run("check", bk, "--profile", WARM, "--track", "a:x")
+        assert r.exit_code == 2 and "SYSPAR/MOC.cfg" in r.output and says in r.output, r.output

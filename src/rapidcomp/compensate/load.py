@@ -55,7 +55,8 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
         for other in tasks_of(source.input, motion_only=False):
             if other.task != source.task:
                 observers += [_parse(other, rel) for rel in other.modules]
-    return Task(source.task or source.name, tuple(files), tuple(context), tuple(observers))
+    return Task(source.task or source.name, tuple(files), tuple(context), tuple(observers),
+                source.base_moved_by)
 
 
 def _parse(source: TaskSource, rel: str):

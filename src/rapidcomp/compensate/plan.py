@@ -27,6 +27,8 @@ class Task:
     # Modules of the controller's other tasks: their writes to PERS data
     # count (PERS are shared between tasks), nothing else of them does.
     observers: tuple[ParsedFile, ...] = ()
+    # The unit that moves the robot's base (a backup's MOC.cfg), if any.
+    base_moved_by: str | None = None
 
     @property
     def all_files(self) -> list[ParsedFile]:
@@ -39,7 +41,7 @@ class Plan:
         self.files = task.all_files
         self.n_written = len(task.files)
         self.resolver = Resolver(self.files, track=track, base=base,
-                                 observers=task.observers)
+                                 observers=task.observers, moved_by=task.base_moved_by)
         self.track = tuple(track)
         self.uses: list[TargetUse] = []
         for fi, pf in enumerate(task.files):
@@ -75,6 +77,12 @@ class Plan:
 
     def notes(self) -> list[str]:
         out = list(self.flow.notes)
+        if self.task.base_moved_by and not self.track:
+            out.append(f"SYSPAR/MOC.cfg says {self.task.base_moved_by} moves the robot's base: "
+                       "robtarget moves are not compensated until --track AXIS:x|y|z names "
+                       "its external axis and direction; MoveAbsJ targets (joints, relative "
+                       "to the base) are, their external axis values copied as written")
+            return out
         active = [u for u in self.uses if u.reason is None
                   and any(abs(v) < EXTAX_UNUSED for v in u.ext)]
         if active:

@@ -173,9 +173,10 @@ class Resolver:
 
     def __init__(self, files: list[ParsedFile], float32: bool = False,
                  usages: dict | None = None, writes: bool = True, track=(), base=None,
-                 observers=()):
+                 observers=(), moved_by: str | None = None):
         self.float32 = float32
         self.track = tuple(track)
+        self.moved_by = moved_by
         self.base = base if base is not None else IDENTITY_POSE   # world_M_base at track 0
         self.globals: dict[str, list[Declaration]] = {}
         self.module_decls: dict[tuple[int, str], Declaration] = {}
@@ -595,6 +596,12 @@ class Resolver:
         if not motion.spec.moves_arm:
             return fail(Unresolved(f"{motion.spec.name} moves only external axes; the arm "
                                    "stays where it is"))
+        if kind == "robtarget" and self.moved_by and not self.track:
+            return fail(Unresolved(
+                f"SYSPAR/MOC.cfg says {self.moved_by} moves the robot's base "
+                "(-base_frame_moved_by): where the base is depends on its axis; say which "
+                "external axis it is and along which base axis it moves with --track "
+                "AXIS:x|y|z", True))
         if t.value is not None:
             src = Source(t.value, None, None, None, False, t.expr, t.expr, None, None, None)
         elif t.issue:

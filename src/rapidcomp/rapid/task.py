@@ -17,6 +17,7 @@ Only paths are found here; parsing is the caller's (job.py).
 
 from __future__ import annotations
 
+import math
 import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
@@ -47,6 +48,9 @@ class TaskSource:
     # Why the backup cannot tell the base frame (several robots): an error
     # unless --base says it.
     base_problem: str | None = None
+    # The mechanical unit that moves the robot's base (MOC.cfg ROBOT
+    # -base_frame_moved_by, a track): robtargets need --track.
+    base_moved_by: str | None = None
 
     @property
     def is_folder(self) -> bool:
@@ -196,10 +200,9 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
     frames = _base_frames(root, shown, groups)
     out = []
     for n, t in enumerate(tasks):
-        frame = frames.get(t.task.upper())
-        out.append(replace(t, notes=tuple(skipped) if n == 0 else (),
-                           base=frame if not isinstance(frame, str) else None,
-                           base_problem=frame if isinstance(frame, str) else None))
+        frame, problem, mover = frames.get(t.task.upper(), (None, None, None))
+        out.append(replace(t, notes=tuple(skipped) if n == 0 else (), base=frame,
+                           base_problem=problem, base_moved_by=mover))
     return out
 
 
@@ -268,6 +271,7 @@ def _motion_tasks(root: Path, shown: str) -> dict[str, str | None] | None:
 _MOC_KEYS = ("base_frame_pos_x", "base_frame_pos_y", "base_frame_pos_z", "base_frame_orient_u0",
              "base_frame_orient_u1", "base_frame_orient_u2", "base_frame_orient_u3")
 _IDENTITY = (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+MAX_BASE_M = 100.0
 
 
 def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None]) -> dict:
@@ -275,34 +279,54 @@ def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None]) -> di
     the task's mechanical unit group (SYS.cfg) names its ROBOT
     (MECHANICAL_UNIT_GROUP -robot), whose -base_frame_pos_x/y/z (metres)
     and -base_frame_orient_u0..u3 (quaternion w, x, y, z) place it. Task
-    name (upper case) -> ((x, y, z) mm, (q1..q4)), None (the world frame),
-    or the reason it cannot be told (several robots, no link to one)."""
+    name (upper case) -> (frame: ((x, y, z) mm, (q1..q4)) or None for the
+    world frame; the reason it cannot be told (several robots, no link to
+    one) or None; the unit that moves the base (-base_frame_moved_by) or
+    None). Values no robot cell has are bad input."""
     text = _read_text(root / "SYSPAR" / "MOC.cfg", shown)
     robots = {}
+    movers = {}
+    where = f"{shown}/SYSPAR/MOC.cfg"
     for inst in _cfg_instances(text, "ROBOT"):
         if inst.get("name") is None:
             continue
         vals = []
         for k, default in zip(_MOC_KEYS, _IDENTITY):
             try:
-                vals.append(float(inst.get(k) or default))
+                v = float(inst.get(k) or default)
             except ValueError:
-                raise InputError(f"{shown}/SYSPAR/MOC.cfg", f"ROBOT {inst['name']}: -{k} "
-                                 f"{inst.get(k)} is not a number") from None
+                raise InputError(where, f"ROBOT {inst['name']}: -{k} {inst.get(k)} is not a "
+                                 "number") from None
+            if not (abs(v) <= MAX_BASE_M if k.startswith("base_frame_pos") else abs(v) <= 1.0):
+                raise InputError(where, f"ROBOT {inst['name']}: -{k} {v:g} is not "
+                                 + ("a position in metres within 100 m of the world origin"
+                                    if k.startswith("base_frame_pos") else
+                                    "a quaternion component (-1..1)"))
+            vals.append(v)
+        if abs(math.sqrt(sum(v * v for v in vals[3:])) - 1.0) > 1e-3:
+            raise InputError(where, f"ROBOT {inst['name']}: -base_frame_orient_u0..u3 "
+                             f"[{', '.join(f'{v:g}' for v in vals[3:])}] is not a unit "
+                             "quaternion")
         robots[inst["name"].lower()] = None if tuple(vals) == _IDENTITY else (
             (vals[0] * MM_PER_M, vals[1] * MM_PER_M, vals[2] * MM_PER_M), tuple(vals[3:]))
+        movers[inst["name"].lower()] = inst.get("base_frame_moved_by")
     robot_of = {inst["name"].lower(): (inst.get("robot") or "").lower()
                 for inst in _cfg_instances(text, "MECHANICAL_UNIT_GROUP") if inst.get("name")}
     out: dict = {}
     for task, group in groups_of.items():
         robot = robot_of.get(group or "")
+        if robot not in robots and len(robots) == 1:
+            robot = next(iter(robots))
+        mover = movers.get(robot)
         if robot in robots:
-            out[task] = robots[robot]
+            out[task] = (robots[robot], None, mover)
         elif len(set(robots.values())) <= 1:
-            out[task] = next(iter(robots.values()), None)
+            mover = next((m for m in movers.values() if m), None)
+            out[task] = (next(iter(robots.values()), None), None, mover)
         else:
-            out[task] = (f"{shown}/SYSPAR/MOC.cfg: several robots with different base frames "
-                         f"and nothing links task {task} to one (SYS.cfg -UseMechanicalUnitGroup, "
-                         "MOC.cfg MECHANICAL_UNIT_GROUP -robot); say where this task's robot "
-                         "stands with --base X,Y,Z,Q1,Q2,Q3,Q4")
+            out[task] = (None, f"{where}: several robots with different base frames and nothing "
+                               f"links task {task} to one (SYS.cfg -UseMechanicalUnitGroup, "
+                               "MOC.cfg MECHANICAL_UNIT_GROUP -robot); say where this task's "
+                               "robot stands with --base X,Y,Z,Q1,Q2,Q3,Q4",
+                         next((m for m in movers.values() if m), None))
     return out
