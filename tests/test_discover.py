@@ -349,3 +349,24 @@ def test_a_profile_row_the_effects_take_past_its_bounds_is_not_written(tmp_path)
     assert "joint_displacement:J2 not written into p.csv: with the base profile, row J2 would " \
            "be beyond what a profile holds (J2 shift of 5.204 mm exceeds 5.0 mm" in r.output
     assert read_profile(p).get("J2").d_mm[0] == 4.9
+
+
+def test_data_in_metres_name_nothing_and_write_no_profile(tmp_path):
+    """The shipped example with x, y, z in metres: 0.8 m off everywhere,
+    beyond anything a robot has; nothing is named and the profile that
+    would move the robot by the units error is not written."""
+    rows = []
+    for line in (FIXTURES / "measured.csv").read_text().splitlines():
+        cells = line.split(",")
+        if not line.startswith(("#", "point")):
+            cells[7:10] = [str(float(v) / 1000) for v in cells[7:10]]
+        rows.append(",".join(cells))
+    m, p = tmp_path / "m.csv", tmp_path / "p.csv"
+    m.write_text("\n".join(rows) + "\n")
+    r = _cli("discover", m, *EXAMPLE, "--sigma", "0.005", "--out-profile", p,
+             "--json", tmp_path / "d.json")
+    assert r.exit_code == 0
+    doc = json.loads((tmp_path / "d.json").read_text())
+    assert doc["verdict"] == "unexplained" and doc["steps"] == []
+    assert "far apart" in r.output and "not in millimetres" in r.output
+    assert "p.csv not written" in r.output and not p.exists()

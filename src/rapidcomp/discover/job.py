@@ -111,7 +111,11 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
         files.append((report_path, report.markdown(d, meta, plot_note, heldout).encode("utf-8")))
     if json_path:
         files.append((json_path, report.as_json(d, heldout).encode("utf-8")))
-    if out_profile:
+    if out_profile and d.far_apart:
+        notes.append(f"{Path(out_profile).name} not written: the data and the model are far "
+                     "apart (see the verdict); a profile from them would move the robot by what "
+                     "the measurement set-up got wrong")
+    elif out_profile:
         values = d.named_values()
         kept = {e: v for e, v in values.items()
                 if writable(e, e.user(v)) and e.kind != "backlash"}

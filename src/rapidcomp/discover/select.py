@@ -48,6 +48,8 @@ EQUIVALENT_QUANTILE = 0.99
 # plausible one leaves (100x better) means the model and the data are far
 # apart: nothing more is named.
 FAR_APART = 0.01
+# Residuals beyond this RMS (mm) are beyond every plausible effect at once.
+FAR_APART_MM = 250.0
 # A candidate whose parameter estimates correlate beyond this with those
 # already named needs cancelling parameters: not named.
 CORRELATION_LIMIT = 0.995
@@ -109,6 +111,7 @@ class Discovery:
     structure: Structure | None = None  # what the joints predict of the final residuals
     notes: tuple[str, ...] = ()
     kept: np.ndarray | None = None      # rows of the measured data fitted (outliers left out)
+    far_apart: bool = False             # only values no robot has would explain the data
 
     @property
     def initial_rms_mm(self) -> float:
@@ -420,7 +423,15 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     swapped: dict[str, list[str]] = {}
     blocked: list[str] = []
     far_apart = False
-    while _noise_p(current, sigma, n) < 1 - NOISE_QUANTILE:
+    far_notes: list[str] = []
+    if start.rms_mm > FAR_APART_MM:
+        # Beyond what every plausible effect together could do: any fit
+        # would be an artefact of the distance.
+        far_apart = True
+        blocked = [f"the residuals (RMS {start.rms_mm:.4g} mm) are beyond what any effect a "
+                   f"real robot has could explain (at most ~{FAR_APART_MM:g} mm at the "
+                   "measuring point, a base frame registered 50 mm and 5 deg off included)"]
+    while not far_apart and _noise_p(current, sigma, n) < 1 - NOISE_QUANTILE:
         scored = sel.score(current)
         # A fit that would take away most of what is left, with values no
         # robot has: the data and the model are far apart, and whatever
@@ -429,6 +440,12 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
         far = [x.blocked for x in scored if x.blocked and x.fit.rss < FAR_APART * plausible]
         if far:
             blocked, far_apart = far[:3], True
+            if current.effects:
+                # What was named on the way is an artefact of that distance.
+                dropped = ", ".join(e.id for e in current.effects)
+                far_notes.append(f"{dropped} fitted before the data and the model showed far "
+                                 "apart: not named (an artefact of the distance)")
+                current = start
             break
         chosen = sel.pick(scored)
         if chosen is None:
@@ -451,11 +468,11 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
                           {e.joint: J[:, :, i] for i, e in enumerate(offsets)})
     verdict, text = _verdict(steps, current, sigma, noise_p, nz.kind == "estimated", blocked,
                              far_apart, found)
-    notes = (screened.note,) if screened.note else ()
+    notes = ((screened.note,) if screened.note else ()) + tuple(far_notes)
     return Discovery(len(data), sigma, source, initial, final, start.heldout_rms_mm(),
                      tuple(steps), verdict, text, noise_p, tuple(sel.not_identifiable.items()),
                      current, start, effects, tuple(blocked), nz, screened.outliers, found, notes,
-                     screened.rows)
+                     screened.rows, far_apart)
 
 
 def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:
@@ -479,11 +496,13 @@ def _verdict(steps, current: Fit, sigma: float, noise_p: float, estimated: bool,
             "also inflates that estimate). Give the measuring system's noise with --sigma or "
             "measure some poses more than once.")
     if not at_noise and far_apart:
+        why = (blocked[0] if len(blocked) == 1 and blocked[0].startswith("the residuals (RMS")
+               else f"the residuals (RMS {current.rms_mm * 1000:.1f} um) are explained only by "
+                    f"values no real robot has ({'; '.join(blocked)})")
         return "unexplained", (
-            f"The model and the data are far apart: the residuals (RMS "
-            f"{current.rms_mm * 1000:.1f} um) are explained only by values no real robot has "
-            f"({'; '.join(blocked)}). Likely causes: the measuring point is not given "
-            "(--tool X,Y,Z in the flange frame), the data are not in millimetres or not in the "
+            f"The model and the data are far apart: {why}. Likely causes: the measuring point "
+            "is not given (--tool X,Y,Z in the flange frame), the data are not in millimetres "
+            "or not in the "
             "robot's base frame, or the robot model (--robot) is not the robot measured.")
     if at_noise and not steps:
         return "noise", (f"The residuals (RMS {current.rms_mm * 1000:.1f} um) are consistent with "
