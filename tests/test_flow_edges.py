@@ -96,7 +96,30 @@ def test_a_label_after_an_unconditional_goto_is_reached():
 ENDMODULE""")
     plan, st = states(t)
     assert (5, "to") not in {(plan.by_key[k].line, k[2]) for k in plan.flow.before}
-    assert st[(7, "to")].confl == BOTH and st[(7, "to")].last is None
+    # The label holds what the GOTO brings: supervision as at the start.
+    assert st[(7, "to")].confl == ON and st[(7, "to")].pdisp == OFF
+
+
+def test_a_goto_back_to_a_label_brings_its_state_around():
+    """ConfL is on the first time round, off after the GOTO back: both at
+    the label's move; nothing in the task switches displacement on, so the
+    label invents none."""
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    VAR num n:=0;
+    PROC main()
+      again:
+        MoveL p1, v100, fine, tool0;
+        ConfL\\Off;
+        IF n > 0 GOTO again;
+        MoveL p1, v100, fine, tool0;
+        EXIT;
+    ENDPROC
+ENDMODULE""")
+    plan, st = states(t)
+    assert st[(6, "to")].confl == BOTH and st[(6, "to")].pdisp == OFF
+    assert {plan.by_key[k].line for k in st[(6, "to")].last if k != PROGRAM_START} == {6}
+    assert st[(9, "to")].confl == OFF
 
 
 def test_functions_called_in_expressions_are_followed():

@@ -35,10 +35,23 @@ def _write(files) -> None:
         _fail(RapidcompError(f"{where}: cannot write: {exc.strerror or exc}; nothing written"))
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Group(click.Group):
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except RecursionError:
+            # Nesting deeper than job.MAX_FRAMES Python frames: generated
+            # code of thousands of levels no controller runs either.
+            _fail(RapidcompError("the program nests routine calls or blocks thousands of "
+                                 "levels deep, more than rapidcomp follows; nothing written"))
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="rapidcomp")
 def main() -> None:
     """Thermal compensation of ABB RAPID programs (IRC5, IRB 140)."""
+    from .compensate.job import allow_deep_nesting
+    allow_deep_nesting()
 
 
 def _floats(count: int, what: str, limits=None):
@@ -258,6 +271,11 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
     several = len(programs) > 1
     if several and output is None:
         raise RapidcompError("several programs need -o DIR")
+    for option, value in (("-o", output), ("--report", report), ("--json", json_path)):
+        if value is not None and not value.strip():
+            raise RapidcompError(f"{option}: an empty path; give a file name")
+    if no_report and report:
+        raise RapidcompError("--no-report and --report: give one of them")
     for p in [profile] + list(with_modules):
         if not os.path.isfile(p):
             raise RapidcompError(f"{p}: no such file")

@@ -56,6 +56,15 @@ class Values:
             self._values[key] = self._robtarget_value(g, k)
         return self._values[key]
 
+    def _unsupervised(self, g: Group) -> bool:
+        """Every use of the group runs without configuration supervision
+        (once per group: an array group has a use per element)."""
+        key = ("unsupervised", id(g))
+        if key not in self._values:
+            s = self.solved
+            self._values[key] = all(s.picks[s.row[u.key]].kind == "closest" for u in g.uses)
+        return self._values[key]
+
     def _robtarget_value(self, g: Group, k):
         s = self.solved
         i = g.rows[k]
@@ -64,7 +73,7 @@ class Values:
         base = self.plan.resolver.world_M_base(src.record)
         target = wobj_target(base, g.wobj[1], flange, g.tool[1])
         written = np.array(src.record.conf)
-        if all(s.picks[s.row[u.key]].kind == "closest" for u in g.uses):
+        if self._unsupervised(g):
             conf = written       # supervision is off for every use: confdata is not read
         else:
             conf = np.array(s.conf_after[i])

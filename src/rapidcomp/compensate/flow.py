@@ -131,8 +131,13 @@ class _Frame:
     rt: _Routine
     stack: tuple
     floor: State | None = None
+    # Label name -> the states GOTOs brought there on the previous walk of
+    # the body (None: labels are not followed; a label is then entered in
+    # the unknown state).
+    labels: dict | None = None
     returns: list = field(default_factory=list)
     retries: list = field(default_factory=list)
+    gotos: dict = field(default_factory=dict)     # label name -> states of its GOTOs
     inside: State | None = None
 
     def absorb(self, st: State | None) -> None:
@@ -340,9 +345,19 @@ class _Walker:
                 self.walk(h.body, UNKNOWN, {}, _Frame(rt, stack))
         handlers = [h for h in rt.node.handlers if h.kind == "ERROR"]
         floor = None
+        labels: dict = {}
         for attempt in range(9):
-            frame = _Frame(rt, stack, floor)
+            frame = _Frame(rt, stack, floor, labels)
             out = self.walk(rt.node.body, state, {}, frame)
+            # A GOTO back to a label: the body again, until what the GOTOs
+            # bring to every label is already there.
+            grown = False
+            for name, states in frame.gotos.items():
+                got = join(labels.get(name), *states)
+                if got != labels.get(name):
+                    labels[name], grown = got, True
+            if attempt == 7 and grown:
+                labels = {name: replace(UNKNOWN, last=None) for name in labels}
             exit_state = join(out, *frame.returns)
             inside = frame.inside
             retries = []
@@ -363,6 +378,8 @@ class _Walker:
                     retries += eframe.retries
             retry = join(*retries)
             if retry is None:
+                if grown:
+                    continue
                 break
             # RETRY/TRYNEXT resume the body at (or after) the statement that
             # failed, in its state plus what the handler may have switched;
@@ -373,7 +390,7 @@ class _Walker:
             nxt = nxt if floor is None else floor.join(nxt)
             if attempt == 7:
                 nxt = replace(UNKNOWN, last=None)
-            if floor is not None and nxt == floor:
+            if floor is not None and nxt == floor and not grown:
                 break
             floor = nxt
         return exit_state, inside
@@ -384,7 +401,7 @@ class _Walker:
             if st is None:
                 if t is A.Simple and s.kind == "LABEL":
                     # Reached by a GOTO only.
-                    st = replace(UNKNOWN, last=None)
+                    st = self.label(s, None, frame)
                 continue
             if frame.floor is not None:
                 st = st.join(frame.floor)
@@ -423,12 +440,21 @@ class _Walker:
                 elif s.kind in ("RETRY", "TRYNEXT"):
                     frame.retries.append(st)
                     st = None
-                elif s.kind in ("EXIT", "RAISE", "GOTO"):
+                elif s.kind == "GOTO":
+                    frame.gotos.setdefault((s.name or "").lower(), []).append(st)
+                    st = None
+                elif s.kind in ("EXIT", "RAISE"):
                     st = None
                 elif s.kind == "LABEL":
-                    # A GOTO may jump here from anywhere in the routine.
-                    st = replace(st.join(UNKNOWN), last=None)
+                    st = self.label(s, st, frame)
         return st
+
+    def label(self, s: A.Simple, st: State | None, frame: _Frame) -> State | None:
+        """The state at a label: what falls through to it and what its
+        GOTOs bring (where labels are not followed: unknown)."""
+        if frame.labels is None:
+            return replace(UNKNOWN, last=None)
+        return join(st, frame.labels.get((s.name or "").lower()))
 
     def for_loop(self, s: A.For, st: State, env: dict, frame: _Frame) -> State | None:
         rt = frame.rt

@@ -8,6 +8,8 @@ Several tasks run in a process pool of two workers (the machine's cores).
 
 from __future__ import annotations
 
+import sys
+
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, replace
@@ -64,8 +66,22 @@ def output_path(spec: JobSpec, rel: str) -> Path:
     return Path(spec.output) / rel
 
 
+# Python frames the analyses may use: a routine call chain or a nesting of
+# IF/WHILE blocks takes a few each (real programs: tens of levels).
+MAX_FRAMES = 20_000
+
+
+def allow_deep_nesting() -> None:
+    """Programs nested hundreds of levels deep (generated code) are
+    followed, not a RecursionError (Python 3.11 calls between Python
+    functions need no C stack)."""
+    if sys.getrecursionlimit() < MAX_FRAMES:
+        sys.setrecursionlimit(MAX_FRAMES)
+
+
 def run(spec: JobSpec) -> JobOutcome:
     from .targets import parse_track
+    allow_deep_nesting()
     src = spec.source
     progress = Progress(src.name, spec.progress)
     progress.stage("parsing")

@@ -522,7 +522,19 @@ def _displacement_sensitivity(solver: Solver, q_deg: np.ndarray) -> np.ndarray:
     """
     q = np.asarray(q_deg, float) * DEG
     _, _, Jn = solver.nominal_chain.fk_jacobian(q)
-    qa = solver.joint_map.apply(q) if solver.joint_map is not None else q
+    jm = solver.joint_map
+    qa = jm.apply(q) if jm is not None else q
     _, _, Jd = solver.deformed_chain.fk_jacobian(qa)
+    if jm is not None:
+        # The warm robot answers the commanded joints through the joint
+        # map (offsets, scales, gravity compliance): J wrt the commands is
+        # Jd(qa) . d qa / d q (central differences; the map is smooth).
+        h = 1e-6
+        D = np.empty(q.shape + (q.shape[1],))
+        for j in range(q.shape[1]):
+            dq = np.zeros(q.shape[1])
+            dq[j] = h
+            D[:, :, j] = (jm.apply(q + dq) - jm.apply(q - dq)) / (2 * h)
+        Jd = Jd @ D
     M = Jn @ np.linalg.inv(Jd) - np.eye(6)
     return np.linalg.norm(M[:, :3, :3], ord=2, axis=(1, 2)) * 1000.0
