@@ -74,7 +74,10 @@ def render_text(result: CheckResult) -> str:
     for note in result.notes:
         out.append(f"note: {note}")
     if s["error_before_um"]:
-        out.append(f"predicted TCP error without compensation: max {s['error_before_um']['max']:.1f} um, "
-                   f"mean {s['error_before_um']['mean']:.1f} um -> after: max "
+        n = s["compensable"]
+        of = "" if n == s["target_uses"] else f" (the {n} compensable uses)"
+        out.append(f"predicted TCP error without compensation{of}: max "
+                   f"{s['error_before_um']['max']:.1f} um, mean "
+                   f"{s['error_before_um']['mean']:.1f} um -> after: max "
                    f"{s['residual_after_um']['max']:.1e} um")
     return "\n".join(out) + "\n"

@@ -16,6 +16,9 @@ def load_robot(robot: str | None, limits=()):
     from ..kinematics.robot import irb140, load_urdf, override_limits
     if robot is None or robot.lower() == "irb140":
         return override_limits(irb140(), limits)
+    if not os.path.isfile(robot):
+        raise RapidcompError(f"--robot {robot}: not a built-in robot (irb140) and no such URDF "
+                             "file")
     return override_limits(load_urdf(robot), limits)
 
 

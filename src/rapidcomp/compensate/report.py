@@ -39,7 +39,9 @@ def summary_lines(result: FixResult) -> list[str]:
     out += failure_lines([r for r in result.rows if r.status == "not compensated"], several)
     if s["error_before_um"]:
         b, a = s["error_before_um"], s["residual_after_um"]
-        out.append(f"predicted TCP error on the warm robot: max {b['max']:.1f} um, mean "
+        of = ("" if s["compensated"] == s["target_uses"]
+              else f" (the {s['compensated']} compensated uses; the others keep theirs)")
+        out.append(f"predicted TCP error on the warm robot{of}: max {b['max']:.1f} um, mean "
                    f"{b['mean']:.1f} um -> after: max {a['max']:.3f} um, mean {a['mean']:.3f} um")
     if several:
         out.append(f"{s['modules_changed']} of {len(result.modules)} modules changed")

@@ -244,7 +244,7 @@ class Resolver:
         if abs(norm - 1.0) > QUAT_TOLERANCE and not self.float32:
             line = pf.line(A.Span(offset, offset))
             self._notes.append(f"{what} ({pf.source.display_path}:{line}): quaternion norm "
-                               f"{norm:.6f}, not 1 (the controller expects a unit quaternion); "
+                               f"{norm:.7g}, not 1 (the controller expects a unit quaternion); "
                                "normalised")
         return q / norm if abs(norm - 1.0) > 1e-12 else q
 

@@ -143,8 +143,11 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
     seen: dict[str, tuple[int, str]] = {}
     disps, terms = [], []
     base, payload = ZERO, NO_PAYLOAD
+    if not body:
+        raise InputError(source, "no rows: a profile lists at least one joint, flange or base "
+                         "row (a row of zeros for a joint that does not move)")
     for line, row in body:
-        if len(row) < len(header):
+        if len(row) < len(header) or any(c.strip() for c in row[len(header):]):
             raise InputError(source, f"{len(row)} values, expected {len(header)}", line)
         name = row[index["joint"]].strip()
         key = allowed.get(name.lower())
@@ -203,21 +206,27 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
     return ThermalProfile(tuple(disps), source, base, tuple(terms), payload)
 
 
+def _amount(x: float) -> str:
+    """A number for a message: three decimals, or four digits when huge."""
+    return f"{x:.3f}" if abs(x) < 1e6 else f"{x:.4g}"
+
+
 def _check_size(source, line, key, d, r, extra) -> None:
     limit = MAX_FRAME_SHIFT_MM if key in ("base", "flange") else MAX_SHIFT_MM
     if math.hypot(*d) > limit:
-        raise InputError(source, f"{key} shift of {math.hypot(*d):.3f} mm exceeds "
+        raise InputError(source, f"{key} shift of {_amount(math.hypot(*d))} mm exceeds "
                          f"{limit} mm (thermal shifts are microns; use --force "
                          "if this is intended)", line)
     rot = max(abs(a) for a in (*r, extra["offset_deg"]))
     if rot > MAX_ROTATION_DEG:
-        raise InputError(source, f"{key} rotation of {rot} deg "
+        raise InputError(source, f"{key} rotation of {rot:.6g} deg "
                          f"exceeds {MAX_ROTATION_DEG} deg (use --force if intended)", line)
     if abs(extra["scale"]) > MAX_SCALE:
-        raise InputError(source, f"{key} scale of {extra['scale']} exceeds {MAX_SCALE} "
+        raise InputError(source, f"{key} scale of {extra['scale']:.6g} exceeds {MAX_SCALE} "
                          "(use --force if intended)", line)
     if extra["compliance_deg_per_nm"] > MAX_COMPLIANCE_DEG_PER_NM:
-        raise InputError(source, f"{key} compliance of {extra['compliance_deg_per_nm']} deg/N m "
+        raise InputError(source, f"{key} compliance of {extra['compliance_deg_per_nm']:.6g} "
+                         "deg/N m "
                          f"exceeds {MAX_COMPLIANCE_DEG_PER_NM} (use --force if intended)", line)
 
 

@@ -148,6 +148,7 @@ def override_limits(robot: RobotModel, specs) -> RobotModel:
         return robot
     lower, upper = list(robot.lower_deg), list(robot.upper_deg)
     names = [n.lower() for n in robot.joint_names]
+    given: dict[int, str] = {}
     for spec in specs:
         try:
             joint, rng = spec.split("=")
@@ -159,5 +160,9 @@ def override_limits(robot: RobotModel, specs) -> RobotModel:
         if not (math.isfinite(lo) and math.isfinite(hi) and -720 <= lo < hi <= 720):
             raise RapidcompError(f"--limit {spec}: expected LOWER < UPPER, finite degrees "
                                  "within -720..720")
+        if k in given:
+            raise RapidcompError(f"--limit {spec}: {robot.joint_names[k]} is limited twice "
+                                 f"(also --limit {given[k]})")
+        given[k] = spec
         lower[k], upper[k] = lo, hi
     return robot.with_limits(lower, upper)

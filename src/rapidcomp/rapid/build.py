@@ -37,10 +37,17 @@ class NumberOutOfRange(Exception):
         self.text = text
 
 
+# A hexadecimal, octal or binary literal is an integer; no RAPID numeric
+# type holds one beyond 2^52 (dnum's exact integers).
+MAX_BASED = 2 ** 52
+
+
 def number_value(text: str) -> float:
-    """Value of a RAPID num literal in any spelling the kernel allows."""
+    """Value of a RAPID num literal in any spelling the kernel allows
+    (infinite when no RAPID numeric type holds it)."""
     if len(text) > 2 and text[0] == "0" and text[1] in "xXoObB":
-        return float(int(text, 0))
+        value = int(text, 0)
+        return float(value) if value <= MAX_BASED else _INF
     return float(text)
 
 
