@@ -222,11 +222,12 @@ def test_cli_refuses_to_overwrite_the_input(tmp_path):
 
 def test_cli_several_modules_into_a_directory(tmp_path):
     out = tmp_path / "out"
-    r = _run(["fix", str(FIXTURES / "paper_front.mod"), str(FIXTURES / "rapid" / "robodk.mod"),
-              "--profile", WARM, "-o", str(out), "-q"])
+    r = _run(["fix", str(FIXTURES / "paper_front.mod"),
+              str(FIXTURES / "rapid" / "cam_confoff.mod"), "--profile", WARM, "-o", str(out),
+              "-q"])
     assert r.exit_code == 0, r.output
     assert sorted(p.name for p in out.iterdir()) == [
-        "paper_front.md", "paper_front.mod", "robodk.md", "robodk.mod"]
+        "cam_confoff.md", "cam_confoff.mod", "paper_front.md", "paper_front.mod"]
     single = _run(["fix", str(FIXTURES / "paper_front.mod"), "--profile", WARM,
                    "-o", str(tmp_path / "one.mod"), "-q"])
     assert single.exit_code == 0

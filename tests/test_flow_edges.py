@@ -383,3 +383,28 @@ ENDMODULE""", "M0.mod"),))
     assert [r.status for r in res.rows] == ["compensated"] * 2
     text = res.modules[0].text
     assert "[[0,0,0,0,0,0]," in text.replace(" ", "")
+
+
+def test_data_assigned_its_own_declared_value_is_that_value():
+    """RoboDK assigns the tool and work object their declared literal at the
+    top of the program (digits written differently): that changes nothing,
+    the moves compensate, and the report says so. Assigned another value,
+    the tool is a run-time value: untouched."""
+    decl = "[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0.005]]"
+    same = "[TRUE,[[0.000,0.000,150.000],[1.0000,0,0,0]],[2.000,[0,0,75],[1,0,0,0],0,0,0.005]]"
+    other = "[TRUE,[[0,0,120],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0.005]]"
+    for assigned, ok in ((same, True), (other, False)):
+        t = task(f"""MODULE A
+    PERS tooldata rdkTool:={decl};
+    PROC main()
+        rdkTool := {assigned};
+        MoveL {P1}, v100, fine, rdkTool;
+    ENDPROC
+ENDMODULE""")
+        (row,) = rows_of(t, "auto").values()
+        if ok:
+            assert row.status == "compensated"
+            assert any("rdkTool is assigned at run time (M0.mod:4), but only its own declared "
+                       "value" in w for w in row.warnings), row.warnings
+        else:
+            assert row.status == "untouched" and "rdkTool is assigned at run time" in row.reason

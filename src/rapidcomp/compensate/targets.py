@@ -32,7 +32,7 @@ from ..errors import RapidcompError
 from ..kinematics.frames import DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z
 from ..rapid import ast as A
 from ..rapid.model import Declaration, Module, Motion, ParsedFile
-from ..rapid.refs import names_in, usage
+from ..rapid.refs import literal_leaves, names_in, usage
 from ..rapid.writes import Writes, task_writes
 from ..rapid.values import DecodeIssue, JointTarget, Pose, RobTarget, ToolData, WobjData, decode
 
@@ -330,9 +330,26 @@ class Resolver:
         if d.storage == "CONST":
             return None
         why = self.writes.why(d.name)
+        same = self._assigned_itself(d)
+        if why is not None and same is not None:
+            self._notes.append(same)
+            why = self.writes.why(d.name, literal_ok=True)
         if why is None and d.storage == "PERS" and self.pers_anything is not None:
             why = f"{d.name} {self.pers_anything}"
         return why
+
+    def _assigned_itself(self, d: Declaration) -> str | None:
+        """A note when every write of d assigns it its own declared value
+        (which changes nothing), else None."""
+        assigns = self.writes.literal.get(d.name.lower())
+        if not assigns or d.node.init is None or d.routine is not None:
+            return None
+        mine = literal_leaves(d.node.init)
+        if mine is None or any(literal_leaves(a.value) != mine for _, a in assigns):
+            return None
+        where = ", ".join(f"{pf.source.display_path}:{pf.line(a.span)}" for pf, a in assigns[:3])
+        return (f"{d.name} is assigned at run time ({where}), but only its own declared "
+                "value: compensated with that value")
 
     def tool(self, expr, module, routine: str):
         """(key, tframe as (R, p)), or Unresolved."""

@@ -8,7 +8,7 @@ reference of the module, which this walk collects once.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 from . import ast as A
 from .motions import motion_spec
@@ -30,6 +30,7 @@ class Usage:
     writes: dict[str, list[A.Span]]       # lower-case name -> assignments / search results
     calls: tuple = ()                     # ProcCall/LateCall/Call: arguments may be written
                                           # (see writes.py)
+    assigns: dict = field(default_factory=dict)  # lower-case name -> whole-value Assigns
 
 
 def _nodes(root):
@@ -50,6 +51,7 @@ def _nodes(root):
 def usage(module: A.ModuleNode) -> Usage:
     refs: dict[str, list[A.Ref]] = {}
     writes: dict[str, list[A.Span]] = {}
+    assigns: dict[str, list[A.Assign]] = {}
     calls = []
     for node in _nodes(module.items):
         t = type(node)
@@ -57,6 +59,8 @@ def usage(module: A.ModuleNode) -> Usage:
             refs.setdefault(node.name.lower(), []).append(node)
         elif t is A.Assign:
             writes.setdefault(node.target.name.lower(), []).append(node.span)
+            if not node.target.selectors:
+                assigns.setdefault(node.target.name.lower(), []).append(node)
         elif t is A.ProcCall:
             spec = motion_spec(node.name)
             positional = [a for a in node.args if a.kind in ("pos", "named")]
@@ -69,12 +73,32 @@ def usage(module: A.ModuleNode) -> Usage:
             calls.append(node)
         elif t is A.LateCall or t is A.Call:
             calls.append(node)
-    return Usage(refs, writes, tuple(calls))
+    return Usage(refs, writes, tuple(calls), assigns)
 
 
 def calls_in(expr):
     """The function calls in an expression (nested ones too)."""
     return [node for node in _nodes(expr) if type(node) is A.Call]
+
+
+def literal_leaves(expr) -> tuple | None:
+    """The values of a literal aggregate in order (numbers, strings,
+    booleans), or None when it holds anything but literals: two literals
+    with equal leaves are the same value however their digits are written."""
+    out = []
+    stack = [expr]
+    while stack:
+        node = stack.pop()
+        t = type(node)
+        if t is A.Agg or t is A.NumAgg:
+            stack.extend(reversed(node.items))
+        elif t is A.Num or t is A.Str or t is A.Bool:
+            out.append(node.value)
+        elif t is A.Unary and node.op == "-" and type(node.operand) is A.Num:
+            out.append(-node.operand.value)
+        else:
+            return None
+    return tuple(out)
 
 
 def names_in(expr) -> set[str]:

@@ -12,7 +12,7 @@ time, SetDataVal/SetAllDataVal may change anything.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from . import ast as A
 from .model import ParsedFile, RoutineTable
@@ -34,10 +34,18 @@ WRITING_BUILTINS = {
 class Writes:
     by_name: dict            # lower-case name -> (ParsedFile, Span, how it is written)
     anything: tuple | None   # (ParsedFile, Span, instruction) writing a name computed at run time
+    # Names written only by assigning a whole literal: name -> [(ParsedFile,
+    # Assign)] (RoboDK posts assign a tool or work object its own declared
+    # value at the top of every program: that changes nothing).
+    literal: dict = field(default_factory=dict)
 
-    def why(self, name: str) -> str | None:
-        """Why data of this name may change at run time, or None."""
+    def why(self, name: str, literal_ok: bool = False) -> str | None:
+        """Why data of this name may change at run time, or None
+        (literal_ok: its whole-literal assignments are known to change
+        nothing)."""
         hit = self.by_name.get(name.lower())
+        if literal_ok and name.lower() in self.literal:
+            hit = None
         if hit is not None:
             pf, span, how = hit
             return f"{name} is {how} at run time ({pf.source.display_path}:{pf.line(span)})"
@@ -57,6 +65,13 @@ def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
                 routines.add(m, r, r.node)
     by_name: dict = {}
     anything = None
+    literal: dict = {}
+    other: set = set()          # names written other than by a whole literal
+
+    def written(name: str, pf, span, how: str) -> None:
+        by_name.setdefault(name, (pf, span, how))
+        other.add(name)
+
     for pf in files:
         for m in pf.modules:
             us: Usage | None = usages.get(id(m))
@@ -64,39 +79,44 @@ def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
                 continue
             for name, spans in us.writes.items():
                 by_name.setdefault(name, (pf, spans[0], "assigned"))
+                whole = [a for a in us.assigns.get(name, ())
+                         if type(a.value) in (A.Agg, A.NumAgg)]
+                if len(whole) == len(spans):
+                    literal.setdefault(name, []).extend((pf, a) for a in whole)
+                else:
+                    other.add(name)
             for call in us.calls:
                 if isinstance(call, A.LateCall):
-                    _args_written(by_name, pf, call.args, None, "passed to a late-bound call")
+                    _args_written(written, pf, call.args, None, "passed to a late-bound call")
                     continue
                 name = call.name.lower()
                 if name in ("setdataval", "setalldataval"):
                     first = next((a for a in call.args if a.kind == "pos"), None)
                     if name == "setdataval" and first is not None and isinstance(
                             first.value, A.Str):
-                        by_name.setdefault(first.value.value.lower(),
-                                           (pf, call.span, "set by SetDataVal"))
+                        written(first.value.value.lower(), pf, call.span, "set by SetDataVal")
                     elif anything is None:
                         anything = (pf, call.span, call.name)
                     continue
                 node = routines.find(m, name)
                 if node is not None:
-                    _args_written(by_name, pf, call.args, node.params,
+                    _args_written(written, pf, call.args, node.params,
                                   f"passed to {node.name}, which may change it")
                 elif name in WRITING_BUILTINS:
                     positional = [a for a in call.args if a.kind in ("pos", "named")]
                     for k in WRITING_BUILTINS[name]:
                         if k < len(positional) and isinstance(positional[k].value, A.Ref):
-                            by_name.setdefault(positional[k].value.name.lower(),
-                                               (pf, positional[k].span, f"filled by {call.name}"))
+                            written(positional[k].value.name.lower(), pf, positional[k].span,
+                                    f"filled by {call.name}")
                 elif name not in BUILTIN_INSTRUCTIONS and name not in BUILTIN_FUNCTIONS:
                     kind = "function " if isinstance(call, A.Call) else ""
-                    _args_written(by_name, pf, call.args, None,
+                    _args_written(written, pf, call.args, None,
                                   f"passed to {kind}{call.name}, which no given module "
                                   "declares (it may change it)")
-    return Writes(by_name, anything)
+    return Writes(by_name, anything, {n: v for n, v in literal.items() if n not in other})
 
 
-def _args_written(by_name: dict, pf, args, params, how: str) -> None:
+def _args_written(written, pf, args, params, how: str) -> None:
     required = [p for p in params if not p.optional] if params is not None else None
     k = 0
     for a in args:
@@ -105,14 +125,14 @@ def _args_written(by_name: dict, pf, args, params, how: str) -> None:
                 k += 1
             continue
         if params is None:
-            written = True
+            is_written = True
         elif a.kind == "pos":
             p = required[k] if k < len(required) else None
-            written = p is not None and p.access in ("INOUT", "VAR", "PERS")
+            is_written = p is not None and p.access in ("INOUT", "VAR", "PERS")
         else:
             p = next((p for p in params if p.name.lower() == (a.name or "").lower()), None)
-            written = p is not None and p.access in ("INOUT", "VAR", "PERS")
+            is_written = p is not None and p.access in ("INOUT", "VAR", "PERS")
         if a.kind == "pos":
             k += 1
-        if written:
-            by_name.setdefault(a.value.name.lower(), (pf, a.span, how))
+        if is_written:
+            written(a.value.name.lower(), pf, a.span, how)
