@@ -207,3 +207,13 @@ def test_moc_values_no_cell_has_are_bad_input(tmp_path):
             f"MOC:CFG_1.0:6:0::\n#\nROBOT:\n\n      -name \"ROB_1\" {bad}\n")
         r = run("check", bk, "--profile", WARM, "--track", "a:x")
         assert r.exit_code == 2 and "SYSPAR/MOC.cfg" in r.output and says in r.output, r.output
+
+
+def test_a_compensated_program_is_recognised(tmp_path):
+    """Compensating rapidcomp's own output adds the correction twice: the
+    names it gives its values (jt_..., ..._c) are recognised and said."""
+    out = tmp_path / "out"
+    assert run("fix", TASKS / "cell", "--profile", WARM, "-o", out, "-q").exit_code == 0
+    r = run("check", out, "--profile", WARM)
+    assert "looks compensated already (jt_pGlue_1, jt_pPlace_offs are the names" in r.output
+    assert "looks compensated" not in run("check", TASKS / "cell", "--profile", WARM).output

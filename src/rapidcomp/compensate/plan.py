@@ -54,6 +54,27 @@ class Plan:
         self.file_index = {id(pf): i for i, pf in enumerate(self.files)}
         self.flow: Flow = analyse(self.files, self.n_written, self.resolver, bool(track))
 
+    def _compensated_before(self) -> list[str]:
+        """Declarations named as rapidcomp names its new values (jt_<name> for
+        a robtarget's jointtarget, <name>_c for a robtarget copy) next to
+        the target they come from."""
+        decls = [d for pf in self.task.files for m in pf.modules for d in m.declarations]
+        rob = {d.name.lower() for d in decls if d.type == "robtarget"}
+
+        def from_robtarget(rest: str) -> bool:
+            # pA, pA_offs, pA_2: the robtarget's name, then suffixes.
+            parts = rest.split("_")
+            return any("_".join(parts[:k]) in rob for k in range(1, len(parts) + 1))
+
+        out = []
+        for d in decls:
+            name = d.name.lower()
+            head, _, tail = name.rpartition("_c")
+            if (d.type == "jointtarget" and name.startswith("jt_") and from_robtarget(name[3:])) \
+                    or (d.type == "robtarget" and head in rob and (tail == "" or tail.isdigit())):
+                out.append(d.name)
+        return sorted(out)
+
     def state(self, u: TargetUse) -> State:
         """The motion state before a use (where the flow never reached it:
         as entered from outside)."""
@@ -77,6 +98,12 @@ class Plan:
 
     def notes(self) -> list[str]:
         out = list(self.flow.notes)
+        again = self._compensated_before()
+        if again:
+            out.append("this program looks compensated already (" + ", ".join(again[:3])
+                       + (", ..." if len(again) > 3 else "") + " are the names rapidcomp gives "
+                       "its values): compensating it again adds the correction twice; "
+                       "compensate the original program")
         if self.task.base_moved_by and not self.track:
             out.append(f"SYSPAR/MOC.cfg says {self.task.base_moved_by} moves the robot's base: "
                        "robtarget moves are not compensated until --track AXIS:x|y|z names "
