@@ -199,3 +199,64 @@ def test_an_approach_column_gives_the_directions(tmp_path):
     m.write_text("\n".join(rows[:3] + [rows[3].rsplit(",", 1)[0] + ",+-x+++"] + rows[4:]) + "\n")
     r = _cli("discover", m, "--sigma", "0.005")
     assert r.exit_code == 2 and "m.csv:4: approach is '+-x+++'" in r.output
+
+
+def _write_measured(path, names, q, xyz, tool=None):
+    head = "point,j1,j2,j3,j4,j5,j6,x,y,z" + (",tx,ty,tz" if tool is not None else "")
+    rows = [head]
+    for i, name in enumerate(names):
+        cells = [name, *(f"{v:.6f}" for v in q[i]), *(f"{v:.6f}" for v in xyz[i])]
+        if tool is not None:
+            cells += [f"{v:g}" for v in tool[i]]
+        rows.append(",".join(cells))
+    path.write_text("\n".join(rows) + "\n")
+
+
+def test_two_reflectors_per_pose_are_rows_with_their_own_point(tmp_path):
+    """Each pose measured at two reflectors (150 mm along z, and 60 mm off
+    it): a row each, with tx, ty, tz. A J6 offset, which a reflector on the
+    J6 axis cannot see, is named from the off-axis one; the rows of one pose
+    are not replicates (their scatter is not the noise)."""
+    names, q = random_points(ROBOT, 60, 8)
+    tools = np.array([[0.0, 0.0, 150.0], [60.0, 0.0, 120.0]])
+    values = parse_effect_values(CAT, ["joint_offset:J6=0.05"])
+    rows_q = np.repeat(q, 2, axis=0)
+    rows_t = np.tile(tools, (len(q), 1))
+    xyz = np.vstack([simulate_positions(ROBOT, WARM, values, q[i:i + 1].repeat(2, 0), tools)
+                     for i in range(len(q))])
+    xyz = add_noise(xyz, SIGMA, 9)
+    rows_n = [f"{n}{s}" for n in names for s in "ab"]
+    m = tmp_path / "m.csv"
+    _write_measured(m, rows_n, rows_q, xyz, rows_t)
+    r = _cli("discover", m, "--profile", FIXTURES / "warm.csv", "--json", tmp_path / "d.json")
+    assert r.exit_code == 0, r.output
+    doc = json.loads((tmp_path / "d.json").read_text())
+    assert [s["effect"] for s in doc["steps"]] == ["joint_offset:J6"]
+    assert doc["sigma_source"].startswith("estimated")      # not "replicates"
+    r = _cli("discover", m, "--profile", FIXTURES / "warm.csv", "--tool", "0,0,150")
+    assert r.exit_code == 2 and "give it once" in r.output
+
+
+def test_data_in_the_trackers_frame_are_registered_first(tmp_path):
+    """The same measurements turned 30 deg about z and moved 2 m (the
+    tracker's frame): far apart as they are; with --register the same
+    effect is named as in the base frame (with base_frame for what the
+    rigid registration took of it)."""
+    names, q = random_points(ROBOT, 80, 1)
+    xyz = _measure(q, ["link_elongation:J2-J3=0.0003"], 2)
+    c, s_ = np.cos(np.radians(30)), np.sin(np.radians(30))
+    R = np.array([[c, -s_, 0], [s_, c, 0], [0, 0, 1]])
+    m = tmp_path / "m.csv"
+    _write_measured(m, names, q, xyz @ R.T + np.array([2000.0, -500.0, 300.0]))
+    prof = ("--profile", FIXTURES / "warm.csv", "--sigma", "0.005")
+    r = _cli("discover", m, *prof)
+    assert "far apart" in r.output
+    r = _cli("discover", m, *prof, "--register", "--json", tmp_path / "d.json")
+    assert r.exit_code == 0, r.output
+    assert "m.csv registered onto the nominal model: turned 30 deg" in r.output
+    doc = json.loads((tmp_path / "d.json").read_text())
+    # The registration takes the rigid share of the elongation's signal;
+    # base_frame gives it back.
+    assert {s["effect"] for s in doc["steps"]} <= {"link_elongation:J2-J3", "base_frame"}
+    assert "link_elongation:J2-J3" in {s["effect"] for s in doc["steps"]}
+    assert doc["verdict"] == "explained"

@@ -412,9 +412,12 @@ def _write_outcome(outcome, quiet: bool) -> None:
 @click.option("--test", "test_path", default=None, type=click.Path(dir_okay=False),
               help="Poses measured but not fitted (same columns): the final model's error "
                    "there, next to the nominal model's.")
+@click.option("--register", is_flag=True,
+              help="The data are in the measuring system's own frame: move them rigidly onto "
+                   "the nominal model first (base_frame then finds what is left).")
 @click.option("-q", "--quiet", is_flag=True, help="No summary on stdout.")
 def discover(measured, profile, robot, tool, payload, force, sigma, report_path, json_path,
-             plot_path, out_profile, test_path, quiet) -> None:
+             plot_path, out_profile, test_path, register, quiet) -> None:
     """Compare MEASURED positions with the model, name the effects it misses.
 
     MEASURED.csv has columns point,j1..j6,x,y,z: commanded joints (deg) and
@@ -423,7 +426,8 @@ def discover(measured, profile, robot, tool, payload, force, sigma, report_path,
     from .discover.job import run_discover
     try:
         outcome = run_discover(measured, profile, robot, tool, payload, sigma, report_path,
-                               json_path, plot_path, out_profile, force, test_path)
+                               json_path, plot_path, out_profile, force, test_path,
+                               register)
     except RapidcompError as exc:
         _fail(exc)
     _write_outcome(outcome, quiet)

@@ -67,7 +67,8 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                  tool=(0.0, 0.0, 0.0), payload=None, sigma: float | None = None,
                  report_path: str | None = None, json_path: str | None = None,
                  plot_path: str | None = None, out_profile: str | None = None,
-                 force: bool = False, test: str | None = None) -> Outcome:
+                 force: bool = False, test: str | None = None,
+                 register: bool = False) -> Outcome:
     outputs = [p for p in (report_path, json_path, plot_path, out_profile) if p]
     _check_outputs(outputs, [measured, profile, robot, test])
     if sigma is not None and not sigma > 0:
@@ -80,13 +81,24 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                              f"discover needs at least {MIN_DISTINCT_POSES} different poses "
                              "(a base frame alone has 6 parameters)")
     test_data = read_measured(test, min_points=1) if test else None
-    model = ParamModel(nominal, prof, data.q_deg, tool, approach=data.approach)
+    for d_ in (data, test_data):
+        if d_ is not None and d_.tool is not None and any(tool):
+            raise RapidcompError(f"{d_.source}: the measuring point is given per row (tx, ty, "
+                                 "tz) and by --tool; give it once")
+    notes = []
+    if register:
+        data, text = registered(nominal, prof, data, tool)
+        notes.append(text)
+        if test_data is not None:
+            test_data, text = registered(nominal, prof, test_data, tool)
+            notes.append("test " + text)
+    model = ParamModel(nominal, prof, data.q_deg, _tool(data, tool), approach=data.approach)
     effects = catalogue(nominal)
     d = discover(model, data, effects, sigma)
-    heldout = (held_out(ParamModel(nominal, prof, test_data.q_deg, tool,
+    heldout = (held_out(ParamModel(nominal, prof, test_data.q_deg, _tool(test_data, tool),
                                    approach=test_data.approach), test_data,
                         d.final_fit) if test_data is not None else None)
-    notes = _beyond_limits(data, nominal) + list(d.notes)
+    notes += _beyond_limits(data, nominal) + list(d.notes)
     if test_data is not None:
         notes += [f"test {n}" for n in _beyond_limits(test_data, nominal)]
     if data.ignored_columns:
@@ -95,7 +107,10 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
     meta = {"measured": Path(measured).name,
             "model": (f"{Path(robot).name if robot else 'irb140'} + "
                       f"{Path(profile).name if profile else 'no profile'}"),
-            "measuring point": f"({', '.join(f'{x:g}' for x in tool)}) mm in the flange frame",
+            "measuring point": (f"({', '.join(f'{x:g}' for x in tool)}) mm in the flange frame"
+                                if data.tool is None else
+                                f"per row (tx, ty, tz): {len(np.unique(data.tool, axis=0))} "
+                                "different points"),
             "payload": _payload_text(prof.payload)}
     files = []
     plot_note = None
@@ -142,6 +157,33 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
         text = _loadable_profile(nominal, prof, kept, comments, Path(out_profile).name, notes)
         files.append((out_profile, text.encode("utf-8")))
     return Outcome(tuple(report.summary_lines(d, heldout)), tuple(notes), tuple(files), d)
+
+
+def _tool(data, tool) -> np.ndarray:
+    """The measuring point of every row: the data's own, else --tool."""
+    return data.tool if data.tool is not None else np.asarray(tool, float)
+
+
+def registered(nominal, prof, data, tool):
+    """Data measured in the tracker's own frame, moved rigidly onto the
+    nominal model's positions (least squares, Kabsch): (the data in the
+    robot's base frame, what was done). The base_frame effect then finds
+    what is left of the registration."""
+    model = ParamModel(nominal, prof, data.q_deg, _tool(data, tool), approach=data.approach)
+    target, _ = model.evaluate((), (), jacobian=False)
+    src = data.xyz_mm
+    a0, b0 = src.mean(axis=0), target.mean(axis=0)
+    U, _, Vt = np.linalg.svd((src - a0).T @ (target - b0))
+    d = np.sign(np.linalg.det(Vt.T @ U.T))
+    R = Vt.T @ np.diag([1.0, 1.0, d]) @ U.T
+    t = b0 - R @ a0
+    moved = src @ R.T + t
+    angle = np.degrees(np.arccos(np.clip((np.trace(R) - 1) / 2, -1.0, 1.0)))
+    rms = float(np.sqrt(np.mean(np.sum((moved - target) ** 2, axis=1))))
+    text = (f"{Path(data.source).name} registered onto the nominal model: turned {angle:.4g} "
+            f"deg, moved ({', '.join(f'{v:.4g}' for v in t)}) mm; {rms * 1000:.1f} um RMS "
+            "left for discover")
+    return replace(data, xyz_mm=moved), text
 
 
 def _row_of(e, names) -> str:

@@ -1,9 +1,11 @@
-"""Measured-data files: `point,j1,j2,j3,j4,j5,j6,x,y,z[,approach]`.
+"""Measured-data files: `point,j1,j2,j3,j4,j5,j6,x,y,z[,approach][,tx,ty,tz]`.
 
 Joints are the commanded angles (deg), x/y/z the measured position (mm, robot
 base frame) of the measuring point; rows in the order they were measured
 (each joint's direction of approach, for backlash, comes from that order
-unless an `approach` column gives it). Lines starting with '#' are comments
+unless an `approach` column gives it); `tx,ty,tz` give each row's measuring
+point in the flange frame (several reflectors per pose: a row each, the
+same joints). Lines starting with '#' are comments
 (simulate writes its provenance there); extra columns are ignored and
 reported; any bad row is a path:line error.
 """
@@ -23,6 +25,7 @@ JOINT_COLUMNS = ("j1", "j2", "j3", "j4", "j5", "j6")
 COLUMNS = ("point",) + JOINT_COLUMNS + ("x", "y", "z")
 MIN_POINTS = 3
 APPROACH = "approach"
+TOOL_COLUMNS = ("tx", "ty", "tz")
 # Values no measurement of a robot has: a joint beyond two turns, a
 # position beyond 100 m (wrong units, a corrupt row).
 MAX_JOINT_DEG = 720.0
@@ -40,6 +43,9 @@ class Measurements:
     # Per pose and joint, the direction it approached the pose from (+1, -1,
     # 0 not known), from an `approach` column; None: from the measuring order.
     approach: np.ndarray | None = None
+    # Per row, the measuring point in the flange frame (mm), from `tx,ty,tz`
+    # columns (several reflectors: a row each); None: --tool for all.
+    tool: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.names)
@@ -103,7 +109,18 @@ def parse_measured(text: str, source: str, min_points: int = MIN_POINTS) -> Meas
     if APPROACH in ignored:
         ignored = tuple(c for c in ignored if c != APPROACH)
         approach = _approach(text, source)
-    return Measurements(source, names, values[:, :6], values[:, 6:], lines, ignored, approach)
+    tool = None
+    given = [c for c in TOOL_COLUMNS if c in ignored]
+    if given:
+        if len(given) < len(TOOL_COLUMNS):
+            raise InputError(source, f"column(s) {', '.join(given)} without "
+                             f"{', '.join(c for c in TOOL_COLUMNS if c not in given)}: the "
+                             "measuring point of a row takes tx, ty and tz (mm, flange frame)")
+        ignored = tuple(c for c in ignored if c not in TOOL_COLUMNS)
+        _, tool, _, _ = parse_table(text, source, ("point",) + COLUMNS[1:] + TOOL_COLUMNS,
+                                    TOOL_COLUMNS, min_points)
+    return Measurements(source, names, values[:, :6], values[:, 6:], lines, ignored, approach,
+                        tool)
 
 
 def _approach(text: str, source: str) -> np.ndarray:

@@ -61,7 +61,9 @@ class ParamModel:
         jm = deformed.joint_map
         self.q0 = jm.apply(self.q_cmd) if jm is not None else self.q_cmd.copy()
         self.tau_nm = GravityModel.from_robot(robot, profile.payload).torques_nm(self.q_cmd)
-        self.tool = np.asarray(tool_mm, float)
+        # The measuring point in the flange frame, per pose (several
+        # reflectors: one row each).
+        self.tool = np.array(np.broadcast_to(np.asarray(tool_mm, float), (len(self.q_cmd), 3)))
         self.n = len(self.chain.trans)
         # Each joint's last direction of motion before each pose (backlash).
         self.direction = (np.asarray(approach, float) if approach is not None
@@ -76,6 +78,7 @@ class ParamModel:
         out = copy.copy(self)
         out.q_cmd, out.q0, out.tau_nm = self.q_cmd[rows], self.q0[rows], self.tau_nm[rows]
         out.direction = self.direction[rows]
+        out.tool = self.tool[rows]
         return out
 
     def evaluate(self, effects: tuple[Effect, ...], values, jacobian: bool = True):
@@ -124,7 +127,8 @@ class ParamModel:
             R = Wt @ rot_axis(c.axes[k], q[:, k])
         last = R
         Rf = R @ c.flange_rot
-        P = p + R @ (c.flange_trans + eps[n] * self.nominal.flange_trans) + Rf @ tool
+        P = (p + R @ (c.flange_trans + eps[n] * self.nominal.flange_trans)
+             + (Rf @ tool[..., None])[..., 0])
         Rx, Ry, Rz = rot_x(T_ang[0]), rot_y(T_ang[1]), rot_z(T_ang[2])
         TR = Rz @ Ry @ Rx
         X = P @ TR.T + T_d

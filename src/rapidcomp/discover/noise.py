@@ -49,19 +49,22 @@ class Structure:
     share: float      # of the residual sum of squares predicted out of sample
 
 
-def replicate_groups(q_deg: np.ndarray) -> list[np.ndarray]:
-    """Row indices of the poses measured more than once."""
+def replicate_groups(q_deg: np.ndarray, tool_mm: np.ndarray | None = None) -> list[np.ndarray]:
+    """Row indices of the poses measured more than once (at the same
+    measuring point: two reflectors on one pose are not a replicate)."""
     keys = np.round(np.asarray(q_deg, float) / SAME_POSE_DEG).astype(np.int64)
+    if tool_mm is not None:
+        keys = np.hstack([keys, np.round(np.asarray(tool_mm, float) / 1e-6).astype(np.int64)])
     _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
     inverse = inverse.ravel()
     return [np.flatnonzero(inverse == g) for g in np.flatnonzero(counts > 1)]
 
 
 def noise(sigma_mm: float | None, q_deg: np.ndarray, xyz_mm: np.ndarray,
-          full: CatalogueFit) -> Noise:
+          full: CatalogueFit, tool_mm: np.ndarray | None = None) -> Noise:
     if sigma_mm is not None:
         return Noise(float(sigma_mm), "given (--sigma)", "given")
-    groups = replicate_groups(q_deg)
+    groups = replicate_groups(q_deg, tool_mm)
     dof = 3 * sum(len(g) - 1 for g in groups)
     if dof >= MIN_NOISE_DOF:
         ss = sum(float(np.sum((xyz_mm[g] - xyz_mm[g].mean(axis=0)) ** 2)) for g in groups)

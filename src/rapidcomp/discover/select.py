@@ -415,7 +415,7 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
                             data.ignored_columns)
     n = 3 * len(data)
     meas = data.xyz_mm
-    nz = noise(sigma_mm, data.q_deg, meas, screened.full)
+    nz = noise(sigma_mm, data.q_deg, meas, screened.full, model.tool)
     sigma, source = nz.sigma_mm, nz.source
     sel = _Selector(model, meas, effects, sigma)
     start = sel.fit(())

@@ -63,7 +63,8 @@ def parse_effect_values(effects, specs, force: bool = False) -> dict[Effect, np.
 
 def simulate_positions(robot: RobotModel, profile: ThermalProfile, values, q_deg: np.ndarray,
                        tool_mm, payload: Payload | None = None) -> np.ndarray:
-    """Measuring point positions (N, 3) of the model robot + profile + effects,
+    """Measuring point positions (N, 3) of the model robot + profile + effects
+    (tool_mm: the measuring point in the flange frame, one or one per pose),
     the poses measured in the order given (backlash: each joint lags half
     of it behind the direction it last moved)."""
     if payload is not None:
@@ -78,11 +79,11 @@ def simulate_positions(robot: RobotModel, profile: ThermalProfile, values, q_deg
         q = q.copy()
         for k, b in lash:
             q[:, k] += 0.5 * b * _last_direction(np.asarray(q_deg, float)[:, k])
-    tool = np.asarray(tool_mm, float)
+    tool = np.broadcast_to(np.asarray(tool_mm, float), (len(q), 3))   # one per pose
     out = np.empty((len(q), 3))
     for i, qi in enumerate(q):
         pin.framesForwardKinematics(model.model, data, qi)
-        out[i] = data.oMf[model.flange_frame].act(tool)
+        out[i] = data.oMf[model.flange_frame].act(tool[i])
     return out
 
 
