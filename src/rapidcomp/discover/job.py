@@ -12,6 +12,7 @@ import numpy as np
 
 from ..errors import InputError, RapidcompError
 from ..kinematics.gravity import Payload
+from ..progress import Progress
 from ..kinematics.profile import ThermalProfile, format_profile, parse_profile, read_profile
 from . import plot, report
 from .effects import catalogue, to_profile
@@ -94,7 +95,9 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
             notes.append("test " + text)
     model = ParamModel(nominal, prof, data.q_deg, _tool(data, tool), approach=data.approach)
     effects = catalogue(nominal)
-    d = discover(model, data, effects, sigma)
+    progress = Progress(Path(measured).name)
+    d = discover(model, data, effects, sigma, progress.stage)
+    progress.done()
     heldout = (held_out(ParamModel(nominal, prof, test_data.q_deg, _tool(test_data, tool),
                                    approach=test_data.approach), test_data,
                         d.final_fit) if test_data is not None else None)

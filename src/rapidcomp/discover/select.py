@@ -405,7 +405,11 @@ class _Selector:
 
 
 def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
-             sigma_mm: float | None = None) -> Discovery:
+             sigma_mm: float | None = None, progress=None) -> Discovery:
+    """progress: called with a short text at each stage (stderr on a
+    terminal, job.py)."""
+    say = progress or (lambda text: None)
+    say("gross errors")
     screened = screen(model, data, effects)
     if screened.outliers:
         rows = screened.rows
@@ -432,6 +436,7 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
                    f"real robot has could explain (at most ~{FAR_APART_MM:g} mm at the "
                    "measuring point, a base frame registered 50 mm and 5 deg off included)"]
     while not far_apart and _noise_p(current, sigma, n) < 1 - NOISE_QUANTILE:
+        say(f"step {len(current.effects) + 1}: fitting {len(effects)} candidates")
         scored = sel.score(current)
         # A fit that would take away most of what is left, with values no
         # robot has: the data and the model are far apart, and whatever
@@ -454,7 +459,9 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
         current = sel.simplify(chosen.fit, swapped)
     if _noise_p(current, sigma, n) >= 1 - NOISE_QUANTILE:
         # Only a model that explains the data is worth making smaller.
+        say("looking for a smaller equivalent model")
         current = sel.exchange_two(current, swapped)
+    say("report")
     sel.score(start)   # the not-identifiable list is made on the first scoring (cached)
     steps, current = sel.replay(start, current.effects, swapped)
     noise_p = _noise_p(current, sigma, n)
