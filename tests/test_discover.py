@@ -72,6 +72,8 @@ def test_hidden_effect_is_named_first_and_the_rest_is_noise(kind, points):
         # the others as alternatives, and the report says so.
         assert hidden in (step.effect.id,) + step.alternatives
         assert "cannot tell" in step.note
+        # Other poses (the flange turned) do separate them: the advice says so.
+        assert "Measure poses that separate them" in step.note
     else:
         assert step.effect.id == hidden
     assert len(d.steps) == 1
@@ -131,10 +133,10 @@ def test_equivalent_effects_prefer_fewer_parameters():
 
 
 def test_effect_outside_the_catalogue_is_unexplained():
-    """A cyclic gear error on J2 (0.01 deg at three cycles per turn) is no
-    catalogue effect: with the noise known, the verdict says so."""
+    """A cyclic gear error on J2 (0.01 deg at six cycles per turn; the
+    catalogue's cyclic effects have 2-4) is no catalogue effect: with the noise known, the verdict says so."""
     model, data, _ = _data("random", [], q_shift=lambda q: np.stack(
-        [np.zeros(len(q)), 0.01 * np.sin(3 * np.radians(q[:, 1])) / 1.0,
+        [np.zeros(len(q)), 0.01 * np.sin(6 * np.radians(q[:, 1])),
          *[np.zeros(len(q))] * 4], axis=1) * 1.0)
     d = discover(model, data, CAT, SIGMA)
     assert d.verdict == "unexplained"
@@ -370,3 +372,17 @@ def test_data_in_metres_name_nothing_and_write_no_profile(tmp_path):
     assert doc["verdict"] == "unexplained" and doc["steps"] == []
     assert "far apart" in r.output and "not in millimetres" in r.output
     assert "p.csv not written" in r.output and not p.exists()
+
+
+def test_separable_tells_effects_some_pose_separates_from_the_same_effect():
+    """A J2 offset and a J2 scale differ on poses over the workspace; an
+    effect and itself (or a tool shift along the flange axis and the
+    J6-flange elongation with the point on that axis) do not."""
+    from rapidcomp.discover.select import _Selector
+    model, data, _ = _data("cube", [])
+    sel = _Selector(model, data.xyz_mm, CAT, SIGMA)
+    by = {e.id: e for e in CAT}
+    assert sel.separable((), by["joint_offset:J2"], by["joint_scale:J2"])
+    assert not sel.separable((), by["joint_offset:J2"], by["joint_offset:J2"])
+    assert not sel.separable((by["tool_offset"],), by["joint_offset:J3"], by["joint_offset:J3"])
+

@@ -39,7 +39,9 @@ def test_catalogue_ids_for_the_irb140():
     assert [i for i in ids if i.startswith("link_elongation")] == [
         "link_elongation:J1-J2", "link_elongation:J2-J3", "link_elongation:J4-J5",
         "link_elongation:J6-flange"]
-    assert sum(e.size for e in CAT) == 6 + 3 + 6 + 6 + 6 + 4 + 12 + 18 + 6
+    assert sum(e.size for e in CAT) == 6 + 3 + 6 + 6 + 6 + 4 + 12 + 18 + 6 + 36
+    assert [i for i in ids if i.startswith("cyclic:J2")] == ["cyclic:J2:2", "cyclic:J2:3",
+                                                             "cyclic:J2:4"]
     assert [i for i in ids if i.startswith("backlash")] == [f"backlash:J{k}" for k in range(1, 7)]
     assert find(CAT, "axis_tilt:J2").params == ("rx_deg", "rz_deg")    # J2 turns about y
     assert find(CAT, "axis_tilt:J1").params == ("rx_deg", "ry_deg")

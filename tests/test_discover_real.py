@@ -52,15 +52,16 @@ def test_a_gross_error_is_reported_left_out_and_drives_nothing():
 
 def test_replicates_give_the_noise_and_catch_what_the_catalogue_cannot_say():
     """40 poses measured three times each (the tracker's 5 um): sigma is
-    their scatter, not a fit's; a cyclic J2 gear error (outside the
-    catalogue) then stays above it: unexplained."""
+    their scatter, not a fit's; a J2 gear error of six cycles per turn
+    (outside the catalogue, whose cyclic effects have 2-4) then stays above
+    it: unexplained."""
     _, q = random_points(ROBOT, 40, 3)
     q = np.repeat(q, 3, axis=0)
     assert len(replicate_groups(q)) == 40
 
     def gear(qq):
         out = np.zeros_like(qq)
-        out[:, 1] = 0.01 * np.sin(3 * np.radians(qq[:, 1]))
+        out[:, 1] = 0.01 * np.sin(6 * np.radians(qq[:, 1]))
         return out
     model, data = _case(q, _measure(q, [], 11, gear))
     d = discover(model, data, CAT)
@@ -74,11 +75,11 @@ def test_replicates_give_the_noise_and_catch_what_the_catalogue_cannot_say():
 
 
 def test_an_error_outside_the_catalogue_is_unexplained_without_sigma():
-    """The cyclic gear error with the noise estimated from the catalogue's own
+    """The six-cycle gear error with the noise estimated from the catalogue's own
     fit (which absorbs part of it): the residuals look like noise against
     that estimate, but J2's angle predicts them out of sample."""
     model, data, _ = _data("random", [], q_shift=lambda q: np.stack(
-        [np.zeros(len(q)), 0.01 * np.sin(3 * np.radians(q[:, 1])), *[np.zeros(len(q))] * 4],
+        [np.zeros(len(q)), 0.01 * np.sin(6 * np.radians(q[:, 1])), *[np.zeros(len(q))] * 4],
         axis=1))
     d = discover(model, data, CAT)
     assert d.noise.kind == "estimated"
@@ -260,3 +261,39 @@ def test_data_in_the_trackers_frame_are_registered_first(tmp_path):
     assert {s["effect"] for s in doc["steps"]} <= {"link_elongation:J2-J3", "base_frame"}
     assert "link_elongation:J2-J3" in {s["effect"] for s in doc["steps"]}
     assert doc["verdict"] == "explained"
+
+
+def test_a_cyclic_gear_error_in_the_catalogue_is_named():
+    """J1 off by 0.008 deg at three cycles per turn (a gear stage), poses
+    over its whole turn: named as cyclic:J1:3 with its amplitude, not as a
+    set of geometric effects."""
+    names, q = random_points(ROBOT, 120, 12)
+    assert np.ptp(q[:, 0]) > 330
+    xyz = _measure(q, ["cyclic:J1:3=0.008,-0.004"], 13)
+    model, data = _case(q, xyz, names)
+    d = discover(model, data, CAT, SIGMA)
+    assert [s.effect.id for s in d.steps] == ["cyclic:J1:3"] and d.verdict == "explained"
+    got = d.steps[0].params
+    assert abs(got["a_deg"] - 0.008) < 5e-4 and abs(got["b_deg"] + 0.004) < 5e-4
+
+
+def test_a_cyclic_error_over_part_of_a_turn_is_not_guessed():
+    """The same error on J3, which these poses turn over 230 deg only: its
+    harmonics are not told apart there (a 3-cycle error fits as a 4-cycle
+    one plus geometry), so no cyclic effect of J3 is a candidate, the report
+    says why, and the verdict is not `explained`."""
+    names, q = random_points(ROBOT, 120, 12)
+    assert np.ptp(q[:, 2]) < 330
+    xyz = _measure(q, ["cyclic:J3:3=0.008,-0.004"], 13)
+    model, data = _case(q, xyz, names)
+    d = discover(model, data, CAT, SIGMA)
+    assert not [s for s in d.steps if s.effect.kind == "cyclic"]
+    why = dict(d.not_identifiable)
+    assert all("full turn" in why[f"cyclic:J3:{h}"] for h in (2, 3, 4))
+    assert d.verdict == "unexplained"
+    # A gear error no robot has (0.5 deg) is not named either.
+    values = parse_effect_values(CAT, ["cyclic:J1:3=0.5,0"], force=True)
+    xyz = add_noise(simulate_positions(ROBOT, WARM, values, q, TOOL), SIGMA, 13)
+    d = discover(*_case(q, xyz, names), CAT, SIGMA)
+    assert "cyclic:J1:3" not in [s.effect.id for s in d.steps]
+    assert any("cyclic:J1:3 needs a cyclic error of" in b for b in d.implausible)

@@ -262,6 +262,28 @@ def test_urdf_arm_goes_through_the_same_code():
         Status.JOINT_LIMIT, Status.JOINT_JUMP, Status.NOT_CONVERGED}
 
 
+def test_a_urdf_with_negative_axes_is_the_same_robot(tmp_path):
+    """FANUC-style URDFs turn some joints about -y or -x (pinocchio: a
+    RevoluteUnaligned joint): with J3 and J5 flipped, the robot at q with
+    those two angles negated is the IRB 140 at q, for the batch kernel too."""
+    from rapidcomp.kinematics.robot import load_urdf
+    text = (FIXTURES / "robots" / "irb140.urdf").read_text()
+    parts = text.split("<joint ")
+    for i, part in enumerate(parts):
+        if part.startswith(('name="J3"', 'name="J5"')):
+            parts[i] = part.replace('<axis xyz="0 1 0"/>', '<axis xyz="0 -1 0"/>')
+    path = tmp_path / "negative.urdf"
+    path.write_text("<joint ".join(parts))
+    robot = load_urdf(path)
+    assert [j.shortname() for j in robot.model.joints[1:]][2] == "JointModelRevoluteUnaligned"
+    rng = np.random.default_rng(8)
+    q = random_q(rng, 50)
+    sign = np.array([1, 1, -1, 1, -1, 1])
+    R, p = Chain.from_robot(robot).fk(q * sign * DEG)
+    R0, p0 = Chain.from_robot(ROBOT).fk(q * DEG)
+    assert np.max(np.abs(p - p0)) < 1e-9 and np.max(np.abs(R - R0)) < 1e-12
+
+
 def test_urdf_errors():
     from rapidcomp.errors import InputError
     from rapidcomp.kinematics.robot import load_urdf

@@ -45,6 +45,7 @@ class Effect:
     params: tuple[str, ...]      # user-facing names, unit in the suffix
     to_internal: tuple[float, ...]  # internal value = user value * this
     axes: np.ndarray | None = None  # axis_tilt (2, 3) / joint_displacement (3, 3), local
+    harmonic: int = 0               # cyclic: cycles per turn of the joint
 
     @property
     def size(self) -> int:
@@ -75,6 +76,12 @@ def _perpendicular_base_axes(z0: np.ndarray) -> list[tuple[str, np.ndarray]]:
         v = eye[m] - z0 * (z0 @ eye[m]) - sum(u * (u @ eye[m]) for _, u in out)
         out.append((f"t{len(out) + 1}", v / np.linalg.norm(v)))
     return out
+
+
+# A cyclic gear error of joint k: q_k <- q_k + a sin(h q_k) + b cos(h q_k)
+# for h cycles per turn (a gear stage, a bearing); h = 1 is an offset and an
+# eccentricity the other effects already express.
+CYCLIC_HARMONICS = (2, 3, 4)
 
 
 def catalogue(robot: RobotModel) -> tuple[Effect, ...]:
@@ -113,6 +120,10 @@ def catalogue(robot: RobotModel) -> tuple[Effect, ...]:
                           ("dx_mm", "dy_mm", "dz_mm"), (mm, mm, mm), A[k].T.copy()))
     for k in range(n):
         out.append(Effect(f"backlash:{names[k]}", "backlash", k, ("b_deg",), (deg,)))
+    for k in range(n):
+        for h in CYCLIC_HARMONICS:
+            out.append(Effect(f"cyclic:{names[k]}:{h}", "cyclic", k, ("a_deg", "b_deg"),
+                              (deg, deg), harmonic=h))
     return tuple(out)
 
 
@@ -140,7 +151,8 @@ def to_profile(robot: RobotModel, profile: ThermalProfile, values) -> ThermalPro
     base:     T . base;  joint terms add.
 
     Backlash depends on the direction each move approaches its target from,
-    which a profile cannot hold: it is left out (job.py says so).
+    and a cyclic gear error is a function of the angle, neither of which a
+    profile holds: they are left out (job.py says so).
     """
     chain = Chain.from_robot(robot)
     names = robot.joint_names
@@ -154,7 +166,7 @@ def to_profile(robot: RobotModel, profile: ThermalProfile, values) -> ThermalPro
     base = profile.base.se3()
     for e, v in values.items():
         v = np.asarray(v, float)
-        if e.kind == "backlash":
+        if e.kind in ("backlash", "cyclic"):
             continue
         if e.kind == "base_frame":
             base = pin.SE3(rpy_matrix(*v[3:]), v[:3]) * base

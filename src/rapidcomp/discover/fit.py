@@ -106,13 +106,18 @@ def fit(model: ParamModel, measured: np.ndarray, effects: tuple[Effect, ...],
                 dead = _names(effects, free, scale < ZERO_COLUMN)
                 return _failed(effects, x, X, measured, J, free, np.inf, it_total,
                                f"{dead} does not move the measuring point at these poses")
-            U, S, Vt = np.linalg.svd(A / scale, full_matrices=False)
+            # The SVD of the scaled Jacobian through a QR of [A r]: the same
+            # singular values and step as its own SVD, a third of the work
+            # on thousands of rows.
+            m = A.shape[1]
+            R = np.linalg.qr(np.column_stack([A / scale, r]), mode="r")
+            U, S, Vt = np.linalg.svd(R[:m, :m])
             cond = float(S[0] / S[-1]) if S[-1] > 0 else np.inf
             if S[-1] < RANK_TOL * S[0]:
                 return _failed(effects, x, X, measured, J, free, cond, it_total,
                                "parameters not identifiable on these points (the Jacobian "
                                f"has rank {int(np.sum(S >= RANK_TOL * S[0]))} of {len(S)})")
-            dx = (Vt.T @ ((U.T @ r) / S)) / scale
+            dx = (Vt.T @ ((U.T @ R[:m, m]) / S)) / scale
             rss = r @ r
             step = 1.0
             for _ in range(30):

@@ -136,12 +136,15 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
     elif out_profile:
         values = d.named_values()
         kept = {e: v for e, v in values.items()
-                if writable(e, e.user(v)) and e.kind != "backlash"}
+                if writable(e, e.user(v)) and e.kind not in ("backlash", "cyclic")}
         for e in values:
             if e.kind == "backlash":
                 notes.append(f"{e.id} is not written into {Path(out_profile).name}: a profile "
                              "corrects every move alike, backlash depends on the direction each "
                              "move approaches its target from")
+            elif e.kind == "cyclic":
+                notes.append(f"{e.id} is not written into {Path(out_profile).name}: a profile "
+                             "holds no function of a joint's angle")
             elif e not in kept:
                 notes.append(f"{e.id} is not written into {Path(out_profile).name}: at "
                              f"{', '.join(f'{k}={x:.4g}' for k, x in e.user(values[e]).items())} "

@@ -102,6 +102,9 @@ class ParamModel:
                 q[:, k] += v[0] * self.tau_nm[:, k]
             elif e.kind == "backlash":
                 q[:, k] += 0.5 * v[0] * self.direction[:, k]
+            elif e.kind == "cyclic":
+                h = e.harmonic * self.q_cmd[:, k]
+                q[:, k] += v[0] * np.sin(h) + v[1] * np.cos(h)
             elif e.kind == "link_elongation":
                 eps[k] += v[0]
             elif e.kind == "axis_tilt":
@@ -145,6 +148,10 @@ class ParamModel:
                      "gravity_compliance": self.tau_nm[:, k],
                      "backlash": 0.5 * self.direction[:, k]}[e.kind]
                 block = [d * np.reshape(w, (-1, 1))]
+            elif e.kind == "cyclic":
+                d = np.cross(z[k], P - origin[k])
+                h = e.harmonic * self.q_cmd[:, k]
+                block = [d * np.sin(h)[:, None], d * np.cos(h)[:, None]]
             elif e.kind == "link_elongation":
                 seg = self.nominal.trans[k] if k < n else self.nominal.flange_trans
                 block = [(parent[k] if k < n else last) @ seg]

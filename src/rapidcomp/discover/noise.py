@@ -7,7 +7,7 @@ mean, which no model error can inflate); else from the fit of the whole
 catalogue at once, sigma^2 = RSS_full / (3N - rank). That last estimate
 absorbs whatever systematic error the catalogue cannot express, so when it
 is used the final residuals are also tested for structure: a smooth
-function of one joint angle (harmonics 1..4; as an angle error of that
+function of one joint angle (harmonics 1..8; as an angle error of that
 joint, or per axis of the residual) fitted to them and judged on points it
 was not fitted to (5-fold cross-validation). If it predicts more than a
 fifth of their sum of squares out of sample, they are not noise and the
@@ -28,7 +28,7 @@ from .fit import CatalogueFit
 MIN_NOISE_DOF = 10
 # Joint vectors closer than this (deg, every joint) are the same pose.
 SAME_POSE_DEG = 1e-6
-HARMONICS = 4
+HARMONICS = 8
 FOLDS = 5
 # Out-of-sample share of the residual sum of squares a joint's harmonics
 # must predict for the residuals to count as structured (for noise it is

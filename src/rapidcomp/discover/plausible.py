@@ -13,6 +13,8 @@ and `check` without --force:
   joint_scale            |scale| <= 5e-3
   joint_offset, axis_tilt  <= 1 deg
   gravity_compliance     0 <= c <= 0.01 deg per N m
+  cyclic                 amplitude sqrt(a^2 + b^2) <= 0.1 deg (a gear stage's
+                         transmission error is arc minutes); never written
   base_frame, tool_offset  |d| <= 10 mm, rotations <= 1 deg; as the model's
                          first effect (a frame registration error, the largest
                          thing a campaign can get wrong) up to 50 mm and 5 deg,
@@ -28,6 +30,7 @@ from ..kinematics.profile import (MAX_COMPLIANCE_DEG_PER_NM, MAX_FRAME_SHIFT_MM,
 from .effects import Effect
 
 FIRST_FRAME_FACTOR = 5.0
+MAX_CYCLIC_DEG = 0.1
 FRAMES = ("base_frame", "tool_offset")
 
 
@@ -50,6 +53,12 @@ def implausible(effect: Effect, user: dict[str, float], first: bool = False) -> 
                  if not k.endswith(("_mm", "_deg"))] or [0.0])
     if effect.kind == "link_elongation":
         shift = 0.0
+    if effect.kind == "cyclic":
+        amplitude = math.hypot(*user.values())
+        if amplitude > MAX_CYCLIC_DEG:
+            return (f"{effect.id} needs a cyclic error of {amplitude:.3g} deg (a real robot's "
+                    f"gears: <= {MAX_CYCLIC_DEG:g} deg)")
+        return None
     if shift > mm:
         return f"{effect.id} needs a shift of {shift:.3g} mm (a real robot: <= {mm:g} mm)"
     if turn > deg:

@@ -14,7 +14,9 @@ from .simulate import Detectability
 
 
 def _um(mm: float) -> str:
-    return f"{mm * 1000:.1f}"
+    text = f"{mm * 1000:.1f}"
+    # A value that rounds to zero is 0.0, whatever its sign.
+    return "0.0" if text == "-0.0" else text
 
 
 def _num(x: float) -> str:
@@ -130,7 +132,7 @@ def markdown(d: Discovery, meta: dict, plot_note: str | None = None,
                 "because |", "|---|---:|---:|---:|---:|---:|---|"]
         out += [f"| {c.effect} | {c.nparams} | {_um(c.rms_mm)} | {_um(c.heldout_mm)} | "
                 f"{c.p_value:.3g} | {c.delta_bic:.1f} | "
-                f"{c.implausible or c.cancelling or ''} |" for c in s.candidates[:5]]
+                f"{c.implausible or c.cancelling or _estimated(c)} |" for c in s.candidates[:5]]
         out.append("")
     if d.steps:
         out += _analysis(d.final, "Residuals after the final model")
@@ -173,3 +175,8 @@ def detectability_markdown(rows: tuple[Detectability, ...], meta: dict) -> str:
         tcp = "-" if r.tcp_um is None else f"{r.tcp_um:.1f}"
         out.append(f"| {r.effect} | {r.param} | {size} | {tcp} | {r.note} |")
     return "\n".join(out) + "\n"
+
+
+def _estimated(c) -> str:
+    return ("not fitted: a linearized step predicts it far from the best (figures are "
+            "the prediction)") if c.estimated else ""

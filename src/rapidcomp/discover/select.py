@@ -31,11 +31,12 @@ from itertools import combinations
 import numpy as np
 
 from .effects import Effect
-from .fit import Fit, fit
+from .fit import RANK_TOL, Fit, fit
 from .measured import Measurements
-from .model import ParamModel
+from .model import ZERO_COLUMN, ParamModel
 from .noise import Noise, Structure, noise, structure
 from .outliers import Outlier, screen
+from .points import random_points
 from .plausible import bounds, implausible
 from .residuals import Analysis, analyse
 from .stats import chi2_ppf, chi2_sf
@@ -57,6 +58,21 @@ CORRELATION_LIMIT = 0.995
 # the most fits one exchange pass makes.
 EXCHANGE_POOL = 6
 EXCHANGE_FITS = 400
+# The share of the RSS a linearized prediction of a fit's RSS may be off by
+# (second-order terms): within it, the fit is made.
+NEAR_MARGIN = 0.02
+# Candidates a later scoring fits at least (the best by a linearized step's
+# prediction); the rest get the prediction.
+FULL_FITS = 8
+MAX_EFFECT_SIZE = 6     # base_frame
+# The least range of a joint's angle over which its cyclic errors are
+# candidates.
+CYCLIC_SPAN_DEG = 330.0
+# Poses over the whole workspace on which two effects the data cannot tell
+# apart are checked for any difference at all, and the singular value
+# (relative) below which a direction is none.
+SEPARATE_POSES = 200
+SEPARATE_TOL = 1e-7
 
 
 @dataclass(frozen=True)
@@ -69,6 +85,7 @@ class Candidate:
     delta_bic: float          # BIC(model + candidate) - BIC(model): negative is better
     implausible: str | None = None   # the fit needs values no real robot has
     cancelling: str | None = None    # its parameters cancel those already named
+    estimated: bool = False          # not fitted: a linearized step's prediction, far from the best
 
 
 @dataclass(frozen=True)
@@ -141,7 +158,7 @@ def _noise_p(f: Fit, sigma: float, n: int) -> float:
 @dataclass(frozen=True, eq=False)
 class _Scored:
     effect: Effect
-    fit: Fit
+    fit: Fit | None           # None: not fitted (Candidate.estimated)
     candidate: Candidate
     strong: bool
     order: int
@@ -208,69 +225,222 @@ class _Selector:
         self.model, self.meas, self.effects, self.sigma = model, meas, tuple(effects), sigma
         self.n = meas.size
         self.not_identifiable: dict[str, str] = {}
+        # A cyclic error's own evidence rule: over less than (nearly) a
+        # full turn the harmonics of an angle are not orthogonal to each
+        # other, nor to an offset, a scale or a compliance of the joint, so
+        # a 3-cycle error would be named as a 4-cycle one plus geometry.
+        span = np.ptp(np.degrees(model.q_cmd), axis=0) if model.size else None
+        for e in self.effects:
+            if e.kind == "cyclic" and span is not None and span[e.joint] < CYCLIC_SPAN_DEG:
+                name = model.robot.joint_names[e.joint]
+                self.not_identifiable[e.id] = (
+                    f"the poses turn {name} over {span[e.joint]:.0f} deg: a cyclic error is "
+                    f"told from the others only over (nearly) a full turn, "
+                    f">= {CYCLIC_SPAN_DEG:g} deg")
         # Scorings by the model fit they extend: the search and the replay
         # of its steps meet the same models, whose candidates need fitting once.
-        self._scored: dict[int, tuple[Fit, list]] = {}
+        self._scored: dict[int, tuple] = {}
+        self._structure: dict[int, tuple] = {}
+        self._generic: ParamModel | None = None    # poses over the whole workspace
 
     def fit(self, effects, start=None) -> Fit:
         return fit(self.model, self.meas, tuple(effects), start)
 
     def score(self, current: Fit) -> list[_Scored]:
-        """Every candidate not in `current`, fitted with it, best BIC first."""
+        """Every candidate not in `current`, fitted with it, best BIC first.
+
+        The first scoring fits every candidate (it finds those that cannot
+        be identified). Later ones fit the best FULL_FITS by a linearized
+        step's prediction and every candidate it puts within the
+        equivalence band of the best and of the best with strong evidence;
+        the others are scored by the prediction (Candidate.estimated): they
+        cannot be named, nor be the alternative of what is."""
         hit = self._scored.get(id(current))
         if hit is not None and hit[0] is current:
             return hit[1]
         named = {e.id for e in current.effects}
-        fits = []
-        for order, e in enumerate(self.effects):
-            if e.id in named or e.id in self.not_identifiable:
-                continue
-            f = self.fit(current.effects + (e,), current.values + (np.zeros(e.size),))
-            if not f.success:
-                if not current.effects:
-                    self.not_identifiable[e.id] = f.reason
-                continue
-            if not current.effects:
-                hidden = _invisible(e, f.jac[:, -e.size:], self.sigma)
-                if hidden is not None:
-                    self.not_identifiable[e.id] = hidden
+        pending = [(order, e) for order, e in enumerate(self.effects)
+                   if e.id not in named and e.id not in self.not_identifiable]
+        lin = {}
+        if current.effects:
+            lin = self._linear(current.effects, current.values, [e for _, e in pending])
+            logn = math.log(self.n)
+            ranked = sorted(pending, key=lambda oe: (lin[oe[1].id][0] / self.sigma ** 2
+                                                     + oe[1].size * logn, oe[0]))
+            want = {e.id for _, e in ranked[:FULL_FITS]}
+            want |= self._near(lin, min(v[0] for v in lin.values()))
+        else:
+            want = {e.id for _, e in pending}
+        m = max(1, len(pending))
+        fitted: dict[str, _Scored] = {}
+        while True:
+            for order, e in pending:
+                if e.id not in want or e.id in fitted:
                     continue
-            fits.append((order, e, f))
-        m = max(1, len(fits))
-        bic0 = _bic(current, self.sigma, self.n)
-        held0 = current.heldout_rms_mm()
-        out = []
-        for order, e, f in fits:
-            k = f.nparams - current.nparams
-            drop = max(0.0, (current.rss - f.rss) / self.sigma ** 2)
-            p = chi2_sf(drop, k) if k > 0 else 1.0
-            cand = Candidate(e.id, e.size, f.rms_mm, f.heldout_rms_mm(), p,
-                             _bic(f, self.sigma, self.n) - bic0)
-            strong = p < ALPHA / m and cand.delta_bic <= -STRONG_BIC and cand.heldout_mm < held0
-            why = _implausible(f)
-            if why is not None:
-                cand = replace(cand, implausible=why)
-            cancel = _cancelling(f, e)
-            if cancel is not None:
-                cand = replace(cand, cancelling=cancel)
-                strong = False
-            out.append(_Scored(e, f, cand, strong and why is None, order,
-                               why if strong and why is not None else None))
+                f = self.fit(current.effects + (e,), current.values + (np.zeros(e.size),))
+                if not f.success:
+                    if not current.effects:
+                        self.not_identifiable[e.id] = f.reason
+                    continue
+                if not current.effects:
+                    hidden = _invisible(e, f.jac[:, -e.size:], self.sigma)
+                    if hidden is not None:
+                        self.not_identifiable[e.id] = hidden
+                        continue
+                fitted[e.id] = self._judge(current, order, e, f, m)
+            strong = [x for x in fitted.values() if x.strong]
+            if not strong or not lin:
+                break
+            more = self._near(lin, min(x.fit.rss for x in strong)) - want
+            if not more:
+                break
+            want |= more
+        out = list(fitted.values())
+        for order, e in pending:
+            if e.id in fitted or e.id not in lin or e.id in want:
+                continue
+            rss, deleted = lin[e.id]
+            drop = max(0.0, (current.rss - rss) / self.sigma ** 2)
+            cand = Candidate(e.id, e.size, math.sqrt(rss / len(self.meas)),
+                             float(np.sqrt(np.mean(np.sum(deleted ** 2, axis=1)))),
+                             chi2_sf(drop, e.size), (rss - current.rss) / self.sigma ** 2
+                             + e.size * math.log(self.n), estimated=True)
+            out.append(_Scored(e, None, cand, False, order))
         out.sort(key=lambda s: (s.candidate.delta_bic, s.order))
-        self._scored[id(current)] = (current, out)
+        self._scored[id(current)] = (current, out, m, lin)
+        return out
+
+    def _judge(self, current: Fit, order: int, e: Effect, f: Fit, m: int) -> _Scored:
+        """A candidate's fit against the model it extends (m: the number of
+        candidates, Bonferroni)."""
+        k = f.nparams - current.nparams
+        drop = max(0.0, (current.rss - f.rss) / self.sigma ** 2)
+        p = chi2_sf(drop, k) if k > 0 else 1.0
+        cand = Candidate(e.id, e.size, f.rms_mm, f.heldout_rms_mm(), p,
+                         _bic(f, self.sigma, self.n) - _bic(current, self.sigma, self.n))
+        strong = (p < ALPHA / m and cand.delta_bic <= -STRONG_BIC
+                  and cand.heldout_mm < current.heldout_rms_mm())
+        why = _implausible(f)
+        if why is not None:
+            cand = replace(cand, implausible=why)
+        cancel = _cancelling(f, e)
+        if cancel is not None:
+            cand = replace(cand, cancelling=cancel)
+            strong = False
+        return _Scored(e, f, cand, strong and why is None, order,
+                       why if strong and why is not None else None)
+
+    def fitted(self, current: Fit, wanted) -> list[_Scored]:
+        """score(current) with the candidates in `wanted` fitted, and those a
+        linearized step puts within the equivalence band of them (the
+        replay of the final model's steps needs their fits and their
+        alternatives)."""
+        scored = self.score(current)
+        _, _, m, lin = self._scored[id(current)]
+        need = {s.effect.id for s in scored if s.effect in wanted}
+        for s in scored:
+            if s.effect in wanted and s.fit is not None:
+                need |= self._near(lin, s.fit.rss)
+        if all(s.fit is not None for s in scored if s.effect.id in need):
+            return scored
+        out = []
+        for s in scored:
+            if s.fit is None and s.effect.id in need:
+                f = self.fit(current.effects + (s.effect,),
+                             current.values + (np.zeros(s.effect.size),))
+                if f.success:
+                    s = self._judge(current, s.order, s.effect, f, m)
+            out.append(s)
+        out.sort(key=lambda s: (s.candidate.delta_bic, s.order))
+        self._scored[id(current)] = (current, out, m, lin)
         return out
 
     def equivalents(self, scored: list[_Scored], best: _Scored) -> list[_Scored]:
-        return [s for s in scored if s is best or _equivalent(s.fit, best.fit, self.sigma)]
+        return [s for s in scored
+                if s is best or (s.fit is not None and _equivalent(s.fit, best.fit, self.sigma))]
 
-    def pick(self, scored: list[_Scored]) -> _Scored | None:
+    def pick(self, scored: list[_Scored], current: Fit) -> _Scored | None:
         """The best candidate with strong evidence, or the simplest of those
-        that explain the data equally well."""
+        that explain the data equally well.
+
+        A cyclic gear error has its own evidence rule: it is named only as
+        the step's best candidate (with its free amplitude and phase it
+        would stand in for a geometric effect as an equal alternative), and
+        only when what is left is a function of that joint's angle more
+        than of any other's (noise.structure, out of sample): otherwise a
+        harmonic of some joint would soak up whatever the catalogue misses."""
         strong = [s for s in scored if s.strong]
+        while strong and strong[0].effect.kind == "cyclic" and \
+                not self._cyclic_evident(current, strong[0].effect):
+            strong = strong[1:]
         if not strong:
             return None
-        equal = [s for s in self.equivalents(scored, strong[0]) if s.strong]
+        equal = [s for s in self.equivalents(scored, strong[0]) if s.strong
+                 and (s.effect.kind != "cyclic" or s is strong[0])]
         return min(equal, key=lambda s: (s.fit.nparams, s.fit.rss, s.order))
+
+    def _cyclic_evident(self, current: Fit, e: Effect) -> bool:
+        names = self.model.robot.joint_names
+        if id(current) not in self._structure:
+            offsets = tuple(x for x in self.effects if x.kind == "joint_offset")
+            _, J = self.model.evaluate(offsets, tuple(np.zeros(1) for _ in offsets))
+            self._structure[id(current)] = (current, structure(
+                np.degrees(self.model.q_cmd), current.residuals, names,
+                {x.joint: J[:, :, i] for i, x in enumerate(offsets)}))
+        found = self._structure[id(current)][1]
+        return found is not None and found.joint == names[e.joint]
+
+    def _linear(self, rest, start, options) -> dict[str, tuple[float, np.ndarray]]:
+        """For each of `options` added to `rest` (at its values `start`):
+        the RSS and the residuals (N, 3) of one linearized step from there,
+        and the deleted residuals of that linear fit (leave-one-point-out,
+        as Fit.heldout_rms_mm). A fit would tell exactly, but the step
+        predicts the fit's RSS to second order in the (small) change, and a
+        nonlinear fit ends at or below it: a cheap screen of which fits are
+        worth making."""
+        if not options:
+            return {}
+        X, J = self.model.evaluate(tuple(rest) + tuple(options),
+                                   tuple(start) + tuple(np.zeros(f.size) for f in options))
+        r = (self.meas - X).ravel()
+        N = len(self.meas)
+        A = J.reshape(len(r), -1)
+        scale = np.linalg.norm(A, axis=0)
+        scale[scale < ZERO_COLUMN] = 1.0
+        A = A / scale
+        k = sum(e.size for e in rest)
+        H = np.zeros((N, 3, 3))
+        if k:
+            U, S, _ = np.linalg.svd(A[:, :k], full_matrices=False)
+            Q = U[:, S >= RANK_TOL * S[0]]
+            r = r - Q @ (Q.T @ r)
+            A = A[:, k:] - Q @ (Q.T @ A[:, k:])
+            Qp = Q.reshape(N, 3, -1)
+            H = Qp @ np.swapaxes(Qp, 1, 2)
+        else:
+            A = A[:, k:]
+        out = {}
+        col = 0
+        for f in options:
+            B = A[:, col:col + f.size]
+            col += f.size
+            Uf, Sf, _ = np.linalg.svd(B, full_matrices=False)
+            Uf = Uf[:, Sf > RANK_TOL * max(1.0, Sf[0])]
+            res = r - Uf @ (Uf.T @ r)
+            Up = Uf.reshape(N, 3, -1)
+            Hf = H + Up @ np.swapaxes(Up, 1, 2)
+            res = res.reshape(N, 3)
+            e = np.linalg.solve(np.eye(3) - Hf + 1e-15 * np.eye(3), res[..., None])[..., 0]
+            out[f.id] = (float(np.sum(res ** 2)), e)
+        return out
+
+    def _near(self, lin: dict, target_rss: float) -> set[str]:
+        """The ids in `lin` whose predicted RSS is within the equivalence
+        band of `target_rss` (that of the largest difference in parameters
+        any two effects have) with a margin for the second-order terms."""
+        band = chi2_ppf(EQUIVALENT_QUANTILE, MAX_EFFECT_SIZE) * self.sigma ** 2
+        return {fid for fid, (rss, _) in lin.items()
+                if rss <= target_rss + 2 * band + NEAR_MARGIN * target_rss}
 
     def simplify(self, current: Fit, swapped: dict[str, list[str]]) -> Fit:
         """With a new effect in the model, an earlier one may be standing in
@@ -284,9 +454,12 @@ class _Selector:
                 rest = current.effects[:i] + current.effects[i + 1:]
                 start = current.values[:i] + current.values[i + 1:]
                 named = {x.id for x in current.effects}
+                smaller = [f for f in self.effects if f.id not in named and f.size < e.size
+                           and f.kind != "cyclic"]
+                near = self._near(self._linear(rest, start, smaller), current.rss)
                 options = []
                 for order, f in enumerate(self.effects):
-                    if f.id in named or f.size >= e.size:
+                    if f.id not in near:
                         continue
                     g = self.fit(rest + (f,), start + (np.zeros(f.size),))
                     if g.success and _equivalent(g, current, self.sigma) and \
@@ -317,8 +490,8 @@ class _Selector:
         of the search (their top EXCHANGE_POOL), at most EXCHANGE_FITS fits
         a pass."""
         pool: dict[str, Effect] = {}
-        for _, scored in self._scored.values():
-            for x in scored[:EXCHANGE_POOL]:
+        for _, scored, _, _ in self._scored.values():
+            for x in [x for x in scored if x.effect.kind != "cyclic"][:EXCHANGE_POOL]:
                 pool.setdefault(x.effect.id, x.effect)
         changed = True
         while changed and len(current.effects) > 1:
@@ -350,6 +523,31 @@ class _Selector:
                 current, changed = h, True
         return current
 
+    def separable(self, rest, a: Effect, b: Effect) -> bool:
+        """Whether some poses tell `a` from `b` (with `rest` in the model):
+        on poses spread over the whole workspace, does either add a
+        direction the other does not? Same direction everywhere: no
+        measurement separates them (a J6-flange elongation and a measuring
+        point shifted along the flange axis)."""
+        if self._generic is None:
+            tool = np.mean(self.model.tool, axis=0) if self.model.size else np.zeros(3)
+            _, q = random_points(self.model.robot, SEPARATE_POSES, 0)
+            self._generic = ParamModel(self.model.robot, self.model.profile, q, tool)
+        effects = tuple(rest) + (a, b)
+        _, J = self._generic.evaluate(effects, tuple(np.zeros(e.size) for e in effects))
+        A = J.reshape(-1, J.shape[-1])
+        scale = np.linalg.norm(A, axis=0)
+        A = A / np.where(scale >= ZERO_COLUMN, scale, 1.0)
+        k = sum(e.size for e in rest)
+
+        def rank(cols) -> int:
+            S = np.linalg.svd(A[:, cols], compute_uv=False)
+            return int(np.sum(S >= SEPARATE_TOL * S[0])) if S.size and S[0] > 0 else 0
+        both = rank(slice(None))
+        # Separable: together they span more than one of them does.
+        return both > rank(list(range(k + a.size))) or \
+            both > rank(list(range(k)) + list(range(k + a.size, k + a.size + b.size)))
+
     def replay(self, start: Fit, chosen: tuple[Effect, ...], swapped) -> tuple[list[Step], Fit]:
         """The steps of the final model from `start` (no effects), in the
         order the data rank them: at each step the best-scoring remaining
@@ -358,28 +556,37 @@ class _Selector:
         steps = []
         remaining = list(chosen)
         while remaining:
-            scored = self.score(current)
-            mine = [s for s in scored if s.effect in remaining]
+            scored = self.fitted(current, remaining)
+            mine = [s for s in scored if s.effect in remaining and s.fit is not None]
             if not mine:
                 break
             s = mine[0]
             equal = self.equivalents(scored, s)
+            # An effect the final model names (at a later step) is not an
+            # alternative to this one, nor replaced by it.
+            final_ids = {e.id for e in chosen}
             alternatives = [x.effect.id for x in sorted(equal, key=lambda x: x.order)
-                            if x is not s]
-            alternatives += [a for a in swapped.get(s.effect.id, []) if a not in alternatives]
-            ties = [x for x in equal if x is not s and x.fit.nparams == s.fit.nparams]
+                            if x is not s and x.effect.id not in final_ids]
+            replaced = [a for a in swapped.get(s.effect.id, []) if a not in final_ids]
+            alternatives += [a for a in replaced if a not in alternatives]
+            ties = [x for x in equal if x is not s and x.fit.nparams == s.fit.nparams
+                    and x.effect.id not in final_ids]
             note = None
             if ties:
                 identical = all(abs(x.fit.rss - s.fit.rss) <= 1e-9 * max(s.fit.rss, 1e-30)
                                 for x in ties)
                 why = ("the fits are identical; it comes first in the catalogue" if identical
                        else "it leaves the smaller residual")
+                same = [x.effect.id for x in ties
+                        if not self.separable(current.effects, s.effect, x.effect)]
+                advice = ("Measure poses that separate them to decide." if not same else
+                          f"No pose separates {s.effect.id} from {', '.join(same)} on this "
+                          "robot with this measuring point: they are the same effect here.")
                 note = (f"the data cannot tell {s.effect.id} from "
                         f"{', '.join(x.effect.id for x in ties)} (same number of parameters, "
-                        f"residuals within noise); named {s.effect.id} because {why}. "
-                        "Measure poses that separate them to decide.")
-            if swapped.get(s.effect.id):
-                extra = (f"replaces {', '.join(swapped[s.effect.id])}, named earlier in the "
+                        f"residuals within noise); named {s.effect.id} because {why}. {advice}")
+            if replaced:
+                extra = (f"replaces {', '.join(replaced)}, named earlier in the "
                          "search: with the other effects in the model it explains the same "
                          "with fewer parameters")
                 note = f"{note} {extra}" if note else extra
@@ -410,7 +617,11 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     terminal, job.py)."""
     say = progress or (lambda text: None)
     say("gross errors")
-    screened = screen(model, data, effects)
+    # The reference fit for gross errors and the noise: every effect but
+    # the cyclic ones, whose free amplitudes and phases would fit a small
+    # data set's noise too.
+    reference = tuple(e for e in effects if e.kind != "cyclic")
+    screened = screen(model, data, reference)
     if screened.outliers:
         rows = screened.rows
         model = model.subset(rows)
@@ -452,7 +663,7 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
                                  "apart: not named (an artefact of the distance)")
                 current = start
             break
-        chosen = sel.pick(scored)
+        chosen = sel.pick(scored, current)
         if chosen is None:
             blocked = [s.blocked for s in scored if s.blocked][:3]
             break

@@ -74,6 +74,12 @@ def simulate_positions(robot: RobotModel, profile: ThermalProfile, values, q_deg
     q = np.asarray(q_deg, float) * DEG
     if model.joint_map is not None:
         q = model.joint_map.apply(q)
+    gears = [(e.joint, e.harmonic, v) for e, v in values.items() if e.kind == "cyclic"]
+    if gears:
+        q = q.copy()
+        for k, h, (a, b) in gears:
+            angle = np.radians(np.asarray(q_deg, float)[:, k]) * h
+            q[:, k] += a * np.sin(angle) + b * np.cos(angle)
     lash = [(e.joint, float(v[0])) for e, v in values.items() if e.kind == "backlash"]
     if lash:
         q = q.copy()

@@ -56,7 +56,7 @@ class Chain:
             if name in _AXES:
                 axis = _AXES[name]
             elif "RevoluteUnaligned" in name:
-                axis = tuple(np.asarray(j.axis, float))
+                axis = tuple(np.asarray(j.extract().axis, float))
             else:
                 raise ValueError(f"joint {model.names[jid]} is {name}, expected revolute")
             p = model.jointPlacements[jid]
