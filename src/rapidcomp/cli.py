@@ -210,8 +210,25 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, ba
               help="Write the output even when some targets cannot be compensated "
                    "(they stay as they were and are listed).")
 @click.option("-q", "--quiet", is_flag=True, help="No summary on stdout.")
+@click.option("--transient", is_flag=True,
+              help="Compensate for the thermal state at run time (warm-up, pauses): each move "
+                   "goes to rcTcJ(cold, dq) of a support module rcThermal.sys written next to "
+                   "the output; needs --tau-heat or --temperature. MoveAbsJ targets only: "
+                   "MoveJ becomes MoveAbsJ, MoveL too with --emit absj.")
+@click.option("--tau-heat", type=float, default=None, metavar="MIN",
+              help="--transient: warm-up time constant while the robot runs, minutes.")
+@click.option("--tau-cool", type=float, default=None, metavar="MIN",
+              help="--transient: cooling time constant while it stands, minutes "
+                   "(default: --tau-heat).")
+@click.option("--gap", type=float, default=None, metavar="MIN",
+              help="--transient: a gap between compensated moves longer than this is a stop "
+                   "(cooling); default 2 minutes.")
+@click.option("--temperature", default=None, metavar="SIGNAL:T_COLD:T_WARM",
+              help="--transient: the thermal state from an analog input instead of the clock, "
+                   "s = (T - T_COLD) / (T_WARM - T_COLD) clipped to 0..1.")
 def fix(programs, profile, output, emit, report, no_report, json_path, with_modules, tasks,
-        robot, force, limits, track, base, start, allow_partial, quiet) -> None:
+        robot, force, limits, track, base, start, allow_partial, quiet, transient, tau_heat,
+        tau_cool, gap, temperature) -> None:
     """Write a compensated copy of each PROGRAM and a review report.
 
     Exit code 0: all statically known targets compensated; 1: some could not
@@ -221,7 +238,8 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
     from .compensate.report import summary_lines
     try:
         specs = _fix_specs(programs, profile, output, emit, report, no_report, json_path,
-                           with_modules, tasks, robot, force, limits, track, start, base)
+                           with_modules, tasks, robot, force, limits, track, start, base,
+                           _transient(transient, emit, tau_heat, tau_cool, gap, temperature))
         outcomes = run_all(specs)
         files = [(path, data) for o in outcomes for path, data in o.files]
         done = {path for path, _ in files}
@@ -260,8 +278,24 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
     sys.exit(EXIT_PARTIAL if failed else EXIT_OK)
 
 
+def _transient(on, emit, tau_heat, tau_cool, gap, temperature):
+    """The Transient of --transient and its options, None without it."""
+    from .compensate.transient import make_transient
+    given = [name for name, v in (("--tau-heat", tau_heat), ("--tau-cool", tau_cool),
+                                  ("--gap", gap), ("--temperature", temperature))
+             if v is not None]
+    if not on:
+        if given:
+            raise RapidcompError(f"{given[0]} applies to --transient only")
+        return None
+    if emit == "robtarget":
+        raise RapidcompError("--transient writes MoveAbsJ targets; --emit robtarget keeps "
+                             "robtargets: give one of them")
+    return make_transient(tau_heat, tau_cool, gap, temperature)
+
+
 def _fix_specs(programs, profile, output, emit, report, no_report, json_path, with_modules,
-               tasks, robot, force, limits, track, start, base):
+               tasks, robot, force, limits, track, start, base, transient=None):
     """One JobSpec per task, with output paths checked: never an input,
     never two jobs on one file, never inside an input folder."""
     from pathlib import Path
@@ -333,7 +367,8 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
                     raise RapidcompError(f"{path}: would overwrite an input or another output")
                 seen.add(real)
             specs.append(JobSpec(t, out, rep, json_path, profile, robot, tuple(with_modules),
-                                 emit, force, tuple(limits), tuple(track), start, base))
+                                 emit, force, tuple(limits), tuple(track), start, base,
+                                 transient=transient))
     return specs
 
 

@@ -14,9 +14,10 @@ import numpy as np
 
 from ..edits import SpanEdit
 from ..kinematics.conf import quadrant_miss
+from ..kinematics.frames import matrix_to_quat_wxyz
 from ..errors import InternalError
 from ..rapid import ast as A
-from ..rewrite import records
+from ..rewrite import numbers, records
 from ..rewrite.names import NameAllocator
 from .place import Group, element_label, multi_index
 from .plan import Plan
@@ -42,6 +43,37 @@ class Values:
         if k in g.slots:
             return g.slots[k].q_deg
         return self.solved.deformed.q_deg[g.rows[k]]
+
+    def cold(self, g: Group, k) -> np.ndarray:
+        """Transient: the joints the cold robot needs, the ideal
+        controller's own solution (the uncompensated program's joints)."""
+        if k in g.slots:
+            return g.slots[k].q_deg
+        return self.solved.nominal.q_deg[g.rows[k]]
+
+    def dq(self, g: Group, k) -> np.ndarray:
+        """Transient: the warm robot's correction of those joints (zero for
+        a slot no move reaches)."""
+        if k in g.slots or k not in g.rows:
+            return np.zeros(6)
+        i = g.rows[k]
+        return self.solved.deformed.q_deg[i] - self.solved.nominal.q_deg[i]
+
+    def pose_dq(self, g: Group, k):
+        """Transient, robtarget kept: the warm robot's compensated robtarget
+        minus the written one, (trans mm, quaternion components, RAPID
+        order, the warm one's sign nearest the written one), and the
+        confdata the warm robot needs; zero for an element no move reaches."""
+        record = self.source(g, k).record
+        q0 = np.asarray(record.quat_wxyz, float)
+        if k in g.slots or k not in g.rows:
+            return np.zeros(3), np.zeros(4), np.array(record.conf)
+        R, p, conf = self.robtarget_value(g, k)
+        q = matrix_to_quat_wxyz(R)
+        q0n = q0 / np.linalg.norm(q0)
+        if float(q @ q0n) < 0:
+            q = -q
+        return p - np.asarray(record.values[:3], float), q - q0n, np.asarray(conf)
 
     def robtarget_value(self, g: Group, k):
         """(R, p, conf) of the literal the ideal controller must be given:
@@ -133,9 +165,12 @@ def _indent(text: str, pos: int) -> str:
 
 
 class Editor:
-    def __init__(self, plan: Plan, values: Values):
+    def __init__(self, plan: Plan, values: Values, transient: bool = False):
         self.plan = plan
         self.values = values
+        # Transient compensation (transient.py): every target becomes
+        # rcTcJ(<cold>, <cold>_dq), the correction applied at run time.
+        self.transient = transient
         self.names = NameAllocator([pf.source.text for pf in plan.files])
         self.edits: dict[tuple[int, int, int], SpanEdit] = {}   # (file, start, end)
         self.inserts: dict[tuple[int, int], list[str]] = {}    # (file, offset) -> decls
@@ -220,6 +255,9 @@ class Editor:
 
     # -------------------------------------------------------- per group
     def apply(self, g: Group) -> None:
+        if self.transient:
+            self._apply_transient(g)
+            return
         vals = self.values
         type_name = "jointtarget" if g.mode in ("absj", "joint") else "robtarget"
         texts = {} if g.mode == "absj" else {k: vals.field_texts(g, k) for k in g.elements}
@@ -279,6 +317,153 @@ class Editor:
                 self.edit(u.key[0], src.ref.span, new_ref, f"{u.label} -> {new_ref}")
                 self.actions[u.key] = f"new {type_name} {new_ref.split('{')[0]}"
 
+    # -------------------------------------------------------- transient
+    def _dq_literal(self, g: Group, k) -> str:
+        texts = [numbers.joint(float(v)) for v in self.values.dq(g, k)] + ["0"] * 6
+        return records.jointtarget_literal(texts)
+
+    def _cold_literal(self, g: Group, k) -> str:
+        if g.mode == "absj":
+            return records.jointtarget_literal(
+                records.absj_texts(self.values.cold(g, k), self.values.source(g, k).record))
+        return records.jointtarget_literal(list(self.values.source(g, k).record.texts))
+
+    def _array_literal(self, g: Group, nl: str, indent: str, literal) -> str:
+        dims = g.decl.dims
+        lits = [literal(g, k) for k in range(len(g.decl.value))]
+
+        def nest(items, ds):
+            if len(ds) == 1:
+                return "[" + ",".join(items) + "]"
+            step = len(items) // ds[0]
+            return "[" + ",".join(nest(items[i * step:(i + 1) * step], ds[1:])
+                                  for i in range(ds[0])) + "]"
+        rows = len(lits) // dims[0]
+        parts = [nest(lits[i * rows:(i + 1) * rows], dims[1:]) if len(dims) > 1 else lits[i]
+                 for i in range(dims[0])]
+        inner = indent + "    "
+        return "[" + nl + inner + ("," + nl + inner).join(parts) + "]"
+
+    def _pose_literal(self, g: Group, k) -> str:
+        d, dq, _ = self.values.pose_dq(g, k)
+        return ("[[" + ",".join(numbers.mm(float(v)) for v in d) + "],["
+                + ",".join(numbers.fmt(float(v), numbers.QUAT_DECIMALS) for v in dq) + "]]")
+
+    def _apply_transient(self, g: Group) -> None:
+        """The cold value and the steady-state correction as named
+        constants, each move's target computed from them by rcTcJ. A
+        jointtarget of the program stays as written (it is the cold value)
+        and gets its <name>_dq; a robtarget becomes jt_<name> and
+        jt_<name>_dq, its move a MoveAbsJ."""
+        from .transient import FUNC_J, FUNC_R
+        if g.mode == "rob":
+            for k in g.elements:
+                _, _, conf = self.values.pose_dq(g, k)
+                written = np.asarray(self.values.source(g, k).record.conf)
+                if not np.array_equal(conf, written):
+                    g.failure = (f"the warm robot needs confdata {_conf(conf)}, the cold one "
+                                 f"{_conf(written)}: one robtarget cannot carry both states "
+                                 "(--emit absj makes it a MoveAbsJ)", k)
+                    for u in g.uses:
+                        self.actions.pop(u.key, None)
+                    return
+            self._apply_transient_rob(g, FUNC_R)
+            return
+        if g.placement == "inline" or g.decl is None:
+            for u in g.uses:
+                k = u.source.element
+                cold = (u.file.text(u.source.expr) if g.mode == "joint"
+                        else self._cold_literal(g, k))
+                target = f"{FUNC_J}({cold}, {self._dq_literal(g, k)})"
+                if g.mode == "joint":
+                    self.edit(u.key[0], u.source.expr.span, target, f"{u.label} -> {FUNC_J}")
+                    self.actions[u.key] = f"inline jointtarget -> {FUNC_J}(cold, correction)"
+                else:
+                    self._to_absj(u, target)
+                    self.actions[u.key] = (f"{u.motion.instruction} -> MoveAbsJ "
+                                           f"{FUNC_J}(cold, correction)")
+            return
+        stem = g.decl.name
+        if g.src.call is not None:
+            stem += "_" + g.src.call.name.lower()
+        _, _, nl, indent, _ = self._anchor(g)
+        # Element (or "array") -> (cold name or None: the program's own
+        # jointtarget is the cold value, correction name).
+        names: dict = {}
+        if g.array:
+            dims = "{" + ",".join(map(str, g.decl.dims)) + "}"
+            cold = None if g.mode == "joint" else self.names.new("jt_" + stem)
+            dq = self.names.new((cold or stem)[:29] + "_dq")
+            if cold is not None:
+                self.declare(g, "jointtarget", cold, dims,
+                             self._array_literal(g, nl, indent, self._cold_literal))
+            self.declare(g, "jointtarget", dq, dims,
+                         self._array_literal(g, nl, indent, self._dq_literal))
+            names["array"] = (cold, dq)
+        else:
+            for k in g.elements:
+                s = stem if k is None else stem + "_" + "_".join(
+                    map(str, multi_index(k, g.decl.dims)))
+                cold = None if g.mode == "joint" else self.names.new("jt_" + s)
+                dq = self.names.new((cold or s)[:29] + "_dq")
+                if cold is not None:
+                    self.declare(g, "jointtarget", cold, "", self._cold_literal(g, k))
+                self.declare(g, "jointtarget", dq, "", self._dq_literal(g, k))
+                names[k] = (cold, dq)
+        for key, (cold, dq) in names.items():
+            g.names[key] = cold or g.decl.name
+        for u in g.uses:
+            src = u.source
+            ref_text = u.file.text(src.ref)
+            cold, dq = names["array"] if g.array else names[src.element]
+            index = ref_text[len(src.ref.name):] if g.array else ""
+            cold_ref = (cold + index) if cold is not None else ref_text
+            target = f"{FUNC_J}({cold_ref}, {dq}{index})"
+            if g.mode == "joint":
+                self.edit(u.key[0], src.ref.span, target, f"{u.label} -> {FUNC_J}")
+                self.actions[u.key] = f"{ref_text} -> {target}"
+            else:
+                self._to_absj(u, target)
+                self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {target}"
+
+    def _apply_transient_rob(self, g: Group, func: str) -> None:
+        """A robtarget move keeps its kind (a MoveL its straight line): its
+        target becomes func(<robtarget as written>, <name>_dq), the
+        correction a pose (translation and quaternion difference)."""
+        if g.placement == "inline" or g.decl is None:
+            for u in g.uses:
+                k = u.source.element
+                target = f"{func}({u.file.text(u.source.ref)}, {self._pose_literal(g, k)})"
+                self.edit(u.key[0], u.source.ref.span, target, f"{u.label} -> {func}")
+                self.actions[u.key] = f"inline robtarget -> {func}(written, correction)"
+            return
+        stem = g.decl.name
+        if g.src.call is not None:
+            stem += "_" + g.src.call.name.lower()
+        _, _, nl, indent, _ = self._anchor(g)
+        names: dict = {}
+        if g.array:
+            dims = "{" + ",".join(map(str, g.decl.dims)) + "}"
+            dq = self.names.new(stem[:29] + "_dq")
+            self.declare(g, "pose", dq, dims,
+                         self._array_literal(g, nl, indent, self._pose_literal))
+            names["array"] = dq
+        else:
+            for k in g.elements:
+                s = stem if k is None else stem + "_" + "_".join(
+                    map(str, multi_index(k, g.decl.dims)))
+                dq = self.names.new(s[:29] + "_dq")
+                self.declare(g, "pose", dq, "", self._pose_literal(g, k))
+                names[k] = dq
+        for u in g.uses:
+            src = u.source
+            ref_text = u.file.text(src.ref)
+            dq = names["array"] if g.array else names[src.element]
+            index = ref_text[len(src.ref.name):] if g.array else ""
+            target = f"{func}({ref_text}, {dq}{index})"
+            self.edit(u.key[0], src.ref.span, target, f"{u.label} -> {func}")
+            self.actions[u.key] = f"{ref_text} -> {target}"
+
     def _to_absj(self, u, target_text: str) -> None:
         m = u.motion
         fi = u.key[0]
@@ -296,4 +481,8 @@ class Editor:
                                                                      for d in decls),
                                                    "new declarations"))
         return {fi: sorted(es, key=lambda e: (e.start, e.end)) for fi, es in out.items()}
+
+
+def _conf(c) -> str:
+    return "[" + ",".join(str(int(x)) for x in c) + "]"
 

@@ -70,27 +70,32 @@ class FixResult:
 
 
 def fix(task: Task, solver: Solver, mode: str = "auto", timings: dict | None = None,
-        track=(), output_names: dict | None = None, start=None, base=None) -> FixResult:
+        track=(), output_names: dict | None = None, start=None, base=None,
+        transient=None) -> FixResult:
     """Compensate the modules of `task` (its context modules supply data
     only). Targets that cannot be compensated keep their text and are
     listed with the reason; whether to write such an output is the caller's
     decision (FixResult.failed). `timings`, when given, receives seconds per
     stage; output_names maps a module's display path to the name its diff
     shows for the output; base: world_M_base (R, p) of the robot, default
-    the identity."""
+    the identity. transient: (Transient, {s: Solver of the robot deformed
+    by s . profile}) writes the correction for the run-time thermal state
+    (transient.py), verified at every s."""
     import gc
     # Like the parser: 1e5 targets make millions of small objects and no
     # cycles; the cyclic collector would rescan them all, again and again.
     enabled = gc.isenabled()
     gc.disable()
     try:
-        return _fix(task, solver, mode, timings, track, output_names or {}, start, base)
+        return _fix(task, solver, mode, timings, track, output_names or {}, start, base,
+                    transient)
     finally:
         if enabled:
             gc.enable()
 
 
-def _fix(task, solver, mode, timings, track, output_names, start, base) -> FixResult:
+def _fix(task, solver, mode, timings, track, output_names, start, base,
+         transient=None) -> FixResult:
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}")
     clock = _Clock(timings)
@@ -100,13 +105,14 @@ def _fix(task, solver, mode, timings, track, output_names, start, base) -> FixRe
     clock("solve")
     gs = P.groups(plan, solved, mode)
     values = Values(plan, solved, solver.options.quadrant_tol_deg)
+    state_errors: dict = {}
     # A written value that does not reproduce its compensated joints (the
     # ideal controller's IK lands elsewhere) fails its group; the rest is
     # placed, written and verified again without it.
     for _ in range(4):
         P.place(plan, gs)
         P.fill_slots(plan, solver, gs)
-        editor = Editor(plan, values)
+        editor = Editor(plan, values, transient is not None)
         for g in gs:
             if g.failure is None:
                 editor.apply(g)
@@ -117,7 +123,10 @@ def _fix(task, solver, mode, timings, track, output_names, start, base) -> FixRe
         out_files = reparse(plan, texts)
         clock("re-parse")
         keys = [u.key for g in gs if g.failure is None for u in g.uses]
-        verified = verify(plan, solved, keys, out_files, solver) if keys else {}
+        if transient is None:
+            verified = verify(plan, solved, keys, out_files, solver) if keys else {}
+        else:
+            verified, state_errors = _verify_states(plan, solved, keys, texts, transient[1])
         clock("verify")
         missed = _missed(solved, gs, verified)
         if not missed:
@@ -135,6 +144,8 @@ def _fix(task, solver, mode, timings, track, output_names, start, base) -> FixRe
     rows = use_rows(plan, solved, group_of=group_of, actions=editor.actions, verified=verified,
                     mode=mode, written_conf=written_conf)
     notes = plan.notes() + _notes(rows, gs)
+    if transient is not None:
+        notes += _transient_notes(transient[0], state_errors)
     modules = []
     for fi, pf in enumerate(task.files):
         es = file_edits.get(fi, [])
@@ -143,6 +154,41 @@ def _fix(task, solver, mode, timings, track, output_names, start, base) -> FixRe
         modules.append(ModuleOutput(name, texts.get(fi, pf.source.text), tuple(es), tuple(diff)))
     clock("report")
     return FixResult(mode, task.name, tuple(modules), tuple(rows), tuple(notes))
+
+
+def _verify_states(plan, solved, keys, texts, solvers) -> tuple[dict, dict]:
+    """Transient: the written program at every thermal state s, each
+    rcTcJ(cold, dq) evaluated as the controller does, verified on the robot
+    deformed by s . profile. Per use the worst state's residual; per state
+    the worst use's."""
+    from .transient import materialize
+    names = {fi: plan.files[fi].source.display_path for fi in texts}
+    worst: dict = {}
+    by_state: dict = {}
+    for s, state_solver in solvers.items():
+        out_files = reparse(plan, materialize(texts, names, s))
+        got = verify(plan, solved, keys, out_files, state_solver) if keys else {}
+        by_state[s] = (max([um for um, _ in got.values()] or [0.0]),
+                       max([deg for _, deg in got.values()] or [0.0]))
+        for k, (um, deg) in got.items():
+            a, b = worst.get(k, (0.0, 0.0))
+            worst[k] = (max(a, um), max(b, deg))
+    return worst, by_state
+
+
+def _transient_notes(tr, state_errors: dict) -> list[str]:
+    from .transient import FUNC_J, FUNC_R, MODULE_FILE
+    figures = "; ".join(f"s={s:g}: {um:.3f} um / {deg:.1e} deg"
+                        for s, (um, deg) in sorted(state_errors.items()))
+    return [f"transient: each compensated move goes to {FUNC_J}(cold, dq) (MoveAbsJ) or "
+            f"{FUNC_R}(cold, dq) (a robtarget move, which keeps its kind) = the cold robot's "
+            "target + s x the warm robot's correction; load "
+            f"{MODULE_FILE} (written next to the output) into the same task. State law: "
+            f"{tr.law}.",
+            "transient: the written numbers evaluated as the controller computes them (float32) "
+            "at every thermal state, on the robot deformed by s x profile, worst target: "
+            f"{figures} (what is left beyond float32 rounding is the linearisation q_cold + "
+            "s x dq, second order in the deformation)."]
 
 
 def _missed(solved, gs, verified) -> dict:

@@ -20,7 +20,7 @@ from ..progress import Progress
 from ..rapid.task import TaskSource
 from . import report
 from .fix import FixResult, fix
-from .load import load_solver, load_task, robot_base
+from .load import load_solver, load_state_solvers, load_task, robot_base
 
 
 @dataclass(frozen=True)
@@ -39,6 +39,7 @@ class JobSpec:
     start: tuple[float, ...] | None = None
     base: tuple[float, ...] | None = None       # --base X,Y,Z,Q1..Q4
     progress: bool | None = None
+    transient: object | None = None               # transient.Transient
 
     @property
     def program(self) -> str:
@@ -90,8 +91,14 @@ def run(spec: JobSpec) -> JobOutcome:
     progress.stage("compensating")
     names = {} if src.is_folder else {src.modules[0]: Path(spec.output).name}
     base, base_text = robot_base(src, spec.base)
+    transient = None
+    if spec.transient is not None:
+        from .transient import check_names
+        check_names(task)
+        transient = (spec.transient, load_state_solvers(spec.profile, spec.robot, spec.force,
+                                                        spec.limits))
     result = fix(task, solver, spec.mode, track=parse_track(spec.track), output_names=names,
-                 start=spec.start, base=base)
+                 start=spec.start, base=base, transient=transient)
     if src.notes:
         result = replace(result, notes=src.notes + result.notes)
     progress.stage("writing")
@@ -108,6 +115,8 @@ def run(spec: JobSpec) -> JobOutcome:
         meta["track"] = ", ".join(spec.track)
     if spec.start:
         meta["start"] = ", ".join(f"{v:g}" for v in spec.start)
+    if spec.transient is not None:
+        meta["transient"] = spec.transient.law
     if src.is_folder:
         meta = {"input": f"{src.kind} {src.input.name}" + (f", task {src.task}" if src.task
                                                            else ""),
@@ -115,6 +124,14 @@ def run(spec: JobSpec) -> JobOutcome:
     out = []
     for pf, m in zip(task.files, result.modules):
         out.append((str(output_path(spec, m.path)), pf.source.encode(m.text)))
+    if spec.transient is not None:
+        from .transient import MODULE_FILE, support_module
+        # Next to the task's (first) module, in its line breaks.
+        first = task.files[0].source
+        nl = "\r\n" if "\r\n" in first.text else "\n"
+        where = output_path(spec, src.modules[0]).parent if src.is_folder \
+            else Path(spec.output).parent
+        out.append((str(where / MODULE_FILE), support_module(spec.transient, nl).encode("ascii")))
     if spec.report:
         out.append((spec.report, report.markdown(result, meta).encode("utf-8")))
     if spec.json:

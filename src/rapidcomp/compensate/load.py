@@ -34,6 +34,17 @@ def load_solver(profile: str, robot: str | None, force: bool, limits=()):
         raise RapidcompError(f"{robot}: {exc}") from exc
 
 
+def load_state_solvers(profile: str, robot: str | None, force: bool, limits=()) -> dict:
+    """Transient: {s: Solver of the robot deformed by s . profile} for the
+    thermal states the written program is verified at."""
+    from ..kinematics.ik import Solver
+    from ..kinematics.profile import deform, read_profile, scaled
+    from .transient import STATES
+    nominal = load_robot(robot, limits)
+    prof = read_profile(profile, force=force, joint_names=nominal.joint_names)
+    return {s: Solver(nominal, deform(nominal, scaled(prof, s))) for s in STATES}
+
+
 def load_task(source: TaskSource, with_modules=()) -> Task:
     """Parse the task's modules (named by their path inside the task) and
     the --with modules; a module name twice in a task is refused, as the

@@ -286,6 +286,22 @@ def joint_map(robot: RobotModel, profile: ThermalProfile) -> JointMap | None:
                     comp, gravity)
 
 
+def scaled(profile: ThermalProfile, s: float) -> ThermalProfile:
+    """s . profile: the deformation at thermal state s (0 cold, 1 the
+    measured steady state). Every number of the profile is a deformation
+    and is multiplied by s (displacements, rotation angles, base frame,
+    joint offsets, scales, compliances); the payload is a load, not a
+    deformation, and is kept."""
+    def disp(d: Displacement) -> Displacement:
+        return Displacement(tuple(s * x for x in d.d_mm), tuple(s * x for x in d.r_deg))
+    return ThermalProfile(
+        tuple((name, disp(d)) for name, d in profile.displacements), profile.source,
+        disp(profile.base),
+        tuple((name, JointTerms(s * t.offset_deg, s * t.scale, s * t.compliance_deg_per_nm))
+              for name, t in profile.joint_terms),
+        profile.payload)
+
+
 def deform(robot: RobotModel, profile: ThermalProfile) -> RobotModel:
     """A deformed copy of `robot`; the nominal model is left untouched."""
     model = robot.copy_model()

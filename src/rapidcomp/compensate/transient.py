@@ -1,0 +1,468 @@
+"""Transient compensation: the correction applied at run time for the
+robot's current thermal state s, not only for the warm robot.
+
+Thermal state model (README "Transient compensation"). The deformation at
+state s is s . profile (kinematics/profile.scaled): s = 0 cold, s = 1 the
+measured steady state. Because the deformation is tiny, the joints the robot
+needs at state s are, to first order, q_cold + s . dq with dq = q_warm -
+q_cold: every compensated target is written as its cold value and its
+correction, and the move's target is rcTcJ(cold, dq), a function of the
+generated support module (support_module) that also keeps s up to date:
+
+- clock law: between two compensated moves at most `gap_min` apart the robot
+  runs and s rises towards 1 with time constant tau_heat; a longer gap (a
+  stop, a pause, power off) is standing and s falls towards 0 with tau_cool.
+  The time comes from the controller's calendar clock (CDate/CTime, read
+  so that midnight cannot fall between date and time), kept in PERS data,
+  so it survives program stops, restarts and power off.
+- sensor law: s = clip((T - T_cold) / (T_warm - T_cold), 0, 1), T an analog
+  input (AInput).
+
+`state_after` is the Python twin of the clock law; tests execute the
+generated RAPID (a small evaluator in tests/) and compare the two.
+
+Verification (fix.py): for every s in STATES the written program is
+materialized (each rcTcJ(cold, dq) replaced by its float32 value, as the
+controller computes it) and verified as any output is, on the robot
+deformed by s . profile.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..edits import SpanEdit, apply_edits
+from ..errors import InternalError, RapidcompError
+from ..rapid import ast as A
+from ..rapid.parse import parse_text
+
+FUNC_J = "rcTcJ"
+FUNC_R = "rcTcR"
+MODULE = "rcThermal"
+MODULE_FILE = "rcThermal.sys"
+STATES = (0.0, 0.25, 0.5, 0.75, 1.0)
+# Defaults (minutes). Cooling is slower than heating on a standing arm (no
+# motor losses, only convection); both are settable and the profile may
+# carry them.
+DEFAULT_TAU_COOL_FACTOR = 1.0
+DEFAULT_GAP_MIN = 2.0
+MINUTES_PER_DAY = 1440.0
+
+
+@dataclass(frozen=True)
+class Transient:
+    """How s is known at run time: the clock law (tau_heat_min, tau_cool_min,
+    gap_min) or a temperature sensor (signal, t_cold, t_warm)."""
+
+    tau_heat_min: float | None = None
+    tau_cool_min: float | None = None
+    gap_min: float = DEFAULT_GAP_MIN
+    signal: str | None = None
+    t_cold: float = 0.0
+    t_warm: float = 0.0
+
+    @property
+    def law(self) -> str:
+        if self.signal is not None:
+            return (f"s from analog input {self.signal}: (T - {self.t_cold:g}) / "
+                    f"({self.t_warm:g} - {self.t_cold:g}), clipped to 0..1")
+        return (f"clock: heating tau {self.tau_heat_min:g} min while running, cooling tau "
+                f"{self.tau_cool_min:g} min after a gap of more than {self.gap_min:g} min")
+
+
+def make_transient(tau_heat: float | None, tau_cool: float | None, gap: float | None,
+                   temperature: str | None) -> Transient:
+    """The options of `fix --transient`, checked (RapidcompError: exit 2)."""
+    if temperature is not None:
+        if tau_heat is not None or tau_cool is not None:
+            raise RapidcompError("--temperature and --tau-heat/--tau-cool are two ways to know "
+                                 "the thermal state: give one")
+        parts = temperature.split(":")
+        if len(parts) != 3:
+            raise RapidcompError(f"--temperature {temperature}: expected SIGNAL:T_COLD:T_WARM "
+                                 "(an analog input and its readings cold and warm)")
+        name = parts[0]
+        if not _identifier(name):
+            raise RapidcompError(f"--temperature {temperature}: {name!r} is not a RAPID signal "
+                                 "name (a letter, then letters, digits or _, at most 32)")
+        try:
+            cold, warm = float(parts[1]), float(parts[2])
+        except ValueError:
+            raise RapidcompError(f"--temperature {temperature}: T_COLD and T_WARM must be "
+                                 "numbers") from None
+        if not (math.isfinite(cold) and math.isfinite(warm)) or abs(warm - cold) < 1e-6 \
+                or max(abs(cold), abs(warm)) > 1e6:
+            raise RapidcompError(f"--temperature {temperature}: T_COLD and T_WARM must be "
+                                 "finite, different numbers")
+        return Transient(signal=name, t_cold=cold, t_warm=warm)
+    if tau_heat is None:
+        raise RapidcompError("--transient needs how the thermal state is known: --tau-heat MIN "
+                             "[--tau-cool MIN] (clock) or --temperature SIGNAL:T_COLD:T_WARM")
+    for label, v in (("--tau-heat", tau_heat), ("--tau-cool", tau_cool), ("--gap", gap)):
+        if v is not None and not (math.isfinite(v) and 0 < v <= 100_000):
+            raise RapidcompError(f"{label} {v:g}: minutes, more than 0 and at most 100000")
+    return Transient(tau_heat, tau_cool if tau_cool is not None
+                     else tau_heat * DEFAULT_TAU_COOL_FACTOR,
+                     gap if gap is not None else DEFAULT_GAP_MIN)
+
+
+def _identifier(name: str) -> bool:
+    return (0 < len(name) <= 32 and name[0].isascii() and name[0].isalpha()
+            and all(c.isascii() and (c.isalnum() or c == "_") for c in name))
+
+
+# The support module's global names: a task that has any of them already
+# cannot load it (or was compensated with --transient before).
+GLOBAL_NAMES = ("rcS", "rcLastDay", "rcLastMin", "rcTauHeat", "rcTauCool", "rcGapMin",
+                "rcTCold", "rcTWarm", "rcNow", "rcUpdate", FUNC_J, FUNC_R, "rcThermalSet",
+                "rcThermalShow", MODULE)
+
+
+def check_names(task) -> None:
+    """RapidcompError when the task already declares one of the support
+    module's names."""
+    import re
+    taken = {n.lower(): n for n in GLOBAL_NAMES}
+    for pf in task.files:
+        words = {w.lower() for w in re.findall(r"[A-Za-z][A-Za-z0-9_]*", pf.source.text)}
+        clash = sorted(taken[w] for w in words & set(taken))
+        if clash:
+            raise RapidcompError(
+                f"{pf.source.display_path}: uses {', '.join(clash)}, a name of the transient "
+                f"support module {MODULE_FILE}: the task cannot load both (compensated with "
+                "--transient already? Compensate the original program)")
+
+
+# ------------------------------------------------------------- Python twin
+
+def state_after(s: float, dt_min: float, tr: Transient) -> float:
+    """The clock law (the generated rcUpdate's twin): the state dt_min
+    after a state s."""
+    dt = max(0.0, dt_min)
+    if dt <= tr.gap_min:
+        return 1.0 - (1.0 - s) * math.exp(-dt / tr.tau_heat_min)
+    return s * math.exp(-dt / tr.tau_cool_min)
+
+
+def day_number(year: int, month: int, day: int) -> int:
+    """Days since 2000-03-01 (the generated rcNow's formula: a year counted
+    from March, so that the leap day is its last)."""
+    y, m = (year - 1, month + 12) if month < 3 else (year, month)
+    y -= 2000
+    return 365 * y + y // 4 - y // 100 + y // 400 + (153 * (m - 3) + 2) // 5 + day - 1
+
+
+# ------------------------------------------------------------- the module
+
+def support_module(tr: Transient, nl: str = "\n") -> str:
+    """The RAPID support module: s as PERS data, its update, rcTcJ, and the
+    operator's routines. Only instructions every IRC5 has (no options)."""
+    i1, i2, i3 = "    ", "        ", "            "
+    head = [
+        f"MODULE {MODULE}(SYSMODULE,NOSTEPIN)",
+        f"{i1}! rapidcomp transient thermal compensation, written by `rapidcomp fix --transient`.",
+        f"{i1}! A compensated move goes to {FUNC_J}(cold, dq) or {FUNC_R}(cold, dq): the target",
+        f"{i1}! the cold robot needs plus rcS times the warm robot's correction (the measured",
+        f"{i1}! steady state).",
+        f"{i1}! rcS is the thermal state: 0 cold, 1 warm. {tr.law}.",
+        f"{i1}! Read or set it in the program data window, or call rcThermalSet / rcThermalShow.",
+        f"{i1}PERS num rcS:=0;",
+    ]
+    if tr.signal is None:
+        head += [
+            f"{i1}! When rcS was last updated: days since 2000-03-01 and minutes of that day.",
+            f"{i1}PERS num rcLastDay:=-1;",
+            f"{i1}PERS num rcLastMin:=0;",
+            f"{i1}CONST num rcTauHeat:={_num(tr.tau_heat_min)};",
+            f"{i1}CONST num rcTauCool:={_num(tr.tau_cool_min)};",
+            f"{i1}CONST num rcGapMin:={_num(tr.gap_min)};",
+            "",
+            f"{i1}PROC rcNow(INOUT num day,INOUT num mins)",
+            f"{i2}VAR string d1;",
+            f"{i2}VAR string d2;",
+            f"{i2}VAR string t;",
+            f"{i2}VAR num y;",
+            f"{i2}VAR num m;",
+            f"{i2}VAR num d;",
+            f"{i2}VAR num hh;",
+            f"{i2}VAR num mm;",
+            f"{i2}VAR num ss;",
+            f"{i2}VAR bool ok;",
+            f"{i2}d1:=CDate();",
+            f"{i2}t:=CTime();",
+            f"{i2}d2:=CDate();",
+            f"{i2}IF d1<>d2 THEN",
+            f"{i3}! midnight passed between the readings: read the time of the new day",
+            f"{i3}t:=CTime();",
+            f"{i2}ENDIF",
+            f"{i2}ok:=StrToVal(StrPart(d2,1,4),y);",
+            f"{i2}ok:=StrToVal(StrPart(d2,6,2),m);",
+            f"{i2}ok:=StrToVal(StrPart(d2,9,2),d);",
+            f"{i2}ok:=StrToVal(StrPart(t,1,2),hh);",
+            f"{i2}ok:=StrToVal(StrPart(t,4,2),mm);",
+            f"{i2}ok:=StrToVal(StrPart(t,7,2),ss);",
+            f"{i2}! a year counted from March: the leap day is its last",
+            f"{i2}IF m<3 THEN",
+            f"{i3}y:=y-1;",
+            f"{i3}m:=m+12;",
+            f"{i2}ENDIF",
+            f"{i2}y:=y-2000;",
+            f"{i2}day:=365*y+y DIV 4-y DIV 100+y DIV 400+(153*(m-3)+2) DIV 5+d-1;",
+            f"{i2}mins:=hh*60+mm+ss/60;",
+            f"{i1}ENDPROC",
+            "",
+            f"{i1}PROC rcUpdate()",
+            f"{i2}VAR num day;",
+            f"{i2}VAR num mins;",
+            f"{i2}VAR num dt;",
+            f"{i2}rcNow day,mins;",
+            f"{i2}IF rcLastDay>=0 THEN",
+            f"{i3}! days and minutes apart: float32 holds both exactly",
+            f"{i3}dt:=(day-rcLastDay)*1440+(mins-rcLastMin);",
+            f"{i3}IF dt<0 THEN",
+            f"{i3}    ! the clock was set back: nothing is known of the gap",
+            f"{i3}    dt:=0;",
+            f"{i3}ENDIF",
+            f"{i3}IF dt<=rcGapMin THEN",
+            f"{i3}    ! running: towards warm",
+            f"{i3}    rcS:=1-(1-rcS)*Exp(-dt/rcTauHeat);",
+            f"{i3}ELSE",
+            f"{i3}    ! a stop, a pause or power off: towards cold",
+            f"{i3}    rcS:=rcS*Exp(-dt/rcTauCool);",
+            f"{i3}ENDIF",
+            f"{i2}ENDIF",
+            f"{i2}rcLastDay:=day;",
+            f"{i2}rcLastMin:=mins;",
+            f"{i1}ENDPROC",
+        ]
+        set_time = [f"{i2}rcNow rcLastDay,rcLastMin;"]
+    else:
+        head += [
+            f"{i1}CONST num rcTCold:={_num(tr.t_cold)};",
+            f"{i1}CONST num rcTWarm:={_num(tr.t_warm)};",
+            "",
+            f"{i1}PROC rcUpdate()",
+            f"{i2}rcS:=(AInput({tr.signal})-rcTCold)/(rcTWarm-rcTCold);",
+            f"{i2}IF rcS<0 rcS:=0;",
+            f"{i2}IF rcS>1 rcS:=1;",
+            f"{i1}ENDPROC",
+        ]
+        set_time = []
+    body = [
+        "",
+        f"{i1}FUNC jointtarget {FUNC_J}(jointtarget cold,jointtarget dq)",
+        f"{i2}VAR jointtarget jt;",
+        f"{i2}rcUpdate;",
+        f"{i2}jt:=cold;",
+    ] + [f"{i2}jt.robax.rax_{k}:=cold.robax.rax_{k}+rcS*dq.robax.rax_{k};" for k in range(1, 7)] + [
+        f"{i2}RETURN jt;",
+        f"{i1}ENDFUNC",
+        "",
+        f"{i1}! A robtarget move keeps its kind (a MoveL its straight line): the written",
+        f"{i1}! robtarget plus rcS times the correction (translation, quaternion difference).",
+        f"{i1}FUNC robtarget {FUNC_R}(robtarget cold,pose dq)",
+        f"{i2}VAR robtarget rt;",
+        f"{i2}rcUpdate;",
+        f"{i2}rt:=cold;",
+        f"{i2}rt.trans.x:=cold.trans.x+rcS*dq.trans.x;",
+        f"{i2}rt.trans.y:=cold.trans.y+rcS*dq.trans.y;",
+        f"{i2}rt.trans.z:=cold.trans.z+rcS*dq.trans.z;",
+    ] + [f"{i2}rt.rot.q{k}:=cold.rot.q{k}+rcS*dq.rot.q{k};" for k in range(1, 5)] + [
+        f"{i2}rt.rot:=NOrient(rt.rot);",
+        f"{i2}RETURN rt;",
+        f"{i1}ENDFUNC",
+        "",
+        f"{i1}PROC rcThermalSet(num s)",
+        f"{i2}! what the operator knows: 0 cold (after a long stop), 1 warm",
+        f"{i2}rcS:=s;",
+        f"{i2}IF rcS<0 rcS:=0;",
+        f"{i2}IF rcS>1 rcS:=1;",
+    ] + set_time + [
+        f"{i1}ENDPROC",
+        "",
+        f"{i1}PROC rcThermalShow()",
+        f"{i2}rcUpdate;",
+        f'{i2}TPWrite "rapidcomp thermal state (0 cold, 1 warm): "\\Num:=rcS;',
+        f"{i1}ENDPROC",
+        "ENDMODULE",
+    ]
+    return nl.join(head + body) + nl
+
+
+def _num(x: float) -> str:
+    text = f"{x:.6g}"
+    if "e" in text or "E" in text:
+        raise RapidcompError(f"{x:g}: out of the range the support module writes")
+    return text
+
+
+# ------------------------------------------------------------- verification
+
+def f32(x) -> np.ndarray:
+    return np.asarray(x, dtype=np.float32)
+
+
+def state_joints(cold, dq, s: float) -> np.ndarray:
+    """rcTcJ as the controller computes it: float32 numbers, float32
+    arithmetic (cold + s * dq)."""
+    return (f32(cold) + f32(f32(s) * f32(dq))).astype(np.float32)
+
+
+def state_pose(trans, rot, d_trans, d_rot, s: float):
+    """rcTcR as the controller computes it: translation and quaternion
+    components cold + s * dq in float32, the quaternion normalized
+    (NOrient)."""
+    t = state_joints(trans, d_trans, s)
+    q = state_joints(rot, d_rot, s).astype(float)
+    return t, f32(q / np.linalg.norm(q))
+
+
+def _walk(node):
+    """Every AST node under `node` (dataclass fields, tuples)."""
+    stack = [node]
+    while stack:
+        n = stack.pop()
+        if isinstance(n, tuple):
+            stack.extend(n)
+            continue
+        if not hasattr(n, "__dataclass_fields__"):
+            continue
+        yield n
+        if isinstance(n, A.NumAgg):
+            continue
+        for name in n.__dataclass_fields__:
+            stack.append(getattr(n, name))
+
+
+def _aggs(expr) -> tuple:
+    if isinstance(expr, (A.Agg, A.NumAgg)):
+        return expr.items
+    raise InternalError("a transient value is not a literal")
+
+
+def _is_numbers(expr, n: int) -> bool:
+    return isinstance(expr, (A.Agg, A.NumAgg)) and len(expr.items) == n and \
+        all(isinstance(v, (A.Num, A.Unary)) for v in expr.items)
+
+
+def _leaves(expr, kind: str) -> list:
+    """The literals of `kind` in a value (a literal, or an array's nested
+    literals), in order, as their groups of number nodes: a jointtarget
+    [robax]; a robtarget [trans, rot]; a pose [trans, rot]."""
+    items = _aggs(expr)
+    if kind == "jointtarget" and len(items) == 2 and _is_numbers(items[0], 6):
+        return [(items[0].items,)]
+    if kind == "robtarget" and len(items) == 4 and _is_numbers(items[0], 3) \
+            and _is_numbers(items[1], 4):
+        return [(items[0].items, items[1].items)]
+    if kind == "pose" and len(items) == 2 and _is_numbers(items[0], 3) \
+            and _is_numbers(items[1], 4):
+        return [(items[0].items, items[1].items)]
+    out = []
+    for x in items:
+        out += _leaves(x, kind)
+    return out
+
+
+def _value(node) -> float:
+    if isinstance(node, A.Num):
+        return node.value
+    if isinstance(node, A.Unary) and node.op in "+-":
+        v = _value(node.operand)
+        return -v if node.op == "-" else v
+    raise InternalError("a transient value is not a number")
+
+
+def _values(nodes) -> list[float]:
+    return [_value(x) for x in nodes]
+
+
+def _text(v) -> str:
+    return f"{float(v):.9g}"
+
+
+def _state_text(text: str, cold, dq, func: str, s: float) -> str:
+    """The cold value's text (a literal or an array of them) with every
+    number the state changes replaced by its value at s."""
+    kind = "jointtarget" if func.lower() == FUNC_J.lower() else "robtarget"
+    c = _leaves(cold, kind)
+    d = _leaves(dq, "jointtarget" if kind == "jointtarget" else "pose")
+    if len(c) != len(d):
+        raise InternalError("a transient value and its correction differ in size")
+    base = cold.span.start
+    edits = []
+    for cv, dv in zip(c, d):
+        if kind == "jointtarget":
+            nodes, new = cv[0], state_joints(_values(cv[0]), _values(dv[0]), s)
+        else:
+            t, q = state_pose(_values(cv[0]), _values(cv[1]), _values(dv[0]), _values(dv[1]), s)
+            nodes, new = cv[0] + cv[1], np.concatenate([t, q])
+        edits += [SpanEdit(x.span.start - base, x.span.end - base, _text(v), "state value")
+                  for x, v in zip(nodes, new)]
+    return apply_edits(text[cold.span.start:cold.span.end],
+                       sorted(edits, key=lambda e: (e.start, e.end)))
+
+
+def materialize(texts: dict, names: dict, s: float) -> dict:
+    """The written files (index -> text) with every rcTcJ/rcTcR(cold, dq)
+    replaced by its value at state s, computed as the controller does
+    (float32): the program a controller without the functions would run at
+    that state. A call on declared data becomes a reference to a new
+    constant holding that value, declared after the correction; an inline
+    call becomes the literal. Only for verification: never written."""
+    parsed = {fi: parse_text(text, names[fi]) for fi, text in texts.items()}
+    decls = {}
+    for fi, pf in parsed.items():
+        for m in pf.modules:
+            for item in m.node.items:
+                if isinstance(item, A.DataDecl):
+                    decls[item.name.lower()] = (fi, item)
+                elif isinstance(item, A.Routine):
+                    for d in item.decls:
+                        decls.setdefault(d.name.lower(), (fi, d))
+    edits: dict = {fi: [] for fi in texts}
+    made: dict = {}
+    funcs = {FUNC_J.lower(): FUNC_J, FUNC_R.lower(): FUNC_R}
+    for fi, pf in parsed.items():
+        text = texts[fi]
+        for m in pf.modules:
+            for node in _walk(m.node):
+                if not (isinstance(node, A.Call) and node.name.lower() in funcs):
+                    continue
+                func = funcs[node.name.lower()]
+                cold, dq = (a.value for a in node.args)
+                if not isinstance(cold, A.Ref):
+                    if isinstance(dq, A.Ref):
+                        raise InternalError(f"{func}: an inline value with a declared correction")
+                    new = _state_text(text, cold, dq, func, s)
+                else:
+                    key = (cold.name.lower(), dq.name.lower())
+                    if key not in made:
+                        made[key] = _declare_state(texts, decls, key, func, s, edits,
+                                                   len(made) + 1)
+                    new = made[key] + text[cold.span.start:cold.span.end][len(cold.name):]
+                edits[fi].append(SpanEdit(node.span.start, node.span.end, new, "state value"))
+    return {fi: apply_edits(texts[fi], sorted(es, key=lambda e: (e.start, e.end)))
+            for fi, es in edits.items()}
+
+
+def _declare_state(texts, decls, key, func, s, edits, n) -> str:
+    cold_name, dq_name = key
+    if cold_name not in decls or dq_name not in decls:
+        raise InternalError(f"{func}({cold_name}, {dq_name}): a declaration is missing")
+    cfi, cold = decls[cold_name]
+    dfi, dq = decls[dq_name]
+    value = _state_text(texts[cfi], cold.init, dq.init, func, s)
+    # Unique: the written program has no name starting "rcState_" (the
+    # support module's names are checked against the task).
+    name = f"rcState_{n}"
+    text = texts[dfi]
+    dims = "{" + ",".join(text[d.span.start:d.span.end] for d in dq.dims) + "}" if dq.dims \
+        else ""
+    type_name = "jointtarget" if func == FUNC_J else "robtarget"
+    edits[dfi].append(SpanEdit(dq.span.end, dq.span.end,
+                               f"\nCONST {type_name} {name}{dims}:={value};", "state value"))
+    return name

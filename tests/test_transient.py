@@ -1,0 +1,253 @@
+"""Transient compensation (#13): the generated support module executed by a
+RAPID evaluator of its own (tests/rapid_eval.py) against the Python twin of
+the state law, and `fix --transient` re-evaluated independently at every
+thermal state with Pinocchio on the robot deformed by s . profile."""
+
+from __future__ import annotations
+
+import math
+import re
+import subprocess
+import sys
+from datetime import datetime, timedelta
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from rapidcomp.compensate.transient import (GLOBAL_NAMES, Transient, day_number, make_transient,
+                                            state_after, support_module)
+from rapidcomp.errors import RapidcompError
+from rapidcomp.kinematics.frames import DEG, quat_wxyz_to_matrix
+from rapidcomp.kinematics.profile import deform, read_profile, scaled
+from rapidcomp.kinematics.robot import irb140
+from rapidcomp.rapid.parse import parse_text
+
+from conftest import FIXTURES
+from rapid_eval import Machine
+
+CLOCK = Transient(45.0, 90.0, 2.0)
+SENSOR = Transient(signal="aiMotorTemp", t_cold=22.0, t_warm=47.0)
+
+
+class Clock:
+    """The controller's calendar clock at a settable time; `race` makes the
+    date change between two reads (midnight passing during rcNow)."""
+
+    def __init__(self, t: datetime):
+        self.t = t
+        self.reads = 0
+        self.race_at = None
+
+    def __call__(self):
+        self.reads += 1
+        t = self.t
+        if self.race_at is not None and self.reads >= self.race_at:
+            t = self.t + timedelta(seconds=2)
+        return t.strftime("%Y-%m-%d"), t.strftime("%H:%M:%S")
+
+
+def test_the_support_module_parses_and_keeps_to_what_an_irc5_loads():
+    for tr in (CLOCK, SENSOR):
+        for nl in ("\n", "\r\n"):
+            text = support_module(tr, nl)
+            pf = parse_text(text, "rcThermal.sys")
+            assert pf.modules[0].name == "rcThermal"
+            assert text.count("\r\n") == (text.count("\n") if nl == "\r\n" else 0)
+            words = set(re.findall(r"\b[A-Za-z][A-Za-z0-9_]*\b", text))
+            assert max(len(w) for w in words) <= 32
+            # No option a controller may not have.
+            for option in ("PathOffset", "EGM", "CorrWrite", "CorrCon", "WorldZone"):
+                assert option not in text
+    assert "AInput(aiMotorTemp)" in support_module(SENSOR)
+
+
+def test_the_clock_law_in_rapid_matches_its_python_twin():
+    """A shift: run 60 min (a compensated move every 20 s), stand 30 min,
+    run 40 min, over midnight; s after every move as the RAPID computes it
+    (float32) and as the twin does."""
+    clock = Clock(datetime(2026, 11, 22, 23, 10, 0))
+    m = Machine(support_module(CLOCK), clock)
+    s, t_prev = 0.0, None
+    schedule = [(60, 20), (None, 30 * 60), (40, 20)]
+    for minutes, step in schedule:
+        if minutes is None:
+            clock.t += timedelta(seconds=step)
+            continue
+        for _ in range(int(minutes * 60 / step)):
+            clock.t += timedelta(seconds=step)
+            m.call("rcUpdate")
+            if t_prev is not None:
+                s = state_after(s, (clock.t - t_prev).total_seconds() / 60, CLOCK)
+            t_prev = clock.t
+            assert float(m.data["rcs"]) == pytest.approx(s, abs=2e-5)
+    # By hand: the first update only stamps the time (59 2/3 min of heating
+    # follow), the first after the stop cools over 30 min 20 s.
+    expected = 1 - math.exp(-(60 - 20 / 60) / 45)
+    expected *= math.exp(-(30 + 20 / 60) / 90)
+    expected = 1 - (1 - expected) * math.exp(-(40 - 20 / 60) / 45)
+    assert float(m.data["rcs"]) == pytest.approx(expected, abs=1e-4)
+
+
+@pytest.mark.parametrize("before, after", [
+    (datetime(2026, 12, 31, 23, 59, 0), datetime(2027, 1, 1, 0, 0, 30)),
+    (datetime(2028, 2, 28, 23, 0, 0), datetime(2028, 3, 1, 1, 0, 0)),   # leap day between
+    (datetime(2026, 11, 20, 17, 0, 0), datetime(2026, 11, 27, 17, 1, 0)),  # a week off
+])
+def test_gaps_across_midnight_years_and_power_off(before, after):
+    clock = Clock(before)
+    m = Machine(support_module(CLOCK), clock)
+    m.call("rcThermalSet", 0.8)
+    clock.t = after
+    m.call("rcUpdate")
+    dt = (after - before).total_seconds() / 60
+    assert float(m.data["rcs"]) == pytest.approx(state_after(0.8, dt, CLOCK), abs=2e-5)
+    y, mo, d = after.year, after.month, after.day
+    assert float(m.data["rclastday"]) == day_number(y, mo, d)
+    assert day_number(y, mo, d) == (after.date() - datetime(2000, 3, 1).date()).days
+
+
+def test_midnight_between_date_and_time_reads_and_a_clock_set_back():
+    clock = Clock(datetime(2026, 11, 22, 23, 59, 59))
+    m = Machine(support_module(CLOCK), clock)
+    m.call("rcThermalSet", 0.5)
+    # The date changes between the first and the second CDate of rcNow.
+    clock.reads, clock.race_at = 0, 3
+    m.call("rcUpdate")
+    assert float(m.data["rclastday"]) == day_number(2026, 11, 23)
+    assert float(m.data["rclastmin"]) == pytest.approx(1 / 60, abs=1e-6)
+    assert float(m.data["rcs"]) == pytest.approx(state_after(0.5, 2 / 60, CLOCK), abs=2e-5)
+    # The clock set back an hour: nothing is known of the gap, s stays.
+    clock.race_at = None
+    clock.t = datetime(2026, 11, 22, 23, 0, 0)
+    before = float(m.data["rcs"])
+    m.call("rcUpdate")
+    assert float(m.data["rcs"]) == pytest.approx(before, abs=1e-7)
+
+
+def test_the_sensor_law_and_the_operators_routines():
+    m = Machine(support_module(SENSOR), inputs={"aiMotorTemp": 34.5})
+    m.call("rcUpdate")
+    assert float(m.data["rcs"]) == pytest.approx(0.5, abs=1e-6)
+    for temp, s in ((10.0, 0.0), (60.0, 1.0)):
+        m.inputs["aiMotorTemp"] = temp
+        m.call("rcThermalShow")
+        assert float(m.data["rcs"]) == s
+    assert m.printed[-1].startswith("rapidcomp thermal state") and m.printed[-1].endswith("1")
+    m.call("rcThermalSet", 7)
+    assert float(m.data["rcs"]) == 1.0
+
+
+def test_rctcj_and_rctcr_compute_cold_plus_s_times_the_correction():
+    m = Machine(support_module(CLOCK), Clock(datetime(2026, 11, 22, 8, 0, 0)))
+    m.data["rcs"] = np.float32(0.25)
+    cold = [[10, 20, 30, 40, 50, 60], [9e9] * 6]
+    dq = [[0.04, -0.02, 0, 0, 0, 0.008], [0] * 6]
+    jt = m.call("rcTcJ", cold, dq)
+    assert [float(jt["robax"][f"rax_{k}"]) for k in (1, 2, 6)] == pytest.approx(
+        [10.01, 19.995, 60.002], abs=1e-5)
+    assert float(jt["extax"]["eax_a"]) == pytest.approx(9e9)
+    rt = [[400, 0, 250], [0.7071068, 0, 0.7071068, 0], [0, 0, 0, 1], [9e9] * 6]
+    rt = m.call("rcTcR", rt, [[0.08, -0.04, 0.12], [0.0001, 0, -0.0001, 0]])
+    assert float(rt["trans"]["x"]) == pytest.approx(400.02, abs=1e-4)
+    q = [float(rt["rot"][k]) for k in ("q1", "q2", "q3", "q4")]
+    assert np.linalg.norm(q) == pytest.approx(1, abs=1e-6)
+
+
+def test_options_are_checked():
+    with pytest.raises(RapidcompError, match="needs how the thermal state"):
+        make_transient(None, None, None, None)
+    with pytest.raises(RapidcompError, match="SIGNAL:T_COLD:T_WARM"):
+        make_transient(None, None, None, "ai1:20")
+    with pytest.raises(RapidcompError, match="not a RAPID signal"):
+        make_transient(None, None, None, "1ai:20:40")
+    with pytest.raises(RapidcompError, match="different"):
+        make_transient(None, None, None, "ai1:20:20")
+    with pytest.raises(RapidcompError, match="give one"):
+        make_transient(30, None, None, "ai1:20:40")
+    with pytest.raises(RapidcompError, match="more than 0"):
+        make_transient(-5, None, None, None)
+    assert make_transient(30, None, None, None) == Transient(30, 30, 2.0)
+
+
+def _rapidcomp(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "rapidcomp", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True)
+
+
+def _literal(text):
+    return [float(x) for x in re.findall(r"[-+]?[\d.]+(?:[eE][-+]?\d+)?", text)]
+
+
+def test_fix_transient_holds_at_every_thermal_state(tmp_path):
+    """The cube program (--emit absj: MoveL becomes MoveAbsJ; the MoveC
+    keeps its robtargets through rcTcR): every MoveAbsJ target of the
+    output, executed with the evaluator at s, put through Pinocchio's FK of
+    the IRB 140 deformed by s . profile, lands on the program's own target
+    (read from the input module, tool0 in the base frame) within 1 um; at
+    s = 0 the written joints are the program's (the paper's Table 5)."""
+    out = tmp_path / "cubes_tr.mod"
+    r = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", FIXTURES / "warm.csv",
+                   "--transient", "--tau-heat", "45", "--emit", "absj", "--limit", "J5=-120:120",
+                   "-o", out, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr + r.stdout
+    assert "76 of 76" in r.stdout and "transient" in r.stdout
+    support = (tmp_path / "rcThermal.sys").read_text()
+    parse_text(out.read_text(), "cubes_tr.mod")
+    source = (FIXTURES / "cubes.mod").read_text()
+    text = out.read_text()
+    robot = irb140()
+    profile = read_profile(FIXTURES / "warm.csv")
+    models = {s: deform(robot, scaled(profile, s)) for s in (0, 0.25, 0.5, 0.75, 1)}
+    m = Machine(support, Clock(datetime(2026, 11, 22, 8, 0, 0)))
+    checked = 0
+    for name in [f"pS{k}" for k in range(1, 10)]:
+        assert re.search(rf"MoveAbsJ rcTcJ\(jt_{name}, jt_{name}_dq\)", text)
+        target = _literal(re.search(rf"CONST robtarget {name}\s*:=\s*(\[.*?\]);", source,
+                                    re.S).group(1))
+        R = quat_wxyz_to_matrix(target[3:7])
+        p = np.array(target[:3])
+        cold = _literal(re.search(rf"CONST jointtarget jt_{name}:=(\[.*?\]);", text).group(1))
+        dq = _literal(re.search(rf"CONST jointtarget jt_{name}_dq:=(\[.*?\]);", text).group(1))
+        for s, model in models.items():
+            m.data["rcs"] = np.float32(s)
+            m.data["rclastday"] = np.float32(-1)
+            jt = m.call("rcTcJ", [cold[:6], cold[6:]], [dq[:6], dq[6:]])
+            q = np.array([float(jt["robax"][f"rax_{k}"]) for k in range(1, 7)])
+            M = model.base_M_flange(q)
+            assert np.linalg.norm(M.translation - p) * 1000 < 1.0
+            assert np.linalg.norm(pin.log3(M.rotation @ R.T)) / DEG < 1e-4
+            checked += 1
+    assert checked == 45
+    # s = 0: the cold robot goes to the program's own joints (Table 5 row 1).
+    cold = _literal(re.search(r"CONST jointtarget jt_pFront\{45\}:=\s*\[\s*(\[\[.*?\]\])",
+                              text, re.S).group(1))
+    assert cold[:6] == pytest.approx([41.85, 44.63, 25.88, 43.53, -75.61, -13.29], abs=0.006)
+    assert "MoveC rcTcR(pS22, pS22_dq), rcTcR(pS23, pS23_dq)" in text
+    # The support module's names are the task's now: compensating the
+    # output again is refused.
+    again = _rapidcomp("fix", out, "--profile", FIXTURES / "warm.csv", "--transient",
+                       "--tau-heat", "45", "-o", tmp_path / "twice.mod", cwd=tmp_path)
+    assert again.returncode == 2 and "rcTcJ" in again.stderr
+    assert not (tmp_path / "twice.mod").exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--tau-heat", "45"], "--tau-heat applies to --transient only"),
+    (["--transient"], "needs how the thermal state is known"),
+    (["--transient", "--tau-heat", "45", "--emit", "robtarget"], "give one of them"),
+    (["--transient", "--temperature", "ai:20"], "SIGNAL:T_COLD:T_WARM"),
+])
+def test_bad_transient_options_exit_2_with_nothing_written(tmp_path, args, message):
+    r = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", FIXTURES / "warm.csv",
+                   "-o", tmp_path / "o.mod", *args, cwd=tmp_path)
+    assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_names_of_the_support_module_are_its_own():
+    assert len(set(n.lower() for n in GLOBAL_NAMES)) == len(GLOBAL_NAMES)
+    text = support_module(CLOCK)
+    pf = parse_text(text, "x.sys")
+    declared = {i.name.lower() for i in pf.modules[0].node.items if hasattr(i, "name")}
+    assert declared | {"rctcold", "rctwarm", "rcthermal"} >= {n.lower() for n in GLOBAL_NAMES}
