@@ -251,3 +251,84 @@ def test_names_of_the_support_module_are_its_own():
     pf = parse_text(text, "x.sys")
     declared = {i.name.lower() for i in pf.modules[0].node.items if hasattr(i, "name")}
     assert declared | {"rctcold", "rctwarm", "rcthermal"} >= {n.lower() for n in GLOBAL_NAMES}
+
+
+def test_the_support_module_goes_where_the_task_loads_it(tmp_path):
+    """A program file lists it after its last module; a backup has it in the
+    task's SYSMOD folder; a task folder next to its modules; robtarget moves
+    keep their kind (MoveL rcTcR(...)), a J4 on its quadrant boundary gets a
+    cold copy with the confdata both states share."""
+    glue = tmp_path / "glueT"
+    r = _rapidcomp("fix", FIXTURES / "tasks" / "glue" / "Glue.pgf", "--profile",
+                   FIXTURES / "warm.csv", "--transient", "--tau-heat", "30", "-o", glue,
+                   cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    pgf = (glue / "Glue.pgf").read_text()
+    assert pgf.splitlines()[-2].strip() == "<Module>rcThermal.sys</Module>"
+    assert (glue / "rcThermal.sys").is_file()
+    backup = tmp_path / "bk"
+    r = _rapidcomp("fix", FIXTURES / "tasks" / "backup_irbt", "--profile", FIXTURES / "warm.csv",
+                   "--transient", "--tau-heat", "30", "--track", "a:x", "-o", backup,
+                   cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert (backup / "RAPID" / "TASK1" / "SYSMOD" / "rcThermal.sys").is_file()
+    cell = tmp_path / "cellT"
+    r = _rapidcomp("fix", FIXTURES / "tasks" / "cell", "--profile", FIXTURES / "warm.csv",
+                   "--transient", "--tau-heat", "30", "-o", cell, cwd=tmp_path)
+    assert r.returncode == 0 and "29 of 30" in r.stdout, r.stderr + r.stdout
+    main = (cell / "MainModule.mod").read_text()
+    assert "MoveL rcTcR(pPlace_cold{i}, pPlace_dq{i})" in main
+    assert (cell / "rcThermal.sys").is_file()
+    parse_text(main, "MainModule.mod")
+
+
+def _nominal_ik(robot, R, p, q0):
+    """Damped Newton on Pinocchio's model (mm) from q0 (deg): an IK of the
+    test's own, not rapidcomp's closed form."""
+    model, data = robot.model, robot.model.createData()
+    q = np.array(q0, float) * DEG
+    for _ in range(50):
+        M = robot.base_M_flange(q / DEG)
+        err = np.concatenate([np.asarray(p) - M.translation, pin.log3(R @ M.rotation.T)])
+        if np.linalg.norm(err[:3]) < 1e-10 and np.linalg.norm(err[3:]) < 1e-13:
+            break
+        J = pin.computeFrameJacobian(model, data, q, robot.flange_frame,
+                                     pin.LOCAL_WORLD_ALIGNED)
+        q = q + np.linalg.solve(J, err)
+    return q / DEG
+
+
+def test_fix_transient_keeps_movel_linear_and_holds_at_every_state(tmp_path):
+    """Default --emit auto: a MoveL keeps its kind, its target rcTcR(pSk,
+    pSk_dq). Evaluated with the RAPID evaluator at s, solved by an IK of the
+    test's own on the nominal robot (what the controller does with a
+    robtarget), the robot deformed by s . profile puts the flange on the
+    program's target within 1 um."""
+    out = tmp_path / "cubes_tr.mod"
+    r = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", FIXTURES / "warm.csv",
+                   "--transient", "--tau-heat", "45", "--limit", "J5=-120:120", "-o", out,
+                   cwd=tmp_path)
+    assert r.returncode == 0 and "76 of 76" in r.stdout, r.stderr + r.stdout
+    text, source = out.read_text(), (FIXTURES / "cubes.mod").read_text()
+    m = Machine((tmp_path / "rcThermal.sys").read_text(), Clock(datetime(2026, 11, 22)))
+    robot = irb140()
+    profile = read_profile(FIXTURES / "warm.csv")
+    side = [(-83.07, 45.14, -44.24, 90.10, 83.07, 269.09)]
+    for name in ("pS2", "pS5", "pS9"):
+        assert f"MoveL rcTcR({name}, {name}_dq)" in text
+        cold = _literal(re.search(rf"CONST robtarget {name}\s*:=\s*(\[.*?\]);", source,
+                                  re.S).group(1))
+        dq = _literal(re.search(rf"CONST pose {name}_dq:=(\[.*?\]);", text).group(1))
+        R0, p0 = quat_wxyz_to_matrix(cold[3:7]), np.array(cold[:3])
+        q_cold = _nominal_ik(robot, R0, p0, side[0])
+        for s in (0, 0.25, 0.5, 0.75, 1):
+            m.data["rcs"] = np.float32(s)
+            m.data["rclastday"] = np.float32(-1)
+            rt = m.call("rcTcR", [cold[0:3], cold[3:7], cold[7:11], cold[11:17]],
+                        [dq[0:3], dq[3:7]])
+            p = np.array([float(rt["trans"][k]) for k in "xyz"])
+            R = quat_wxyz_to_matrix([float(rt["rot"][k]) for k in ("q1", "q2", "q3", "q4")])
+            q = _nominal_ik(robot, R, p, q_cold)
+            M = deform(robot, scaled(profile, s)).base_M_flange(q)
+            assert np.linalg.norm(M.translation - p0) * 1000 < 1.0, (name, s)
+            assert np.linalg.norm(pin.log3(M.rotation @ R0.T)) / DEG < 1e-4

@@ -357,17 +357,28 @@ class Editor:
         jt_<name>_dq, its move a MoveAbsJ."""
         from .transient import FUNC_J, FUNC_R
         if g.mode == "rob":
+            # One confdata serves every state: the written one, or the warm
+            # robot's where the cold joints are within the quadrant
+            # tolerance of it too (a J4 at 0 deg that the warm robot needs
+            # at -0.02 deg); then the cold value is a copy with that confdata.
+            confs = {}
             for k in g.elements:
                 _, _, conf = self.values.pose_dq(g, k)
                 written = np.asarray(self.values.source(g, k).record.conf)
-                if not np.array_equal(conf, written):
-                    g.failure = (f"the warm robot needs confdata {_conf(conf)}, the cold one "
-                                 f"{_conf(written)}: one robtarget cannot carry both states "
-                                 "(--emit absj makes it a MoveAbsJ)", k)
-                    for u in g.uses:
-                        self.actions.pop(u.key, None)
-                    return
-            self._apply_transient_rob(g, FUNC_R)
+                if np.array_equal(conf, written):
+                    continue
+                q = self.values.cold(g, k)
+                if all(quadrant_miss(q[col], conf[cf]) <= self.values.tol
+                       for col, cf in ((0, 0), (3, 1), (5, 2))):
+                    confs[k] = conf
+                    continue
+                g.failure = (f"the warm robot needs confdata {_conf(conf)}, the cold one "
+                             f"{_conf(written)}: one robtarget cannot carry both states "
+                             "(--emit absj makes it a MoveAbsJ)", k)
+                for u in g.uses:
+                    self.actions.pop(u.key, None)
+                return
+            self._apply_transient_rob(g, FUNC_R, confs)
             return
         if g.placement == "inline" or g.decl is None:
             for u in g.uses:
@@ -426,14 +437,23 @@ class Editor:
                 self._to_absj(u, target)
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {target}"
 
-    def _apply_transient_rob(self, g: Group, func: str) -> None:
+    def _apply_transient_rob(self, g: Group, func: str, confs: dict) -> None:
         """A robtarget move keeps its kind (a MoveL its straight line): its
         target becomes func(<robtarget as written>, <name>_dq), the
-        correction a pose (translation and quaternion difference)."""
+        correction a pose (translation and quaternion difference). confs:
+        element -> the confdata every state needs where the written one does
+        not serve (the cold value is then a copy with it, <name>_cold)."""
+        def cold_literal(g, k):
+            texts = list(self.values.source(g, k).record.texts)
+            if k in confs:
+                texts[7:11] = [str(int(c)) for c in confs[k]]
+            return records.robtarget_literal(texts)
+
         if g.placement == "inline" or g.decl is None:
             for u in g.uses:
                 k = u.source.element
-                target = f"{func}({u.file.text(u.source.ref)}, {self._pose_literal(g, k)})"
+                cold = cold_literal(g, k) if k in confs else u.file.text(u.source.ref)
+                target = f"{func}({cold}, {self._pose_literal(g, k)})"
                 self.edit(u.key[0], u.source.ref.span, target, f"{u.label} -> {func}")
                 self.actions[u.key] = f"inline robtarget -> {func}(written, correction)"
             return
@@ -444,23 +464,33 @@ class Editor:
         names: dict = {}
         if g.array:
             dims = "{" + ",".join(map(str, g.decl.dims)) + "}"
+            cold = None
+            if confs:
+                cold = self.names.new(stem[:27] + "_cold")
+                self.declare(g, "robtarget", cold, dims,
+                             self._array_literal(g, nl, indent, cold_literal))
             dq = self.names.new(stem[:29] + "_dq")
             self.declare(g, "pose", dq, dims,
                          self._array_literal(g, nl, indent, self._pose_literal))
-            names["array"] = dq
+            names["array"] = (cold, dq)
         else:
             for k in g.elements:
                 s = stem if k is None else stem + "_" + "_".join(
                     map(str, multi_index(k, g.decl.dims)))
+                cold = None
+                if k in confs:
+                    cold = self.names.new(s[:27] + "_cold")
+                    self.declare(g, "robtarget", cold, "", cold_literal(g, k))
                 dq = self.names.new(s[:29] + "_dq")
                 self.declare(g, "pose", dq, "", self._pose_literal(g, k))
-                names[k] = dq
+                names[k] = (cold, dq)
         for u in g.uses:
             src = u.source
             ref_text = u.file.text(src.ref)
-            dq = names["array"] if g.array else names[src.element]
+            cold, dq = names["array"] if g.array else names[src.element]
             index = ref_text[len(src.ref.name):] if g.array else ""
-            target = f"{func}({ref_text}, {dq}{index})"
+            cold_ref = (cold + index) if cold is not None else ref_text
+            target = f"{func}({cold_ref}, {dq}{index})"
             self.edit(u.key[0], src.ref.span, target, f"{u.label} -> {func}")
             self.actions[u.key] = f"{ref_text} -> {target}"
 

@@ -125,19 +125,45 @@ def run(spec: JobSpec) -> JobOutcome:
     for pf, m in zip(task.files, result.modules):
         out.append((str(output_path(spec, m.path)), pf.source.encode(m.text)))
     if spec.transient is not None:
-        from .transient import MODULE_FILE, support_module
-        # Next to the task's (first) module, in its line breaks.
-        first = task.files[0].source
-        nl = "\r\n" if "\r\n" in first.text else "\n"
-        where = output_path(spec, src.modules[0]).parent if src.is_folder \
-            else Path(spec.output).parent
-        out.append((str(where / MODULE_FILE), support_module(spec.transient, nl).encode("ascii")))
+        out += _support_files(spec, task)
     if spec.report:
         out.append((spec.report, report.markdown(result, meta).encode("utf-8")))
     if spec.json:
         out.append((spec.json, report.as_json(result, meta).encode("utf-8")))
     progress.done()
     return JobOutcome(spec, result, tuple(out))
+
+
+def _support_files(spec: JobSpec, task) -> list[tuple[str, bytes]]:
+    """The transient support module, where the task loads it: next to the
+    output module; in a folder next to the task's first module (a backup:
+    its task's SYSMOD folder, whose modules a restore loads); a program
+    file (.pgf) lists it after its last module."""
+    from .transient import MODULE_FILE, support_module
+    src = spec.source
+    first = task.files[0].source
+    nl = "\r\n" if "\r\n" in first.text else "\n"
+    text = support_module(spec.transient, nl).encode("ascii")
+    if not src.is_folder:
+        return [(str(Path(spec.output).parent / MODULE_FILE), text)]
+    rel = Path(src.modules[0]).parent
+    if src.kind == "backup" and rel.name.upper() == "PROGMOD":
+        rel = rel.parent / "SYSMOD"
+    out = [(str(Path(spec.output) / rel / MODULE_FILE), text)]
+    if src.kind == "pgf":
+        pgf = src.input.read_text(encoding="latin-1")
+        end = pgf.rfind("</Module>")
+        if end < 0:
+            raise InputError(str(src.input), "lists no <Module>: cannot add the transient "
+                                             f"support module {MODULE_FILE}")
+        line = pgf[pgf.rfind("\n", 0, end) + 1:end]
+        indent = line[:len(line) - len(line.lstrip(" \t"))]
+        entry = (rel / MODULE_FILE).as_posix()
+        cut = end + len("</Module>")
+        pgf_nl = "\r\n" if "\r\n" in pgf else "\n"
+        pgf = pgf[:cut] + pgf_nl + indent + f"<Module>{entry}</Module>" + pgf[cut:]
+        out.append((str(Path(spec.output) / src.input.name), pgf.encode("latin-1")))
+    return out
 
 
 def run_all(specs: list[JobSpec], workers: int = 2) -> list[JobOutcome]:

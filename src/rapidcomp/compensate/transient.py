@@ -317,7 +317,9 @@ def state_pose(trans, rot, d_trans, d_rot, s: float):
     (NOrient)."""
     t = state_joints(trans, d_trans, s)
     q = state_joints(rot, d_rot, s).astype(float)
-    return t, f32(q / np.linalg.norm(q))
+    norm = np.linalg.norm(q)
+    # A spare slot no move reaches may hold [0,0,0,0]: left as it is.
+    return t, f32(q / norm if norm > 0 else q)
 
 
 def _walk(node):
