@@ -168,11 +168,14 @@ def test_cli_discover_on_the_shipped_example(tmp_path):
     assert r.returncode == 0, r.stderr
     doc = json.loads((tmp_path / "r.json").read_text())
     assert list(doc) == ["initial_rms_mm", "final_rms_mm", "verdict", "sigma_mm", "sigma_source",
-                         "outliers", "steps"]
+                         "outliers", "steps", "tau_min"]
+    assert doc["tau_min"] is None
     assert doc["sigma_mm"] == 0.005 and doc["sigma_source"] == "given (--sigma)"
     assert doc["outliers"] == []
     assert [list(s) for s in doc["steps"]] == [[
-        "effect", "params", "stderr", "rms_before_mm", "rms_after_mm", "alternatives"]] * 2
+        "effect", "params", "stderr", "rms_before_mm", "rms_after_mm", "alternatives",
+        "thermal"]] * 2
+    assert not any(s["thermal"] for s in doc["steps"])
     # The example hides these two (see the file's first comment line).
     assert [s["effect"] for s in doc["steps"]] == ["link_elongation:J2-J3", "joint_offset:J3"]
     assert doc["verdict"] == "explained"

@@ -239,7 +239,8 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
     try:
         specs = _fix_specs(programs, profile, output, emit, report, no_report, json_path,
                            with_modules, tasks, robot, force, limits, track, start, base,
-                           _transient(transient, emit, tau_heat, tau_cool, gap, temperature))
+                           _transient(transient, emit, tau_heat, tau_cool, gap, temperature,
+                                      profile, robot, force))
         outcomes = run_all(specs)
         files = [(path, data) for o in outcomes for path, data in o.files]
         done = {path for path, _ in files}
@@ -278,8 +279,11 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
     sys.exit(EXIT_PARTIAL if failed else EXIT_OK)
 
 
-def _transient(on, emit, tau_heat, tau_cool, gap, temperature):
-    """The Transient of --transient and its options, None without it."""
+def _transient(on, emit, tau_heat, tau_cool, gap, temperature, profile=None, robot=None,
+               force=False):
+    """The Transient of --transient and its options, None without it; tau
+    from the profile (`# tau_heat_min:`, written by discover) when
+    --tau-heat is not given."""
     from .compensate.transient import make_transient
     given = [name for name, v in (("--tau-heat", tau_heat), ("--tau-cool", tau_cool),
                                   ("--gap", gap), ("--temperature", temperature))
@@ -291,6 +295,12 @@ def _transient(on, emit, tau_heat, tau_cool, gap, temperature):
     if emit == "robtarget":
         raise RapidcompError("--transient writes MoveAbsJ targets; --emit robtarget keeps "
                              "robtargets: give one of them")
+    if tau_heat is None and temperature is None and profile is not None and \
+            os.path.isfile(profile):
+        from .compensate.load import load_robot
+        from .kinematics.profile import read_profile
+        names = load_robot(robot).joint_names
+        tau_heat = read_profile(profile, force=force, joint_names=names).tau_heat_min
     return make_transient(tau_heat, tau_cool, gap, temperature)
 
 
@@ -395,6 +405,28 @@ def _check_output_folder(out: str, src) -> None:
                                  + (", ..." if len(other) > 3 else "") + "); give a new folder")
 
 
+def _warmup_campaign(times, thermal_effects, tau_heat):
+    """(times, thermal effect specs, tau) of simulate --times, or None."""
+    import math
+    if times is None:
+        given = [o for o, v in (("--thermal-effect", thermal_effects), ("--tau-heat", tau_heat))
+                 if v]
+        if given:
+            raise RapidcompError(f"{given[0]} needs --times (a warm-up campaign)")
+        return None
+    try:
+        ts = [float(x) for x in times.split(",")]
+    except ValueError:
+        raise RapidcompError(f"--times {times}: expected minutes, e.g. 0,10,20,40") from None
+    if not ts or any(not math.isfinite(t) or t < 0 or t > 525_600 for t in ts) or \
+            len(set(ts)) != len(ts):
+        raise RapidcompError(f"--times {times}: expected different minutes from 0 to 525600")
+    if tau_heat is None or not (math.isfinite(tau_heat) and 0 < tau_heat <= 100_000):
+        raise RapidcompError("--times needs --tau-heat MIN (the hidden warm-up time constant, "
+                             "more than 0)")
+    return ts, tuple(thermal_effects), tau_heat
+
+
 def _campaign_options(f):
     """The options that describe the measurement set-up, shared by discover
     and simulate."""
@@ -485,14 +517,23 @@ def discover(measured, profile, robot, tool, payload, force, sigma, report_path,
               help="Random seed (noise and random:N poses).")
 @click.option("--table", "table_path", default=None, type=click.Path(dir_okay=False),
               help="Also write the detectability table as Markdown.")
+@click.option("--times", default=None, metavar="T1,T2,...",
+              help="A warm-up campaign: the points measured at each of these times, minutes "
+                   "since a cold start with the robot running (writes a t_min column).")
+@click.option("--thermal-effect", "thermal_effects", multiple=True, metavar="ID=V[,V...]",
+              help="--times: an effect that grows with the thermal state, its steady-state "
+                   "values (repeatable).")
+@click.option("--tau-heat", type=float, default=None, metavar="MIN",
+              help="--times: the warm-up time constant, minutes.")
 @click.option("-q", "--quiet", is_flag=True, help="No summary on stdout.")
 def simulate(output, points, profile, robot, tool, payload, force, effects, noise, seed,
-             table_path, quiet) -> None:
+             table_path, times, thermal_effects, tau_heat, quiet) -> None:
     """Make a measured-data file from a model, and say what it can detect."""
     from .discover.job import run_simulate
     try:
+        campaign = _warmup_campaign(times, thermal_effects, tau_heat)
         outcome = run_simulate(output, points, profile, robot, tool, payload, effects, noise,
-                               seed, table_path, force)
+                               seed, table_path, force, campaign)
     except RapidcompError as exc:
         _fail(exc)
     _write_outcome(outcome, quiet)

@@ -100,7 +100,9 @@ def make_transient(tau_heat: float | None, tau_cool: float | None, gap: float | 
         return Transient(signal=name, t_cold=cold, t_warm=warm)
     if tau_heat is None:
         raise RapidcompError("--transient needs how the thermal state is known: --tau-heat MIN "
-                             "[--tau-cool MIN] (clock) or --temperature SIGNAL:T_COLD:T_WARM")
+                             "[--tau-cool MIN] (clock), --temperature SIGNAL:T_COLD:T_WARM, or "
+                             "a profile with tau_heat_min (discover writes it from a warm-up "
+                             "campaign)")
     for label, v in (("--tau-heat", tau_heat), ("--tau-cool", tau_cool), ("--gap", gap)):
         if v is not None and not (math.isfinite(v) and 0 < v <= 100_000):
             raise RapidcompError(f"{label} {v:g}: minutes, more than 0 and at most 100000")

@@ -46,6 +46,13 @@ class Effect:
     to_internal: tuple[float, ...]  # internal value = user value * this
     axes: np.ndarray | None = None  # axis_tilt (2, 3) / joint_displacement (3, 3), local
     harmonic: int = 0               # cyclic: cycles per turn of the joint
+    # Thermal: grows with the thermal state s(t) of a warm-up campaign (its
+    # values are the steady state's); id "thermal:<base id>".
+    thermal: bool = False
+
+    @property
+    def base_id(self) -> str:
+        return self.id[len(THERMAL_PREFIX):] if self.thermal else self.id
 
     @property
     def size(self) -> int:
@@ -82,6 +89,21 @@ def _perpendicular_base_axes(z0: np.ndarray) -> list[tuple[str, np.ndarray]]:
 # for h cycles per turn (a gear stage, a bearing); h = 1 is an offset and an
 # eccentricity the other effects already express.
 CYCLIC_HARMONICS = (2, 3, 4)
+
+
+THERMAL_PREFIX = "thermal:"
+# What heat changes: joint zeros (encoder mounts), link lengths, axis
+# directions and joint origins (the paper's Table 1), and the base
+# (the stand). Gear ratios, compliances, backlash and gear errors do not.
+THERMAL_KINDS = ("base_frame", "joint_offset", "link_elongation", "axis_tilt",
+                 "joint_displacement")
+
+
+def thermal_variants(effects) -> tuple[Effect, ...]:
+    """The thermal twin of every effect heat can change, for a warm-up
+    campaign (data with a t_min column)."""
+    return tuple(replace(e, id=THERMAL_PREFIX + e.id, thermal=True) for e in effects
+                 if e.kind in THERMAL_KINDS and not e.thermal)
 
 
 def catalogue(robot: RobotModel) -> tuple[Effect, ...]:

@@ -15,7 +15,7 @@ from ..kinematics.gravity import Payload
 from ..progress import Progress
 from ..kinematics.profile import ThermalProfile, format_profile, parse_profile, read_profile
 from . import plot, report
-from .effects import catalogue, to_profile
+from .effects import THERMAL_KINDS, catalogue, to_profile
 from .heldout import held_out
 from .measured import format_measured, read_joints, read_measured
 from .model import ParamModel
@@ -98,9 +98,17 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
     progress = Progress(Path(measured).name)
     d = discover(model, data, effects, sigma, progress.stage)
     progress.done()
-    heldout = (held_out(ParamModel(nominal, prof, test_data.q_deg, _tool(test_data, tool),
-                                   approach=test_data.approach), test_data,
-                        d.final_fit) if test_data is not None else None)
+    heldout = None
+    if test_data is not None:
+        test_model = ParamModel(nominal, prof, test_data.q_deg, _tool(test_data, tool),
+                                approach=test_data.approach)
+        if d.warmup is not None and d.warmup.tau_min is not None:
+            if test_data.t_min is None:
+                raise RapidcompError(f"--test {Path(test).name}: the model has thermal effects "
+                                     "(the data are a warm-up campaign); the test poses need a "
+                                     "t_min column too")
+            test_model = test_model.with_state(d.warmup.states(test_data.t_min))
+        heldout = held_out(test_model, test_data, d.final_fit)
     notes += _beyond_limits(data, nominal) + list(d.notes)
     if test_data is not None:
         notes += [f"test {n}" for n in _beyond_limits(test_data, nominal)]
@@ -135,10 +143,16 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                      "the measurement set-up got wrong")
     elif out_profile:
         values = d.named_values()
+        warm = d.warmup is not None and d.warmup.tau_min is not None
         kept = {e: v for e, v in values.items()
-                if writable(e, e.user(v)) and e.kind not in ("backlash", "cyclic")}
+                if writable(e, e.user(v)) and e.kind not in ("backlash", "cyclic")
+                and (e.thermal or not warm)}
         for e in values:
-            if e.kind == "backlash":
+            if warm and not e.thermal and e.kind not in ("backlash", "cyclic"):
+                notes.append(f"{e.id} is static (the robot's geometry, not heat): not written "
+                             f"into {Path(out_profile).name}, the thermal profile that fix "
+                             "--transient scales with the thermal state")
+            elif e.kind == "backlash":
                 notes.append(f"{e.id} is not written into {Path(out_profile).name}: a profile "
                              "corrects every move alike, backlash depends on the direction each "
                              "move approaches its target from")
@@ -154,6 +168,10 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
             out = [f"written by rapidcomp discover from {Path(measured).name} "
                    f"(base profile: {Path(profile).name if profile else 'none'})",
                    "effects: " + (", ".join(e.id for e in kept) or "none")]
+            if warm:
+                out += ["the thermal effects at the steady state (s = 1); fix --transient "
+                        "takes tau from the next line",
+                        f"tau_heat_min: {d.warmup.tau_min:.4g}"]
             if any(e.kind == "tool_offset" for e in kept):
                 out.append("tool_offset is written into the flange row; if it is an error of "
                            "the measuring point's mounting, not of the robot, remove it "
@@ -261,7 +279,11 @@ def point_set(spec: str, robot, seed: int):
 def run_simulate(output: str, points: str = "cube", profile: str | None = None,
                  robot: str | None = None, tool=(0.0, 0.0, 0.0), payload=None,
                  effects=(), noise: float = 0.005, seed: int = 0,
-                 table_path: str | None = None, force: bool = False) -> Outcome:
+                 table_path: str | None = None, force: bool = False,
+                 campaign=None) -> Outcome:
+    """campaign: (times, thermal effect specs, tau) for a warm-up campaign:
+    the points measured at each time, thermal effects at s(t) times their
+    steady-state values."""
     _check_outputs([p for p in (output, table_path) if p],
                    [profile, robot, points if os.path.isfile(points) else None])
     if not noise >= 0:
@@ -270,11 +292,39 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
     cat = catalogue(nominal)
     values = parse_effect_values(cat, effects, force)
     names, q = point_set(points, nominal, seed)
-    exact = simulate_positions(nominal, prof, values, q, tool)
+    t_min = None
+    thermal = {}
+    if campaign is not None:
+        times, thermal_specs, tau = campaign
+        thermal = parse_effect_values(cat, thermal_specs, force)
+        for e in thermal:
+            if e.kind not in THERMAL_KINDS:
+                raise RapidcompError(f"--thermal-effect {e.id}: heat does not change a "
+                                     f"{e.kind.replace('_', ' ')}; thermal effects are "
+                                     + ", ".join(THERMAL_KINDS))
+        rounds = []
+        for t in times:
+            s = 1.0 - np.exp(-t / tau)
+            both = dict(values)
+            for e, v in thermal.items():
+                both[e] = both.get(e, 0.0) + s * np.asarray(v, float)
+            rounds.append(simulate_positions(nominal, prof, both, q, tool))
+        exact = np.vstack(rounds)
+        base = np.vstack([simulate_positions(nominal, prof, {}, q, tool)] * len(times))
+        names = tuple(f"{n}_t{t:g}" for t in times for n in names)
+        t_min = np.repeat(np.asarray(times, float), len(q))
+        q = np.vstack([q] * len(times))
+    else:
+        exact = simulate_positions(nominal, prof, values, q, tool)
+        base = simulate_positions(nominal, prof, {}, q, tool)
     xyz = add_noise(exact, noise, seed) if noise > 0 else exact
-    shift = np.linalg.norm(exact - simulate_positions(nominal, prof, {}, q, tool), axis=1)
+    shift = np.linalg.norm(exact - base, axis=1)
     effect_text = ", ".join(f"{e.id}=" + ",".join(f"{v:g}" for v in e.user(val).values())
                             for e, val in values.items()) or "none"
+    if thermal:
+        effect_text += "; thermal (steady state, tau " + f"{campaign[2]:g} min): " + ", ".join(
+            f"{e.id}=" + ",".join(f"{v:g}" for v in e.user(val).values())
+            for e, val in thermal.items())
     comments = [f"simulated by rapidcomp simulate: points {Path(points).name}, model "
                 f"{Path(robot).name if robot else 'irb140'} + "
                 f"{Path(profile).name if profile else 'no profile'}",
@@ -282,7 +332,10 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
                 f"measuring point ({', '.join(f'{x:g}' for x in tool)}) mm in the flange "
                 f"frame; payload {_payload_text(prof.payload)}",
                 f"noise {noise:g} mm per axis, seed {seed}"]
-    files = [(output, format_measured(names, q, xyz, comments).encode("utf-8"))]
+    if campaign is not None:
+        comments.append(f"warm-up campaign: the points at {', '.join(f'{t:g}' for t in campaign[0])} "
+                        "min since a cold start (t_min)")
+    files = [(output, format_measured(names, q, xyz, comments, t_min).encode("utf-8"))]
     rows = detectability(ParamModel(nominal, prof, q, tool), cat, noise if noise > 0 else 0.005)
     meta = {"points": f"{Path(points).name} ({len(names)})",
             "noise": f"{(noise if noise > 0 else 0.005) * 1000:g} um per axis"

@@ -5,7 +5,8 @@ base frame) of the measuring point; rows in the order they were measured
 (each joint's direction of approach, for backlash, comes from that order
 unless an `approach` column gives it); `tx,ty,tz` give each row's measuring
 point in the flange frame (several reflectors per pose: a row each, the
-same joints). Lines starting with '#' are comments
+same joints); `t_min` the minutes since a cold start, the robot running, at
+which the row was measured (a warm-up campaign). Lines starting with '#' are comments
 (simulate writes its provenance there); extra columns are ignored and
 reported; any bad row is a path:line error.
 """
@@ -26,6 +27,9 @@ COLUMNS = ("point",) + JOINT_COLUMNS + ("x", "y", "z")
 MIN_POINTS = 3
 APPROACH = "approach"
 TOOL_COLUMNS = ("tx", "ty", "tz")
+TIME = "t_min"
+# A warm-up campaign spans hours; beyond a year the column is not minutes.
+MAX_T_MIN = 525_600.0
 # Values no measurement of a robot has: a joint beyond two turns, a
 # position beyond 100 m (wrong units, a corrupt row).
 MAX_JOINT_DEG = 720.0
@@ -46,6 +50,8 @@ class Measurements:
     # Per row, the measuring point in the flange frame (mm), from `tx,ty,tz`
     # columns (several reflectors: a row each); None: --tool for all.
     tool: np.ndarray | None = None
+    # Per row, minutes since a cold start (robot running), from `t_min`.
+    t_min: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.names)
@@ -119,8 +125,18 @@ def parse_measured(text: str, source: str, min_points: int = MIN_POINTS) -> Meas
         ignored = tuple(c for c in ignored if c not in TOOL_COLUMNS)
         _, tool, _, _ = parse_table(text, source, ("point",) + COLUMNS[1:] + TOOL_COLUMNS,
                                     TOOL_COLUMNS, min_points)
+    t_min = None
+    if TIME in ignored:
+        ignored = tuple(c for c in ignored if c != TIME)
+        _, t, _, _ = parse_table(text, source, ("point",) + COLUMNS[1:] + (TIME,), (TIME,),
+                                 min_points)
+        bad = np.flatnonzero((t[:, 0] < 0) | (t[:, 0] > MAX_T_MIN))
+        if bad.size:
+            raise InputError(source, f"t_min is {t[bad[0], 0]:g}, expected minutes since a cold "
+                             f"start (0 to {MAX_T_MIN:g})", lines[bad[0]])
+        t_min = t[:, 0]
     return Measurements(source, names, values[:, :6], values[:, 6:], lines, ignored, approach,
-                        tool)
+                        tool, t_min)
 
 
 def _approach(text: str, source: str) -> np.ndarray:
@@ -153,8 +169,12 @@ def read_joints(path: str | Path) -> tuple[tuple[str, ...], np.ndarray]:
     return names, values
 
 
-def format_measured(names, q_deg, xyz_mm, comments=()) -> str:
-    out = [f"# {c}" for c in comments] + [",".join(COLUMNS)]
-    for name, q, x in zip(names, q_deg, xyz_mm):
-        out.append(",".join([name, *(f"{v:.6f}" for v in q), *(f"{v:.6f}" for v in x)]))
+def format_measured(names, q_deg, xyz_mm, comments=(), t_min=None) -> str:
+    out = [f"# {c}" for c in comments] + [",".join(COLUMNS + ((TIME,) if t_min is not None
+                                                              else ()))]
+    for n, (name, q, x) in enumerate(zip(names, q_deg, xyz_mm)):
+        row = [name, *(f"{v:.6f}" for v in q), *(f"{v:.6f}" for v in x)]
+        if t_min is not None:
+            row.append(f"{t_min[n]:g}")
+        out.append(",".join(row))
     return "\n".join(out) + "\n"

@@ -68,6 +68,7 @@ class ParamModel:
         # Each joint's last direction of motion before each pose (backlash).
         self.direction = (np.asarray(approach, float) if approach is not None
                           else approach_directions(q_deg))
+        self.s: np.ndarray | None = None     # thermal state per pose (with_state)
 
     @property
     def size(self) -> int:
@@ -79,11 +80,42 @@ class ParamModel:
         out.q_cmd, out.q0, out.tau_nm = self.q_cmd[rows], self.q0[rows], self.tau_nm[rows]
         out.direction = self.direction[rows]
         out.tool = self.tool[rows]
+        if self.s is not None:
+            out.s = self.s[rows]
+        return out
+
+    def with_state(self, s: np.ndarray) -> "ParamModel":
+        """The same model with each pose's thermal state (warm-up campaign):
+        thermal effects act as s times their value."""
+        out = copy.copy(self)
+        out.s = np.asarray(s, float)
         return out
 
     def evaluate(self, effects: tuple[Effect, ...], values, jacobian: bool = True):
         """Positions (N, 3) and, if asked, the Jacobian (N, 3, P) with
-        respect to the concatenated internal parameters of `effects`."""
+        respect to the concatenated internal parameters of `effects`.
+
+        A thermal effect acts as s_i times its value at pose i, to first
+        order: its Jacobian columns at the static model, times s_i (thermal
+        deformations are microns on a metre-sized arm: the second-order
+        term is ~1e-5 mm)."""
+        if not any(e.thermal for e in effects):
+            return self._evaluate(effects, values, jacobian)
+        if self.s is None:
+            raise ValueError("thermal effects need the poses' thermal states (with_state)")
+        vals = [np.asarray(v, float) for v in values]
+        zeroed = [np.zeros(e.size) if e.thermal else v for e, v in zip(effects, vals)]
+        X, J = self._evaluate(effects, zeroed, True)
+        J = J.copy()
+        col = 0
+        for e, v in zip(effects, vals):
+            if e.thermal:
+                J[:, :, col:col + e.size] *= self.s[:, None, None]
+                X = X + J[:, :, col:col + e.size] @ v
+            col += e.size
+        return X, (J if jacobian else None)
+
+    def _evaluate(self, effects: tuple[Effect, ...], values, jacobian: bool = True):
         vals = [np.asarray(v, float) for v in values]
         n, N = self.n, self.size
         q = self.q0.copy()

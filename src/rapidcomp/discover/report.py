@@ -31,12 +31,15 @@ def as_json(d: Discovery, test: HeldOut | None = None) -> str:
         "sigma_mm": float(f"{d.sigma_mm:.6g}"),
         "sigma_source": d.sigma_source,
         "outliers": [o.point for o in d.outliers],
-        "steps": [{"effect": s.effect.id,
+        "steps": [{"effect": s.effect.base_id,
                    "params": {k: float(f"{v:.9g}") for k, v in s.params.items()},
                    "stderr": {k: float(f"{v:.3g}") for k, v in s.stderr.items()},
                    "rms_before_mm": round(s.rms_before_mm, 9),
                    "rms_after_mm": round(s.rms_after_mm, 9),
-                   "alternatives": list(s.alternatives)} for s in d.steps],
+                   "alternatives": list(s.alternatives),
+                   "thermal": s.effect.thermal} for s in d.steps],
+        "tau_min": (None if d.warmup is None or d.warmup.tau_min is None
+                    else float(f"{d.warmup.tau_min:.6g}")),
     }
     if test is not None:
         doc.update({"test_points": test.points, "test_rms_mm": round(test.rms_mm, 9),
@@ -101,6 +104,13 @@ def markdown(d: Discovery, meta: dict, plot_note: str | None = None,
             f"({len(d.steps)} effect{'s' if len(d.steps) != 1 else ''} named).", ""]
     if test is not None:
         out += _held_out(test)
+    if d.warmup is not None:
+        out += ["## Warm-up", "", d.warmup.text + ".", ""]
+        if d.thermal_evidence:
+            out += ["| effect | static or thermal, and why |", "|---|---|"]
+            out += [f"| {s.effect.base_id} | {d.thermal_evidence.get(s.effect.id, '')} |"
+                    for s in d.steps]
+            out.append("")
     if d.outliers:
         out += _outliers(d)
     if d.steps:
@@ -151,6 +161,8 @@ def summary_lines(d: Discovery, test: HeldOut | None = None) -> list[str]:
     if d.outliers:
         out.append("gross errors left out: " + ", ".join(
             f"{o.point} (line {o.line}, off by {_um(o.off_mm)} um)" for o in d.outliers))
+    if d.warmup is not None:
+        out.append(d.warmup.text)
     for i, s in enumerate(d.steps, 1):
         params = ", ".join(f"{k}={_num(v)}±{_num(s.stderr[k])}" for k, v in s.params.items())
         alt = f"  [alternatives: {', '.join(s.alternatives)}]" if s.alternatives else ""

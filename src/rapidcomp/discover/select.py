@@ -30,7 +30,8 @@ from itertools import combinations
 
 import numpy as np
 
-from .effects import Effect
+from . import warmup
+from .effects import THERMAL_PREFIX, Effect, thermal_variants
 from .fit import RANK_TOL, Fit, fit
 from .measured import Measurements
 from .model import ZERO_COLUMN, ParamModel
@@ -129,6 +130,8 @@ class Discovery:
     notes: tuple[str, ...] = ()
     kept: np.ndarray | None = None      # rows of the measured data fitted (outliers left out)
     far_apart: bool = False             # only values no robot has would explain the data
+    warmup: "warmup.Warmup | None" = None  # a warm-up campaign's tau (data with t_min)
+    thermal_evidence: dict | None = None    # effect id -> static/thermal and why
 
     @property
     def initial_rms_mm(self) -> float:
@@ -616,6 +619,15 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     """progress: called with a short text at each stage (stderr on a
     terminal, job.py)."""
     say = progress or (lambda text: None)
+    warm = None
+    if data.t_min is not None:
+        # A warm-up campaign: tau from the data alone (warmup.py); each
+        # effect heat can change gets a thermal twin acting as s(t) times it.
+        say("warm-up")
+        warm = warmup.estimate(data.q_deg, data.xyz_mm, data.t_min, data.tool, sigma_mm)
+        if warm.tau_min is not None:
+            model = model.with_state(warm.states(data.t_min))
+            effects = tuple(effects) + thermal_variants(effects)
     say("gross errors")
     # The reference fit for gross errors and the noise: every effect but
     # the cyclic ones, whose free amplitudes and phases would fit a small
@@ -625,12 +637,21 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     if screened.outliers:
         rows = screened.rows
         model = model.subset(rows)
-        data = Measurements(data.source, tuple(data.names[i] for i in rows), data.q_deg[rows],
-                            data.xyz_mm[rows], tuple(data.lines[i] for i in rows),
-                            data.ignored_columns)
+        data = replace(data, names=tuple(data.names[i] for i in rows), q_deg=data.q_deg[rows],
+                       xyz_mm=data.xyz_mm[rows], lines=tuple(data.lines[i] for i in rows),
+                       approach=None if data.approach is None else data.approach[rows],
+                       tool=None if data.tool is None else data.tool[rows],
+                       t_min=None if data.t_min is None else data.t_min[rows])
     n = 3 * len(data)
     meas = data.xyz_mm
-    nz = noise(sigma_mm, data.q_deg, meas, screened.full, model.tool)
+    if warm is not None and sigma_mm is None:
+        # The same pose at other times is no replicate (it moved): the
+        # scatter about each pose's own warm-up curve is the pure error.
+        nz = Noise(warm.sigma_mm, f"from the warm-up fit of {warm.poses} poses measured at "
+                   f"{warm.times} times (each pose's scatter about its own curve a + s(t) b, "
+                   f"{warm.dof} degrees of freedom)", "replicates")
+    else:
+        nz = noise(sigma_mm, data.q_deg, meas, screened.full, model.tool)
     sigma, source = nz.sigma_mm, nz.source
     sel = _Selector(model, meas, effects, sigma)
     start = sel.fit(())
@@ -687,10 +708,46 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     verdict, text = _verdict(steps, current, sigma, noise_p, nz.kind == "estimated", blocked,
                              far_apart, found)
     notes = ((screened.note,) if screened.note else ()) + tuple(far_notes)
+    evidence = _thermal_evidence(sel, current, steps) if warm is not None else {}
     return Discovery(len(data), sigma, source, initial, final, start.heldout_rms_mm(),
                      tuple(steps), verdict, text, noise_p, tuple(sel.not_identifiable.items()),
                      current, start, effects, tuple(blocked), nz, screened.outliers, found, notes,
-                     screened.rows, far_apart)
+                     screened.rows, far_apart, warm, evidence)
+
+
+def _thermal_evidence(sel: _Selector, final: Fit, steps) -> dict[str, str]:
+    """Per named effect: static or thermal, and what says so (the final
+    model with the effect swapped for its twin of the other kind)."""
+    out = {}
+    named = {e.id for e in final.effects}
+    twins = {e.id: e for e in sel.effects}
+    for st in steps:
+        e = st.effect
+        kind = "thermal" if e.thermal else "static"
+        other = e.base_id if e.thermal else THERMAL_PREFIX + e.id
+        if other not in twins:
+            out[e.id] = f"static: heat does not change a {e.kind.replace('_', ' ')}"
+            continue
+        if other in named:
+            out[e.id] = (f"{kind}, and a {'static' if e.thermal else 'thermal'} part of it is "
+                         "named too")
+            continue
+        i = final.effects.index(e)
+        swapped = sel.fit(final.effects[:i] + (twins[other],) + final.effects[i + 1:],
+                          final.values[:i] + (final.values[i],) + final.values[i + 1:])
+        if not swapped.success:
+            out[e.id] = f"{kind}: its {'static' if e.thermal else 'thermal'} twin does not fit"
+            continue
+        chi = (swapped.rss - final.rss) / sel.sigma ** 2
+        tell = chi2_ppf(EQUIVALENT_QUANTILE, e.size)
+        if chi > tell:
+            out[e.id] = (f"{kind}: as a {'static' if e.thermal else 'thermal'} effect the fit is "
+                         f"worse by chi-square {chi:.1f} (p = {chi2_sf(chi, e.size):.3g})")
+        else:
+            out[e.id] = (f"{kind}, but the data hardly tell: as a "
+                         f"{'static' if e.thermal else 'thermal'} effect the fit is worse by "
+                         f"chi-square {chi:.1f} only; measure over a longer warm-up")
+    return out
 
 
 def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:

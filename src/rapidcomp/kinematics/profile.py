@@ -26,11 +26,16 @@ offset/scale/compliance apply to joint rows only (jointmap.py:
 q_actual = q_cmd (1 + scale) + offset + compliance * tau_gravity(q_cmd)),
 mass_kg to the payload row only, whose dx..dz are the centre of mass. An
 empty cell is 0.
+
+A comment line `# tau_heat_min: 42.3` (discover writes it for a warm-up
+campaign) gives the thermal time constant, which `fix --transient` takes
+when --tau-heat is not given.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -106,6 +111,7 @@ class ThermalProfile:
     base: Displacement = ZERO
     joint_terms: tuple[tuple[str, JointTerms], ...] = ()
     payload: Payload = NO_PAYLOAD
+    tau_heat_min: float | None = None    # from a `# tau_heat_min: X` comment
 
     def get(self, name: str) -> Displacement:
         for key, disp in self.displacements:
@@ -203,7 +209,26 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
             jt = JointTerms(extra["offset_deg"], extra["scale"], extra["compliance_deg_per_nm"])
             if not jt.is_zero:
                 terms.append((key, jt))
-    return ThermalProfile(tuple(disps), source, base, tuple(terms), payload)
+    return ThermalProfile(tuple(disps), source, base, tuple(terms), payload,
+                          _tau(text, source))
+
+
+_TAU = re.compile(r"^\s*#\s*tau_heat_min\s*:\s*(\S+)\s*$", re.IGNORECASE)
+
+
+def _tau(text: str, source: str) -> float | None:
+    for n, line in enumerate(text.splitlines(), 1):
+        m = _TAU.match(line)
+        if m:
+            try:
+                tau = float(m.group(1))
+            except ValueError:
+                tau = float("nan")
+            if not (math.isfinite(tau) and 0 < tau <= 100_000):
+                raise InputError(source, f"tau_heat_min is {m.group(1)!r}, expected minutes "
+                                 "(more than 0, at most 100000)", n)
+            return tau
+    return None
 
 
 def _amount(x: float) -> str:

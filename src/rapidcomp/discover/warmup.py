@@ -1,0 +1,141 @@
+"""A warm-up campaign (measured data with a `t_min` column: minutes since a
+cold start, the robot running): the thermal time constant, from the data
+alone.
+
+Thermal deformations are tiny, so every pose's measured point moves
+linearly with the thermal state: x_p(t) = a_p + s(t) b_p, s(t) = 1 -
+exp(-t / tau) (README "Transient compensation"), whatever the effects are:
+a_p holds the static ones, b_p the thermal ones at the steady state. For a
+given tau that is a linear fit per pose; tau is the one-dimensional
+minimum of its residual (a log grid, then golden section). No effect model
+enters, so tau cannot absorb a model error, and the same fit gives the
+noise (each pose's scatter about its own warm-up curve) and the evidence of
+any change over time at all (the fit without b, chi-square).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RapidcompError
+from .noise import replicate_groups
+from .stats import chi2_ppf, chi2_sf
+
+TAU_RANGE_MIN = (1.0, 10_000.0)
+GRID = 240
+ALPHA = 0.001
+INTERVAL = 0.95
+# Fewer distinct times than this cannot tell a curve from a line.
+MIN_TIMES = 3
+
+
+@dataclass(frozen=True)
+class Warmup:
+    poses: int                     # poses measured at MIN_TIMES or more times
+    times: int                     # distinct times
+    tau_min: float | None          # None: no change over time (or not measurable)
+    low_min: float | None          # INTERVAL confidence interval of tau (profile)
+    high_min: float | None
+    p_value: float                 # of "nothing changes over time"
+    sigma_mm: float | None         # scatter about each pose's warm-up curve
+    dof: int
+    text: str
+
+    def states(self, t_min) -> np.ndarray:
+        return states(np.asarray(t_min, float), self.tau_min)
+
+
+def states(t_min: np.ndarray, tau_min: float) -> np.ndarray:
+    """s(t) of a robot running since a cold start."""
+    return 1.0 - np.exp(-np.asarray(t_min, float) / tau_min)
+
+
+def _poses(q_deg, t_min, tool):
+    """Rows of each pose (same joints and measuring point) measured at
+    MIN_TIMES or more distinct times."""
+    out = []
+    for rows in replicate_groups(q_deg, tool):
+        if len(np.unique(np.round(t_min[rows], 9))) >= MIN_TIMES:
+            out.append(rows)
+    return out
+
+
+def _rss(groups, t_min, xyz, tau) -> float:
+    total = 0.0
+    for rows in groups:
+        s = states(t_min[rows], tau)
+        A = np.column_stack([np.ones(len(rows)), s])
+        coef, *_ = np.linalg.lstsq(A, xyz[rows], rcond=None)
+        r = xyz[rows] - A @ coef
+        total += float(np.sum(r ** 2))
+    return total
+
+
+def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None) -> Warmup:
+    """tau, its interval and the evidence of a warm-up, from the poses
+    measured at several times."""
+    q_deg, xyz, t = np.asarray(q_deg, float), np.asarray(xyz_mm, float), np.asarray(t_min, float)
+    groups = _poses(q_deg, t, tool)
+    times = len(np.unique(np.round(t, 9)))
+    if not groups:
+        raise RapidcompError(
+            "t_min: no pose is measured at 3 or more different times; a warm-up campaign "
+            "measures the same poses repeatedly from a cold start (rapidcomp simulate --times "
+            "makes one)")
+    rows = sum(len(g) for g in groups)
+    dof = 3 * (rows - 2 * len(groups)) - 1
+    if dof < 10:
+        raise RapidcompError(f"t_min: {len(groups)} poses at {times} times leave {dof} degrees "
+                             "of freedom for the warm-up fit: measure more poses or more times")
+    grid = np.exp(np.linspace(*np.log(TAU_RANGE_MIN), GRID))
+    rss = np.array([_rss(groups, t, xyz, tau) for tau in grid])
+    k = int(np.argmin(rss))
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, GRID - 1)]
+    tau = _golden(lambda x: _rss(groups, t, xyz, x), lo, hi)
+    best = _rss(groups, t, xyz, tau)
+    sigma = sigma_mm if sigma_mm is not None else math.sqrt(best / dof)
+    static = sum(float(np.sum((xyz[g] - xyz[g].mean(axis=0)) ** 2)) for g in groups)
+    chi = (static - best) / max(sigma, 1e-12) ** 2
+    p = chi2_sf(max(chi, 0.0), 3 * len(groups) + 1)
+    span = (float(t.min()), float(t.max()))
+    if p >= ALPHA:
+        return Warmup(len(groups), times, None, None, None, p, sigma, dof,
+                      f"nothing changes over time (chi-square p = {p:.3g} over {len(groups)} "
+                      f"poses at {times} times, {span[0]:g}-{span[1]:g} min): every effect is "
+                      "static")
+    # Profile interval: the taus whose fit is within the chi-square(1)
+    # quantile of the best.
+    limit = best + chi2_ppf(INTERVAL, 1) * sigma ** 2
+    inside = grid[rss <= limit]
+    low = float(min(inside.min(), tau)) if inside.size else tau
+    high = float(max(inside.max(), tau)) if inside.size else tau
+    open_end = high >= grid[-2]
+    text = (f"warm-up time constant tau = {tau:.1f} min ({INTERVAL:.0%} interval "
+            f"{low:.1f}-{'beyond ' if open_end else ''}{high:.1f} min), from {len(groups)} poses "
+            f"measured at {times} times ({span[0]:g}-{span[1]:g} min); change over time: "
+            f"chi-square p = {p:.3g}")
+    if open_end or tau > 3 * span[1]:
+        text += ("; the campaign ends long before the robot is warm: tau is poorly known, "
+                 "measure longer")
+    return Warmup(len(groups), times, float(tau), low, high, p, sigma, dof, text)
+
+
+def _golden(f, a: float, b: float, iterations: int = 60) -> float:
+    """Minimum of f on [a, b] (log scale)."""
+    la, lb = math.log(a), math.log(b)
+    g = (math.sqrt(5) - 1) / 2
+    c, d = lb - g * (lb - la), la + g * (lb - la)
+    fc, fd = f(math.exp(c)), f(math.exp(d))
+    for _ in range(iterations):
+        if fc < fd:
+            lb, d, fd = d, c, fc
+            c = lb - g * (lb - la)
+            fc = f(math.exp(c))
+        else:
+            la, c, fc = c, d, fd
+            d = la + g * (lb - la)
+            fd = f(math.exp(d))
+    return math.exp((la + lb) / 2)

@@ -1,0 +1,132 @@
+"""discover on warm-up campaigns (#13): data made by `rapidcomp simulate
+--times` (Pinocchio on the profile the effects are written as, each round at
+s(t) times the thermal values: code separate from discover's linear thermal
+model), hidden static and thermal effects and a hidden tau."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from rapidcomp.discover.effects import catalogue
+from rapidcomp.discover.measured import read_measured
+from rapidcomp.discover.model import ParamModel
+from rapidcomp.discover.select import discover
+from rapidcomp.discover.warmup import estimate
+from rapidcomp.kinematics.profile import ThermalProfile, read_profile
+from rapidcomp.kinematics.robot import irb140
+
+from conftest import FIXTURES
+
+TIMES = "0,8,16,25,35,50,70,100,140,200"
+
+
+def _rapidcomp(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "rapidcomp", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True)
+
+
+def _campaign(tmp_path, name, *extra, points="random:30"):
+    path = tmp_path / name
+    r = _rapidcomp("simulate", "-o", path, "--points", points, "--tool", "0,0,150", "--seed", "4",
+                   "--times", TIMES, "--noise", "0.005", *extra, "-q", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    return path
+
+
+def _discover(path):
+    robot = irb140()
+    data = read_measured(path)
+    model = ParamModel(robot, ThermalProfile(()), data.q_deg, (0, 0, 150))
+    return discover(model, data, catalogue(robot))
+
+
+def test_static_and_thermal_effects_are_told_apart_and_tau_is_found(tmp_path):
+    """A J3 zero error (static) and a J2 origin shift and an upper-arm
+    elongation that grow as the robot warms (tau 35 min): tau within 10 %,
+    its interval holding the truth, each effect named with its kind."""
+    path = _campaign(tmp_path, "wu.csv", "--tau-heat", "35", "--effect", "joint_offset:J3=0.01",
+                     "--thermal-effect", "joint_displacement:J2=0.03,0,0.04",
+                     "--thermal-effect", "link_elongation:J2-J3=0.0002")
+    d = _discover(path)
+    assert abs(d.warmup.tau_min - 35) < 3.5 and d.warmup.low_min <= 35 <= d.warmup.high_min
+    assert d.noise.kind == "replicates" and 0.004 < d.sigma_mm < 0.006
+    named = {s.effect.id for s in d.steps}
+    assert named == {"joint_offset:J3", "thermal:joint_displacement:J2",
+                     "thermal:link_elongation:J2-J3"}
+    assert d.verdict == "explained"
+    ev = d.thermal_evidence
+    assert ev["joint_offset:J3"].startswith("static: as a thermal effect the fit is worse")
+    assert ev["thermal:link_elongation:J2-J3"].startswith("thermal: as a static effect")
+    got = {s.effect.id: s.params for s in d.steps}
+    assert got["thermal:link_elongation:J2-J3"]["epsilon"] == pytest.approx(2e-4, rel=0.1)
+    assert got["joint_offset:J3"]["offset_deg"] == pytest.approx(0.01, abs=5e-4)
+
+
+def test_a_campaign_without_warm_up_names_everything_static(tmp_path):
+    path = _campaign(tmp_path, "cold.csv", "--tau-heat", "35",
+                     "--effect", "joint_offset:J3=0.01")
+    d = _discover(path)
+    assert d.warmup.tau_min is None and "nothing changes over time" in d.warmup.text
+    assert [s.effect.id for s in d.steps] == ["joint_offset:J3"]
+    assert not any(s.effect.thermal for s in d.steps)
+
+
+def test_tau_alone_from_the_data_without_any_effect_model():
+    """The model-free estimate on hand-made curves: three poses moving as
+    a + (1 - exp(-t/50)) b, 2 um noise."""
+    rng = np.random.default_rng(3)
+    t = np.repeat([0, 10, 20, 40, 60, 90, 130, 180.0], 3)
+    q = np.tile(np.array([[0, 10, 20, 0, 30, 0], [40, 0, 10, 5, 60, 0], [-30, 20, 0, 0, 45, 0]],
+                         float), (8, 1))
+    b = np.tile(np.array([[0.05, -0.02, 0.08], [0.1, 0.0, -0.04], [0.0, 0.06, 0.02]]), (8, 1))
+    xyz = 500 + (1 - np.exp(-t / 50))[:, None] * b + rng.normal(0, 0.002, (24, 3))
+    w = estimate(q, xyz, t)
+    assert abs(w.tau_min - 50) < 5 and w.sigma_mm == pytest.approx(0.002, rel=0.35)
+
+
+def test_cli_json_profile_with_tau_and_fix_transient_takes_it(tmp_path):
+    path = _campaign(tmp_path, "wu.csv", "--tau-heat", "35", "--effect", "joint_offset:J3=0.01",
+                     "--thermal-effect", "joint_displacement:J2=0.03,0,0.04")
+    r = _rapidcomp("discover", path, "--tool", "0,0,150", "--json", "d.json", "--report", "d.md",
+                   "--out-profile", "thermal.csv", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "d.json").read_text())
+    assert 31.5 < doc["tau_min"] < 38.5
+    kinds = {s["effect"]: s["thermal"] for s in doc["steps"]}
+    assert kinds == {"joint_offset:J3": False, "joint_displacement:J2": True}
+    assert "warm-up time constant tau" in r.stdout and "## Warm-up" in (tmp_path / "d.md").read_text()
+    assert "joint_offset:J3 is static" in r.stdout
+    prof = read_profile(tmp_path / "thermal.csv")
+    assert prof.tau_heat_min == pytest.approx(doc["tau_min"], rel=1e-3)
+    assert prof.terms("J3").is_zero and not prof.get("J2").is_zero
+    fixed = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", "thermal.csv", "--transient",
+                       "--limit", "J5=-120:120", "-o", "c.mod", cwd=tmp_path)
+    assert fixed.returncode == 0, fixed.stderr
+    assert f"heating tau {prof.tau_heat_min:g} min" in fixed.stdout
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--thermal-effect", "joint_offset:J2=0.01"], "--thermal-effect needs --times"),
+    (["--times", "0,10,20"], "--times needs --tau-heat"),
+    (["--times", "0,10,x", "--tau-heat", "30"], "expected minutes"),
+    (["--times", "0,10,20", "--tau-heat", "30", "--thermal-effect", "joint_scale:J2=0.001"],
+     "heat does not change a joint scale"),
+])
+def test_bad_campaign_options_exit_2(tmp_path, args, message):
+    r = _rapidcomp("simulate", "-o", tmp_path / "x.csv", *args, cwd=tmp_path)
+    assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_a_bad_time_is_a_path_line_error(tmp_path):
+    path = _campaign(tmp_path, "wu.csv", "--tau-heat", "35")
+    lines = path.read_text().splitlines()
+    lines[8] = lines[8].rsplit(",", 1)[0] + ",-5"
+    path.write_text("\n".join(lines) + "\n")
+    r = _rapidcomp("discover", path, "--tool", "0,0,150", cwd=tmp_path)
+    assert r.returncode == 2 and "wu.csv:9" in r.stderr and "t_min is -5" in r.stderr
