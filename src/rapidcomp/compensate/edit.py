@@ -238,20 +238,8 @@ class Editor:
         return before + ":=" + after
 
     def array_value(self, g: Group, nl: str, indent: str, texts: dict) -> str:
-        dims = g.decl.dims
-        lits = [self.values.literal(g, k, texts.get(k)) for k in range(len(g.decl.value))]
-        rows = len(lits) // dims[0]
-
-        def nest(items, ds):
-            if len(ds) == 1:
-                return "[" + ",".join(items) + "]"
-            step = len(items) // ds[0]
-            return "[" + ",".join(nest(items[i * step:(i + 1) * step], ds[1:])
-                                  for i in range(ds[0])) + "]"
-        parts = [nest(lits[i * rows:(i + 1) * rows], dims[1:]) if len(dims) > 1 else lits[i]
-                 for i in range(dims[0])]
-        inner = indent + "    "
-        return "[" + nl + inner + ("," + nl + inner).join(parts) + "]"
+        return self._array_literal(g, nl, indent,
+                                   lambda g, k: self.values.literal(g, k, texts.get(k)))
 
     # -------------------------------------------------------- per group
     def apply(self, g: Group) -> None:
@@ -394,48 +382,59 @@ class Editor:
                     self.actions[u.key] = (f"{u.motion.instruction} -> MoveAbsJ "
                                            f"{FUNC_J}(cold, correction)")
             return
+        absj = g.mode == "absj"
+        names = self._declare_transient(
+            g, "jointtarget", (lambda s, k: "jt_" + s) if absj else (lambda s, k: None),
+            self._cold_literal, "jointtarget", self._dq_literal, dq_after_cold=True)
+        self._use_transient(g, names, FUNC_J, absj)
+
+    def _declare_transient(self, g: Group, cold_type: str, cold_name, cold_literal,
+                           dq_type: str, dq_literal, dq_after_cold: bool) -> dict:
+        """The named constants of a declared group: per element (or
+        "array") the cold value's name (None: the program's own data is
+        the cold value; cold_name(stem, element) says) and the
+        correction's, <cold>_dq or <stem>_dq."""
         stem = g.decl.name
         if g.src.call is not None:
             stem += "_" + g.src.call.name.lower()
         _, _, nl, indent, _ = self._anchor(g)
-        # Element (or "array") -> (cold name or None: the program's own
-        # jointtarget is the cold value, correction name).
         names: dict = {}
-        if g.array:
-            dims = "{" + ",".join(map(str, g.decl.dims)) + "}"
-            cold = None if g.mode == "joint" else self.names.new("jt_" + stem)
-            dq = self.names.new((cold or stem)[:29] + "_dq")
-            if cold is not None:
-                self.declare(g, "jointtarget", cold, dims,
-                             self._array_literal(g, nl, indent, self._cold_literal))
-            self.declare(g, "jointtarget", dq, dims,
-                         self._array_literal(g, nl, indent, self._dq_literal))
-            names["array"] = (cold, dq)
-        else:
-            for k in g.elements:
-                s = stem if k is None else stem + "_" + "_".join(
-                    map(str, multi_index(k, g.decl.dims)))
-                cold = None if g.mode == "joint" else self.names.new("jt_" + s)
-                dq = self.names.new((cold or s)[:29] + "_dq")
+        items = [("array", None)] if g.array else [(k, k) for k in g.elements]
+        for key, k in items:
+            s = stem if k is None else stem + "_" + "_".join(
+                map(str, multi_index(k, g.decl.dims)))
+            want = cold_name(s, key if g.array else k)
+            cold = self.names.new(want) if want else None
+            dq = self.names.new(((cold if dq_after_cold and cold else s))[:29] + "_dq")
+            if g.array:
+                dims = "{" + ",".join(map(str, g.decl.dims)) + "}"
                 if cold is not None:
-                    self.declare(g, "jointtarget", cold, "", self._cold_literal(g, k))
-                self.declare(g, "jointtarget", dq, "", self._dq_literal(g, k))
-                names[k] = (cold, dq)
-        for key, (cold, dq) in names.items():
+                    self.declare(g, cold_type, cold, dims,
+                                 self._array_literal(g, nl, indent, cold_literal))
+                self.declare(g, dq_type, dq, dims, self._array_literal(g, nl, indent, dq_literal))
+            else:
+                if cold is not None:
+                    self.declare(g, cold_type, cold, "", cold_literal(g, k))
+                self.declare(g, dq_type, dq, "", dq_literal(g, k))
+            names[key] = (cold, dq)
             g.names[key] = cold or g.decl.name
+        return names
+
+    def _use_transient(self, g: Group, names: dict, func: str, absj: bool) -> None:
+        """Each use's target becomes func(<cold>, <dq>) (with its index)."""
         for u in g.uses:
             src = u.source
             ref_text = u.file.text(src.ref)
             cold, dq = names["array"] if g.array else names[src.element]
             index = ref_text[len(src.ref.name):] if g.array else ""
             cold_ref = (cold + index) if cold is not None else ref_text
-            target = f"{FUNC_J}({cold_ref}, {dq}{index})"
-            if g.mode == "joint":
-                self.edit(u.key[0], src.ref.span, target, f"{u.label} -> {FUNC_J}")
-                self.actions[u.key] = f"{ref_text} -> {target}"
-            else:
+            target = f"{func}({cold_ref}, {dq}{index})"
+            if absj:
                 self._to_absj(u, target)
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {target}"
+            else:
+                self.edit(u.key[0], src.ref.span, target, f"{u.label} -> {func}")
+                self.actions[u.key] = f"{ref_text} -> {target}"
 
     def _apply_transient_rob(self, g: Group, func: str, confs: dict) -> None:
         """A robtarget move keeps its kind (a MoveL its straight line): its
@@ -457,42 +456,11 @@ class Editor:
                 self.edit(u.key[0], u.source.ref.span, target, f"{u.label} -> {func}")
                 self.actions[u.key] = f"inline robtarget -> {func}(written, correction)"
             return
-        stem = g.decl.name
-        if g.src.call is not None:
-            stem += "_" + g.src.call.name.lower()
-        _, _, nl, indent, _ = self._anchor(g)
-        names: dict = {}
-        if g.array:
-            dims = "{" + ",".join(map(str, g.decl.dims)) + "}"
-            cold = None
-            if confs:
-                cold = self.names.new(stem[:27] + "_cold")
-                self.declare(g, "robtarget", cold, dims,
-                             self._array_literal(g, nl, indent, cold_literal))
-            dq = self.names.new(stem[:29] + "_dq")
-            self.declare(g, "pose", dq, dims,
-                         self._array_literal(g, nl, indent, self._pose_literal))
-            names["array"] = (cold, dq)
-        else:
-            for k in g.elements:
-                s = stem if k is None else stem + "_" + "_".join(
-                    map(str, multi_index(k, g.decl.dims)))
-                cold = None
-                if k in confs:
-                    cold = self.names.new(s[:27] + "_cold")
-                    self.declare(g, "robtarget", cold, "", cold_literal(g, k))
-                dq = self.names.new(s[:29] + "_dq")
-                self.declare(g, "pose", dq, "", self._pose_literal(g, k))
-                names[k] = (cold, dq)
-        for u in g.uses:
-            src = u.source
-            ref_text = u.file.text(src.ref)
-            cold, dq = names["array"] if g.array else names[src.element]
-            index = ref_text[len(src.ref.name):] if g.array else ""
-            cold_ref = (cold + index) if cold is not None else ref_text
-            target = f"{func}({cold_ref}, {dq}{index})"
-            self.edit(u.key[0], src.ref.span, target, f"{u.label} -> {func}")
-            self.actions[u.key] = f"{ref_text} -> {target}"
+        names = self._declare_transient(
+            g, "robtarget",
+            lambda s, k: s[:27] + "_cold" if (confs if k == "array" else k in confs) else None,
+            cold_literal, "pose", self._pose_literal, dq_after_cold=False)
+        self._use_transient(g, names, func, False)
 
     def _to_absj(self, u, target_text: str) -> None:
         m = u.motion
