@@ -21,6 +21,9 @@ from .model import ZERO_COLUMN, ParamModel
 # data cannot tell the parameters apart (float64 round-off is ~1e-16).
 RANK_TOL = 1e-9
 MAX_ITERATIONS = 30
+RSS_TOL = 1e-10
+# 1 - leverage below this: the point is fitted by parameters of its own.
+LEVERAGE_TOL = 1e-9
 # For the whole catalogue at once: directions this weak are left out of the
 # noise estimate's reference fit rather than fitted to the noise.
 FULL_RANK_TOL = 1e-6
@@ -75,7 +78,13 @@ class Fit:
             return self.rms_mm
         U = self._basis()[0].reshape(len(r), 3, -1)
         H = U @ np.swapaxes(U, 1, 2)
-        e = np.linalg.solve(np.eye(3) - H + 1e-15 * np.eye(3), r[..., None])[..., 0]
+        w, V = np.linalg.eigh(np.eye(3) - H)
+        if np.min(w) < LEVERAGE_TOL:
+            # A point the fit passes through on its own (leverage 1): the
+            # others do not predict it at all.
+            return float("inf")
+        local = np.einsum("nji,nj->ni", V, r)
+        e = np.einsum("nij,nj->ni", V, local / w)
         return float(np.sqrt(np.mean(np.sum(e ** 2, axis=1))))
 
 
@@ -131,8 +140,11 @@ def fit(model: ParamModel, measured: np.ndarray, effects: tuple[Effect, ...],
             x, X, J, r = x_try, X_try, J_try, r_try
             it_total += 1
             # Converged when the step changes the fitted positions by less
-            # than a nanometre in total.
-            if np.linalg.norm(A @ (step * dx * scale)) < 1e-6:
+            # than a nanometre in total, or the residual sum of squares by
+            # less than a part in 1e10 (a real robot's data: the last
+            # digits of a large residual, far below any test's resolution).
+            if np.linalg.norm(A @ (step * dx * scale)) < 1e-6 or \
+                    rss - float(r @ r) <= RSS_TOL * rss:
                 break
         negative = bounded & free & (x < 0)
         if not negative.any():

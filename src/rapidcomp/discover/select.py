@@ -32,7 +32,7 @@ import numpy as np
 
 from . import warmup
 from .effects import THERMAL_PREFIX, Effect, thermal_variants
-from .fit import RANK_TOL, Fit, fit
+from .fit import LEVERAGE_TOL, RANK_TOL, Fit, fit
 from .measured import Measurements
 from .model import ZERO_COLUMN, ParamModel
 from .noise import Noise, Structure, noise, structure
@@ -433,7 +433,11 @@ class _Selector:
             Up = Uf.reshape(N, 3, -1)
             Hf = H + Up @ np.swapaxes(Up, 1, 2)
             res = res.reshape(N, 3)
-            e = np.linalg.solve(np.eye(3) - Hf + 1e-15 * np.eye(3), res[..., None])[..., 0]
+            w, V = np.linalg.eigh(np.eye(3) - Hf)
+            if np.min(w) < LEVERAGE_TOL:
+                e = np.full_like(res, np.inf)    # a point fitted on its own
+            else:
+                e = np.einsum("nij,nj->ni", V, np.einsum("nji,nj->ni", V, res) / w)
             out[f.id] = (float(np.sum(res ** 2)), e)
         return out
 
