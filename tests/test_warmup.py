@@ -130,3 +130,41 @@ def test_a_bad_time_is_a_path_line_error(tmp_path):
     path.write_text("\n".join(lines) + "\n")
     r = _rapidcomp("discover", path, "--tool", "0,0,150", cwd=tmp_path)
     assert r.returncode == 2 and "wu.csv:9" in r.stderr and "t_min is -5" in r.stderr
+
+
+def test_temperature_columns_are_read_and_judged_against_time(tmp_path):
+    """A sensor that follows the warm-up explains it as well as time (and
+    its cold and warm readings are what fix --temperature needs); one that
+    lags (its own 90 min) explains it worse and is not suggested."""
+    path = _campaign(tmp_path, "ws.csv", "--tau-heat", "35",
+                     "--thermal-effect", "joint_displacement:J2=0.03,0,0.04",
+                     "--sensor", "temp_j2:22:47", "--sensor", "temp_lag:22:40:90")
+    d = _discover(path)
+    j2, lag = d.warmup.sensors
+    assert (j2.name, lag.name) == ("temp_j2", "temp_lag")
+    assert j2.t_cold == pytest.approx(22, abs=0.2) and j2.t_warm == pytest.approx(47, abs=0.5)
+    assert "as well as time" in j2.text and "worse than time" in lag.text
+    assert lag.tau_min == pytest.approx(90, rel=0.15) and d.warmup.state_from is None
+    r = _rapidcomp("discover", path, "--tool", "0,0,150", "--out-profile", "p.csv", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    text = (tmp_path / "p.csv").read_text()
+    assert "--temperature SIGNAL:22.0:47.0" in text and "temp_lag" not in text
+
+
+def test_the_state_comes_from_a_temperature_the_points_follow_better():
+    """Hand-made: the points follow a sensor whose warm-up has two time
+    constants (no single exponential fits it): that column gives s."""
+    rng = np.random.default_rng(5)
+    times = np.array([0, 5, 10, 20, 30, 45, 60, 90, 120, 180, 240.0])
+    T = 20 + 15 * (1 - np.exp(-times / 8)) + 10 * (1 - np.exp(-times / 120))
+    q = np.array([[0, 10, 20, 0, 30, 0], [40, 0, 10, 5, 60, 0], [-30, 20, 0, 0, 45, 0],
+                  [10, -20, 30, 60, 20, 90]], float)
+    b = np.array([[0.05, -0.02, 0.08], [0.1, 0.0, -0.04], [0.0, 0.06, 0.02], [0.03, 0.03, 0.0]])
+    rows_t = np.repeat(times, 4)
+    rows_T = np.repeat(T, 4)
+    xyz = 400 + ((rows_T - 20) / 25)[:, None] * np.tile(b, (len(times), 1)) \
+        + rng.normal(0, 0.001, (len(rows_t), 3))
+    w = estimate(np.tile(q, (len(times), 1)), xyz, rows_t, temperatures=(("temp_m", rows_T),))
+    assert w.state_from == "temp_m" and "better than time" in w.sensors[0].text
+    s = w.states(rows_t, (("temp_m", rows_T),))
+    assert s.min() == pytest.approx(0, abs=1e-9) and s.max() == pytest.approx(1, abs=1e-9)

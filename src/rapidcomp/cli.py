@@ -405,12 +405,13 @@ def _check_output_folder(out: str, src) -> None:
                                  + (", ..." if len(other) > 3 else "") + "); give a new folder")
 
 
-def _warmup_campaign(times, thermal_effects, tau_heat):
-    """(times, thermal effect specs, tau) of simulate --times, or None."""
+def _warmup_campaign(times, thermal_effects, tau_heat, sensors=()):
+    """(times, thermal effect specs, tau, sensors) of simulate --times, or
+    None."""
     import math
     if times is None:
-        given = [o for o, v in (("--thermal-effect", thermal_effects), ("--tau-heat", tau_heat))
-                 if v]
+        given = [o for o, v in (("--thermal-effect", thermal_effects), ("--tau-heat", tau_heat),
+                                ("--sensor", sensors)) if v]
         if given:
             raise RapidcompError(f"{given[0]} needs --times (a warm-up campaign)")
         return None
@@ -424,7 +425,21 @@ def _warmup_campaign(times, thermal_effects, tau_heat):
     if tau_heat is None or not (math.isfinite(tau_heat) and 0 < tau_heat <= 100_000):
         raise RapidcompError("--times needs --tau-heat MIN (the hidden warm-up time constant, "
                              "more than 0)")
-    return ts, tuple(thermal_effects), tau_heat
+    parsed = []
+    for spec in sensors:
+        parts = spec.split(":")
+        try:
+            cold, warm = float(parts[1]), float(parts[2])
+            lag = float(parts[3]) if len(parts) == 4 else None
+        except (ValueError, IndexError):
+            cold = warm = lag = float("nan")
+        if len(parts) not in (3, 4) or not parts[0].lower().startswith("temp_") or \
+                not all(math.isfinite(v) and abs(v) <= 500 for v in (cold, warm)) or \
+                (lag is not None and not (math.isfinite(lag) and 0 < lag <= 100_000)):
+            raise RapidcompError(f"--sensor {spec}: expected temp_NAME:T_COLD:T_WARM[:TAU] "
+                                 "(deg C, minutes)")
+        parsed.append((parts[0].lower(), cold, warm, lag))
+    return ts, tuple(thermal_effects), tau_heat, tuple(parsed)
 
 
 def _campaign_options(f):
@@ -525,13 +540,16 @@ def discover(measured, profile, robot, tool, payload, force, sigma, report_path,
                    "values (repeatable).")
 @click.option("--tau-heat", type=float, default=None, metavar="MIN",
               help="--times: the warm-up time constant, minutes.")
+@click.option("--sensor", "sensors", multiple=True, metavar="temp_NAME:T_COLD:T_WARM[:TAU]",
+              help="--times: a temperature column rising from T_COLD to T_WARM deg C with the "
+                   "warm-up (or its own time constant TAU, minutes), 0.05 deg C noise.")
 @click.option("-q", "--quiet", is_flag=True, help="No summary on stdout.")
 def simulate(output, points, profile, robot, tool, payload, force, effects, noise, seed,
-             table_path, times, thermal_effects, tau_heat, quiet) -> None:
+             table_path, times, thermal_effects, tau_heat, sensors, quiet) -> None:
     """Make a measured-data file from a model, and say what it can detect."""
     from .discover.job import run_simulate
     try:
-        campaign = _warmup_campaign(times, thermal_effects, tau_heat)
+        campaign = _warmup_campaign(times, thermal_effects, tau_heat, sensors)
         outcome = run_simulate(output, points, profile, robot, tool, payload, effects, noise,
                                seed, table_path, force, campaign)
     except RapidcompError as exc:

@@ -15,6 +15,7 @@ from ..kinematics.gravity import Payload
 from ..progress import Progress
 from ..kinematics.profile import ThermalProfile, format_profile, parse_profile, read_profile
 from . import plot, report
+from .stats import chi2_ppf
 from .effects import THERMAL_KINDS, catalogue, to_profile
 from .heldout import held_out
 from .measured import format_measured, read_joints, read_measured
@@ -107,7 +108,12 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                 raise RapidcompError(f"--test {Path(test).name}: the model has thermal effects "
                                      "(the data are a warm-up campaign); the test poses need a "
                                      "t_min column too")
-            test_model = test_model.with_state(d.warmup.states(test_data.t_min))
+            if d.warmup.state_from is not None and d.warmup.state_from not in dict(
+                    test_data.temperatures):
+                raise RapidcompError(f"--test {Path(test).name}: the thermal state comes from "
+                                     f"{d.warmup.state_from}; the test poses need that column")
+            test_model = test_model.with_state(d.warmup.states(test_data.t_min,
+                                                               test_data.temperatures))
         heldout = held_out(test_model, test_data, d.final_fit)
     notes += _beyond_limits(data, nominal) + list(d.notes)
     if test_data is not None:
@@ -172,6 +178,12 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                 out += ["the thermal effects at the steady state (s = 1); fix --transient "
                         "takes tau from the next line",
                         f"tau_heat_min: {d.warmup.tau_min:.4g}"]
+                for x in d.warmup.sensors:
+                    if x.chi_vs_time > chi2_ppf(0.99, 1):
+                        continue     # the points follow it worse than time
+                    out.append(f"{x.name}: {x.t_cold:.1f} deg C cold, {x.t_warm:.1f} warm: "
+                               f"fix --transient --temperature SIGNAL:{x.t_cold:.1f}:"
+                               f"{x.t_warm:.1f} reads the state from it")
             if any(e.kind == "tool_offset" for e in kept):
                 out.append("tool_offset is written into the flange row; if it is an error of "
                            "the measuring point's mounting, not of the robot, remove it "
@@ -276,6 +288,10 @@ def point_set(spec: str, robot, seed: int):
     return read_joints(spec)
 
 
+# A temperature sensor's noise in a simulated campaign, deg C.
+SENSOR_NOISE_C = 0.05
+
+
 def run_simulate(output: str, points: str = "cube", profile: str | None = None,
                  robot: str | None = None, tool=(0.0, 0.0, 0.0), payload=None,
                  effects=(), noise: float = 0.005, seed: int = 0,
@@ -295,7 +311,7 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
     t_min = None
     thermal = {}
     if campaign is not None:
-        times, thermal_specs, tau = campaign
+        times, thermal_specs, tau, sensors = campaign
         thermal = parse_effect_values(cat, thermal_specs, force)
         for e in thermal:
             if e.kind not in THERMAL_KINDS:
@@ -313,10 +329,16 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
         base = np.vstack([simulate_positions(nominal, prof, {}, q, tool)] * len(times))
         names = tuple(f"{n}_t{t:g}" for t in times for n in names)
         t_min = np.repeat(np.asarray(times, float), len(q))
+        rng = np.random.default_rng(seed + 1)
+        temperatures = tuple(
+            (name, cold + (warm - cold) * (1.0 - np.exp(-t_min / (lag or tau)))
+             + rng.normal(0.0, SENSOR_NOISE_C, len(t_min)))
+            for name, cold, warm, lag in sensors)
         q = np.vstack([q] * len(times))
     else:
         exact = simulate_positions(nominal, prof, values, q, tool)
         base = simulate_positions(nominal, prof, {}, q, tool)
+        temperatures = ()
     xyz = add_noise(exact, noise, seed) if noise > 0 else exact
     shift = np.linalg.norm(exact - base, axis=1)
     effect_text = ", ".join(f"{e.id}=" + ",".join(f"{v:g}" for v in e.user(val).values())
@@ -334,8 +356,11 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
                 f"noise {noise:g} mm per axis, seed {seed}"]
     if campaign is not None:
         comments.append(f"warm-up campaign: the points at {', '.join(f'{t:g}' for t in campaign[0])} "
-                        "min since a cold start (t_min)")
-    files = [(output, format_measured(names, q, xyz, comments, t_min).encode("utf-8"))]
+                        "min since a cold start (t_min)" + "".join(
+                            f"; {n} {c:g}..{w:g} deg C (tau {lag or campaign[2]:g} min, noise "
+                            f"{SENSOR_NOISE_C:g})" for n, c, w, lag in campaign[3]))
+    files = [(output, format_measured(names, q, xyz, comments, t_min,
+                                      temperatures).encode("utf-8"))]
     rows = detectability(ParamModel(nominal, prof, q, tool), cat, noise if noise > 0 else 0.005)
     meta = {"points": f"{Path(points).name} ({len(names)})",
             "noise": f"{(noise if noise > 0 else 0.005) * 1000:g} um per axis"

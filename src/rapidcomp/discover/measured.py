@@ -6,7 +6,9 @@ base frame) of the measuring point; rows in the order they were measured
 unless an `approach` column gives it); `tx,ty,tz` give each row's measuring
 point in the flange frame (several reflectors per pose: a row each, the
 same joints); `t_min` the minutes since a cold start, the robot running, at
-which the row was measured (a warm-up campaign). Lines starting with '#' are comments
+which the row was measured (a warm-up campaign), and `temp_<name>` columns
+temperatures read at the same time (deg C, e.g. temp_j2 for a motor).
+Lines starting with '#' are comments
 (simulate writes its provenance there); extra columns are ignored and
 reported; any bad row is a path:line error.
 """
@@ -28,6 +30,8 @@ MIN_POINTS = 3
 APPROACH = "approach"
 TOOL_COLUMNS = ("tx", "ty", "tz")
 TIME = "t_min"
+TEMP_PREFIX = "temp_"
+MAX_TEMP_C = 500.0
 # A warm-up campaign spans hours; beyond a year the column is not minutes.
 MAX_T_MIN = 525_600.0
 # Values no measurement of a robot has: a joint beyond two turns, a
@@ -52,6 +56,8 @@ class Measurements:
     tool: np.ndarray | None = None
     # Per row, minutes since a cold start (robot running), from `t_min`.
     t_min: np.ndarray | None = None
+    # Temperature columns: name -> (N,) deg C.
+    temperatures: tuple[tuple[str, np.ndarray], ...] = ()
 
     def __len__(self) -> int:
         return len(self.names)
@@ -135,8 +141,21 @@ def parse_measured(text: str, source: str, min_points: int = MIN_POINTS) -> Meas
             raise InputError(source, f"t_min is {t[bad[0], 0]:g}, expected minutes since a cold "
                              f"start (0 to {MAX_T_MIN:g})", lines[bad[0]])
         t_min = t[:, 0]
+    temps = []
+    for col in [c for c in ignored if c.startswith(TEMP_PREFIX)]:
+        if t_min is None:
+            raise InputError(source, f"column {col} without t_min: temperatures describe a "
+                             "warm-up campaign, whose rows say when they were measured (t_min)")
+        _, v, _, _ = parse_table(text, source, ("point",) + COLUMNS[1:] + (col,), (col,),
+                                 min_points)
+        bad = np.flatnonzero(np.abs(v[:, 0]) > MAX_TEMP_C)
+        if bad.size:
+            raise InputError(source, f"{col} is {v[bad[0], 0]:g}, expected a temperature in deg C",
+                             lines[bad[0]])
+        temps.append((col, v[:, 0]))
+    ignored = tuple(c for c in ignored if not c.startswith(TEMP_PREFIX))
     return Measurements(source, names, values[:, :6], values[:, 6:], lines, ignored, approach,
-                        tool, t_min)
+                        tool, t_min, tuple(temps))
 
 
 def _approach(text: str, source: str) -> np.ndarray:
@@ -169,12 +188,13 @@ def read_joints(path: str | Path) -> tuple[tuple[str, ...], np.ndarray]:
     return names, values
 
 
-def format_measured(names, q_deg, xyz_mm, comments=(), t_min=None) -> str:
-    out = [f"# {c}" for c in comments] + [",".join(COLUMNS + ((TIME,) if t_min is not None
-                                                              else ()))]
+def format_measured(names, q_deg, xyz_mm, comments=(), t_min=None, temperatures=()) -> str:
+    extra = ((TIME,) if t_min is not None else ()) + tuple(c for c, _ in temperatures)
+    out = [f"# {c}" for c in comments] + [",".join(COLUMNS + extra)]
     for n, (name, q, x) in enumerate(zip(names, q_deg, xyz_mm)):
         row = [name, *(f"{v:.6f}" for v in q), *(f"{v:.6f}" for v in x)]
         if t_min is not None:
             row.append(f"{t_min[n]:g}")
+        row += [f"{v[n]:.3f}" for _, v in temperatures]
         out.append(",".join(row))
     return "\n".join(out) + "\n"

@@ -106,6 +106,7 @@ def markdown(d: Discovery, meta: dict, plot_note: str | None = None,
         out += _held_out(test)
     if d.warmup is not None:
         out += ["## Warm-up", "", d.warmup.text + ".", ""]
+        out += [f"- {x.text}." for x in d.warmup.sensors] + ([""] if d.warmup.sensors else [])
         if d.thermal_evidence:
             out += ["| effect | static or thermal, and why |", "|---|---|"]
             out += [f"| {s.effect.base_id} | {d.thermal_evidence.get(s.effect.id, '')} |"
@@ -163,6 +164,7 @@ def summary_lines(d: Discovery, test: HeldOut | None = None) -> list[str]:
             f"{o.point} (line {o.line}, off by {_um(o.off_mm)} um)" for o in d.outliers))
     if d.warmup is not None:
         out.append(d.warmup.text)
+        out += [f"temperature {x.text}" for x in d.warmup.sensors]
     for i, s in enumerate(d.steps, 1):
         params = ", ".join(f"{k}={_num(v)}±{_num(s.stderr[k])}" for k, v in s.params.items())
         alt = f"  [alternatives: {', '.join(s.alternatives)}]" if s.alternatives else ""

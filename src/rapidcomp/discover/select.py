@@ -628,9 +628,10 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
         # A warm-up campaign: tau from the data alone (warmup.py); each
         # effect heat can change gets a thermal twin acting as s(t) times it.
         say("warm-up")
-        warm = warmup.estimate(data.q_deg, data.xyz_mm, data.t_min, data.tool, sigma_mm)
+        warm = warmup.estimate(data.q_deg, data.xyz_mm, data.t_min, data.tool, sigma_mm,
+                               data.temperatures)
         if warm.tau_min is not None:
-            model = model.with_state(warm.states(data.t_min))
+            model = model.with_state(warm.states(data.t_min, data.temperatures))
             effects = tuple(effects) + thermal_variants(effects)
     say("gross errors")
     # The reference fit for gross errors and the noise: every effect but
@@ -645,7 +646,8 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
                        xyz_mm=data.xyz_mm[rows], lines=tuple(data.lines[i] for i in rows),
                        approach=None if data.approach is None else data.approach[rows],
                        tool=None if data.tool is None else data.tool[rows],
-                       t_min=None if data.t_min is None else data.t_min[rows])
+                       t_min=None if data.t_min is None else data.t_min[rows],
+                       temperatures=tuple((c, v[rows]) for c, v in data.temperatures))
     n = 3 * len(data)
     meas = data.xyz_mm
     if warm is not None and sigma_mm is None:

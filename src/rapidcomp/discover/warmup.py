@@ -33,6 +33,18 @@ MIN_TIMES = 3
 
 
 @dataclass(frozen=True)
+class Sensor:
+    """A temperature column against the warm-up."""
+
+    name: str
+    t_cold: float            # its warm-up curve T(t) = T_c + (T_w - T_c) s(t; tau_T)
+    t_warm: float
+    tau_min: float
+    chi_vs_time: float       # (RSS with s from T - RSS with s(t)) / sigma^2: < 0 better
+    text: str
+
+
+@dataclass(frozen=True)
 class Warmup:
     poses: int                     # poses measured at MIN_TIMES or more times
     times: int                     # distinct times
@@ -43,8 +55,16 @@ class Warmup:
     sigma_mm: float | None         # scatter about each pose's warm-up curve
     dof: int
     text: str
+    sensors: tuple[Sensor, ...] = ()
+    state_from: str | None = None  # a temperature column that explains better than time
 
-    def states(self, t_min) -> np.ndarray:
+    def states(self, t_min, temperatures=()) -> np.ndarray:
+        """Each row's thermal state: s(t), or from the temperature column
+        that explains the warm-up better, (T - T_c) / (T_w - T_c)."""
+        if self.state_from is not None:
+            sensor = next(x for x in self.sensors if x.name == self.state_from)
+            T = dict(temperatures)[self.state_from]
+            return (np.asarray(T, float) - sensor.t_cold) / (sensor.t_warm - sensor.t_cold)
         return states(np.asarray(t_min, float), self.tau_min)
 
 
@@ -74,7 +94,49 @@ def _rss(groups, t_min, xyz, tau) -> float:
     return total
 
 
-def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None) -> Warmup:
+def _rss_linear(groups, x, xyz) -> float:
+    """Each pose's points as a + x b (x per row)."""
+    total = 0.0
+    for rows in groups:
+        A = np.column_stack([np.ones(len(rows)), x[rows]])
+        coef, *_ = np.linalg.lstsq(A, xyz[rows], rcond=None)
+        total += float(np.sum((xyz[rows] - A @ coef) ** 2))
+    return total
+
+
+def _sensor(name, T, t, groups, xyz, rss_time, sigma) -> Sensor:
+    """A temperature column: its own warm-up curve, and whether the points
+    follow it better than they follow s(t)."""
+    grid = np.exp(np.linspace(*np.log(TAU_RANGE_MIN), GRID))
+
+    def curve(tau):
+        A = np.column_stack([np.ones(len(t)), states(t, tau)])
+        coef, *_ = np.linalg.lstsq(A, T, rcond=None)
+        return float(np.sum((T - A @ coef) ** 2)), coef
+    k = int(np.argmin([curve(tau)[0] for tau in grid]))
+    tau = _golden(lambda x: curve(x)[0], grid[max(k - 1, 0)], grid[min(k + 1, GRID - 1)])
+    (t0, rise) = curve(tau)[1]
+    t_warm = t0 + rise
+    # Cold is what it reads at the cold start (the first time measured),
+    # warm its curve's steady state.
+    t_cold = float(np.mean(T[t == t.min()]))
+    # A sensor still rising past its curve's steady state (a slow second
+    # time constant): warm is the highest reading, so that s <= 1 (the
+    # generated module clips s to 0..1).
+    t_warm = max(t_warm, float(T.max())) if rise > 0 else min(t_warm, float(T.min()))
+    chi = (_rss_linear(groups, T, xyz) - rss_time) / sigma ** 2
+    tell = chi2_ppf(0.99, 1)
+    verdict = ("explains the warm-up better than time does (the heat does not follow one time "
+               "constant)" if chi < -tell else
+               "explains it as well as time" if chi <= tell else "explains it worse than time")
+    return Sensor(name, float(t_cold), float(t_warm), float(tau), float(chi),
+                  f"{name}: {t_cold:.1f} deg C cold, {t_warm:.1f} warm (its tau "
+                  f"{tau:.1f} min); the points follow it with chi-square {chi:+.1f} against "
+                  f"s(t): it {verdict}")
+
+
+def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
+             temperatures=()) -> Warmup:
     """tau, its interval and the evidence of a warm-up, from the poses
     measured at several times."""
     q_deg, xyz, t = np.asarray(q_deg, float), np.asarray(xyz_mm, float), np.asarray(t_min, float)
@@ -120,7 +182,15 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None) -> 
     if open_end or tau > 3 * span[1]:
         text += ("; the campaign ends long before the robot is warm: tau is poorly known, "
                  "measure longer")
-    return Warmup(len(groups), times, float(tau), low, high, p, sigma, dof, text)
+    sensors = tuple(_sensor(name, np.asarray(T, float), t, groups, xyz, best, sigma)
+                    for name, T in temperatures)
+    better = [x for x in sensors if x.chi_vs_time < -chi2_ppf(0.99, 1)
+              and abs(x.t_warm - x.t_cold) > 1e-6]
+    state_from = min(better, key=lambda x: x.chi_vs_time).name if better else None
+    if state_from is not None:
+        text += f"; the thermal state comes from {state_from}, which the points follow better"
+    return Warmup(len(groups), times, float(tau), low, high, p, sigma, dof, text, sensors,
+                  state_from)
 
 
 def _golden(f, a: float, b: float, iterations: int = 60) -> float:
