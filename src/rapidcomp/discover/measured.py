@@ -142,10 +142,9 @@ def parse_measured(text: str, source: str, min_points: int = MIN_POINTS) -> Meas
                              f"start (0 to {MAX_T_MIN:g})", lines[bad[0]])
         t_min = t[:, 0]
     temps = []
-    for col in [c for c in ignored if c.startswith(TEMP_PREFIX)]:
-        if t_min is None:
-            raise InputError(source, f"column {col} without t_min: temperatures describe a "
-                             "warm-up campaign, whose rows say when they were measured (t_min)")
+    # Without t_min a temperature column is an extra column like any other
+    # (ignored, with a note): only a warm-up campaign reads it.
+    for col in [c for c in ignored if c.startswith(TEMP_PREFIX) and t_min is not None]:
         _, v, _, _ = parse_table(text, source, ("point",) + COLUMNS[1:] + (col,), (col,),
                                  min_points)
         bad = np.flatnonzero(np.abs(v[:, 0]) > MAX_TEMP_C)
@@ -153,7 +152,7 @@ def parse_measured(text: str, source: str, min_points: int = MIN_POINTS) -> Meas
             raise InputError(source, f"{col} is {v[bad[0], 0]:g}, expected a temperature in deg C",
                              lines[bad[0]])
         temps.append((col, v[:, 0]))
-    ignored = tuple(c for c in ignored if not c.startswith(TEMP_PREFIX))
+    ignored = tuple(c for c in ignored if t_min is None or not c.startswith(TEMP_PREFIX))
     return Measurements(source, names, values[:, :6], values[:, 6:], lines, ignored, approach,
                         tool, t_min, tuple(temps))
 
