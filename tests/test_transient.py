@@ -165,7 +165,7 @@ def test_options_are_checked():
         make_transient(None, None, None, "ai1:20:20")
     with pytest.raises(RapidcompError, match="give one"):
         make_transient(30, None, None, "ai1:20:40")
-    with pytest.raises(RapidcompError, match="more than 0"):
+    with pytest.raises(RapidcompError, match="from 0.001 to 100000"):
         make_transient(-5, None, None, None)
     assert make_transient(30, None, None, None) == Transient(30, 30, 2.0)
 
@@ -235,7 +235,7 @@ def test_fix_transient_holds_at_every_thermal_state(tmp_path):
 @pytest.mark.parametrize("args, message", [
     (["--tau-heat", "45"], "--tau-heat applies to --transient only"),
     (["--transient"], "needs how the thermal state is known"),
-    (["--transient", "--tau-heat", "45", "--emit", "robtarget"], "give one of them"),
+    (["--transient", "--tau-heat", "45", "--emit", "robtarget"], "--emit robtarget is not one"),
     (["--transient", "--temperature", "ai:20"], "SIGNAL:T_COLD:T_WARM"),
 ])
 def test_bad_transient_options_exit_2_with_nothing_written(tmp_path, args, message):
@@ -332,3 +332,62 @@ def test_fix_transient_keeps_movel_linear_and_holds_at_every_state(tmp_path):
             M = deform(robot, scaled(profile, s)).base_M_flange(q)
             assert np.linalg.norm(M.translation - p0) * 1000 < 1.0, (name, s)
             assert np.linalg.norm(pin.log3(M.rotation @ R0.T)) / DEG < 1e-4
+
+
+def test_review_cases_literal_index_backinfo_overwrite_and_static_profiles(tmp_path):
+    """An array element with a literal index (jA{1}, pA{2}) is compensated;
+    a backup's backinfo.txt lists the support module; an existing different
+    rcThermal.sys is not overwritten; a profile discover marked static and a
+    reserved word as signal are refused; tau_heat_min with '=' is read, twice
+    is an error."""
+    mod = tmp_path / "m1.mod"
+    mod.write_text(
+        "MODULE M1\n"
+        "    CONST jointtarget jA{2}:=[[[0,-30,30,0,60,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
+        "[[90,-30,30,0,60,180],[9E9,9E9,9E9,9E9,9E9,9E9]]];\n"
+        "    CONST robtarget pA{2}:=[[[500,0,400],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
+        "[[500,100,400],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]];\n"
+        "    PROC main()\n        MoveAbsJ jA{1}, v200, fine, tool0;\n"
+        "        MoveL pA{2}, v200, fine, tool0;\n    ENDPROC\nENDMODULE\n")
+    out = tmp_path / "o" / "m1.mod"
+    r = _rapidcomp("fix", mod, "--profile", FIXTURES / "warm.csv", "--transient", "--tau-heat",
+                   "40", "-o", out, cwd=tmp_path)
+    assert r.returncode == 0 and "2 of 2" in r.stdout, r.stderr + r.stdout
+    text = out.read_text()
+    assert "MoveAbsJ rcTcJ(jA{1}, jA_1_dq)" in text
+    assert re.search(r"MoveL rcTcR\((pA\{2\}|pA_2_cold), pA_2_dq\)", text)
+    # Another law into the same folder: refused, the first module kept.
+    before = (out.parent / "rcThermal.sys").read_bytes()
+    r = _rapidcomp("fix", mod, "--profile", FIXTURES / "warm.csv", "--transient", "--tau-heat",
+                   "90", "-o", out.parent / "again.mod", cwd=tmp_path)
+    assert r.returncode == 2 and "exists and is not this support module" in r.stderr
+    assert (out.parent / "rcThermal.sys").read_bytes() == before
+    assert not (out.parent / "again.mod").exists()
+    backup = tmp_path / "bk"
+    r = _rapidcomp("fix", FIXTURES / "tasks" / "backup_irbt", "--profile", FIXTURES / "warm.csv",
+                   "--transient", "--tau-heat", "30", "--track", "a:x", "-o", backup,
+                   cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    info = (backup / "BACKINFO" / "backinfo.txt").read_text().splitlines()
+    task1 = info[info.index(">>TASK1: (T_ROB1,,)") + 1:]
+    assert task1[:3] == ["SYSMOD/user.sys", "PROGMOD/Track.mod", "SYSMOD/rcThermal.sys"]
+    assert "TASK PERS num rcS:=0;" in (backup / "RAPID" / "TASK1" / "SYSMOD" /
+                                       "rcThermal.sys").read_text()
+    static = tmp_path / "static.csv"
+    static.write_text("# static: nothing changed over time\njoint,dx_mm,dy_mm,dz_mm,rx_deg,"
+                      "ry_deg,rz_deg\nJ2,0.01,0,0,0,0,0\n")
+    r = _rapidcomp("fix", mod, "--profile", static, "--transient", "--tau-heat", "40",
+                   "-o", tmp_path / "s.mod", cwd=tmp_path)
+    assert r.returncode == 2 and "effects are static" in r.stderr
+    r = _rapidcomp("fix", mod, "--profile", FIXTURES / "warm.csv", "--transient",
+                   "--temperature", "IF:20:40", "-o", tmp_path / "t.mod", cwd=tmp_path)
+    assert r.returncode == 2 and "reserved word" in r.stderr
+    eq = tmp_path / "eq.csv"
+    eq.write_text("# tau_heat_min = 33\n" + (FIXTURES / "warm.csv").read_text())
+    r = _rapidcomp("fix", mod, "--profile", eq, "--transient", "-o", tmp_path / "e" / "e.mod",
+                   cwd=tmp_path)
+    assert r.returncode == 0 and "heating tau 33 min" in r.stdout and "tau from eq.csv" in r.stdout
+    eq.write_text("# tau_heat_min: 33\n# tau_heat_min: 40\n" + (FIXTURES / "warm.csv").read_text())
+    r = _rapidcomp("fix", mod, "--profile", eq, "--transient", "-o", tmp_path / "f.mod",
+                   cwd=tmp_path)
+    assert r.returncode == 2 and "given twice" in r.stderr

@@ -168,3 +168,14 @@ def test_the_state_comes_from_a_temperature_the_points_follow_better():
     assert w.state_from == "temp_m" and "better than time" in w.sensors[0].text
     s = w.states(rows_t, (("temp_m", rows_T),))
     assert s.min() == pytest.approx(0, abs=1e-9) and s.max() == pytest.approx(1, abs=1e-9)
+
+
+def test_out_profile_of_a_campaign_without_warm_up_is_marked_static(tmp_path):
+    path = _campaign(tmp_path, "cold.csv", "--tau-heat", "35",
+                     "--effect", "joint_offset:J3=0.01")
+    r = _rapidcomp("discover", path, "--tool", "0,0,150", "--out-profile", "p.csv", cwd=tmp_path)
+    assert r.returncode == 0 and "nothing changed over time" in r.stdout, r.stderr
+    assert read_profile(tmp_path / "p.csv").static_only
+    r = _rapidcomp("simulate", "-o", "two.csv", "--times", "0,60", "--tau-heat", "30",
+                   cwd=tmp_path)
+    assert r.returncode == 2 and "3 or more times" in r.stderr

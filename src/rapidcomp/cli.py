@@ -213,8 +213,9 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, ba
 @click.option("--transient", is_flag=True,
               help="Compensate for the thermal state at run time (warm-up, pauses): each move "
                    "goes to rcTcJ(cold, dq) of a support module rcThermal.sys written next to "
-                   "the output; needs --tau-heat or --temperature. MoveAbsJ targets only: "
-                   "MoveJ becomes MoveAbsJ, MoveL too with --emit absj.")
+                   "the output; needs --tau-heat, --temperature or a profile with tau_heat_min. "
+                   "MoveJ becomes MoveAbsJ (rcTcJ), MoveL keeps its line (rcTcR) unless "
+                   "--emit absj.")
 @click.option("--tau-heat", type=float, default=None, metavar="MIN",
               help="--transient: warm-up time constant while the robot runs, minutes.")
 @click.option("--tau-cool", type=float, default=None, metavar="MIN",
@@ -293,15 +294,23 @@ def _transient(on, emit, tau_heat, tau_cool, gap, temperature, profile=None, rob
             raise RapidcompError(f"{given[0]} applies to --transient only")
         return None
     if emit == "robtarget":
-        raise RapidcompError("--transient writes MoveAbsJ targets; --emit robtarget keeps "
-                             "robtargets: give one of them")
-    if tau_heat is None and temperature is None and profile is not None and \
-            os.path.isfile(profile):
+        raise RapidcompError("--transient writes the targets the controller computes at run time "
+                             "(rcTcJ for MoveAbsJ, rcTcR for robtarget moves) and chooses which "
+                             "moves become MoveAbsJ as --emit auto or absj do; --emit robtarget "
+                             "is not one of them")
+    source = None
+    if profile is not None and os.path.isfile(profile):
         from .compensate.load import load_robot
         from .kinematics.profile import read_profile
-        names = load_robot(robot).joint_names
-        tau_heat = read_profile(profile, force=force, joint_names=names).tau_heat_min
-    return make_transient(tau_heat, tau_cool, gap, temperature)
+        prof = read_profile(profile, force=force, joint_names=load_robot(robot).joint_names)
+        if prof.static_only:
+            raise RapidcompError(f"{profile}: its effects are static (nothing changed over time "
+                                 "in the warm-up campaign discover read): --transient would "
+                                 "scale them with the thermal state; use fix without "
+                                 "--transient")
+        if tau_heat is None and temperature is None and prof.tau_heat_min is not None:
+            tau_heat, source = prof.tau_heat_min, f"tau from {os.path.basename(profile)}"
+    return make_transient(tau_heat, tau_cool, gap, temperature, source)
 
 
 def _fix_specs(programs, profile, output, emit, report, no_report, json_path, with_modules,
@@ -422,6 +431,9 @@ def _warmup_campaign(times, thermal_effects, tau_heat, sensors=()):
     if not ts or any(not math.isfinite(t) or t < 0 or t > 525_600 for t in ts) or \
             len(set(ts)) != len(ts):
         raise RapidcompError(f"--times {times}: expected different minutes from 0 to 525600")
+    if len(ts) < 3:
+        raise RapidcompError(f"--times {times}: a warm-up campaign measures at 3 or more times "
+                             "(two cannot tell a curve from a line)")
     if tau_heat is None or not (math.isfinite(tau_heat) and 0 < tau_heat <= 100_000):
         raise RapidcompError("--times needs --tau-heat MIN (the hidden warm-up time constant, "
                              "more than 0)")

@@ -145,7 +145,8 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
                     mode=mode, written_conf=written_conf)
     notes = plan.notes() + _notes(rows, gs)
     if transient is not None:
-        notes += _transient_notes(transient[0], state_errors)
+        notes += _transient_notes(transient[0], state_errors if any(
+            r.status == COMPENSATED for r in rows) else {})
     modules = []
     for fi, pf in enumerate(task.files):
         es = file_edits.get(fi, [])
@@ -183,6 +184,9 @@ def _transient_notes(tr, state_errors: dict) -> list[str]:
     from .transient import FUNC_J, FUNC_R, MODULE_FILE
     figures = "; ".join(f"s={s:g}: {um:.3f} um / {deg:.1e} deg"
                         for s, (um, deg) in sorted(state_errors.items()))
+    if not state_errors:
+        return [f"transient: no target compensated; {MODULE_FILE} is written all the same "
+                f"(state law: {tr.law})."]
     return [f"transient: each compensated move goes to {FUNC_J}(cold, dq) (MoveAbsJ) or "
             f"{FUNC_R}(cold, dq) (a robtarget move, which keeps its kind) = the cold robot's "
             "target + s x the warm robot's correction; load "

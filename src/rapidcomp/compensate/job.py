@@ -145,11 +145,23 @@ def _support_files(spec: JobSpec, task) -> list[tuple[str, bytes]]:
     nl = "\r\n" if "\r\n" in first.text else "\n"
     text = support_module(spec.transient, nl).encode("ascii")
     if not src.is_folder:
-        return [(str(Path(spec.output).parent / MODULE_FILE), text)]
-    rel = Path(src.modules[0]).parent
-    if src.kind == "backup" and rel.name.upper() == "PROGMOD":
-        rel = rel.parent / "SYSMOD"
-    out = [(str(Path(spec.output) / rel / MODULE_FILE), text)]
+        out = [(str(Path(spec.output).parent / MODULE_FILE), text)]
+    else:
+        rel = Path(src.modules[0]).parent
+        if src.kind == "backup" and rel.name.upper() == "PROGMOD":
+            rel = rel.parent / "SYSMOD"
+        out = [(str(Path(spec.output) / rel / MODULE_FILE), text)]
+    path = Path(out[0][0])
+    try:
+        same = path.read_bytes() == text if path.exists() else True
+    except OSError:
+        same = False
+    if not same:
+        raise RapidcompError(f"{path}: exists and is not this support module (another program's, "
+                             "with other settings, or a file of yours); write the output to "
+                             "another folder or remove it")
+    if not src.is_folder:
+        return out
     if src.kind == "pgf":
         pgf = src.input.read_text(encoding="latin-1")
         end = pgf.rfind("</Module>")
@@ -211,7 +223,10 @@ def layout(source: TaskSource) -> list[str]:
 
 
 def copies(source: TaskSource, output: str, written: set[str]) -> list[tuple[str, bytes]]:
-    """The files of layout() that no job writes, copied byte for byte."""
+    """The files of layout() that no job writes, copied byte for byte; a
+    backup's BACKINFO/backinfo.txt, which lists each task's modules for a
+    restore, also lists a transient support module written into a task."""
+    from .transient import MODULE_FILE
     out = []
     for rel in layout(source):
         dest = str(Path(output) / rel)
@@ -219,7 +234,35 @@ def copies(source: TaskSource, output: str, written: set[str]) -> list[tuple[str
             continue
         p = source.root / rel
         try:
-            out.append((dest, p.read_bytes()))
+            data = p.read_bytes()
         except OSError as exc:
             raise InputError(str(p), f"cannot read file: {exc.strerror or exc}") from None
+        if source.kind == "backup" and rel.lower() == "backinfo/backinfo.txt":
+            tasks = sorted({Path(w).parent.parent.name for w in written
+                            if Path(w).name == MODULE_FILE
+                            and Path(w).parent.name.upper() == "SYSMOD"
+                            and Path(w).is_relative_to(Path(output))})
+            data = _list_support(data, tasks, MODULE_FILE)
+        out.append((dest, data))
     return out
+
+
+def _list_support(data: bytes, tasks: list[str], module: str) -> bytes:
+    """backinfo.txt with `SYSMOD/<module>` listed under each task's
+    `>>TASK1: (...)` section (after its last module line)."""
+    if not tasks:
+        return data
+    text = data.decode("latin-1")
+    nl = "\r\n" if "\r\n" in text else "\n"
+    lines = text.split(nl)
+    out, section = [], None
+    for i, line in enumerate(lines):
+        if line.startswith(">>"):
+            section = line[2:].split(":", 1)[0].strip()
+        out.append(line)
+        nxt = lines[i + 1] if i + 1 < len(lines) else ">>"
+        last_of_section = line.strip() and (nxt.startswith(">>") or not nxt.strip())
+        if section in tasks and not line.startswith(">>") and last_of_section:
+            out.append(f"SYSMOD/{module}")
+            tasks = [t for t in tasks if t != section]
+    return nl.join(out).encode("latin-1")

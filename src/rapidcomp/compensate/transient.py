@@ -49,6 +49,9 @@ STATES = (0.0, 0.25, 0.5, 0.75, 1.0)
 # carry them.
 DEFAULT_TAU_COOL_FACTOR = 1.0
 DEFAULT_GAP_MIN = 2.0
+# The shortest time constant or gap the module writes (0.001 min = 60 ms:
+# shorter is no warm-up; the number stays plain decimal in RAPID).
+MIN_MINUTES = 0.001
 MINUTES_PER_DAY = 1440.0
 
 
@@ -63,6 +66,7 @@ class Transient:
     signal: str | None = None
     t_cold: float = 0.0
     t_warm: float = 0.0
+    source: str | None = None        # where tau came from, when not an option
 
     @property
     def law(self) -> str:
@@ -70,16 +74,17 @@ class Transient:
             return (f"s from analog input {self.signal}: (T - {self.t_cold:g}) / "
                     f"({self.t_warm:g} - {self.t_cold:g}), clipped to 0..1")
         return (f"clock: heating tau {self.tau_heat_min:g} min while running, cooling tau "
-                f"{self.tau_cool_min:g} min after a gap of more than {self.gap_min:g} min")
+                f"{self.tau_cool_min:g} min after a gap of more than {self.gap_min:g} min"
+                + (f" ({self.source})" if self.source else ""))
 
 
 def make_transient(tau_heat: float | None, tau_cool: float | None, gap: float | None,
-                   temperature: str | None) -> Transient:
+                   temperature: str | None, source: str | None = None) -> Transient:
     """The options of `fix --transient`, checked (RapidcompError: exit 2)."""
     if temperature is not None:
-        if tau_heat is not None or tau_cool is not None:
-            raise RapidcompError("--temperature and --tau-heat/--tau-cool are two ways to know "
-                                 "the thermal state: give one")
+        if tau_heat is not None or tau_cool is not None or gap is not None:
+            raise RapidcompError("--temperature and --tau-heat/--tau-cool/--gap are two ways to "
+                                 "know the thermal state: give one")
         parts = temperature.split(":")
         if len(parts) != 3:
             raise RapidcompError(f"--temperature {temperature}: expected SIGNAL:T_COLD:T_WARM "
@@ -88,6 +93,9 @@ def make_transient(tau_heat: float | None, tau_cool: float | None, gap: float | 
         if not _identifier(name):
             raise RapidcompError(f"--temperature {temperature}: {name!r} is not a RAPID signal "
                                  "name (a letter, then letters, digits or _, at most 32)")
+        if name.lower() in {n.lower() for n in GLOBAL_NAMES} or not _parses_as_signal(name):
+            raise RapidcompError(f"--temperature {temperature}: {name!r} is a RAPID reserved "
+                                 "word or a name of the support module, not a signal name")
         try:
             cold, warm = float(parts[1]), float(parts[2])
         except ValueError:
@@ -104,11 +112,21 @@ def make_transient(tau_heat: float | None, tau_cool: float | None, gap: float | 
                              "a profile with tau_heat_min (discover writes it from a warm-up "
                              "campaign)")
     for label, v in (("--tau-heat", tau_heat), ("--tau-cool", tau_cool), ("--gap", gap)):
-        if v is not None and not (math.isfinite(v) and 0 < v <= 100_000):
-            raise RapidcompError(f"{label} {v:g}: minutes, more than 0 and at most 100000")
+        if v is not None and not (math.isfinite(v) and MIN_MINUTES <= v <= 100_000):
+            raise RapidcompError(f"{label} {v:g}: minutes, from {MIN_MINUTES:g} to 100000")
     return Transient(tau_heat, tau_cool if tau_cool is not None
                      else tau_heat * DEFAULT_TAU_COOL_FACTOR,
-                     gap if gap is not None else DEFAULT_GAP_MIN)
+                     gap if gap is not None else DEFAULT_GAP_MIN, source=source)
+
+
+def _parses_as_signal(name: str) -> bool:
+    """Whether `name` can stand as AInput's argument (not a reserved word)."""
+    try:
+        parse_text(f"MODULE m\n  PROC p()\n    x:=AInput({name});\n  ENDPROC\nENDMODULE\n",
+                   "<signal>")
+    except RapidcompError:
+        return False
+    return True
 
 
 def _identifier(name: str) -> bool:
@@ -171,13 +189,14 @@ def support_module(tr: Transient, nl: str = "\n") -> str:
         f"{i1}! steady state).",
         f"{i1}! rcS is the thermal state: 0 cold, 1 warm. {tr.law}.",
         f"{i1}! Read or set it in the program data window, or call rcThermalSet / rcThermalShow.",
-        f"{i1}PERS num rcS:=0;",
+        f"{i1}! TASK PERS: each motion task (each robot of a MultiMove system) has its own.",
+        f"{i1}TASK PERS num rcS:=0;",
     ]
     if tr.signal is None:
         head += [
             f"{i1}! When rcS was last updated: days since 2000-03-01 and minutes of that day.",
-            f"{i1}PERS num rcLastDay:=-1;",
-            f"{i1}PERS num rcLastMin:=0;",
+            f"{i1}TASK PERS num rcLastDay:=-1;",
+            f"{i1}TASK PERS num rcLastMin:=0;",
             f"{i1}CONST num rcTauHeat:={_num(tr.tau_heat_min)};",
             f"{i1}CONST num rcTauCool:={_num(tr.tau_cool_min)};",
             f"{i1}CONST num rcGapMin:={_num(tr.gap_min)};",
@@ -438,7 +457,17 @@ def materialize(texts: dict, names: dict, s: float) -> dict:
                     continue
                 func = funcs[node.name.lower()]
                 cold, dq = (a.value for a in node.args)
-                if not isinstance(cold, A.Ref):
+                if isinstance(cold, A.Ref) and cold.selectors and not dq.selectors:
+                    # One element of an array (a literal index) with its own
+                    # correction: the element's value, inline.
+                    cfi, decl = decls.get(cold.name.lower(), (None, None))
+                    _, dq_decl = decls.get(dq.name.lower(), (None, None))
+                    if decl is None or dq_decl is None:
+                        raise InternalError(f"{func}({cold.name}, {dq.name}): a declaration is "
+                                            "missing")
+                    element = _element(decl, cold, texts[cfi])
+                    new = _state_text(texts[cfi], element, dq_decl.init, func, s)
+                elif not isinstance(cold, A.Ref):
                     if isinstance(dq, A.Ref):
                         raise InternalError(f"{func}: an inline value with a declared correction")
                     new = _state_text(text, cold, dq, func, s)
@@ -451,6 +480,19 @@ def materialize(texts: dict, names: dict, s: float) -> dict:
                 edits[fi].append(SpanEdit(node.span.start, node.span.end, new, "state value"))
     return {fi: apply_edits(texts[fi], sorted(es, key=lambda e: (e.start, e.end)))
             for fi, es in edits.items()}
+
+
+def _element(decl, ref, text: str):
+    """The literal of decl's element that `ref` (literal indices) names."""
+    node = decl.init
+    for sel in ref.selectors:
+        if not isinstance(sel, A.Index):
+            raise InternalError(f"{ref.name}: a component where an element was expected")
+        for idx in sel.indices:
+            if not isinstance(idx, A.Num):
+                raise InternalError(f"{ref.name}: an element index that is not a number")
+            node = _aggs(node)[int(idx.value) - 1]
+    return node
 
 
 def _declare_state(texts, decls, key, func, s, edits, n) -> str:

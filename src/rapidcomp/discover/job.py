@@ -190,8 +190,31 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                            "before using this profile with fix")
             return out
 
-        text = _loadable_profile(nominal, prof, kept, comments, Path(out_profile).name, notes)
-        files.append((out_profile, text.encode("utf-8")))
+        campaign = d.warmup is not None
+        if warm and not kept:
+            notes.append(f"{Path(out_profile).name} not written: the data change over time, but "
+                         "no thermal effect is named (nothing for fix --transient to scale)")
+        else:
+            if warm and not prof.is_zero:
+                # The base profile was a static part of the model here: a
+                # thermal profile holds the thermal effects alone.
+                notes.append(f"the base profile {Path(profile).name} is not written into "
+                             f"{Path(out_profile).name}: in this warm-up campaign it was part of "
+                             "the static model")
+            base = ThermalProfile(()) if warm else prof
+            static = campaign and not warm
+
+            def marked(kept):
+                return comments(kept) + ([
+                    "static: nothing changed over time in the warm-up campaign; fix "
+                    "--transient refuses this profile (it would scale geometry with the "
+                    "thermal state)"] if static else [])
+            if static:
+                notes.append(f"{Path(out_profile).name}: nothing changed over time, so its "
+                             "effects are static (geometry); marked so, fix --transient refuses "
+                             "it")
+            text = _loadable_profile(nominal, base, kept, marked, Path(out_profile).name, notes)
+            files.append((out_profile, text.encode("utf-8")))
     return Outcome(tuple(report.summary_lines(d, heldout)), tuple(notes), tuple(files), d)
 
 

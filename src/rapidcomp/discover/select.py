@@ -540,6 +540,9 @@ class _Selector:
             tool = np.mean(self.model.tool, axis=0) if self.model.size else np.zeros(3)
             _, q = random_points(self.model.robot, SEPARATE_POSES, 0)
             self._generic = ParamModel(self.model.robot, self.model.profile, q, tool)
+            # Thermal effects: over every thermal state too.
+            self._generic = self._generic.with_state(
+                np.random.default_rng(0).uniform(0.0, 1.0, SEPARATE_POSES))
         effects = tuple(rest) + (a, b)
         _, J = self._generic.evaluate(effects, tuple(np.zeros(e.size) for e in effects))
         A = J.reshape(-1, J.shape[-1])

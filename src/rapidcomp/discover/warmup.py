@@ -182,6 +182,11 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
     if open_end or tau > 3 * span[1]:
         text += ("; the campaign ends long before the robot is warm: tau is poorly known, "
                  "measure longer")
+    first = np.diff(np.unique(np.round(t, 9)))
+    if low <= grid[1] or (first.size and tau < first.min()):
+        text += ("; the robot warms up faster than the campaign measures (tau below its "
+                 "shortest interval, or at the shortest tau searched, 1 min: are the times in "
+                 "minutes?): tau is poorly known, measure more often at the start")
     sensors = tuple(_sensor(name, np.asarray(T, float), t, groups, xyz, best, sigma)
                     for name, T in temperatures)
     better = [x for x in sensors if x.chi_vs_time < -chi2_ppf(0.99, 1)

@@ -112,6 +112,7 @@ class ThermalProfile:
     joint_terms: tuple[tuple[str, JointTerms], ...] = ()
     payload: Payload = NO_PAYLOAD
     tau_heat_min: float | None = None    # from a `# tau_heat_min: X` comment
+    static_only: bool = False            # a `# static:` comment (see _marks)
 
     def get(self, name: str) -> Displacement:
         for key, disp in self.displacements:
@@ -209,26 +210,35 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
             jt = JointTerms(extra["offset_deg"], extra["scale"], extra["compliance_deg_per_nm"])
             if not jt.is_zero:
                 terms.append((key, jt))
-    return ThermalProfile(tuple(disps), source, base, tuple(terms), payload,
-                          _tau(text, source))
+    tau, static = _marks(text, source)
+    return ThermalProfile(tuple(disps), source, base, tuple(terms), payload, tau, static)
 
 
-_TAU = re.compile(r"^\s*#\s*tau_heat_min\s*:\s*(\S+)\s*$", re.IGNORECASE)
+_TAU = re.compile(r"^\s*#\s*tau_heat_min\s*[:=]\s*(.*?)\s*$", re.IGNORECASE)
+_STATIC = re.compile(r"^\s*#\s*static\s*:", re.IGNORECASE)
 
 
-def _tau(text: str, source: str) -> float | None:
+def _marks(text: str, source: str) -> tuple[float | None, bool]:
+    """The comment lines discover writes: `# tau_heat_min: X` (minutes) and
+    `# static: ...` (effects of a campaign in which nothing changed over
+    time)."""
+    tau, seen, static = None, None, False
     for n, line in enumerate(text.splitlines(), 1):
+        static = static or bool(_STATIC.match(line))
         m = _TAU.match(line)
-        if m:
-            try:
-                tau = float(m.group(1))
-            except ValueError:
-                tau = float("nan")
-            if not (math.isfinite(tau) and 0 < tau <= 100_000):
-                raise InputError(source, f"tau_heat_min is {m.group(1)!r}, expected minutes "
-                                 "(more than 0, at most 100000)", n)
-            return tau
-    return None
+        if not m:
+            continue
+        if seen is not None:
+            raise InputError(source, f"tau_heat_min given twice (first on line {seen})", n)
+        seen = n
+        try:
+            tau = float(m.group(1))
+        except ValueError:
+            tau = float("nan")
+        if not (math.isfinite(tau) and 0.001 <= tau <= 100_000):
+            raise InputError(source, f"tau_heat_min is {m.group(1)!r}, expected minutes as a "
+                             "number (0.001 to 100000), e.g. # tau_heat_min: 42.3", n)
+    return tau, static
 
 
 def _amount(x: float) -> str:
