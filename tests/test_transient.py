@@ -134,8 +134,11 @@ def test_the_sensor_law_and_the_operators_routines():
         m.call("rcThermalShow")
         assert float(m.data["rcs"]) == s
     assert m.printed[-1].startswith("rapidcomp thermal state") and m.printed[-1].endswith("1")
-    m.call("rcThermalSet", 7)
-    assert float(m.data["rcs"]) == 1.0
+    # The sensor sets the state: no rcThermalSet to contradict it.
+    assert "rcthermalset" not in m.routines
+    clock = Machine(support_module(CLOCK), Clock(datetime(2026, 11, 22, 8, 0, 0)))
+    clock.call("rcThermalSet", 7)
+    assert float(clock.data["rcs"]) == 1.0
 
 
 def test_rctcj_and_rctcr_compute_cold_plus_s_times_the_correction():

@@ -188,7 +188,8 @@ def support_module(tr: Transient, nl: str = "\n") -> str:
         f"{i1}! the cold robot needs plus rcS times the warm robot's correction (the measured",
         f"{i1}! steady state).",
         f"{i1}! rcS is the thermal state: 0 cold, 1 warm. {tr.law}.",
-        f"{i1}! Read or set it in the program data window, or call rcThermalSet / rcThermalShow.",
+        f"{i1}! Read it in the program data window or with rcThermalShow"
+        + (", set it with rcThermalSet." if tr.signal is None else "; the sensor sets it."),
         f"{i1}! TASK PERS: each motion task (each robot of a MultiMove system) has its own.",
         f"{i1}TASK PERS num rcS:=0;",
     ]
@@ -296,6 +297,7 @@ def support_module(tr: Transient, nl: str = "\n") -> str:
         f"{i2}RETURN rt;",
         f"{i1}ENDFUNC",
         "",
+    ] + ([
         f"{i1}PROC rcThermalSet(num s)",
         f"{i2}! what the operator knows: 0 cold (after a long stop), 1 warm",
         f"{i2}rcS:=s;",
@@ -304,6 +306,7 @@ def support_module(tr: Transient, nl: str = "\n") -> str:
     ] + set_time + [
         f"{i1}ENDPROC",
         "",
+    ] if tr.signal is None else []) + [
         f"{i1}PROC rcThermalShow()",
         f"{i2}rcUpdate;",
         f'{i2}TPWrite "rapidcomp thermal state (0 cold, 1 warm): "\\Num:=rcS;',

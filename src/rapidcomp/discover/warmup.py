@@ -171,10 +171,23 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
     # Profile interval: the taus whose fit is within the chi-square(1)
     # quantile of the best.
     limit = best + chi2_ppf(INTERVAL, 1) * sigma ** 2
-    inside = grid[rss <= limit]
-    low = float(min(inside.min(), tau)) if inside.size else tau
-    high = float(max(inside.max(), tau)) if inside.size else tau
-    open_end = high >= grid[-2]
+
+    def f(x):
+        return _rss(groups, t, xyz, x) - limit
+
+    # The interval's ends: where the profile crosses the limit, found on
+    # the grid and refined by bisection (log scale) between grid points.
+    k = int(np.searchsorted(grid, tau))
+    lo_i = k - 1
+    while lo_i >= 0 and rss[lo_i] <= limit:
+        lo_i -= 1
+    hi_i = k
+    while hi_i < GRID and rss[hi_i] <= limit:
+        hi_i += 1
+    low = _crossing(f, grid[lo_i], min(tau, grid[lo_i + 1])) if lo_i >= 0 else float(grid[0])
+    high = _crossing(f, grid[hi_i], max(tau, grid[hi_i - 1])) if hi_i < GRID \
+        else float(grid[-1])
+    open_end = hi_i >= GRID - 1
     text = (f"warm-up time constant tau = {tau:.1f} min ({INTERVAL:.0%} interval "
             f"{low:.1f}-{'beyond ' if open_end else ''}{high:.1f} min), from {len(groups)} poses "
             f"measured at {times} times ({span[0]:g}-{span[1]:g} min); change over time: "
@@ -196,6 +209,19 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
         text += f"; the thermal state comes from {state_from}, which the points follow better"
     return Warmup(len(groups), times, float(tau), low, high, p, sigma, dof, text, sensors,
                   state_from)
+
+
+def _crossing(f, outside: float, inside: float, iterations: int = 40) -> float:
+    """Where f changes sign between `outside` (f > 0) and `inside` (f <=
+    0), on a log scale."""
+    a, b = math.log(outside), math.log(inside)
+    for _ in range(iterations):
+        m = (a + b) / 2
+        if f(math.exp(m)) > 0:
+            a = m
+        else:
+            b = m
+    return math.exp((a + b) / 2)
 
 
 def _golden(f, a: float, b: float, iterations: int = 60) -> float:
