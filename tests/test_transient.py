@@ -195,6 +195,8 @@ def test_fix_transient_holds_at_every_thermal_state(tmp_path):
                    "-o", out, cwd=tmp_path)
     assert r.returncode == 0, r.stderr + r.stdout
     assert "76 of 76" in r.stdout and "transient" in r.stdout
+    report = (tmp_path / "cubes_tr.md").read_text()
+    assert "the worst over the thermal states" in report and "| transient | clock:" in report
     support = (tmp_path / "rcThermal.sys").read_text()
     parse_text(out.read_text(), "cubes_tr.mod")
     source = (FIXTURES / "cubes.mod").read_text()

@@ -102,18 +102,23 @@ def markdown(result: FixResult, meta: dict) -> str:
             out += ["```diff"] + list(m.diff) + ["```"]
         else:
             out.append("No change.")
-        out += ["", f"{level} Targets", ""] + _table(rows)
+        out += ["", f"{level} Targets", ""] + _table(rows, "transient" in meta)
     return "\n".join(out) + "\n"
 
 
-def _table(rows: list[UseRow]) -> list[str]:
+def _table(rows: list[UseRow], transient: bool = False) -> list[str]:
     if not rows:
         return ["No motion instructions."]
+    after = ("after = the written values as the controller computes them at run time "
+             "(float32), the worst over the thermal states s = 0, 0.25, 0.5, 0.75, 1, each on "
+             "the robot deformed by s x profile; compensated joints = the warm robot's (s = 1)."
+             if transient else
+             "after = the written values (rounded to float32 as the controller stores them) on "
+             "the warm robot.")
     out = ["Joints in degrees; rule = how the controller chooses the joints (confdata, or "
            "the solution closest to the previous move where configuration supervision is "
            "off); error = TCP position error of the uncompensated program on the warm robot; "
-           "after = the written values (rounded to float32 as the controller stores them) on "
-           "the warm robot.", "",
+           + after, "",
            "| line | instruction | target | status | rule | action | nominal joints | "
            "compensated joints | delta joints | error um | error deg | after um | "
            "conf before | conf after | notes |",
