@@ -30,10 +30,10 @@ def _rapidcomp(*args, cwd):
                           capture_output=True, text=True)
 
 
-def _campaign(tmp_path, name, *extra, points="random:30"):
+def _campaign(tmp_path, name, *extra, points="random:30", times=TIMES):
     path = tmp_path / name
     r = _rapidcomp("simulate", "-o", path, "--points", points, "--tool", "0,0,150", "--seed", "4",
-                   "--times", TIMES, "--noise", "0.005", *extra, "-q", cwd=tmp_path)
+                   "--times", times, "--noise", "0.005", *extra, "-q", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     return path
 
@@ -179,3 +179,27 @@ def test_out_profile_of_a_campaign_without_warm_up_is_marked_static(tmp_path):
     r = _rapidcomp("simulate", "-o", "two.csv", "--times", "0,60", "--tau-heat", "30",
                    cwd=tmp_path)
     assert r.returncode == 2 and "3 or more times" in r.stderr
+
+
+def test_a_campaign_with_a_stop_gives_both_time_constants(tmp_path):
+    """90 min of running, a 30 min stop, 90 min more (tau 35 heating, 70
+    cooling): both found within 15 %, the profile carries both and fix
+    --transient takes them."""
+    path = _campaign(tmp_path, "stop.csv", "--tau-heat", "35", "--tau-cool", "70",
+                     "--thermal-effect", "joint_displacement:J2=0.03,0,0.04",
+                     "--effect", "joint_offset:J3=0.01",
+                     times="0,10,20,35,50,70,90,+30,90,100,115,140,180")
+    text = path.read_text()
+    assert "stood_min" in next(x for x in text.splitlines() if x.startswith("point,"))
+    r = _rapidcomp("discover", path, "--tool", "0,0,150", "--json", "d.json",
+                   "--out-profile", "p.csv", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "d.json").read_text())
+    assert doc["tau_min"] == pytest.approx(35, rel=0.15)
+    assert doc["tau_cool_min"] == pytest.approx(70, rel=0.15)
+    prof = read_profile(tmp_path / "p.csv")
+    assert prof.tau_cool_min == pytest.approx(doc["tau_cool_min"], rel=1e-3)
+    fixed = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", "p.csv", "--transient",
+                       "--limit", "J5=-120:120", "-o", "c.mod", cwd=tmp_path)
+    assert fixed.returncode == 0, fixed.stderr
+    assert f"cooling tau {prof.tau_cool_min:g} min" in fixed.stdout

@@ -310,6 +310,8 @@ def _transient(on, emit, tau_heat, tau_cool, gap, temperature, profile=None, rob
                                  "--transient")
         if tau_heat is None and temperature is None and prof.tau_heat_min is not None:
             tau_heat, source = prof.tau_heat_min, f"tau from {os.path.basename(profile)}"
+            if tau_cool is None and prof.tau_cool_min is not None:
+                tau_cool = prof.tau_cool_min
     return make_transient(tau_heat, tau_cool, gap, temperature, source)
 
 
@@ -414,23 +416,40 @@ def _check_output_folder(out: str, src) -> None:
                                  + (", ..." if len(other) > 3 else "") + "); give a new folder")
 
 
-def _warmup_campaign(times, thermal_effects, tau_heat, sensors=()):
+def _warmup_campaign(times, thermal_effects, tau_heat, sensors=(), tau_cool=None):
     """(times, thermal effect specs, tau, sensors) of simulate --times, or
     None."""
     import math
     if times is None:
         given = [o for o, v in (("--thermal-effect", thermal_effects), ("--tau-heat", tau_heat),
-                                ("--sensor", sensors)) if v]
+                                ("--sensor", sensors), ("--tau-cool", tau_cool)) if v]
         if given:
             raise RapidcompError(f"{given[0]} needs --times (a warm-up campaign)")
         return None
+    # Minutes of running since the cold start; "+N" a stop of N minutes
+    # after the previous round.
+    ts, stands, pending = [], [], 0.0
     try:
-        ts = [float(x) for x in times.split(",")]
+        for x in times.split(","):
+            x = x.strip()
+            if x.startswith("+"):
+                pending += float(x[1:])
+            else:
+                ts.append(float(x))
+                stands.append(pending)
+                pending = 0.0
     except ValueError:
-        raise RapidcompError(f"--times {times}: expected minutes, e.g. 0,10,20,40") from None
-    if not ts or any(not math.isfinite(t) or t < 0 or t > 525_600 for t in ts) or \
-            len(set(ts)) != len(ts):
-        raise RapidcompError(f"--times {times}: expected different minutes from 0 to 525600")
+        raise RapidcompError(f"--times {times}: expected minutes, e.g. 0,10,20,40 (+30: a "
+                             "30 min stop after the round before it)") from None
+    cumulative, total = [], 0.0
+    for x in stands:
+        total += x
+        cumulative.append(total)
+    keys = list(zip(ts, cumulative))
+    if not ts or any(not math.isfinite(v) or v < 0 or v > 525_600 for v in ts + stands) or \
+            len(set(keys)) != len(keys) or any(b < a for a, b in zip(ts, ts[1:])) or pending:
+        raise RapidcompError(f"--times {times}: expected increasing minutes of running from 0 "
+                             "to 525600, each stop (+N) followed by a round")
     if len(ts) < 3:
         raise RapidcompError(f"--times {times}: a warm-up campaign measures at 3 or more times "
                              "(two cannot tell a curve from a line)")
@@ -451,7 +470,9 @@ def _warmup_campaign(times, thermal_effects, tau_heat, sensors=()):
             raise RapidcompError(f"--sensor {spec}: expected temp_NAME:T_COLD:T_WARM[:TAU] "
                                  "(deg C, minutes)")
         parsed.append((parts[0].lower(), cold, warm, lag))
-    return ts, tuple(thermal_effects), tau_heat, tuple(parsed)
+    if tau_cool is not None and not (math.isfinite(tau_cool) and 0 < tau_cool <= 100_000):
+        raise RapidcompError(f"--tau-cool {tau_cool:g}: minutes, more than 0")
+    return ts, tuple(thermal_effects), tau_heat, tuple(parsed), stands, tau_cool
 
 
 def _campaign_options(f):
@@ -546,22 +567,26 @@ def discover(measured, profile, robot, tool, payload, force, sigma, report_path,
               help="Also write the detectability table as Markdown.")
 @click.option("--times", default=None, metavar="T1,T2,...",
               help="A warm-up campaign: the points measured at each of these times, minutes "
-                   "since a cold start with the robot running (writes a t_min column).")
+                   "of running since a cold start (t_min column); +N: a stop of N minutes after "
+                   "the round before it (stood_min column).")
 @click.option("--thermal-effect", "thermal_effects", multiple=True, metavar="ID=V[,V...]",
               help="--times: an effect that grows with the thermal state, its steady-state "
                    "values (repeatable).")
 @click.option("--tau-heat", type=float, default=None, metavar="MIN",
               help="--times: the warm-up time constant, minutes.")
+@click.option("--tau-cool", type=float, default=None, metavar="MIN",
+              help="--times: the cooling time constant during stops (+N in --times), minutes "
+                   "(default: --tau-heat).")
 @click.option("--sensor", "sensors", multiple=True, metavar="temp_NAME:T_COLD:T_WARM[:TAU]",
               help="--times: a temperature column rising from T_COLD to T_WARM deg C with the "
                    "warm-up (or its own time constant TAU, minutes), 0.05 deg C noise.")
 @click.option("-q", "--quiet", is_flag=True, help="No summary on stdout.")
 def simulate(output, points, profile, robot, tool, payload, force, effects, noise, seed,
-             table_path, times, thermal_effects, tau_heat, sensors, quiet) -> None:
+             table_path, times, thermal_effects, tau_heat, tau_cool, sensors, quiet) -> None:
     """Make a measured-data file from a model, and say what it can detect."""
     from .discover.job import run_simulate
     try:
-        campaign = _warmup_campaign(times, thermal_effects, tau_heat, sensors)
+        campaign = _warmup_campaign(times, thermal_effects, tau_heat, sensors, tau_cool)
         outcome = run_simulate(output, points, profile, robot, tool, payload, effects, noise,
                                seed, table_path, force, campaign)
     except RapidcompError as exc:

@@ -112,8 +112,12 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                     test_data.temperatures):
                 raise RapidcompError(f"--test {Path(test).name}: the thermal state comes from "
                                      f"{d.warmup.state_from}; the test poses need that column")
+            if d.warmup.tau_cool_min is not None and test_data.stood_min is None:
+                raise RapidcompError(f"--test {Path(test).name}: the campaign has stops "
+                                     "(stood_min); the test poses need that column too")
             test_model = test_model.with_state(d.warmup.states(test_data.t_min,
-                                                               test_data.temperatures))
+                                                               test_data.temperatures,
+                                                               test_data.stood_min))
         heldout = held_out(test_model, test_data, d.final_fit)
     notes += _beyond_limits(data, nominal) + list(d.notes)
     if test_data is not None:
@@ -178,6 +182,8 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                 out += ["the thermal effects at the steady state (s = 1); fix --transient "
                         "takes tau from the next line",
                         f"tau_heat_min: {d.warmup.tau_min:.4g}"]
+                if d.warmup.tau_cool_min is not None:
+                    out.append(f"tau_cool_min: {d.warmup.tau_cool_min:.4g}")
                 for x in d.warmup.sensors:
                     if x.chi_vs_time > chi2_ppf(0.99, 1):
                         continue     # the points follow it worse than time
@@ -334,7 +340,7 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
     t_min = None
     thermal = {}
     if campaign is not None:
-        times, thermal_specs, tau, sensors = campaign
+        times, thermal_specs, tau, sensors, stands, tau_cool = campaign
         thermal = parse_effect_values(cat, thermal_specs, force)
         for e in thermal:
             if e.kind not in THERMAL_KINDS:
@@ -342,19 +348,34 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
                                      f"{e.kind.replace('_', ' ')}; thermal effects are "
                                      + ", ".join(THERMAL_KINDS))
         rounds = []
-        for t in times:
-            s = 1.0 - np.exp(-t / tau)
+        # The law through the rounds: a stop after a round cools (tau_cool),
+        # running heats (tau).
+        s, last = 0.0, 0.0
+        round_s, stood_at = [], []
+        total = 0.0
+        for t, stand in zip(times, stands):
+            s *= np.exp(-stand / (tau_cool or tau))
+            total += stand
+            s = 1.0 - (1.0 - s) * np.exp(-(t - last) / tau)
+            last = t
+            round_s.append(s)
+            stood_at.append(total)
+        for t, s in zip(times, round_s):
             both = dict(values)
             for e, v in thermal.items():
                 both[e] = both.get(e, 0.0) + s * np.asarray(v, float)
             rounds.append(simulate_positions(nominal, prof, both, q, tool))
         exact = np.vstack(rounds)
         base = np.vstack([simulate_positions(nominal, prof, {}, q, tool)] * len(times))
-        names = tuple(f"{n}_t{t:g}" for t in times for n in names)
+        names = tuple(f"{n}_t{t:g}" + (f"_s{S:g}" if S else "")
+                      for t, S in zip(times, stood_at) for n in names)
         t_min = np.repeat(np.asarray(times, float), len(q))
+        stood = np.repeat(np.asarray(stood_at, float), len(q)) if any(stands) else None
         rng = np.random.default_rng(seed + 1)
+        follows = np.repeat(np.asarray(round_s), len(q))
         temperatures = tuple(
-            (name, cold + (warm - cold) * (1.0 - np.exp(-t_min / (lag or tau)))
+            (name, cold + (warm - cold) * (follows if lag is None
+                                           else 1.0 - np.exp(-t_min / lag))
              + rng.normal(0.0, SENSOR_NOISE_C, len(t_min)))
             for name, cold, warm, lag in sensors)
         q = np.vstack([q] * len(times))
@@ -362,6 +383,7 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
         exact = simulate_positions(nominal, prof, values, q, tool)
         base = simulate_positions(nominal, prof, {}, q, tool)
         temperatures = ()
+        stood = None
     xyz = add_noise(exact, noise, seed) if noise > 0 else exact
     shift = np.linalg.norm(exact - base, axis=1)
     effect_text = ", ".join(f"{e.id}=" + ",".join(f"{v:g}" for v in e.user(val).values())
@@ -379,11 +401,14 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
                 f"noise {noise:g} mm per axis, seed {seed}"]
     if campaign is not None:
         comments.append(f"warm-up campaign: the points at {', '.join(f'{t:g}' for t in campaign[0])} "
-                        "min since a cold start (t_min)" + "".join(
+                        "min of running since a cold start (t_min)" + (
+                            f", stops of {', '.join(f'{x:g}' for x in campaign[4] if x)} min "
+                            f"(stood_min; cooling tau {campaign[5] or campaign[2]:g} min)"
+                            if any(campaign[4]) else "") + "".join(
                             f"; {n} {c:g}..{w:g} deg C (tau {lag or campaign[2]:g} min, noise "
                             f"{SENSOR_NOISE_C:g})" for n, c, w, lag in campaign[3]))
     files = [(output, format_measured(names, q, xyz, comments, t_min,
-                                      temperatures).encode("utf-8"))]
+                                      temperatures, stood).encode("utf-8"))]
     rows = detectability(ParamModel(nominal, prof, q, tool), cat, noise if noise > 0 else 0.005)
     meta = {"points": f"{Path(points).name} ({len(names)})",
             "noise": f"{(noise if noise > 0 else 0.005) * 1000:g} um per axis"

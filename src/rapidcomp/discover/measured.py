@@ -6,7 +6,9 @@ base frame) of the measuring point; rows in the order they were measured
 unless an `approach` column gives it); `tx,ty,tz` give each row's measuring
 point in the flange frame (several reflectors per pose: a row each, the
 same joints); `t_min` the minutes since a cold start, the robot running, at
-which the row was measured (a warm-up campaign), and `temp_<name>` columns
+which the row was measured (a warm-up campaign; `stood_min` the minutes it
+had stood in all by then, each stop following a measurement round), and
+`temp_<name>` columns
 temperatures read at the same time (deg C, e.g. temp_j2 for a motor).
 Lines starting with '#' are comments
 (simulate writes its provenance there); extra columns are ignored and
@@ -31,6 +33,7 @@ APPROACH = "approach"
 TOOL_COLUMNS = ("tx", "ty", "tz")
 TIME = "t_min"
 TEMP_PREFIX = "temp_"
+STOOD = "stood_min"
 MAX_TEMP_C = 500.0
 # A warm-up campaign spans hours; beyond a year the column is not minutes.
 MAX_T_MIN = 525_600.0
@@ -58,6 +61,8 @@ class Measurements:
     t_min: np.ndarray | None = None
     # Temperature columns: name -> (N,) deg C.
     temperatures: tuple[tuple[str, np.ndarray], ...] = ()
+    # Per row, minutes stood since the cold start (stops), from `stood_min`.
+    stood_min: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.names)
@@ -153,8 +158,19 @@ def parse_measured(text: str, source: str, min_points: int = MIN_POINTS) -> Meas
                              lines[bad[0]])
         temps.append((col, v[:, 0]))
     ignored = tuple(c for c in ignored if t_min is None or not c.startswith(TEMP_PREFIX))
+    stood = None
+    if STOOD in ignored and t_min is not None:
+        ignored = tuple(c for c in ignored if c != STOOD)
+        _, v, _, _ = parse_table(text, source, ("point",) + COLUMNS[1:] + (STOOD,), (STOOD,),
+                                 min_points)
+        bad = np.flatnonzero((v[:, 0] < 0) | (v[:, 0] > MAX_T_MIN))
+        if bad.size:
+            raise InputError(source, f"stood_min is {v[bad[0], 0]:g}, expected the minutes the "
+                             f"robot had stood since the cold start (0 to {MAX_T_MIN:g})",
+                             lines[bad[0]])
+        stood = v[:, 0]
     return Measurements(source, names, values[:, :6], values[:, 6:], lines, ignored, approach,
-                        tool, t_min, tuple(temps))
+                        tool, t_min, tuple(temps), stood)
 
 
 def _approach(text: str, source: str) -> np.ndarray:
@@ -187,13 +203,17 @@ def read_joints(path: str | Path) -> tuple[tuple[str, ...], np.ndarray]:
     return names, values
 
 
-def format_measured(names, q_deg, xyz_mm, comments=(), t_min=None, temperatures=()) -> str:
-    extra = ((TIME,) if t_min is not None else ()) + tuple(c for c, _ in temperatures)
+def format_measured(names, q_deg, xyz_mm, comments=(), t_min=None, temperatures=(),
+                    stood=None) -> str:
+    extra = ((TIME,) if t_min is not None else ()) + ((STOOD,) if stood is not None else ()) \
+        + tuple(c for c, _ in temperatures)
     out = [f"# {c}" for c in comments] + [",".join(COLUMNS + extra)]
     for n, (name, q, x) in enumerate(zip(names, q_deg, xyz_mm)):
         row = [name, *(f"{v:.6f}" for v in q), *(f"{v:.6f}" for v in x)]
         if t_min is not None:
             row.append(f"{t_min[n]:g}")
+        if stood is not None:
+            row.append(f"{stood[n]:g}")
         row += [f"{v[n]:.3f}" for _, v in temperatures]
         out.append(",".join(row))
     return "\n".join(out) + "\n"

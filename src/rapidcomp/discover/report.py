@@ -40,6 +40,8 @@ def as_json(d: Discovery, test: HeldOut | None = None) -> str:
                    "thermal": s.effect.thermal} for s in d.steps],
         "tau_min": (None if d.warmup is None or d.warmup.tau_min is None
                     else float(f"{d.warmup.tau_min:.6g}")),
+        "tau_cool_min": (None if d.warmup is None or d.warmup.tau_cool_min is None
+                         else float(f"{d.warmup.tau_cool_min:.6g}")),
     }
     if test is not None:
         doc.update({"test_points": test.points, "test_rms_mm": round(test.rms_mm, 9),

@@ -632,9 +632,10 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
         # effect heat can change gets a thermal twin acting as s(t) times it.
         say("warm-up")
         warm = warmup.estimate(data.q_deg, data.xyz_mm, data.t_min, data.tool, sigma_mm,
-                               data.temperatures)
+                               data.temperatures, data.stood_min)
         if warm.tau_min is not None:
-            model = model.with_state(warm.states(data.t_min, data.temperatures))
+            model = model.with_state(warm.states(data.t_min, data.temperatures,
+                                                 data.stood_min))
             effects = tuple(effects) + thermal_variants(effects)
     say("gross errors")
     # The reference fit for gross errors and the noise: every effect but
@@ -650,7 +651,8 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
                        approach=None if data.approach is None else data.approach[rows],
                        tool=None if data.tool is None else data.tool[rows],
                        t_min=None if data.t_min is None else data.t_min[rows],
-                       temperatures=tuple((c, v[rows]) for c, v in data.temperatures))
+                       temperatures=tuple((c, v[rows]) for c, v in data.temperatures),
+                       stood_min=None if data.stood_min is None else data.stood_min[rows])
     n = 3 * len(data)
     meas = data.xyz_mm
     if warm is not None and sigma_mm is None:

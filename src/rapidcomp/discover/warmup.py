@@ -57,36 +57,52 @@ class Warmup:
     text: str
     sensors: tuple[Sensor, ...] = ()
     state_from: str | None = None  # a temperature column that explains better than time
+    tau_cool_min: float | None = None   # campaigns with stops (stood_min)
 
-    def states(self, t_min, temperatures=()) -> np.ndarray:
+    def states(self, t_min, temperatures=(), stood=None) -> np.ndarray:
         """Each row's thermal state: s(t), or from the temperature column
         that explains the warm-up better, (T - T_c) / (T_w - T_c)."""
         if self.state_from is not None:
             sensor = next(x for x in self.sensors if x.name == self.state_from)
             T = dict(temperatures)[self.state_from]
             return (np.asarray(T, float) - sensor.t_cold) / (sensor.t_warm - sensor.t_cold)
-        return states(np.asarray(t_min, float), self.tau_min)
+        return states(np.asarray(t_min, float), self.tau_min, stood, self.tau_cool_min)
 
 
-def states(t_min: np.ndarray, tau_min: float) -> np.ndarray:
-    """s(t) of a robot running since a cold start."""
-    return 1.0 - np.exp(-np.asarray(t_min, float) / tau_min)
+def states(t_min: np.ndarray, tau_min: float, stood=None, tau_cool=None) -> np.ndarray:
+    """s of each row: a robot running t_min minutes since a cold start;
+    with `stood` (cumulative minutes it stood, a stop following a
+    measurement round) the law runs through the rounds in time order:
+    cooling over each stop (tau_cool), then heating over the running."""
+    t = np.asarray(t_min, float)
+    if stood is None or not np.any(np.asarray(stood) > 0):
+        return 1.0 - np.exp(-t / tau_min)
+    S = np.asarray(stood, float)
+    keys = np.unique(np.round(np.column_stack([t + S, t, S]), 9), axis=0)
+    s, last_t, last_S, value = 0.0, 0.0, 0.0, {}
+    for _, tk, Sk in keys:
+        s *= math.exp(-max(Sk - last_S, 0.0) / tau_cool)
+        s = 1.0 - (1.0 - s) * math.exp(-max(tk - last_t, 0.0) / tau_min)
+        value[(round(tk, 9), round(Sk, 9))] = s
+        last_t, last_S = tk, Sk
+    return np.array([value[(round(a, 9), round(b, 9))] for a, b in zip(t, S)])
 
 
-def _poses(q_deg, t_min, tool):
+def _poses(q_deg, wall, tool):
     """Rows of each pose (same joints and measuring point) measured at
     MIN_TIMES or more distinct times."""
     out = []
     for rows in replicate_groups(q_deg, tool):
-        if len(np.unique(np.round(t_min[rows], 9))) >= MIN_TIMES:
+        if len(np.unique(np.round(wall[rows], 9))) >= MIN_TIMES:
             out.append(rows)
     return out
 
 
-def _rss(groups, t_min, xyz, tau) -> float:
+def _rss(groups, t_min, xyz, tau, stood=None, tau_cool=None) -> float:
     total = 0.0
+    s_all = states(t_min, tau, stood, tau_cool) if stood is not None else None
     for rows in groups:
-        s = states(t_min[rows], tau)
+        s = s_all[rows] if s_all is not None else states(t_min[rows], tau)
         A = np.column_stack([np.ones(len(rows)), s])
         coef, *_ = np.linalg.lstsq(A, xyz[rows], rcond=None)
         r = xyz[rows] - A @ coef
@@ -136,12 +152,16 @@ def _sensor(name, T, t, groups, xyz, rss_time, sigma) -> Sensor:
 
 
 def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
-             temperatures=()) -> Warmup:
+             temperatures=(), stood=None) -> Warmup:
     """tau, its interval and the evidence of a warm-up, from the poses
-    measured at several times."""
+    measured at several times (stood: cumulative minutes stood, a campaign
+    with stops: tau_cool too)."""
     q_deg, xyz, t = np.asarray(q_deg, float), np.asarray(xyz_mm, float), np.asarray(t_min, float)
-    groups = _poses(q_deg, t, tool)
-    times = len(np.unique(np.round(t, 9)))
+    if stood is not None and not np.any(np.asarray(stood) > 0):
+        stood = None
+    wall = t + (np.asarray(stood, float) if stood is not None else 0.0)
+    groups = _poses(q_deg, wall, tool)
+    times = len(np.unique(np.round(wall, 9)))
     if not groups:
         raise RapidcompError(
             "t_min: no pose is measured at 3 or more different times; a warm-up campaign "
@@ -153,11 +173,24 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
         raise RapidcompError(f"t_min: {len(groups)} poses at {times} times leave {dof} degrees "
                              "of freedom for the warm-up fit: measure more poses or more times")
     grid = np.exp(np.linspace(*np.log(TAU_RANGE_MIN), GRID))
-    rss = np.array([_rss(groups, t, xyz, tau) for tau in grid])
-    k = int(np.argmin(rss))
-    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, GRID - 1)]
-    tau = _golden(lambda x: _rss(groups, t, xyz, x), lo, hi)
-    best = _rss(groups, t, xyz, tau)
+    tau_cool = None
+    if stood is not None:
+        # Two constants: a coarse grid with tau_cool = tau_heat, then
+        # each refined with the other held (coordinate descent).
+        coarse = grid[::8]
+        rss0 = [_rss(groups, t, xyz, x, stood, x) for x in coarse]
+        tau = tau_cool = float(coarse[int(np.argmin(rss0))])
+        for _ in range(4):
+            tau_cool = _golden(lambda x: _rss(groups, t, xyz, tau, stood, x),
+                               TAU_RANGE_MIN[0], TAU_RANGE_MIN[1])
+            tau = _golden(lambda x: _rss(groups, t, xyz, x, stood, tau_cool),
+                          TAU_RANGE_MIN[0], TAU_RANGE_MIN[1])
+    rss = np.array([_rss(groups, t, xyz, x, stood, tau_cool) for x in grid])
+    if stood is None:
+        k = int(np.argmin(rss))
+        lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, GRID - 1)]
+        tau = _golden(lambda x: _rss(groups, t, xyz, x), lo, hi)
+    best = _rss(groups, t, xyz, tau, stood, tau_cool)
     sigma = sigma_mm if sigma_mm is not None else math.sqrt(best / dof)
     static = sum(float(np.sum((xyz[g] - xyz[g].mean(axis=0)) ** 2)) for g in groups)
     chi = (static - best) / max(sigma, 1e-12) ** 2
@@ -173,7 +206,7 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
     limit = best + chi2_ppf(INTERVAL, 1) * sigma ** 2
 
     def f(x):
-        return _rss(groups, t, xyz, x) - limit
+        return _rss(groups, t, xyz, x, stood, tau_cool) - limit
 
     # The interval's ends: where the profile crosses the limit, found on
     # the grid and refined by bisection (log scale) between grid points.
@@ -192,6 +225,9 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
             f"{low:.1f}-{'beyond ' if open_end else ''}{high:.1f} min), from {len(groups)} poses "
             f"measured at {times} times ({span[0]:g}-{span[1]:g} min); change over time: "
             f"chi-square p = {p:.3g}")
+    if tau_cool is not None:
+        text += (f"; cooling time constant {tau_cool:.1f} min (from the stops, cumulative "
+                 f"{float(np.max(stood)):g} min)")
     if open_end or tau > 3 * span[1]:
         text += ("; the campaign ends long before the robot is warm: tau is poorly known, "
                  "measure longer")
@@ -201,14 +237,16 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
                  "shortest interval, or at the shortest tau searched, 1 min: are the times in "
                  "minutes?): tau is poorly known, measure more often at the start")
     sensors = tuple(_sensor(name, np.asarray(T, float), t, groups, xyz, best, sigma)
-                    for name, T in temperatures)
+                    for name, T in temperatures) if stood is None else ()
+    if stood is not None and temperatures:
+        text += "; temperature columns are not judged in a campaign with stops (not yet)"
     better = [x for x in sensors if x.chi_vs_time < -chi2_ppf(0.99, 1)
               and abs(x.t_warm - x.t_cold) > 1e-6]
     state_from = min(better, key=lambda x: x.chi_vs_time).name if better else None
     if state_from is not None:
         text += f"; the thermal state comes from {state_from}, which the points follow better"
     return Warmup(len(groups), times, float(tau), low, high, p, sigma, dof, text, sensors,
-                  state_from)
+                  state_from, tau_cool)
 
 
 def _crossing(f, outside: float, inside: float, iterations: int = 40) -> float:

@@ -28,8 +28,9 @@ mass_kg to the payload row only, whose dx..dz are the centre of mass. An
 empty cell is 0.
 
 A comment line `# tau_heat_min: 42.3` (discover writes it for a warm-up
-campaign) gives the thermal time constant, which `fix --transient` takes
-when --tau-heat is not given.
+campaign; `# tau_cool_min:` too when the campaign had stops) gives the
+thermal time constants, which `fix --transient` takes when --tau-heat /
+--tau-cool are not given.
 """
 
 from __future__ import annotations
@@ -113,6 +114,7 @@ class ThermalProfile:
     payload: Payload = NO_PAYLOAD
     tau_heat_min: float | None = None    # from a `# tau_heat_min: X` comment
     static_only: bool = False            # a `# static:` comment (see _marks)
+    tau_cool_min: float | None = None    # from a `# tau_cool_min: X` comment
 
     def get(self, name: str) -> Displacement:
         for key, disp in self.displacements:
@@ -210,35 +212,40 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
             jt = JointTerms(extra["offset_deg"], extra["scale"], extra["compliance_deg_per_nm"])
             if not jt.is_zero:
                 terms.append((key, jt))
-    tau, static = _marks(text, source)
-    return ThermalProfile(tuple(disps), source, base, tuple(terms), payload, tau, static)
+    tau, tau_cool, static = _marks(text, source)
+    return ThermalProfile(tuple(disps), source, base, tuple(terms), payload, tau, static,
+                          tau_cool)
 
 
-_TAU = re.compile(r"^\s*#\s*tau_heat_min\s*[:=]\s*(.*?)\s*$", re.IGNORECASE)
+_TAU = re.compile(r"^\s*#\s*(tau_heat_min|tau_cool_min)\s*[:=]\s*(.*?)\s*$", re.IGNORECASE)
 _STATIC = re.compile(r"^\s*#\s*static\s*:", re.IGNORECASE)
 
 
-def _marks(text: str, source: str) -> tuple[float | None, bool]:
-    """The comment lines discover writes: `# tau_heat_min: X` (minutes) and
-    `# static: ...` (effects of a campaign in which nothing changed over
-    time)."""
-    tau, seen, static = None, None, False
+def _marks(text: str, source: str) -> tuple[float | None, float | None, bool]:
+    """The comment lines discover writes: `# tau_heat_min: X`, `#
+    tau_cool_min: X` (minutes) and `# static: ...` (effects of a campaign
+    in which nothing changed over time)."""
+    taus: dict[str, float] = {}
+    seen: dict[str, int] = {}
+    static = False
     for n, line in enumerate(text.splitlines(), 1):
         static = static or bool(_STATIC.match(line))
         m = _TAU.match(line)
         if not m:
             continue
-        if seen is not None:
-            raise InputError(source, f"tau_heat_min given twice (first on line {seen})", n)
-        seen = n
+        key = m.group(1).lower()
+        if key in seen:
+            raise InputError(source, f"{key} given twice (first on line {seen[key]})", n)
+        seen[key] = n
         try:
-            tau = float(m.group(1))
+            tau = float(m.group(2))
         except ValueError:
             tau = float("nan")
         if not (math.isfinite(tau) and 0.001 <= tau <= 100_000):
-            raise InputError(source, f"tau_heat_min is {m.group(1)!r}, expected minutes as a "
-                             "number (0.001 to 100000), e.g. # tau_heat_min: 42.3", n)
-    return tau, static
+            raise InputError(source, f"{key} is {m.group(2)!r}, expected minutes as a number "
+                             f"(0.001 to 100000), e.g. # {key}: 42.3", n)
+        taus[key] = tau
+    return taus.get("tau_heat_min"), taus.get("tau_cool_min"), static
 
 
 def _amount(x: float) -> str:
