@@ -68,12 +68,17 @@ def test_static_and_thermal_effects_are_told_apart_and_tau_is_found(tmp_path):
 
 
 def test_a_campaign_without_warm_up_names_everything_static(tmp_path):
+    """Nothing changes over time: every effect static, and the profile
+    discover writes is marked so (fix --transient refuses it)."""
     path = _campaign(tmp_path, "cold.csv", "--tau-heat", "35",
                      "--effect", "joint_offset:J3=0.01")
     d = _discover(path)
     assert d.warmup.tau_min is None and "nothing changes over time" in d.warmup.text
     assert [s.effect.id for s in d.steps] == ["joint_offset:J3"]
     assert not any(s.effect.thermal for s in d.steps)
+    r = _rapidcomp("discover", path, "--tool", "0,0,150", "--out-profile", "p.csv", cwd=tmp_path)
+    assert r.returncode == 0 and "nothing changed over time" in r.stdout, r.stderr
+    assert read_profile(tmp_path / "p.csv").static_only
 
 
 def test_tau_alone_from_the_data_without_any_effect_model():
@@ -124,12 +129,13 @@ def test_bad_campaign_options_exit_2(tmp_path, args, message):
 
 
 def test_a_bad_time_is_a_path_line_error(tmp_path):
-    path = _campaign(tmp_path, "wu.csv", "--tau-heat", "35")
-    lines = path.read_text().splitlines()
-    lines[8] = lines[8].rsplit(",", 1)[0] + ",-5"
-    path.write_text("\n".join(lines) + "\n")
+    path = tmp_path / "wu.csv"
+    rows = ["point,j1,j2,j3,j4,j5,j6,x,y,z,t_min"]
+    rows += [f"P{i},0,{i},0,0,30,0,500,0,{400 + i},{10 * i}" for i in range(1, 8)]
+    rows[4] = rows[4].rsplit(",", 1)[0] + ",-5"
+    path.write_text("\n".join(rows) + "\n")
     r = _rapidcomp("discover", path, "--tool", "0,0,150", cwd=tmp_path)
-    assert r.returncode == 2 and "wu.csv:9" in r.stderr and "t_min is -5" in r.stderr
+    assert r.returncode == 2 and "wu.csv:5" in r.stderr and "t_min is -5" in r.stderr
 
 
 def test_temperature_columns_are_read_and_judged_against_time(tmp_path):
@@ -170,12 +176,7 @@ def test_the_state_comes_from_a_temperature_the_points_follow_better():
     assert s.min() == pytest.approx(0, abs=1e-9) and s.max() == pytest.approx(1, abs=1e-9)
 
 
-def test_out_profile_of_a_campaign_without_warm_up_is_marked_static(tmp_path):
-    path = _campaign(tmp_path, "cold.csv", "--tau-heat", "35",
-                     "--effect", "joint_offset:J3=0.01")
-    r = _rapidcomp("discover", path, "--tool", "0,0,150", "--out-profile", "p.csv", cwd=tmp_path)
-    assert r.returncode == 0 and "nothing changed over time" in r.stdout, r.stderr
-    assert read_profile(tmp_path / "p.csv").static_only
+def test_simulate_needs_three_times(tmp_path):
     r = _rapidcomp("simulate", "-o", "two.csv", "--times", "0,60", "--tau-heat", "30",
                    cwd=tmp_path)
     assert r.returncode == 2 and "3 or more times" in r.stderr
