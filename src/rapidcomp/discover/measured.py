@@ -139,38 +139,35 @@ def parse_measured(text: str, source: str, min_points: int = MIN_POINTS) -> Meas
     t_min = None
     if TIME in ignored:
         ignored = tuple(c for c in ignored if c != TIME)
-        _, t, _, _ = parse_table(text, source, ("point",) + COLUMNS[1:] + (TIME,), (TIME,),
-                                 min_points)
-        bad = np.flatnonzero((t[:, 0] < 0) | (t[:, 0] > MAX_T_MIN))
-        if bad.size:
-            raise InputError(source, f"t_min is {t[bad[0], 0]:g}, expected minutes since a cold "
-                             f"start (0 to {MAX_T_MIN:g})", lines[bad[0]])
-        t_min = t[:, 0]
+        t_min = _column(text, source, TIME, min_points, lines, lambda v: 0 <= v <= MAX_T_MIN,
+                        f"minutes since a cold start (0 to {MAX_T_MIN:g})")
     temps = []
     # Without t_min a temperature column is an extra column like any other
     # (ignored, with a note): only a warm-up campaign reads it.
     for col in [c for c in ignored if c.startswith(TEMP_PREFIX) and t_min is not None]:
-        _, v, _, _ = parse_table(text, source, ("point",) + COLUMNS[1:] + (col,), (col,),
-                                 min_points)
-        bad = np.flatnonzero(np.abs(v[:, 0]) > MAX_TEMP_C)
-        if bad.size:
-            raise InputError(source, f"{col} is {v[bad[0], 0]:g}, expected a temperature in deg C",
-                             lines[bad[0]])
-        temps.append((col, v[:, 0]))
+        temps.append((col, _column(text, source, col, min_points, lines,
+                                   lambda v: abs(v) <= MAX_TEMP_C, "a temperature in deg C")))
     ignored = tuple(c for c in ignored if t_min is None or not c.startswith(TEMP_PREFIX))
     stood = None
     if STOOD in ignored and t_min is not None:
         ignored = tuple(c for c in ignored if c != STOOD)
-        _, v, _, _ = parse_table(text, source, ("point",) + COLUMNS[1:] + (STOOD,), (STOOD,),
-                                 min_points)
-        bad = np.flatnonzero((v[:, 0] < 0) | (v[:, 0] > MAX_T_MIN))
-        if bad.size:
-            raise InputError(source, f"stood_min is {v[bad[0], 0]:g}, expected the minutes the "
-                             f"robot had stood since the cold start (0 to {MAX_T_MIN:g})",
-                             lines[bad[0]])
-        stood = v[:, 0]
+        stood = _column(text, source, STOOD, min_points, lines, lambda v: 0 <= v <= MAX_T_MIN,
+                        f"the minutes the robot had stood since the cold start (0 to "
+                        f"{MAX_T_MIN:g})")
     return Measurements(source, names, values[:, :6], values[:, 6:], lines, ignored, approach,
                         tool, t_min, tuple(temps), stood)
+
+
+def _column(text: str, source: str, col: str, min_points: int, lines, ok, expected: str):
+    """One extra numeric column, every value within `ok`, else a path:line
+    error saying what was expected."""
+    _, v, _, _ = parse_table(text, source, ("point",) + COLUMNS[1:] + (col,), (col,),
+                             min_points)
+    bad = [i for i, x in enumerate(v[:, 0]) if not ok(x)]
+    if bad:
+        raise InputError(source, f"{col} is {v[bad[0], 0]:g}, expected {expected}",
+                         lines[bad[0]])
+    return v[:, 0]
 
 
 def _approach(text: str, source: str) -> np.ndarray:
