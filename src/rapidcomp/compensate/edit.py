@@ -275,19 +275,14 @@ class Editor:
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ, inline jointtarget"
             return
         # A new declaration next to the source one.
-        stem = g.decl.name
-        if g.src.call is not None:
-            stem += "_" + g.src.call.name.lower()
         if g.array:
-            name = self.names.new(("jt_" + stem) if g.mode == "absj" else stem + "_c")
+            name = self.names.new(("jt_" + _stem(g)) if g.mode == "absj" else _stem(g) + "_c")
             _, _, nl, indent, _ = self._anchor(g)
-            dims = "{" + ",".join(map(str, g.decl.dims)) + "}"
-            self.declare(g, type_name, name, dims, self.array_value(g, nl, indent, texts))
+            self.declare(g, type_name, name, _dims(g), self.array_value(g, nl, indent, texts))
             g.names["array"] = name
         else:
             for k in g.elements:
-                s = stem if k is None else stem + "_" + "_".join(
-                    map(str, multi_index(k, g.decl.dims)))
+                s = _stem(g, k)
                 name = self.names.new(("jt_" + s) if g.mode == "absj" else s + "_c")
                 self.declare(g, type_name, name, "", vals.literal(g, k, texts.get(k)))
                 g.names[k] = name
@@ -339,10 +334,10 @@ class Editor:
 
     def _apply_transient(self, g: Group) -> None:
         """The cold value and the steady-state correction as named
-        constants, each move's target computed from them by rcTcJ. A
-        jointtarget of the program stays as written (it is the cold value)
-        and gets its <name>_dq; a robtarget becomes jt_<name> and
-        jt_<name>_dq, its move a MoveAbsJ."""
+        constants, each move's target computed from them by rcTcJ (MoveAbsJ)
+        or rcTcR (robtarget moves). A jointtarget of the program stays as
+        written (it is the cold value) and gets its <name>_dq; a robtarget
+        of a move that becomes MoveAbsJ becomes jt_<name> and jt_<name>_dq."""
         from .transient import FUNC_J, FUNC_R
         if g.mode == "rob":
             # One confdata serves every state: the written one, or the warm
@@ -394,24 +389,20 @@ class Editor:
         "array") the cold value's name (None: the program's own data is
         the cold value; cold_name(stem, element) says) and the
         correction's, <cold>_dq or <stem>_dq."""
-        stem = g.decl.name
-        if g.src.call is not None:
-            stem += "_" + g.src.call.name.lower()
         _, _, nl, indent, _ = self._anchor(g)
         names: dict = {}
         items = [("array", None)] if g.array else [(k, k) for k in g.elements]
         for key, k in items:
-            s = stem if k is None else stem + "_" + "_".join(
-                map(str, multi_index(k, g.decl.dims)))
+            s = _stem(g, k)
             want = cold_name(s, key if g.array else k)
             cold = self.names.new(want) if want else None
             dq = self.names.new(((cold if dq_after_cold and cold else s))[:29] + "_dq")
             if g.array:
-                dims = "{" + ",".join(map(str, g.decl.dims)) + "}"
                 if cold is not None:
-                    self.declare(g, cold_type, cold, dims,
+                    self.declare(g, cold_type, cold, _dims(g),
                                  self._array_literal(g, nl, indent, cold_literal))
-                self.declare(g, dq_type, dq, dims, self._array_literal(g, nl, indent, dq_literal))
+                self.declare(g, dq_type, dq, _dims(g),
+                             self._array_literal(g, nl, indent, dq_literal))
             else:
                 if cold is not None:
                     self.declare(g, cold_type, cold, "", cold_literal(g, k))
@@ -483,4 +474,17 @@ class Editor:
 
 def _conf(c) -> str:
     return "[" + ",".join(str(int(x)) for x in c) + "]"
+
+
+def _stem(g: Group, k=None) -> str:
+    """The name new data of a declared group are made from: the source
+    declaration's (with its Offs/RelTool), and an element's index."""
+    stem = g.decl.name
+    if g.src.call is not None:
+        stem += "_" + g.src.call.name.lower()
+    return stem if k is None else stem + "_" + "_".join(map(str, multi_index(k, g.decl.dims)))
+
+
+def _dims(g: Group) -> str:
+    return "{" + ",".join(map(str, g.decl.dims)) + "}"
 

@@ -126,7 +126,8 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         if transient is None:
             verified = verify(plan, solved, keys, out_files, solver) if keys else {}
         else:
-            verified, state_errors = _verify_states(plan, solved, keys, texts, transient[1])
+            verified, state_errors = _verify_states(plan, solved, keys, texts, out_files,
+                                                    transient[1])
         clock("verify")
         missed = _missed(solved, gs, verified)
         if not missed:
@@ -157,17 +158,16 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     return FixResult(mode, task.name, tuple(modules), tuple(rows), tuple(notes))
 
 
-def _verify_states(plan, solved, keys, texts, solvers) -> tuple[dict, dict]:
+def _verify_states(plan, solved, keys, texts, parsed, solvers) -> tuple[dict, dict]:
     """Transient: the written program at every thermal state s, each
     rcTcJ(cold, dq) evaluated as the controller does, verified on the robot
     deformed by s . profile. Per use the worst state's residual; per state
     the worst use's."""
     from .transient import materialize
-    names = {fi: plan.files[fi].source.display_path for fi in texts}
     worst: dict = {}
     by_state: dict = {}
     for s, state_solver in solvers.items():
-        out_files = reparse(plan, materialize(texts, names, s))
+        out_files = reparse(plan, materialize(texts, parsed, s))
         got = verify(plan, solved, keys, out_files, state_solver) if keys else {}
         # A wrist-singular target's orientation is what the wrist can hold
         # (its row says what is left): not the figure of the rest.

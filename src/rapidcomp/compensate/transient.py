@@ -38,6 +38,10 @@ from ..edits import SpanEdit, apply_edits
 from ..errors import InternalError, RapidcompError
 from ..rapid import ast as A
 from ..rapid.parse import parse_text
+from ..rapid.refs import nodes
+from ..rapid.values import DecodeIssue, decode_array
+from ..rewrite import numbers
+from ..rewrite.names import NameAllocator
 
 FUNC_J = "rcTcJ"
 FUNC_R = "rcTcR"
@@ -144,11 +148,9 @@ GLOBAL_NAMES = ("rcS", "rcLastDay", "rcLastMin", "rcTauHeat", "rcTauCool", "rcGa
 def check_names(task) -> None:
     """RapidcompError when the task already declares one of the support
     module's names."""
-    import re
     taken = {n.lower(): n for n in GLOBAL_NAMES}
     for pf in task.files:
-        words = {w.lower() for w in re.findall(r"[A-Za-z][A-Za-z0-9_]*", pf.source.text)}
-        clash = sorted(taken[w] for w in words & set(taken))
+        clash = sorted(taken[w] for w in NameAllocator([pf.source.text]).taken & set(taken))
         if clash:
             raise RapidcompError(
                 f"{pf.source.display_path}: uses {', '.join(clash)}, a name of the transient "
@@ -260,7 +262,6 @@ def support_module(tr: Transient, nl: str = "\n") -> str:
             f"{i2}rcLastMin:=mins;",
             f"{i1}ENDPROC",
         ]
-        set_time = [f"{i2}rcNow rcLastDay,rcLastMin;"]
     else:
         head += [
             f"{i1}CONST num rcTCold:={_num(tr.t_cold)};",
@@ -272,7 +273,6 @@ def support_module(tr: Transient, nl: str = "\n") -> str:
             f"{i2}IF rcS>1 rcS:=1;",
             f"{i1}ENDPROC",
         ]
-        set_time = []
     body = [
         "",
         f"{i1}FUNC jointtarget {FUNC_J}(jointtarget cold,jointtarget dq)",
@@ -303,7 +303,7 @@ def support_module(tr: Transient, nl: str = "\n") -> str:
         f"{i2}rcS:=s;",
         f"{i2}IF rcS<0 rcS:=0;",
         f"{i2}IF rcS>1 rcS:=1;",
-    ] + set_time + [
+        f"{i2}rcNow rcLastDay,rcLastMin;",
         f"{i1}ENDPROC",
         "",
     ] if tr.signal is None else []) + [
@@ -317,10 +317,8 @@ def support_module(tr: Transient, nl: str = "\n") -> str:
 
 
 def _num(x: float) -> str:
-    text = f"{x:.6g}"
-    if "e" in text or "E" in text:
-        raise RapidcompError(f"{x:g}: out of the range the support module writes")
-    return text
+    # Plain decimals (RAPID reads 1e-05 too, but a reviewer reads 0.00001).
+    return numbers.fmt(x, 6)
 
 
 # ------------------------------------------------------------- verification
@@ -346,100 +344,47 @@ def state_pose(trans, rot, d_trans, d_rot, s: float):
     return t, f32(q / norm if norm > 0 else q)
 
 
-def _walk(node):
-    """Every AST node under `node` (dataclass fields, tuples)."""
-    stack = [node]
-    while stack:
-        n = stack.pop()
-        if isinstance(n, tuple):
-            stack.extend(n)
-            continue
-        if not hasattr(n, "__dataclass_fields__"):
-            continue
-        yield n
-        if isinstance(n, A.NumAgg):
-            continue
-        for name in n.__dataclass_fields__:
-            stack.append(getattr(n, name))
+def _records(kind: str, expr, dims: tuple[int, ...]) -> tuple:
+    """The literal `expr` (of `dims`, an array) decoded, row-major."""
+    try:
+        return decode_array(kind, expr, dims, kind)
+    except DecodeIssue as exc:
+        raise InternalError(f"a transient value does not decode: {exc.reason}") from None
 
 
-def _aggs(expr) -> tuple:
-    if isinstance(expr, (A.Agg, A.NumAgg)):
-        return expr.items
-    raise InternalError("a transient value is not a literal")
-
-
-def _is_numbers(expr, n: int) -> bool:
-    return isinstance(expr, (A.Agg, A.NumAgg)) and len(expr.items) == n and \
-        all(isinstance(v, (A.Num, A.Unary)) for v in expr.items)
-
-
-def _leaves(expr, kind: str) -> list:
-    """The literals of `kind` in a value (a literal, or an array's nested
-    literals), in order, as their groups of number nodes: a jointtarget
-    [robax]; a robtarget [trans, rot]; a pose [trans, rot]."""
-    items = _aggs(expr)
-    if kind == "jointtarget" and len(items) == 2 and _is_numbers(items[0], 6):
-        return [(items[0].items,)]
-    if kind == "robtarget" and len(items) == 4 and _is_numbers(items[0], 3) \
-            and _is_numbers(items[1], 4):
-        return [(items[0].items, items[1].items)]
-    if kind == "pose" and len(items) == 2 and _is_numbers(items[0], 3) \
-            and _is_numbers(items[1], 4):
-        return [(items[0].items, items[1].items)]
-    out = []
-    for x in items:
-        out += _leaves(x, kind)
-    return out
-
-
-def _value(node) -> float:
-    if isinstance(node, A.Num):
-        return node.value
-    if isinstance(node, A.Unary) and node.op in "+-":
-        v = _value(node.operand)
-        return -v if node.op == "-" else v
-    raise InternalError("a transient value is not a number")
-
-
-def _values(nodes) -> list[float]:
-    return [_value(x) for x in nodes]
+def _state_text(text: str, cold, dq, func: str, s: float, dims=()) -> str:
+    """The cold value's text (a literal or an array of them) with every
+    number the state changes replaced by its value at s."""
+    joint = func == FUNC_J
+    c = _records("jointtarget" if joint else "robtarget", cold, dims)
+    d = _records("jointtarget" if joint else "pose", dq, dims)
+    base = cold.span.start
+    edits = []
+    for cv, dv in zip(c, d):
+        if joint:
+            fields, new = cv.robax, state_joints(cv.joints, dv.joints, s)
+        else:
+            t, q = state_pose(cv.xyz, cv.quat_wxyz, dv.xyz, dv.quat_wxyz, s)
+            fields, new = cv.trans + cv.rot, np.concatenate([t, q])
+        edits += [SpanEdit(f.span.start - base, f.span.end - base, _text(v), "state value")
+                  for f, v in zip(fields, new)]
+    return apply_edits(text[cold.span.start:cold.span.end],
+                       sorted(edits, key=lambda e: (e.start, e.end)))
 
 
 def _text(v) -> str:
     return f"{float(v):.9g}"
 
 
-def _state_text(text: str, cold, dq, func: str, s: float) -> str:
-    """The cold value's text (a literal or an array of them) with every
-    number the state changes replaced by its value at s."""
-    kind = "jointtarget" if func.lower() == FUNC_J.lower() else "robtarget"
-    c = _leaves(cold, kind)
-    d = _leaves(dq, "jointtarget" if kind == "jointtarget" else "pose")
-    if len(c) != len(d):
-        raise InternalError("a transient value and its correction differ in size")
-    base = cold.span.start
-    edits = []
-    for cv, dv in zip(c, d):
-        if kind == "jointtarget":
-            nodes, new = cv[0], state_joints(_values(cv[0]), _values(dv[0]), s)
-        else:
-            t, q = state_pose(_values(cv[0]), _values(cv[1]), _values(dv[0]), _values(dv[1]), s)
-            nodes, new = cv[0] + cv[1], np.concatenate([t, q])
-        edits += [SpanEdit(x.span.start - base, x.span.end - base, _text(v), "state value")
-                  for x, v in zip(nodes, new)]
-    return apply_edits(text[cold.span.start:cold.span.end],
-                       sorted(edits, key=lambda e: (e.start, e.end)))
-
-
-def materialize(texts: dict, names: dict, s: float) -> dict:
-    """The written files (index -> text) with every rcTcJ/rcTcR(cold, dq)
-    replaced by its value at state s, computed as the controller does
-    (float32): the program a controller without the functions would run at
-    that state. A call on declared data becomes a reference to a new
-    constant holding that value, declared after the correction; an inline
-    call becomes the literal. Only for verification: never written."""
-    parsed = {fi: parse_text(text, names[fi]) for fi, text in texts.items()}
+def materialize(texts: dict, parsed: dict, s: float) -> dict:
+    """The written files (index -> text, and as parsed) with every
+    rcTcJ/rcTcR(cold, dq) replaced by its value at state s, computed as the
+    controller does (float32): the program a controller without the
+    functions would run at that state. A call on declared data becomes a
+    reference to a new constant holding that value, declared after the
+    correction; a call on an array element with a literal index, or on an
+    inline literal, becomes the literal. Only for verification: never
+    written."""
     decls = {}
     for fi, pf in parsed.items():
         for m in pf.modules:
@@ -449,69 +394,62 @@ def materialize(texts: dict, names: dict, s: float) -> dict:
                 elif isinstance(item, A.Routine):
                     for d in item.decls:
                         decls.setdefault(d.name.lower(), (fi, d))
+    fresh = NameAllocator(list(texts.values()))
     edits: dict = {fi: [] for fi in texts}
     made: dict = {}
     funcs = {FUNC_J.lower(): FUNC_J, FUNC_R.lower(): FUNC_R}
     for fi, pf in parsed.items():
         text = texts[fi]
         for m in pf.modules:
-            for node in _walk(m.node):
+            for node in nodes(m.node):
                 if not (isinstance(node, A.Call) and node.name.lower() in funcs):
                     continue
                 func = funcs[node.name.lower()]
                 cold, dq = (a.value for a in node.args)
-                if isinstance(cold, A.Ref) and cold.selectors and not dq.selectors:
-                    # One element of an array (a literal index) with its own
-                    # correction: the element's value, inline.
-                    cfi, decl = decls.get(cold.name.lower(), (None, None))
-                    _, dq_decl = decls.get(dq.name.lower(), (None, None))
-                    if decl is None or dq_decl is None:
-                        raise InternalError(f"{func}({cold.name}, {dq.name}): a declaration is "
-                                            "missing")
-                    element = _element(decl, cold, texts[cfi])
-                    new = _state_text(texts[cfi], element, dq_decl.init, func, s)
-                elif not isinstance(cold, A.Ref):
+                if not isinstance(cold, A.Ref):
                     if isinstance(dq, A.Ref):
                         raise InternalError(f"{func}: an inline value with a declared correction")
                     new = _state_text(text, cold, dq, func, s)
                 else:
-                    key = (cold.name.lower(), dq.name.lower())
-                    if key not in made:
-                        made[key] = _declare_state(texts, decls, key, func, s, edits,
-                                                   len(made) + 1)
-                    new = made[key] + text[cold.span.start:cold.span.end][len(cold.name):]
+                    (cfi, cold_decl), (dfi, dq_decl) = (_declared(decls, r, func)
+                                                        for r in (cold, dq))
+                    if cold.selectors and not dq.selectors:
+                        # One element (a literal index) with its own correction.
+                        new = _state_text(texts[cfi], _element(cold_decl, cold), dq_decl.init,
+                                          func, s)
+                    else:
+                        key = (cold.name.lower(), dq.name.lower())
+                        if key not in made:
+                            made[key] = fresh.new("rcState")
+                            dims = tuple(int(x.value) for x in dq_decl.dims)
+                            value = _state_text(texts[cfi], cold_decl.init, dq_decl.init, func,
+                                                s, dims)
+                            type_name = "jointtarget" if func == FUNC_J else "robtarget"
+                            shape = "{" + ",".join(map(str, dims)) + "}" if dims else ""
+                            edits[dfi].append(SpanEdit(
+                                dq_decl.span.end, dq_decl.span.end,
+                                f"\nCONST {type_name} {made[key]}{shape}:={value};",
+                                "state value"))
+                        new = made[key] + text[cold.span.start:cold.span.end][len(cold.name):]
                 edits[fi].append(SpanEdit(node.span.start, node.span.end, new, "state value"))
     return {fi: apply_edits(texts[fi], sorted(es, key=lambda e: (e.start, e.end)))
             for fi, es in edits.items()}
 
 
-def _element(decl, ref, text: str):
+def _declared(decls: dict, ref, func: str):
+    if ref.name.lower() not in decls:
+        raise InternalError(f"{func}: {ref.name} is not declared in the output")
+    return decls[ref.name.lower()]
+
+
+def _element(decl, ref):
     """The literal of decl's element that `ref` (literal indices) names."""
     node = decl.init
     for sel in ref.selectors:
         if not isinstance(sel, A.Index):
             raise InternalError(f"{ref.name}: a component where an element was expected")
         for idx in sel.indices:
-            if not isinstance(idx, A.Num):
-                raise InternalError(f"{ref.name}: an element index that is not a number")
-            node = _aggs(node)[int(idx.value) - 1]
+            if not isinstance(idx, A.Num) or not isinstance(node, (A.Agg, A.NumAgg)):
+                raise InternalError(f"{ref.name}: an element that is not a literal")
+            node = node.items[int(idx.value) - 1]
     return node
-
-
-def _declare_state(texts, decls, key, func, s, edits, n) -> str:
-    cold_name, dq_name = key
-    if cold_name not in decls or dq_name not in decls:
-        raise InternalError(f"{func}({cold_name}, {dq_name}): a declaration is missing")
-    cfi, cold = decls[cold_name]
-    dfi, dq = decls[dq_name]
-    value = _state_text(texts[cfi], cold.init, dq.init, func, s)
-    # Unique: the written program has no name starting "rcState_" (the
-    # support module's names are checked against the task).
-    name = f"rcState_{n}"
-    text = texts[dfi]
-    dims = "{" + ",".join(text[d.span.start:d.span.end] for d in dq.dims) + "}" if dq.dims \
-        else ""
-    type_name = "jointtarget" if func == FUNC_J else "robtarget"
-    edits[dfi].append(SpanEdit(dq.span.end, dq.span.end,
-                               f"\nCONST {type_name} {name}{dims}:={value};", "state value"))
-    return name

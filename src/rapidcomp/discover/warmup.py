@@ -99,15 +99,7 @@ def _poses(q_deg, wall, tool):
 
 
 def _rss(groups, t_min, xyz, tau, stood=None, tau_cool=None) -> float:
-    total = 0.0
-    s_all = states(t_min, tau, stood, tau_cool) if stood is not None else None
-    for rows in groups:
-        s = s_all[rows] if s_all is not None else states(t_min[rows], tau)
-        A = np.column_stack([np.ones(len(rows)), s])
-        coef, *_ = np.linalg.lstsq(A, xyz[rows], rcond=None)
-        r = xyz[rows] - A @ coef
-        total += float(np.sum(r ** 2))
-    return total
+    return _rss_linear(groups, states(t_min, tau, stood, tau_cool), xyz)
 
 
 def _rss_linear(groups, x, xyz) -> float:

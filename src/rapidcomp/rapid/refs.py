@@ -33,7 +33,7 @@ class Usage:
     assigns: dict = field(default_factory=dict)  # lower-case name -> whole-value Assigns
 
 
-def _nodes(root):
+def nodes(root):
     """Every syntax node below root (numeric aggregates hold no names)."""
     stack: list = [root]
     while stack:
@@ -53,7 +53,7 @@ def usage(module: A.ModuleNode) -> Usage:
     writes: dict[str, list[A.Span]] = {}
     assigns: dict[str, list[A.Assign]] = {}
     calls = []
-    for node in _nodes(module.items):
+    for node in nodes(module.items):
         t = type(node)
         if t is A.Ref:
             refs.setdefault(node.name.lower(), []).append(node)
@@ -78,7 +78,7 @@ def usage(module: A.ModuleNode) -> Usage:
 
 def calls_in(expr):
     """The function calls in an expression (nested ones too)."""
-    return [node for node in _nodes(expr) if type(node) is A.Call]
+    return [node for node in nodes(expr) if type(node) is A.Call]
 
 
 def literal_leaves(expr) -> tuple | None:
@@ -103,4 +103,4 @@ def literal_leaves(expr) -> tuple | None:
 
 def names_in(expr) -> set[str]:
     """Lower-case names of the data an expression refers to."""
-    return {node.name.lower() for node in _nodes(expr) if type(node) is A.Ref}
+    return {node.name.lower() for node in nodes(expr) if type(node) is A.Ref}
