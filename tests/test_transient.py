@@ -396,3 +396,17 @@ def test_review_cases_literal_index_backinfo_overwrite_and_static_profiles(tmp_p
     r = _rapidcomp("fix", mod, "--profile", eq, "--transient", "-o", tmp_path / "f.mod",
                    cwd=tmp_path)
     assert r.returncode == 2 and "given twice" in r.stderr
+
+
+def test_two_programs_in_one_folder_share_the_support_module(tmp_path):
+    """A CRLF module and an LF one compensated into one folder with the same
+    law: the module the first wrote serves the second (only its line
+    breaks would differ); it is not refused nor rewritten."""
+    out = tmp_path / "o"
+    for name in ("cam_confoff.mod", "robotstudio_crlf.mod"):
+        r = _rapidcomp("fix", FIXTURES / "rapid" / name, "--profile", FIXTURES / "warm.csv",
+                       "--transient", "--tau-heat", "40", "--allow-partial", "-o", out / name,
+                       cwd=tmp_path)
+        assert r.returncode in (0, 1) and "exists" not in r.stderr, r.stderr
+        assert (out / name).is_file()
+    assert b"\r\n" not in (out / "rcThermal.sys").read_bytes()

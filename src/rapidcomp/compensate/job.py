@@ -152,14 +152,18 @@ def _support_files(spec: JobSpec, task) -> list[tuple[str, bytes]]:
             rel = rel.parent / "SYSMOD"
         out = [(str(Path(spec.output) / rel / MODULE_FILE), text)]
     path = Path(out[0][0])
-    try:
-        same = path.read_bytes() == text if path.exists() else True
-    except OSError:
-        same = False
-    if not same:
-        raise RapidcompError(f"{path}: exists and is not this support module (another program's, "
-                             "with other settings, or a file of yours); write the output to "
-                             "another folder or remove it")
+    if path.exists():
+        try:
+            existing = path.read_bytes()
+        except OSError:
+            existing = None
+        if existing is None or existing.replace(b"\r\n", b"\n") != text.replace(b"\r\n", b"\n"):
+            raise RapidcompError(f"{path}: exists and is not this support module (another "
+                                 "program's, with other settings, or a file of yours); write the "
+                                 "output to another folder or remove it")
+        # The same module (another program of the folder wrote it, in its
+        # own line breaks): kept as it is.
+        out = []
     if not src.is_folder:
         return out
     if src.kind == "pgf":
