@@ -22,7 +22,7 @@ from ..rewrite.names import NameAllocator
 from .place import Group, element_label, multi_index
 from .plan import Plan
 from .solve import Solved
-from .targets import Source, base_pose, wobj_target
+from .targets import Source, base_pose, compose_pose, invert_pose
 
 
 class Values:
@@ -97,28 +97,67 @@ class Values:
             self._values[key] = all(s.picks[s.row[u.key]].kind == "closest" for u in g.uses)
         return self._values[key]
 
+    def prepare(self, gs: list[Group]) -> None:
+        """Every robtarget value and field texts of the groups at once: a CAM
+        program has 1e5, and one batch of rotations costs what a few
+        single ones do."""
+        items = [(g, k) for g in gs if g.failure is None and g.mode == "rob"
+                 for k in g.elements if (id(g), k) not in self._values]
+        if not items:
+            return
+        values = self._robtarget_values(items)
+        texts = records.robtarget_texts_many([self.source(g, k).record for g, k in items],
+                                             *values)
+        for j, (g, k) in enumerate(items):
+            self._values[(id(g), k)] = (values[0][j], values[1][j], values[2][j])
+            self._values[("texts", id(g), k)] = texts[j]
+
     def _robtarget_value(self, g: Group, k):
+        return tuple(v[0] for v in self._robtarget_values([(g, k)]))
+
+    def _robtarget_values(self, items):
+        """(R (n, 3, 3), p (n, 3), conf (n, 4)) of robtarget_value for each
+        (group, element)."""
         s = self.solved
-        i = g.rows[k]
-        src = self.source(g, k)
-        flange = (s.flange_R[i], s.flange_p[i])
-        base = self.plan.resolver.world_M_base(src.record)
-        target = wobj_target(base, g.wobj[1], flange, g.tool[1])
-        written = np.array(src.record.conf)
-        if self._unsupervised(g):
-            conf = written       # supervision is off for every use: confdata is not read
-        else:
-            conf = np.array(s.conf_after[i])
-            q = s.deformed.q_deg[i]
-            for col, cf in ((0, 0), (3, 1), (5, 2)):
-                if quadrant_miss(q[col], written[cf]) <= self.tol:
-                    conf[cf] = written[cf]
-        return (*base_pose(src, target), conf)
+        rows = [g.rows[k] for g, k in items]
+        srcs = [self.source(g, k) for g, k in items]
+        n = len(items)
+        resolver = self.plan.resolver
+        # wobj_M_target = wobj^-1 . world_M_base . base_M_flange . tframe
+        # (targets.flange_pose inverted), each factor stacked.
+        A_R, A_p = np.empty((n, 3, 3)), np.empty((n, 3))
+        T_R, T_p = np.empty((n, 3, 3)), np.empty((n, 3))
+        for j, ((g, k), src) in enumerate(zip(items, srcs)):
+            base = resolver.world_M_base(src.record)
+            A_R[j], A_p[j] = compose_pose(invert_pose(g.wobj[1]), base)
+            T_R[j], T_p[j] = g.tool[1]
+        F_R, F_p = s.flange_R[rows], s.flange_p[rows]
+        R = A_R @ F_R
+        p = (A_R @ F_p[..., None])[..., 0] + A_p
+        p = (R @ T_p[..., None])[..., 0] + p
+        R = R @ T_R
+        for j, src in enumerate(srcs):
+            if src.call is not None:
+                R[j], p[j] = base_pose(src, (R[j], p[j]))
+        written = np.array([src.record.conf for src in srcs], dtype=int).reshape(n, 4)
+        conf = np.array(s.conf_after[rows], dtype=int).reshape(n, 4)
+        q = s.deformed.q_deg[rows]
+        # A J1/J4/J6 within the quadrant tolerance of the written quadrant
+        # keeps it; every use without supervision keeps all of it (the
+        # controller does not read it).
+        keep = quadrant_miss(q[:, [0, 3, 5]], written[:, :3]) <= self.tol
+        conf[:, :3] = np.where(keep, written[:, :3], conf[:, :3])
+        off = np.array([self._unsupervised(g) for g, _ in items])
+        conf[off] = written[off]
+        return R, p, conf
 
     def field_texts(self, g: Group, k) -> list[str]:
         record = self.source(g, k).record
         if g.mode == "joint":
             return records.jointtarget_texts(record, self.joints(g, k))
+        texts = self._values.get(("texts", id(g), k))
+        if texts is not None:
+            return texts
         R, p, conf = self.robtarget_value(g, k)
         return records.robtarget_texts(record, R, p, conf)
 
@@ -177,11 +216,17 @@ class Editor:
         self.insert_nl: dict[tuple[int, int], str] = {}
         self.insert_indent: dict[tuple[int, int], str] = {}
         self.actions: dict = {}                                # use key -> what was done
+        # (file, record offset) -> (record, new field texts) of every
+        # literal whose numeric fields are edited; structural: some edit
+        # is of anything else (a new declaration, a reference, MoveAbsJ).
+        self.fields: dict[tuple[int, int], tuple] = {}
+        self.structural = False
 
     def text(self, fi: int) -> str:
         return self.plan.files[fi].source.text
 
-    def edit(self, fi: int, span, text: str, why: str) -> None:
+    def edit(self, fi: int, span, text: str, why: str, field: bool = False) -> None:
+        self.structural = self.structural or not field
         key = (fi, span.start, span.end)
         old = self.edits.get(key)
         if old is not None and old.replacement != text:
@@ -215,6 +260,7 @@ class Editor:
         return fi, end, nl, indent, in_routine
 
     def declare(self, g: Group, type_name: str, name: str, dims: str, value: str) -> None:
+        self.structural = True
         fi, end, nl, indent, in_routine = self._anchor(g)
         scope = "" if in_routine or not g.local else "LOCAL "
         decl = f"{scope}CONST {type_name} {name}{dims}{self._assign(g, fi)}{value};"
@@ -261,9 +307,10 @@ class Editor:
                 record = vals.source(g, k).record
                 fi = (self.plan.file_index[id(g.src.home)] if g.decl is not None
                       else g.uses[0].key[0])
+                self.fields[(fi, record.span.start)] = (record, texts[k])
                 for e in records.field_edits(record, texts[k],
                                              f"{element_label(g, k)} compensated"):
-                    self.edit(fi, e, e.replacement, e.why)
+                    self.edit(fi, e, e.replacement, e.why, field=True)
             what = (f"inline {type_name} rewritten" if g.decl is None
                     else f"{type_name} {g.decl.name} rewritten in place")
             for u in g.uses:

@@ -31,7 +31,7 @@ from .edit import Editor, Values
 from .plan import Plan, Task, line_ranges
 from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, UseRow, summary, use_rows
 from .solve import solve
-from .verify import VERIFY_DEG, VERIFY_UM, reparse, verify
+from .verify import VERIFY_DEG, VERIFY_UM, relex, reparse, verify
 
 MODES = P.MODES
 
@@ -105,6 +105,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     clock("solve")
     gs = P.groups(plan, solved, mode)
     values = Values(plan, solved, solver.options.quadrant_tol_deg)
+    values.prepare(gs)
     state_errors: dict = {}
     # A written value that does not reproduce its compensated joints (the
     # ideal controller's IK lands elsewhere) fails its group; the rest is
@@ -120,11 +121,14 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         texts = {fi: apply_edits(plan.files[fi].source.text, es)
                  for fi, es in file_edits.items()}
         clock("print")
-        out_files = reparse(plan, texts)
+        written = None if (transient is not None or editor.structural) else relex(
+            plan, editor.fields, file_edits, texts)
+        out_files = reparse(plan, texts) if written is None else {}
         clock("re-parse")
         keys = [u.key for g in gs if g.failure is None for u in g.uses]
         if transient is None:
-            verified = verify(plan, solved, keys, out_files, solver) if keys else {}
+            verified = verify(plan, solved, keys, out_files, solver,
+                              written) if keys else {}
         else:
             verified, state_errors = _verify_states(plan, solved, keys, texts, out_files,
                                                     transient[1])

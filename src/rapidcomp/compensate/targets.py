@@ -23,7 +23,7 @@ a name no given module declares), which fails the compensation.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -123,12 +123,6 @@ def flange_pose(base, wobj, target, tool):
                         invert_pose(tool))
 
 
-def wobj_target(base, wobj, flange, tool):
-    """wobj_M_target that puts the flange at base_M_flange (flange_pose's
-    inverse)."""
-    return compose_pose(compose_pose(invert_pose(wobj), compose_pose(base, flange)), tool)
-
-
 def parse_base(values) -> tuple | None:
     """`--base X,Y,Z,Q1,Q2,Q3,Q4`: world_M_base, mm and a quaternion in
     RAPID order (w, x, y, z)."""
@@ -173,8 +167,13 @@ class Resolver:
 
     def __init__(self, files: list[ParsedFile], float32: bool = False,
                  usages: dict | None = None, writes: bool = True, track=(), base=None,
-                 observers=(), moved_by: str | None = None):
+                 observers=(), moved_by: str | None = None, written: dict | None = None):
         self.float32 = float32
+        # Records as an output writes them, by (id(file), offset of the
+        # literal): the written program's values on the input's structure
+        # (verify.py, when every edit is of numeric fields).
+        self.written = written or {}
+        self._memos: dict = {}
         self.track = tuple(track)
         self.moved_by = moved_by
         self.base = base if base is not None else IDENTITY_POSE   # world_M_base at track 0
@@ -351,8 +350,30 @@ class Resolver:
         return (f"{d.name} is assigned at run time ({where}), but only its own declared "
                 "value: compensated with that value")
 
+    def _memo(self, kind: str, expr, module, routine: str | None, how):
+        """tool()/wobj() once per name and scope (a CAM program names the
+        same tool 1e5 times), the notes of the first resolution repeated."""
+        if not (isinstance(expr, A.Ref) and not expr.selectors):
+            return how(expr, module, routine)
+        key = (kind, id(module), routine.lower() if routine else None, expr.name.lower())
+        hit = self._memos.get(key)
+        if hit is None:
+            before = len(self._notes)
+            result = how(expr, module, routine)
+            hit = self._memos[key] = (result, tuple(self._notes[before:]))
+        else:
+            self._notes.extend(hit[1])
+        return hit[0]
+
     def tool(self, expr, module, routine: str):
         """(key, tframe as (R, p)), or Unresolved."""
+        return self._memo("tool", expr, module, routine, self._tool)
+
+    def wobj(self, expr, module, routine: str):
+        """(key, uframe . oframe as (R, p)), or Unresolved."""
+        return self._memo("wobj", expr, module, routine, self._wobj)
+
+    def _tool(self, expr, module, routine: str):
         if expr is None:
             return Unresolved("no tool argument", True)
         d = self._data(expr, module, routine, "tool0", ToolData, "tool")
@@ -365,8 +386,7 @@ class Resolver:
             return Unresolved(f"tool {expr.name} is a stationary tool (robhold FALSE)")
         return expr.name.lower(), self._pose(t.tframe, self.home[id(d)], f"tool {d.name}")
 
-    def wobj(self, expr, module, routine: str):
-        """(key, uframe . oframe as (R, p)), or Unresolved."""
+    def _wobj(self, expr, module, routine: str):
         if expr is None:
             return "wobj0", IDENTITY_POSE
         d = self._data(expr, module, routine, "wobj0", WobjData, "work object")
@@ -625,6 +645,11 @@ class Resolver:
             src = Unresolved(t.issue)
         else:
             src = self._source(pf, t.expr, module, motion.routine, env)
+        if self.written and not isinstance(src, Unresolved):
+            record = self.written.get((id(src.home if src.home is not None else pf),
+                                       src.record.span.start))
+            if record is not None:
+                src = replace(src, record=record)
         if isinstance(src, Unresolved):
             if src.blocked and kind == "robtarget" and src.reason.endswith(f"({MISSING_HINT})"):
                 return fail(self._all_missing(src, module, motion))

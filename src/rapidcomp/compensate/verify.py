@@ -11,6 +11,8 @@ against the intended pose is what the report shows as "after".
 
 from __future__ import annotations
 
+from bisect import bisect_right
+
 import numpy as np
 
 from ..errors import InternalError, RapidcompError
@@ -18,6 +20,7 @@ from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
+from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
 from .targets import Resolver
@@ -39,15 +42,46 @@ def reparse(plan: Plan, texts: dict[int, str]) -> dict[int, ParsedFile]:
     return out
 
 
+def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> dict | None:
+    """When every edit replaces numeric fields of literals (fields: (file,
+    offset) -> (record, its new field texts)), the output has the input's
+    structure: instead of parsing it again, each edited literal is lexed
+    again where the output holds it, and must decode to the numbers the
+    editor meant. Returns the records as written, by (id(file), offset),
+    for the verification's resolver; None when a literal does not re-lex
+    (the output is then parsed again)."""
+    out = {}
+    for fi, es in file_edits.items():
+        # Offsets shift by what the edits before them add: a literal's
+        # brackets lie outside every field edit.
+        ends = [e.end for e in es]
+        shift = [0]
+        for e in es:
+            shift.append(shift[-1] + len(e.replacement) - (e.end - e.start))
+        text = texts[fi]
+        for (f, start), (record, want) in fields.items():
+            if f != fi:
+                continue
+            end = record.span.end
+            a = start + shift[bisect_right(ends, start)]
+            b = end + shift[bisect_right(ends, end)]
+            got = relex_record(record, text[a:b])
+            if got is None or list(got.texts) != list(want):
+                return None
+            out[(id(plan.files[fi]), start)] = got
+    return out
+
+
 def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFile],
-           solver: Solver) -> dict:
+           solver: Solver, written: dict | None = None) -> dict:
     """Residual (um, deg) of each compensated use (by key), evaluated on
-    the written output."""
+    the written output: out_files parsed again, or (written) the input's
+    structure with the records as relex() read them."""
     files = [out_files.get(fi, pf) for fi, pf in enumerate(plan.task.files)]
     files += list(plan.task.context)
     # Run-time writes were ruled out on the input; the output adds none.
     res = Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
-                   track=plan.track, base=plan.resolver.base)
+                   track=plan.track, base=plan.resolver.base, written=written)
     wanted = set(keys)
     motions = {k[:2] for k in keys}
     found = {}

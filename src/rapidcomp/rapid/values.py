@@ -275,6 +275,19 @@ def _compact(t: str, expr, where: str) -> Record:
                tuple((f.span.start - base, f.span.end - base) for f in fields), expr.span)
 
 
+def relex(record: Record, text: str) -> Record | None:
+    """`record` as `text` (the same literal with other numbers) writes it,
+    or None when the text is not an all-numeric literal of its type."""
+    m = _FAST[type(record).__name__.lower()].fullmatch(text)
+    if m is None:
+        return None
+    texts = m.groups()
+    values = tuple(map(float, texts))
+    if not all(abs(v) <= NUM_MAX for v in values):
+        return None
+    return type(record)(values, texts, record.regs, record.span)
+
+
 def decode(type_name: str, expr, where: str | None = None) -> Record:
     """Decode a literal value of a supported type. Raises DecodeIssue."""
     t = type_name.lower()

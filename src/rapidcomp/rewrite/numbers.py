@@ -42,12 +42,18 @@ def quaternion(q_wxyz, like=None) -> tuple[str, str, str, str]:
     """A unit quaternion in RAPID order. q and -q are the same rotation: the
     sign is the one nearer `like` (the value it replaces, so the diff shows
     only the change), else the one with w >= 0."""
+    return quaternions(np.asarray(q_wxyz, float)[None],
+                       None if like is None else np.asarray(like, float)[None])[0]
+
+
+def quaternions(q_wxyz, like=None) -> list[tuple[str, str, str, str]]:
+    """quaternion() of many (n, 4) at once."""
     q = np.asarray(q_wxyz, float)
-    q = q / np.linalg.norm(q)
-    ref = np.asarray(like, float) if like is not None else np.array([1.0, 0, 0, 0])
-    if float(q @ ref) < 0:
-        q = -q
-    return tuple(fmt(float(v), QUAT_DECIMALS) for v in q)
+    q = q / np.sqrt(np.einsum("ij,ij->i", q, q))[:, None]
+    ref = np.asarray(like, float) if like is not None else np.array([[1.0, 0, 0, 0]])
+    q = np.where((np.einsum("ij,ij->i", q, np.broadcast_to(ref, q.shape)) < 0)[:, None], -q, q)
+    f = QUAT_DECIMALS
+    return [(fmt(w, f), fmt(x, f), fmt(y, f), fmt(z, f)) for w, x, y, z in q.tolist()]
 
 
 def integer(value: int) -> str:

@@ -16,9 +16,11 @@ from ..rapid.values import JointTarget, RobTarget
 from . import numbers
 
 
-def _rotation_angle(q_old, R_new) -> float:
-    return float(np.linalg.norm(rotation_log(quat_wxyz_to_matrix(np.asarray(q_old, float)).T
-                                             @ R_new)))
+def _rotation_angles(q_old, R_new) -> np.ndarray:
+    """Angles (rad) between the rotations of quaternions q_old (n, 4) and
+    matrices R_new (n, 3, 3)."""
+    return np.linalg.norm(rotation_log(np.swapaxes(quat_wxyz_to_matrix(q_old), -1, -2)
+                                       @ R_new), axis=-1)
 
 
 def robtarget_texts(record: RobTarget, R: np.ndarray, p: np.ndarray,
@@ -26,16 +28,34 @@ def robtarget_texts(record: RobTarget, R: np.ndarray, p: np.ndarray,
     """The 17 field texts of `record` with pose (R, p) and confdata `conf`:
     a field keeps its text unless its value changes beyond what the new
     text could express."""
-    texts = list(record.texts)
-    for i in range(3):
-        if abs(float(p[i]) - record.values[i]) > numbers.MM_KEEP:
-            texts[i] = numbers.mm(float(p[i]))
-    if _rotation_angle(record.quat_wxyz, R) > numbers.ROT_KEEP_RAD:
-        texts[3:7] = numbers.quaternion(matrix_to_quat_wxyz(R), like=record.quat_wxyz)
-    for i in range(4):
-        if int(conf[i]) != record.values[7 + i]:
-            texts[7 + i] = numbers.integer(conf[i])
-    return texts
+    return robtarget_texts_many([record], np.asarray(R)[None], np.asarray(p)[None],
+                                np.asarray(conf)[None])[0]
+
+
+def robtarget_texts_many(recs: list[RobTarget], R: np.ndarray, p: np.ndarray,
+                         conf: np.ndarray) -> list[list[str]]:
+    """robtarget_texts of many records at once (a CAM program has 1e5): the
+    rotations compared and converted as one batch."""
+    if not recs:
+        return []
+    q_old = np.array([r.quat_wxyz for r in recs], float)
+    turned = (_rotation_angles(q_old, R) > numbers.ROT_KEEP_RAD).tolist()
+    quats = numbers.quaternions(matrix_to_quat_wxyz(R), like=q_old)
+    out = []
+    for rec, pj, cj, moved, q in zip(recs, np.asarray(p, float).tolist(),
+                                     np.asarray(conf).tolist(), turned, quats):
+        texts = list(rec.texts)
+        values = rec.values
+        for i in range(3):
+            if abs(pj[i] - values[i]) > numbers.MM_KEEP:
+                texts[i] = numbers.mm(pj[i])
+        if moved:
+            texts[3:7] = q
+        for i in range(4):
+            if int(cj[i]) != values[7 + i]:
+                texts[7 + i] = numbers.integer(cj[i])
+        out.append(texts)
+    return out
 
 
 def jointtarget_texts(record: JointTarget, q_deg) -> list[str]:
