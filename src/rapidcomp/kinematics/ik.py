@@ -120,8 +120,9 @@ class IKBatch:
     def __len__(self) -> int:
         return len(self.status)
 
-    @property
+    @functools.cached_property
     def success(self) -> np.ndarray:
+        # Once: the chooser asks per target (1e5 times on a CAM program).
         return self.status == Status.OK
 
     def reason(self, i: int) -> str | None:

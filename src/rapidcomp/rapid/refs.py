@@ -16,10 +16,16 @@ from .motions import motion_spec
 _FIELDS: dict[type, tuple[str, ...]] = {}
 
 
+# Fields that never hold a node (a CAM program's walk visits 1e6 nodes:
+# pushing their names and kinds too doubled it).
+_SCALAR = frozenset({"str", "str | None", "int", "float", "bool", "Span"})
+
+
 def _field_names(cls: type) -> tuple[str, ...]:
     names = _FIELDS.get(cls)
     if names is None:
-        names = tuple(f.name for f in fields(cls) if f.name not in ("span", "name_span"))
+        names = tuple(f.name for f in fields(cls) if f.name not in ("span", "name_span")
+                      and str(f.type) not in _SCALAR)
         _FIELDS[cls] = names
     return names
 
@@ -41,6 +47,13 @@ def nodes(root):
         t = type(node)
         if t is tuple or t is list:
             stack.extend(node)
+        elif t is A.Ref:      # the commonest nodes first, their fields known
+            yield node
+            if node.selectors:
+                stack.append(node.selectors)
+        elif t is A.Arg:
+            yield node
+            stack.append(node.value)
         elif not (t is A.NumAgg or node is None or t in (str, int, float, bool)):
             yield node
             if hasattr(t, "__dataclass_fields__"):

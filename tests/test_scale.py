@@ -1,0 +1,128 @@
+"""CAM-scale paths of `fix` (issue #14) give what the general path gives.
+
+An output whose edits are all numeric fields of literals is verified on the
+input's structure, each edited literal lexed again where the output holds
+it (verify.relex), instead of parsing the whole output again. Both ways
+must give the same report, byte for byte, on every golden case and
+fixture; and relex must refuse an output that does not hold the numbers
+the editor meant.
+"""
+
+from pathlib import Path
+
+import pytest
+
+from rapidcomp.compensate import fix as F
+from rapidcomp.compensate import report
+from rapidcomp.compensate.load import load_solver, load_task
+from rapidcomp.compensate.plan import Plan, Task
+from rapidcomp.edits import SpanEdit, apply_edits
+from rapidcomp.rapid.parse import parse_file, parse_text
+from rapidcomp.rapid.task import tasks_of
+
+ROOT = Path(__file__).resolve().parents[1]
+PROFILE = ROOT / "fixtures" / "warm.csv"
+MODULES = sorted(p for p in (ROOT / "fixtures").glob("*.mod")) + sorted(
+    (ROOT / "fixtures" / "rapid").iterdir())
+TASKS = ["cell", "glue/Glue.pgf", "backup_irbt"]
+
+
+@pytest.fixture(scope="module")
+def solver():
+    return load_solver(str(PROFILE), None, False, ("J5=-120:120",))
+
+
+def _both(task, solver, mode, monkeypatch):
+    """(result with relex as it is, result with the output parsed again,
+    whether relex served)."""
+    served = []
+    real = F.relex
+
+    def spy(*args):
+        out = real(*args)
+        served.append(out is not None)
+        return out
+    monkeypatch.setattr(F, "relex", spy)
+    fast = F.fix(task, solver, mode)
+    monkeypatch.setattr(F, "relex", lambda *args: None)
+    slow = F.fix(task, solver, mode)
+    return fast, slow, any(served)
+
+
+def _same(fast, slow):
+    assert [m.text for m in fast.modules] == [m.text for m in slow.modules]
+    assert fast.rows == slow.rows          # every figure, exactly
+    meta = {"mode": fast.mode}
+    assert report.markdown(fast, meta) == report.markdown(slow, meta)
+
+
+@pytest.mark.parametrize("mode", ["robtarget", "auto"])
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: p.name)
+def test_relex_verifies_as_a_second_parse_does(path, mode, solver, monkeypatch):
+    pf = parse_file(path, path.name)
+    fast, slow, _ = _both(Task(path.name, (pf,)), solver, mode, monkeypatch)
+    _same(fast, slow)
+
+
+@pytest.mark.parametrize("folder", TASKS)
+def test_relex_on_task_folders(folder, solver, monkeypatch):
+    for source in tasks_of(ROOT / "fixtures" / "tasks" / folder):
+        fast, slow, _ = _both(load_task(source), solver, "robtarget", monkeypatch)
+        _same(fast, slow)
+
+
+def test_relex_serves_programs_edited_in_place(solver, monkeypatch):
+    """A CAM program in robtarget mode is edited in its literals only: relex
+    serves it; in auto mode its MoveJ become MoveAbsJ (new jointtargets)
+    and the output is parsed again."""
+    pf = parse_file(ROOT / "fixtures" / "rapid" / "cam_confoff.mod", "cam.mod")
+    fast, slow, served = _both(Task("cam", (pf,)), solver, "robtarget", monkeypatch)
+    assert served and fast.summary()["compensated"] == 182
+    _, _, served = _both(Task("cam", (pf,)), solver, "auto", monkeypatch)
+    assert not served
+
+
+TEXT = """MODULE M
+  CONST robtarget p1:=[[500,0,600],[0.5,0,0.866025,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  PROC main()
+    MoveL p1,v100,fine,tool0;
+    MoveL [[520,10,610],[0.5,0,0.866025,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,fine,tool0;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def _edits(plan):
+    """Field edits of both literals: x written as 501.25 and 521.5."""
+    recs = [plan.uses[0].source.record, plan.uses[1].source.record]
+    fields, edits = {}, []
+    for rec, x in zip(recs, ("501.25", "521.5")):
+        texts = list(rec.texts)
+        texts[0] = x
+        fields[(0, rec.span.start)] = (rec, texts)
+        s, e = rec.regs[0]
+        edits.append(SpanEdit(rec.span.start + s, rec.span.start + e, x))
+    return recs, fields, edits
+
+
+def test_relex_reads_the_numbers_where_the_output_holds_them():
+    pf = parse_text(TEXT, "m.mod")
+    plan = Plan(Task("m.mod", (pf,)))
+    recs, fields, edits = _edits(plan)
+    out = F.relex(plan, fields, {0: edits}, {0: apply_edits(TEXT, edits)})
+    got = [out[(id(pf), r.span.start)] for r in recs]
+    assert [g.values[0] for g in got] == [501.25, 521.5]
+    assert [g.values[1:] for g in got] == [r.values[1:] for r in recs]
+
+
+def test_relex_refuses_an_output_that_does_not_hold_the_numbers_meant():
+    pf = parse_text(TEXT, "m.mod")
+    plan = Plan(Task("m.mod", (pf,)))
+    _, fields, edits = _edits(plan)
+    # The splice wrote another number than the editor meant: not verified
+    # on the editor's word (the output is parsed again instead).
+    wrong = [edits[0], SpanEdit(edits[1].start, edits[1].end, "521.6")]
+    assert F.relex(plan, fields, {0: edits}, {0: apply_edits(TEXT, wrong)}) is None
+    # A literal that no longer lexes as one (a field edit that broke it).
+    broken = [edits[0], SpanEdit(edits[1].start, edits[1].end, "521.5]")]
+    assert F.relex(plan, fields, {0: broken}, {0: apply_edits(TEXT, broken)}) is None
