@@ -126,3 +126,39 @@ def test_relex_refuses_an_output_that_does_not_hold_the_numbers_meant():
     # A literal that no longer lexes as one (a field edit that broke it).
     broken = [edits[0], SpanEdit(edits[1].start, edits[1].end, "521.5]")]
     assert F.relex(plan, fields, {0: broken}, {0: apply_edits(TEXT, broken)}) is None
+
+
+def test_ik_in_blocks_gives_the_one_batch_results(monkeypatch):
+    """A long program is solved in blocks of rows (bounded temporaries):
+    every result equals the one-batch one, bit for bit."""
+    import numpy as np
+    from rapidcomp.kinematics import ik
+    solver = load_solver(str(PROFILE), None, False)
+    rng = np.random.default_rng(3)
+    q = np.column_stack([rng.uniform(-60, 60, 300), rng.uniform(-30, 60, 300),
+                         rng.uniform(-60, 40, 300), rng.uniform(-150, 150, 300),
+                         rng.uniform(-110, 110, 300), rng.uniform(-300, 300, 300)])
+
+    def run():
+        R, p, seed = solver.seed_from_joints(q)
+        conf = seed.conf
+        out = [R, p, solver.solve_nominal(R, p, conf), solver.solve_deformed(R, p, seed),
+               solver.candidates(R, p), solver.deformed_pose_error(q * np.pi / 180, R, p)]
+        out.append(solver.closest(out[4], q + 3.0, with_branch=True))
+        return out
+
+    one = run()
+    monkeypatch.setattr(ik, "CHUNK", 64)
+    blocks = run()
+
+    def flat(x):
+        if isinstance(x, tuple):
+            return [y for v in x for y in flat(v)]
+        if isinstance(x, ik.IKBatch):
+            return [getattr(x, f) for f in ("q_deg", "status", "detail", "conf", "residual_mm",
+                                            "residual_rad", "iterations", "warnings")]
+        return [x]
+    a, b = flat(tuple(one)), flat(tuple(blocks))
+    assert len(a) == len(b) == 23
+    for x, y in zip(a, b):
+        assert np.array_equal(x, y, equal_nan=True)

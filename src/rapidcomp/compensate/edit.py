@@ -127,9 +127,13 @@ class Values:
         # (targets.flange_pose inverted), each factor stacked.
         A_R, A_p = np.empty((n, 3, 3)), np.empty((n, 3))
         T_R, T_p = np.empty((n, 3, 3)), np.empty((n, 3))
+        known: dict = {}       # one work object and base for a whole CAM program
         for j, ((g, k), src) in enumerate(zip(items, srcs)):
             base = resolver.world_M_base(src.record)
-            A_R[j], A_p[j] = compose_pose(invert_pose(g.wobj[1]), base)
+            a = known.get((id(g.wobj[1]), id(base)))
+            if a is None:
+                a = known[(id(g.wobj[1]), id(base))] = compose_pose(invert_pose(g.wobj[1]), base)
+            A_R[j], A_p[j] = a
             T_R[j], T_p[j] = g.tool[1]
         F_R, F_p = s.flange_R[rows], s.flange_p[rows]
         R = A_R @ F_R
@@ -295,8 +299,10 @@ class Editor:
         vals = self.values
         type_name = "jointtarget" if g.mode in ("absj", "joint") else "robtarget"
         texts = {} if g.mode == "absj" else {k: vals.field_texts(g, k) for k in g.elements}
-        if g.mode != "absj" and all(
-                texts[k] == list(vals.source(g, k).record.texts) for k in g.elements):
+        changes = {k: records.field_edits(vals.source(g, k).record, texts[k],
+                                          f"{element_label(g, k)} compensated")
+                   for k in texts}
+        if g.mode != "absj" and not any(changes.values()):
             # Nothing moves beyond the precision a new text would carry: the
             # value stays as written (a zero profile changes no byte).
             for u in g.uses:
@@ -308,8 +314,7 @@ class Editor:
                 fi = (self.plan.file_index[id(g.src.home)] if g.decl is not None
                       else g.uses[0].key[0])
                 self.fields[(fi, record.span.start)] = (record, texts[k])
-                for e in records.field_edits(record, texts[k],
-                                             f"{element_label(g, k)} compensated"):
+                for e in changes[k]:
                     self.edit(fi, e, e.replacement, e.why, field=True)
             what = (f"inline {type_name} rewritten" if g.decl is None
                     else f"{type_name} {g.decl.name} rewritten in place")

@@ -222,12 +222,14 @@ class Resolver:
         return quat_wxyz_to_matrix(q), self._position(pose.xyz, pose.trans[0].span.start, pf,
                                                       what)
 
-    def _position(self, xyz, offset: int, pf: ParsedFile, what: str) -> np.ndarray:
+    def _position(self, xyz, offset, pf: ParsedFile, what: str) -> np.ndarray:
         """A position a move uses: within 100 m (nothing in a robot cell is
-        further; a larger number is a unit or data error)."""
+        further; a larger number is a unit or data error). offset: where it
+        is written (or a function giving it: a compact literal's fields are
+        lexed again only for a message)."""
         p = self._num(xyz)
         if not np.all(np.abs(p) <= MAX_POSITION_MM):
-            raise pf.source.error(offset, f"{what}: the position [{', '.join(f'{v:g}' for v in p)}] "
+            raise pf.source.error(_at(offset), f"{what}: the position [{', '.join(f'{v:g}' for v in p)}] "
                                           f"mm is beyond {MAX_POSITION_MM:g} mm of the robot")
         return p
 
@@ -238,10 +240,10 @@ class Resolver:
         q = self._num(q)
         norm = math.sqrt(float(q @ q))
         if not norm > 1e-6:
-            raise pf.source.error(offset, f"{what}: the orientation [{', '.join(f'{v:g}' for v in q)}] "
+            raise pf.source.error(_at(offset), f"{what}: the orientation [{', '.join(f'{v:g}' for v in q)}] "
                                           "is not a rotation (norm 0); expected a unit quaternion")
         if abs(norm - 1.0) > QUAT_TOLERANCE and not self.float32:
-            line = pf.line(A.Span(offset, offset))
+            line = pf.line(A.Span(_at(offset), _at(offset)))
             self._notes.append(f"{what} ({pf.source.display_path}:{line}): quaternion norm "
                                f"{norm:.7g}, not 1 (the controller expects a unit quaternion); "
                                "normalised")
@@ -531,10 +533,10 @@ class Resolver:
         (pf: the file of an inline target)."""
         home = src.home if src.home is not None else pf
         where = f"{src.decl.name}" if src.decl is not None else "the inline robtarget"
+        rec = src.record
         R = quat_wxyz_to_matrix(self._quaternion(
-            src.record.quat_wxyz, src.record.span.start + src.record.regs[3][0], home, where))
-        p = self._position(src.record.xyz, src.record.span.start + src.record.regs[0][0], home,
-                           where)
+            rec.quat_wxyz, lambda: rec.span.start + rec.regs[3][0], home, where))
+        p = self._position(rec.xyz, lambda: rec.span.start + rec.regs[0][0], home, where)
         if src.call is None:
             return R, p
         if src.call.name.lower() == "offs":
@@ -690,6 +692,9 @@ class Resolver:
         home = src.home if src.home is not None else pf
         for i, name in enumerate(("cf1", "cf4", "cf6", "cfx")):
             v = record.values[7 + i]
+            if float(v).is_integer() and (0 <= v <= 7 if name == "cfx" else
+                                          abs(v) <= MAX_QUADRANT):
+                continue      # (the field's place is lexed again only for a message)
             s, _ = record.regs[7 + i]
             where = record.span.start + s
             what = src.decl.name if src.decl is not None else "the inline robtarget"
@@ -704,6 +709,10 @@ class Resolver:
                 raise home.source.error(where, f"{what}: confdata {name} is {record.texts[7 + i]}, "
                                         f"expected a quadrant count of a joint angle (within "
                                         f"+-{MAX_QUADRANT}, i.e. +-{90 * MAX_QUADRANT} deg)")
+
+
+def _at(offset) -> int:
+    return offset() if callable(offset) else offset
 
 
 def _same_values(decls, home) -> bool:

@@ -11,6 +11,7 @@ they change.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass
 from enum import IntEnum, IntFlag
@@ -188,6 +189,45 @@ def _turns(theta_deg: np.ndarray, cf: np.ndarray, tol: float):
     return angle, miss, ok
 
 
+# Rows per batch: every row is solved on its own (Newton steps stop per
+# row), so a long program is solved in blocks that bound the temporaries
+# (Jacobians, 8 branches per target) to a few MB, with the same results.
+CHUNK = 8192
+
+
+def _rows(a, sl: slice):
+    if isinstance(a, IKBatch):
+        return IKBatch(*(None if v is None else v[sl] for v in
+                         (getattr(a, f.name) for f in dataclasses.fields(IKBatch))))
+    if a is None or np.ndim(a) == 0:
+        return a
+    return a[sl]
+
+
+def _join(parts: list):
+    first = parts[0]
+    if isinstance(first, tuple):
+        return tuple(_join([p[k] for p in parts]) for k in range(len(first)))
+    if isinstance(first, IKBatch):
+        return IKBatch(*(None if getattr(first, f.name) is None else np.concatenate(
+            [getattr(p, f.name) for p in parts]) for f in dataclasses.fields(IKBatch)))
+    return np.concatenate(parts)
+
+
+def _chunked(method):
+    """method(self, rows, ...) over blocks of CHUNK rows: every array
+    argument (and IKBatch) split along its first axis, results joined."""
+    @functools.wraps(method)
+    def run(self, *args, **kw):
+        n = len(args[0])
+        if n <= CHUNK:
+            return method(self, *args, **kw)
+        return _join([method(self, *(_rows(a, slice(i, i + CHUNK)) for a in args),
+                             **{k: _rows(v, slice(i, i + CHUNK)) for k, v in kw.items()})
+                      for i in range(0, n, CHUNK)])
+    return run
+
+
 class Solver:
     """IK for one nominal robot and, optionally, its deformed copy."""
 
@@ -236,6 +276,7 @@ class Solver:
         djoint[lim] = j[lim]
 
     # ------------------------------------------------------------ nominal
+    @_chunked
     def solve_nominal(self, R: np.ndarray, p: np.ndarray, conf: np.ndarray) -> IKBatch:
         """Closed-form IK of flange poses on the branch and turns of `conf`."""
         R = np.asarray(R, float).reshape(-1, 3, 3)
@@ -294,6 +335,7 @@ class Solver:
                        np.zeros(N, dtype=int), warnings)
 
     # ------------------------------------------------------------ deformed
+    @_chunked
     def deformed_pose_error(self, q_cmd: np.ndarray, R: np.ndarray, p: np.ndarray,
                             tcp: np.ndarray | None = None):
         """Error (mm, rad) of the deformed robot commanded q_cmd (rad)
@@ -309,6 +351,7 @@ class Solver:
         return (np.linalg.norm(d, axis=1),
                 np.linalg.norm(rotation_log(R @ np.swapaxes(Rf, 1, 2)), axis=1))
 
+    @_chunked
     def solve_deformed(self, R: np.ndarray, p: np.ndarray, seed: IKBatch,
                        tcp: np.ndarray | None = None) -> IKBatch:
         """Joint angles with which the deformed robot reaches R, p.
@@ -485,6 +528,7 @@ class Solver:
         best = min(f[2] for f in found)
         return next(f for f in found if f[2] <= best + 1e-4 * DEG)
 
+    @_chunked
     def candidates(self, R: np.ndarray, p: np.ndarray) -> np.ndarray:
         """Every closed-form solution of the flange poses (N, 8, 6), degrees
         in (-180, 180], NaN on a branch that cannot reach. For the rule the
@@ -519,6 +563,7 @@ class Solver:
                                        c[..., col])
         return c
 
+    @_chunked
     def closest(self, cands_deg: np.ndarray, prev_deg: np.ndarray,
                 with_branch: bool = False):
         """Per row, the solution nearest (Euclidean, degrees) to prev_deg
@@ -569,6 +614,7 @@ class Solver:
         prev = unwrapped[:-1]
         return self._turned(c, prev)
 
+    @_chunked
     def seed_from_joints(self, q_deg: np.ndarray):
         """Nominal flange poses of joint vectors (MoveAbsJ targets) and a seed
         IKBatch for solve_deformed: the intended pose is where the ideal

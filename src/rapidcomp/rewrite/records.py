@@ -68,8 +68,9 @@ def jointtarget_texts(record: JointTarget, q_deg) -> list[str]:
 
 def field_edits(record: RobTarget | JointTarget, texts: list[str], why: str) -> list[SpanEdit]:
     base = record.span.start
+    old_texts, regs = record.lex()
     return [SpanEdit(base + s, base + e, new, why)
-            for (s, e), old, new in zip(record.regs, record.texts, texts) if new != old]
+            for (s, e), old, new in zip(regs, old_texts, texts) if new != old]
 
 
 def robtarget_literal(texts: list[str]) -> str:
