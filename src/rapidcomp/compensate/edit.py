@@ -112,6 +112,11 @@ class Values:
             self._values[(id(g), k)] = (values[0][j], values[1][j], values[2][j])
             self._values[("texts", id(g), k)] = texts[j]
 
+    def forget_texts(self) -> None:
+        """The field texts, once written (a retry computes them again)."""
+        for key in [k for k in self._values if k[0] == "texts"]:
+            del self._values[key]
+
     def _robtarget_value(self, g: Group, k):
         return tuple(v[0] for v in self._robtarget_values([(g, k)]))
 

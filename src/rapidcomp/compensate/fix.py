@@ -118,6 +118,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
             if g.failure is None:
                 editor.apply(g)
         file_edits = editor.file_edits()
+        values.forget_texts()
         texts = {fi: apply_edits(plan.files[fi].source.text, es)
                  for fi, es in file_edits.items()}
         clock("print")
@@ -146,6 +147,10 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     written_conf = {u.key: (values.robtarget_value(g, u.source.element)[2]
                             if g.mode == "rob" else None)
                     for g in gs if g.failure is None for u in g.uses}
+    # What each stage made per target is not needed past it (1e5 targets:
+    # hundreds of MB): the values and their texts, the edited literals as
+    # written, the output parsed again.
+    values = written = out_files = editor.fields = editor.edits = None
     rows = use_rows(plan, solved, group_of=group_of, actions=editor.actions, verified=verified,
                     mode=mode, written_conf=written_conf)
     notes = plan.notes() + _notes(rows, gs)

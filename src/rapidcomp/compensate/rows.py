@@ -41,7 +41,10 @@ class UseRow:
 
 
 def _t(a) -> tuple[float, ...] | None:
-    return None if a is None or np.isnan(a).any() else tuple(round(float(x), 6) for x in a)
+    if a is None:
+        return None
+    a = a.tolist()
+    return None if any(x != x for x in a) else tuple([round(x, 6) for x in a])  # x != x: NaN
 
 
 def displacement_warning(um_per_mm: float) -> str:

@@ -290,14 +290,16 @@ def _compact(t: str, expr, where: str) -> Record:
         tuple((f.span.start - base, f.span.end - base) for f in fields)), expr.span)
 
 
-def relex(record: Record, text: str) -> Record | None:
+def relex(record: Record, text: str, want) -> Record | None:
     """`record` as `text` (the same literal with other numbers) writes it,
-    or None when the text is not an all-numeric literal of its type (its
-    span stays where the input holds it)."""
+    or None when the text is not an all-numeric literal of its type with
+    the field texts `want` (its span stays where the input holds it)."""
     m = _FAST[type(record).__name__.lower()].fullmatch(text)
     if m is None:
         return None
     texts = m.groups()
+    if list(texts) != list(want):
+        return None
     values = tuple(map(float, texts))
     if not all(abs(v) <= NUM_MAX for v in values):
         return None
