@@ -10,6 +10,8 @@ the editor meant.
 
 from pathlib import Path
 
+import numpy as np
+
 import pytest
 
 from rapidcomp.compensate import fix as F
@@ -162,3 +164,48 @@ def test_ik_in_blocks_gives_the_one_batch_results(monkeypatch):
     assert len(a) == len(b) == 23
     for x, y in zip(a, b):
         assert np.array_equal(x, y, equal_nan=True)
+
+
+def _cam(n: int, seed: int, confl: str) -> str:
+    """A CAM-like module: random reachable targets with their confdata,
+    under ConfL as given ('' = not known: entered from outside)."""
+    import sys
+    sys.path.insert(0, str(ROOT / "bench"))
+    from fix import cam_module
+    text = cam_module(n, seed)
+    return text.replace("  PROC Path()\n", f"  PROC Path()\n{confl}")
+
+
+@pytest.mark.parametrize("confl", ["", "    ConfL\\Off;\n", "    ConfL\\On;\n"])
+def test_chooser_shortcut_gives_the_general_rules_results(confl, solver, monkeypatch):
+    """The chooser's shortcut for a move after one move with one solution
+    (solve._Chooser._quick) picks what the general rules pick, on moves
+    where supervision is on, off or not known; and it is really taken."""
+    from rapidcomp.compensate import solve as S
+    tasks = [Task("cam.mod", (parse_text(_cam(400, seed, confl), "cam.mod"),))
+             for seed in (1, 2)]
+    tasks += [Task(p.name, (parse_file(p, p.name),)) for p in MODULES]
+    taken = []
+    real = S._Chooser._quick
+
+    def spy(self, *args):
+        out = real(self, *args)
+        taken.append(out is not None)
+        return out
+    for task in tasks:
+        plan = Plan(task)
+        monkeypatch.setattr(S._Chooser, "_quick", spy)
+        fast = S.solve(plan, solver)
+        monkeypatch.setattr(S._Chooser, "_quick", lambda *args: None)
+        slow = S.solve(plan, solver)
+        assert len(fast.picks) == len(slow.picks)
+        for a, b in zip(fast.picks, slow.picks):
+            assert a.rule == b.rule and a.failure == b.failure and a.kind == b.kind
+            assert a.caution == b.caution and a.line == b.line
+            for x, y in ((a.q, b.q), (a.prev, b.prev)):
+                assert (x is None) == (y is None)
+                if x is not None:
+                    assert np.array_equal(x, y, equal_nan=True)
+        assert np.array_equal(fast.deformed.q_deg, slow.deformed.q_deg, equal_nan=True)
+    if confl != "    ConfL\\On;\n":
+        assert sum(taken) > 500

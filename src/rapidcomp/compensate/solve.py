@@ -334,6 +334,36 @@ class _Chooser:
                            "the robot is, and that depends on which move ran before it (lines "
                            f"{where})")
 
+    def _quick(self, i: int, st, sup, flag: str):
+        """choose() where a CAM program spends 1e5 moves, without the
+        general machinery, with its results (tested against it): one move
+        before, with one solution, whose closest solution here came from
+        the batch; supervision off, or on or off with the confdata's
+        solution that same one. None: not this case."""
+        last = st.last
+        if last is None or len(last) != 1 or OFF not in sup:
+            return None
+        j = self.rows.get(next(iter(last)))
+        if j is None or self.pred1[i] != j or j not in self.chosen or len(self.sols[j]) != 1:
+            return None
+        s = self.sols[j][0]
+        if s.q is None or not np.array_equal(s.q, self.spec[j]):
+            return None
+        q = self.off_spec[i]
+        if np.isnan(q).any():
+            return None
+        line = self.uses[j].line
+        p = Pick(q, "", None, "closest", s.q, line, None if s.caution is None else (
+            f"follows line {line}, whose configuration is assumed: kept a robtarget move"))
+        if ON not in sup:
+            return [p], p._replace(rule=f"closest to line {line} ({flag}\\Off)")
+        on = self._by_conf(i, f"confdata ({flag} on or off: the same solution)")
+        if on.q is None or not np.linalg.norm(p.q - on.q) <= SAME_DEG:
+            return None
+        if p.caution is not None:
+            on = on._replace(caution=p.caution)
+        return [on], on
+
     def choose(self, i: int) -> tuple[list[Pick], Pick]:
         """(the solutions a use may take, the one compensated)."""
         u = self.uses[i]
@@ -347,6 +377,9 @@ class _Chooser:
                 return [], _fail(why)
             return self._one(sols, "circle point: closest to {where}", flag)
         sup = st.supervision(u.motion.spec.interpolation)
+        quick = self._quick(i, st, sup, flag)
+        if quick is not None:
+            return quick
         c = _conf_text(u.conf)
         if OFF not in sup:
             p = self._by_conf(i, f"confdata ({flag}\\On)")
