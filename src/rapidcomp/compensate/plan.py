@@ -50,6 +50,7 @@ class Plan:
                 for motion in m.motions:
                     self.uses.extend(self.resolver.resolve(pf, m, motion, (fi, mi)))
                     mi += 1
+        self.resolver.poses()
         self.by_key = {u.key: u for u in self.uses}
         self.file_index = {id(pf): i for i, pf in enumerate(self.files)}
         self.flow: Flow = analyse(self.files, self.n_written, self.resolver, bool(track))

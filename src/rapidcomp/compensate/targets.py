@@ -29,7 +29,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import RapidcompError
-from ..kinematics.frames import DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z
+from ..kinematics.frames import (DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z,
+                                 unit_quat_matrices)
 from ..rapid import ast as A
 from ..rapid.model import Declaration, Module, Motion, ParsedFile
 from ..rapid.refs import literal_leaves, names_in, usage
@@ -116,6 +117,21 @@ def invert_pose(a):
     return a[0].T, -a[0].T @ a[1]
 
 
+def _compose_many(a, b):
+    return a[0] @ b[0], (a[0] @ b[1][..., None])[..., 0] + a[1]
+
+
+def _invert_many(a):
+    Rt = np.swapaxes(a[0], -1, -2)
+    return Rt, -(Rt @ a[1][..., None])[..., 0]
+
+
+def flange_poses(base, wobj, target, tool):
+    """flange_pose of stacks: each argument (R (n, 3, 3), p (n, 3))."""
+    return _compose_many(_compose_many(_invert_many(base), _compose_many(wobj, target)),
+                         _invert_many(tool))
+
+
 def flange_pose(base, wobj, target, tool):
     """base_M_flange = base_M_world . world_M_wobj . wobj_M_target . tcp_M_flange
     (base: world_M_base; wobj: uframe . oframe; tool: tframe)."""
@@ -174,6 +190,8 @@ class Resolver:
         # (verify.py, when every edit is of numeric fields).
         self.written = written or {}
         self._memos: dict = {}
+        # Robtarget uses whose flange pose is composed in one batch (poses()).
+        self._pending: list = []
         self.track = tuple(track)
         self.moved_by = moved_by
         self.base = base if base is not None else IDENTITY_POSE   # world_M_base at track 0
@@ -217,18 +235,24 @@ class Resolver:
         a = np.asarray(values, float)
         return a.astype(np.float32).astype(float) if self.float32 else a
 
+    def _floats(self, values) -> list[float]:
+        """_num as Python floats (a few of them: no array needed)."""
+        if self.float32:
+            return np.asarray(values, np.float32).tolist()
+        return [float(v) for v in values]
+
     def _pose(self, pose: Pose, pf: ParsedFile, what: str):
         q = self._quaternion(pose.quat_wxyz, pose.rot[0].span.start, pf, what)
-        return quat_wxyz_to_matrix(q), self._position(pose.xyz, pose.trans[0].span.start, pf,
-                                                      what)
+        return quat_wxyz_to_matrix(q), np.array(self._position(
+            pose.xyz, pose.trans[0].span.start, pf, what))
 
     def _position(self, xyz, offset, pf: ParsedFile, what: str) -> np.ndarray:
         """A position a move uses: within 100 m (nothing in a robot cell is
         further; a larger number is a unit or data error). offset: where it
         is written (or a function giving it: a compact literal's fields are
         lexed again only for a message)."""
-        p = self._num(xyz)
-        if not np.all(np.abs(p) <= MAX_POSITION_MM):
+        p = self._floats(xyz)
+        if not all(abs(v) <= MAX_POSITION_MM for v in p):
             raise pf.source.error(_at(offset), f"{what}: the position [{', '.join(f'{v:g}' for v in p)}] "
                                           f"mm is beyond {MAX_POSITION_MM:g} mm of the robot")
         return p
@@ -237,8 +261,8 @@ class Resolver:
         """A quaternion of a value a move uses: none with no rotation (bad
         input); one far from unit length normalised, with a note (the
         controller would complain about it)."""
-        q = self._num(q)
-        norm = math.sqrt(float(q @ q))
+        q = self._floats(q)
+        norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
         if not norm > 1e-6:
             raise pf.source.error(_at(offset), f"{what}: the orientation [{', '.join(f'{v:g}' for v in q)}] "
                                           "is not a rotation (norm 0); expected a unit quaternion")
@@ -247,7 +271,7 @@ class Resolver:
             self._notes.append(f"{what} ({pf.source.display_path}:{line}): quaternion norm "
                                f"{norm:.7g}, not 1 (the controller expects a unit quaternion); "
                                "normalised")
-        return q / norm if abs(norm - 1.0) > 1e-12 else q
+        return [v / norm for v in q] if abs(norm - 1.0) > 1e-12 else q
 
     def lookup(self, name: str, module: Module, routine: str | None):
         """The declaration a name means in a routine of a module, None when
@@ -507,8 +531,8 @@ class Resolver:
             return base
         if not isinstance(base.record, RobTarget):
             return Unresolved(f"{call.name} of a non-robtarget", True)
-        d = self._position([v.value for v in pos[1:]], pos[1].span.start, pf,
-                           f"the {call.name} displacement")
+        d = np.array(self._position([v.value for v in pos[1:]], pos[1].span.start, pf,
+                                    f"the {call.name} displacement"))
         rot = np.eye(3)
         if call.name.lower() == "reltool":
             for a in call.args:
@@ -531,17 +555,44 @@ class Resolver:
     def target_pose(self, src: Source, pf: ParsedFile | None = None):
         """wobj_M_target of a robtarget source, with Offs/RelTool applied
         (pf: the file of an inline target)."""
+        q, p = self._target_parts(src, pf)
+        return _relative(src, unit_quat_matrices([q])[0], np.array(p))
+
+    def _target_parts(self, src: Source, pf: ParsedFile | None):
+        """The checked unit quaternion (w, x, y, z) and position of a
+        robtarget source, as written (before Offs/RelTool)."""
         home = src.home if src.home is not None else pf
         where = f"{src.decl.name}" if src.decl is not None else "the inline robtarget"
         rec = src.record
-        R = quat_wxyz_to_matrix(self._quaternion(
-            rec.quat_wxyz, lambda: rec.span.start + rec.regs[3][0], home, where))
+        w, x, y, z = self._quaternion(rec.quat_wxyz, lambda: rec.span.start + rec.regs[3][0],
+                                      home, where)
+        n = (w * w + x * x + y * y + z * z) ** 0.5
         p = self._position(rec.xyz, lambda: rec.span.start + rec.regs[0][0], home, where)
-        if src.call is None:
-            return R, p
-        if src.call.name.lower() == "offs":
-            return R, p + src.rel_d
-        return R @ src.rel_R, p + R @ src.rel_d
+        return (w / n, x / n, y / n, z / n), p
+
+    def poses(self) -> None:
+        """Every flange pose the resolved uses wait for, in one batch: the
+        uses are complete from here on (a CAM program has 1e5, and their
+        3x3 products one by one cost more than resolving them)."""
+        pending, self._pending = self._pending, []
+        if not pending:
+            return
+        n = len(pending)
+        R = unit_quat_matrices(np.array([item[1] for item in pending]).reshape(n, 4))
+        p = np.array([item[2] for item in pending]).reshape(n, 3)
+        for i, (u, _, _, _, _, _) in enumerate(pending):
+            if u.source.call is not None:
+                R[i], p[i] = _relative(u.source, R[i], p[i])
+
+        def stack(k):
+            return (np.array([item[k][0] for item in pending]).reshape(n, 3, 3),
+                    np.array([item[k][1] for item in pending]).reshape(n, 3))
+        Rf, pf = flange_poses(stack(3), stack(4), (R, p), stack(5))
+        for i, (u, *_) in enumerate(pending):
+            # Two-phase construction: the use has not left the resolver's
+            # client yet (Plan, verify call poses() before reading it).
+            object.__setattr__(u, "R", Rf[i])
+            object.__setattr__(u, "p", pf[i])
 
     def integer(self, expr, module, routine: str | None) -> int | None:
         """A literal integer, or a CONST num with a literal integer value."""
@@ -680,10 +731,12 @@ class Resolver:
         if isinstance(base, Unresolved):
             return fail(base)
         self._confdata(src, pf)
-        Rf, pf_ = flange_pose(base, wobj[1], self.target_pose(src, pf), tool[1])
-        return TargetUse(motion, t.role, label, line, kind, Rf, pf_, src.record.conf, None, None,
-                         src, tool, wobj, envt, file=pf, module=module, ext=src.record.ext,
-                         key=key, notes=tuple(self._notes))
+        q, p = self._target_parts(src, pf)
+        u = TargetUse(motion, t.role, label, line, kind, None, None, src.record.conf, None, None,
+                      src, tool, wobj, envt, file=pf, module=module, ext=src.record.ext,
+                      key=key, notes=tuple(self._notes))
+        self._pending.append((u, q, p, base, wobj[1], tool[1]))
+        return u
 
     def _confdata(self, src: Source, pf: ParsedFile) -> None:
         """confdata of a robtarget a move uses: whole numbers, cfx one of
@@ -709,6 +762,15 @@ class Resolver:
                 raise home.source.error(where, f"{what}: confdata {name} is {record.texts[7 + i]}, "
                                         f"expected a quadrant count of a joint angle (within "
                                         f"+-{MAX_QUADRANT}, i.e. +-{90 * MAX_QUADRANT} deg)")
+
+
+def _relative(src: Source, R, p):
+    """wobj_M_target: the literal's pose (R, p) through src's Offs/RelTool."""
+    if src.call is None:
+        return R, p
+    if src.call.name.lower() == "offs":
+        return R, p + src.rel_d
+    return R @ src.rel_R, p + R @ src.rel_d
 
 
 def _at(offset) -> int:

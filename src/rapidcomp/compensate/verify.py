@@ -104,10 +104,12 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
                 if (fi, mi) in motions:
                     for o in res.resolve(pf, m, motion, (fi, mi)):
                         if o.key in wanted:
-                            # Only what the check needs (not 1e5 TargetUse).
-                            found[o.key] = _Written(o.kind, o.R, o.p, o.conf, o.joints_deg,
-                                                    o.reason)
+                            found[o.key] = o
                 mi += 1
+    res.poses()
+    # Only what the check needs (not 1e5 TargetUse).
+    found = {k: _Written(o.kind, o.R, o.p, o.conf, o.joints_deg, o.reason)
+             for k, o in found.items()}
     rows = sorted((solved.row[k] for k in keys))
     outs = {}
     for i in rows:

@@ -39,6 +39,14 @@ def quat_wxyz_to_matrix(q) -> np.ndarray:
     return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
 
 
+def unit_quat_matrices(q) -> np.ndarray:
+    """Rotation matrices (n, 3, 3) of unit quaternions (n, 4) w, x, y, z,
+    taken as given (the caller normalised them)."""
+    q = np.asarray(q, dtype=float)
+    rows = _quat_matrix_rows(*q.T)
+    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+
+
 def matrix_to_quat_wxyz(R) -> np.ndarray:
     """Unit quaternion (w, x, y, z) with w >= 0 of a rotation matrix."""
     R = np.asarray(R, dtype=float)
