@@ -161,7 +161,8 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     for fi, pf in enumerate(task.files):
         es = file_edits.get(fi, [])
         name = pf.source.display_path
-        diff = unified_diff(pf.source.text, es, name, output_names.get(name, name))
+        diff = unified_diff(pf.source.text, es, name, output_names.get(name, name),
+                            new_text=texts.get(fi))
         modules.append(ModuleOutput(name, texts.get(fi, pf.source.text), tuple(es), tuple(diff)))
     clock("report")
     return FixResult(mode, task.name, tuple(modules), tuple(rows), tuple(notes))

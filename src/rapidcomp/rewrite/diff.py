@@ -25,10 +25,13 @@ def _range(start: int, length: int) -> str:
 
 
 def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
-                 context: int = 3) -> list[str]:
+                 context: int = 3, new_text: str | None = None) -> list[str]:
+    """new_text: the text with the edits applied, when the caller has it."""
     if not edits:
         return []
     import bisect
+    if new_text is None:
+        new_text = apply_edits(text, edits)
     lines = text.splitlines(keepends=True)
     starts = _line_starts(text)
     # Changed blocks: (first line, last line) of the original, edits merged
@@ -49,11 +52,12 @@ def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
     # New text of each block; lines an edit leaves as they were (e.g. the
     # line a declaration is inserted after) are context, as difflib has it.
     changed: list[list] = []  # [first old line, end old line (exclusive), new lines]
+    shift = 0                 # what the edits of the blocks before add to offsets
     for a, b, es in blocks:
-        base = starts[a]
         old_lines = [s.rstrip("\r\n") for s in lines[a:b + 1]]
-        rel = [SpanEdit(e.start - base, e.end - base, e.replacement) for e in es]
-        new_lines = apply_edits("".join(lines[a:b + 1]), rel).splitlines()
+        grow = sum(len(e.replacement) - (e.end - e.start) for e in es)
+        new_lines = new_text[starts[a] + shift:starts[b + 1] + shift + grow].splitlines()
+        shift += grow
         lo, hi_old, hi_new = 0, len(old_lines), len(new_lines)
         while lo < hi_old and lo < hi_new and old_lines[lo] == new_lines[lo]:
             lo += 1
