@@ -36,7 +36,7 @@ TO_ABSJ = frozenset({"movej", "movel"})
 ABSJ_FROM = {"auto": frozenset({"movej"}), "absj": TO_ABSJ, "robtarget": frozenset()}
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class Group:
     mode: str                        # "absj", "rob" or "joint"
     src: Source

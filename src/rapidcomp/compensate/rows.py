@@ -18,7 +18,7 @@ LINEAR_WARNING = "MoveL -> MoveAbsJ: the path to this point is no longer a strai
 COMPENSATED, NOT_COMPENSATED, UNTOUCHED = "compensated", "not compensated", "untouched"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class UseRow:
     file: str                        # the module file (display path)
     line: int

@@ -53,7 +53,7 @@ MISSING_HINT = ("give the whole task: its folder, program file or backup, or the
 AXES = "abcdef"
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, slots=True)
 class Source:
     """Where a target's literal value comes from, and how it is transformed.
 
@@ -75,7 +75,7 @@ class Source:
     home_module: Module | None = None  # the module holding decl
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, slots=True)
 class TargetUse:
     """One target of one motion instruction, resolved or not."""
 

@@ -96,20 +96,26 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
                    track=plan.track, base=plan.resolver.base, written=written)
     wanted = set(keys)
     motions = {k[:2] for k in keys}
-    found = {}
+    found: dict = {}
+    batch: list = []
+
+    def keep():
+        # Only what the check needs, a block at a time (not 1e5 TargetUse).
+        res.poses()
+        for o in batch:
+            found[o.key] = _Written(o.kind, o.R, o.p, o.conf, o.joints_deg, o.reason)
+        batch.clear()
     for fi, pf in enumerate(files[:plan.n_written]):
         mi = 0
         for m in pf.modules:
             for motion in m.motions:
                 if (fi, mi) in motions:
-                    for o in res.resolve(pf, m, motion, (fi, mi)):
-                        if o.key in wanted:
-                            found[o.key] = o
+                    batch.extend(o for o in res.resolve(pf, m, motion, (fi, mi))
+                                 if o.key in wanted)
+                    if len(batch) >= 8192:
+                        keep()
                 mi += 1
-    res.poses()
-    # Only what the check needs (not 1e5 TargetUse).
-    found = {k: _Written(o.kind, o.R, o.p, o.conf, o.joints_deg, o.reason)
-             for k, o in found.items()}
+    keep()
     rows = sorted((solved.row[k] for k in keys))
     outs = {}
     for i in rows:
