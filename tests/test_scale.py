@@ -209,3 +209,30 @@ def test_chooser_shortcut_gives_the_general_rules_results(confl, solver, monkeyp
         assert np.array_equal(fast.deformed.q_deg, slow.deformed.q_deg, equal_nan=True)
     if confl != "    ConfL\\On;\n":
         assert sum(taken) > 500
+
+
+def test_names_of_one_stem_are_those_a_search_from_1_gives():
+    """NameAllocator resumes its search per stem (1e5 names of one stem,
+    as transient verification makes, were quadratic): the names are those
+    a search from suffix 1 gives, with names taken in between and long
+    stems cut to 32 characters."""
+    from rapidcomp.rewrite.names import MAX_LEN, NameAllocator
+    long = "p" * 31
+    taken_text = "rcState rcState_3 RCSTATE_7 x_2 " + long + " " + long[:30] + "_2"
+    alloc = NameAllocator([taken_text])
+    naive = {w.lower() for w in taken_text.split()}
+
+    def search(stem):
+        n = 1
+        while True:
+            suffix = "" if n == 1 else f"_{n}"
+            name = stem[:MAX_LEN - len(suffix)] + suffix
+            if name.lower() not in naive:
+                naive.add(name.lower())
+                return name
+            n += 1
+    stems = ["rcState"] * 50 + ["x", "x_2", "X"] * 5 + [long] * 12 + ["rcstate"] * 5
+    got = [alloc.new(s) for s in stems]
+    assert got == [search(s) for s in stems]
+    assert got[:3] == ["rcState_2", "rcState_4", "rcState_5"]
+    assert len(set(g.lower() for g in got)) == len(got)

@@ -230,6 +230,7 @@ class Editor:
         # is of anything else (a new declaration, a reference, MoveAbsJ).
         self.fields: dict[tuple[int, int], tuple] = {}
         self.structural = False
+        self._per_module: dict = {}
 
     def text(self, fi: int) -> str:
         return self.plan.files[fi].source.text
@@ -255,12 +256,16 @@ class Editor:
             span, in_routine = g.decl.span, g.decl.routine is not None
             indent = _indent(text, span.start)
         else:
-            last = None
-            for item in module.node.items:
-                if isinstance(item, A.DataDecl):
-                    last = item
-                elif isinstance(item, A.Routine):
-                    break
+            key = ("last data", id(module))
+            if key not in self._per_module:      # once per module, not per target
+                last = None
+                for item in module.node.items:
+                    if isinstance(item, A.DataDecl):
+                        last = item
+                    elif isinstance(item, A.Routine):
+                        break
+                self._per_module[key] = last
+            last = self._per_module[key]
             span = last.span if last is not None else module.node.name_span
             indent = _indent(text, span.start) if last is not None else (
                 _indent(text, span.start) + "    ")
@@ -281,15 +286,23 @@ class Editor:
         """':=' spaced as in the declaration the new one comes from (else
         as in the module's first declaration with a value)."""
         text = self.text(fi)
-        nodes = [g.decl.node] if g.decl is not None and g.src.home_module is g.home_module else []
-        nodes += [it for it in g.home_module.node.items
-                  if isinstance(it, A.DataDecl) and it.init is not None]
-        if not nodes:
+        if g.decl is not None and g.src.home_module is g.home_module:
+            node = g.decl.node
+        else:
+            # The module's first declaration with a value (once per module:
+            # a CAM program asks for each of its 1e5 targets).
+            key = ("first value", id(g.home_module))
+            if key not in self._per_module:
+                self._per_module[key] = next((it for it in g.home_module.node.items
+                                          if isinstance(it, A.DataDecl) and it.init is not None),
+                                         None)
+            node = self._per_module[key]
+        if node is None:
             return " := "
-        head = text[nodes[0].span.start:nodes[0].init.span.start].rstrip("\t ")
+        head = text[node.span.start:node.init.span.start].rstrip("\t ")
         # The spaces either side of the ':=' as written (at most one each).
         before = " " if head[:-2].endswith(" ") else ""
-        after = " " if text[nodes[0].init.span.start - 1] == " " else ""
+        after = " " if text[node.init.span.start - 1] == " " else ""
         return before + ":=" + after
 
     def array_value(self, g: Group, nl: str, indent: str, texts: dict) -> str:

@@ -19,14 +19,19 @@ class NameAllocator:
         self.taken: set[str] = set()
         for text in texts:
             self.taken.update(w.lower() for w in _WORD.findall(text))
+        # Per stem, the first suffix not known to be taken: names are only
+        # ever added, so the search resumes there (1e5 names of one stem
+        # would otherwise cost 1e10 probes).
+        self._next: dict[str, int] = {}
 
     def new(self, stem: str) -> str:
         """A fresh identifier like `stem`, or `stem_2`, `stem_3`, ..."""
-        n = 1
+        n = self._next.get(stem.lower(), 1)
         while True:
             suffix = "" if n == 1 else f"_{n}"
             name = stem[:MAX_LEN - len(suffix)] + suffix
             if name.lower() not in self.taken:
                 self.taken.add(name.lower())
+                self._next[stem.lower()] = n + 1
                 return name
             n += 1
