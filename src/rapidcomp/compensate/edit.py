@@ -102,18 +102,23 @@ class Values:
         program has 1e5, and one batch of rotations costs what a few
         single ones do."""
         items = [(g, k) for g in gs if g.failure is None and g.mode == "rob"
-                 for k in g.elements if (id(g), k) not in self._values]
+                 for k in g.elements if ("texts", id(g), k) not in self._values]
         if not items:
             return
-        values = self._robtarget_values(items)
+        new = [(g, k) for g, k in items if (id(g), k) not in self._values]
+        if new:
+            values = self._robtarget_values(new)
+            for j, (g, k) in enumerate(new):
+                self._values[(id(g), k)] = (values[0][j], values[1][j], values[2][j])
+        R, p, conf = (np.array([self._values[(id(g), k)][n] for g, k in items])
+                      for n in range(3))
         texts = records.robtarget_texts_many([self.source(g, k).record for g, k in items],
-                                             *values)
-        for j, (g, k) in enumerate(items):
-            self._values[(id(g), k)] = (values[0][j], values[1][j], values[2][j])
-            self._values[("texts", id(g), k)] = texts[j]
+                                             R, p, conf)
+        for (g, k), t in zip(items, texts):
+            self._values[("texts", id(g), k)] = t
 
     def forget_texts(self) -> None:
-        """The field texts, once written (a retry computes them again)."""
+        """The field texts, once written (a retry prepares them again)."""
         for key in [k for k in self._values if k[0] == "texts"]:
             del self._values[key]
 

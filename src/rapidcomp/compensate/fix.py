@@ -105,12 +105,12 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     clock("solve")
     gs = P.groups(plan, solved, mode)
     values = Values(plan, solved, solver.options.quadrant_tol_deg)
-    values.prepare(gs)
     state_errors: dict = {}
     # A written value that does not reproduce its compensated joints (the
     # ideal controller's IK lands elsewhere) fails its group; the rest is
     # placed, written and verified again without it.
     for _ in range(4):
+        values.prepare(gs)
         P.place(plan, gs)
         P.fill_slots(plan, solver, gs)
         editor = Editor(plan, values, transient is not None)
@@ -125,7 +125,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         written = None if (transient is not None or editor.structural) else relex(
             plan, editor.fields, file_edits, texts)
         out_files = reparse(plan, texts) if written is None else {}
-        clock("re-parse")
+        clock("re-parse" if written is None else "re-lex")
         keys = [u.key for g in gs if g.failure is None for u in g.uses]
         if transient is None:
             verified = verify(plan, solved, keys, out_files, solver,
