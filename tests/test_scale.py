@@ -42,7 +42,7 @@ def _both(task, solver, mode, monkeypatch):
 
     def spy(*args):
         out = real(*args)
-        served.append(out is not None)
+        served.append(bool(out))      # read literals back (None: parsed; {}: none edited)
         return out
     monkeypatch.setattr(F, "relex", spy)
     fast = F.fix(task, solver, mode)
@@ -62,7 +62,28 @@ def _same(fast, slow):
 @pytest.mark.parametrize("path", MODULES, ids=lambda p: p.name)
 def test_relex_verifies_as_a_second_parse_does(path, mode, solver, monkeypatch):
     pf = parse_file(path, path.name)
-    fast, slow, _ = _both(Task(path.name, (pf,)), solver, mode, monkeypatch)
+    fast, slow, served = _both(Task(path.name, (pf,)), solver, mode, monkeypatch)
+    _same(fast, slow)
+    # Where every edit is of numbers (and something is compensated), relex
+    # serves; elsewhere (new declarations, MoveAbsJ) the output is parsed.
+    assert served == ((path.name, mode) in SERVED)
+
+
+# Fixtures whose compensation edits numbers only (checked by hand: their
+# diffs change no name and add no declaration).
+SERVED = {("cubes_comp.mod", "robtarget"), ("cubes_comp.mod", "auto"),
+          ("cam_confoff.mod", "robtarget"), ("robodk.mod", "robtarget"), ("robodk.mod", "auto"),
+          ("system_bom.sys", "robtarget"), ("system_bom.sys", "auto")}
+
+
+def test_relex_on_crlf_lines(solver, monkeypatch):
+    """The CAM fixture with CRLF line breaks: relex reads each literal where
+    the output holds it (offsets as in the CRLF text) and gives the output
+    and report a second parse gives."""
+    text = (ROOT / "fixtures" / "rapid" / "cam_confoff.mod").read_text().replace("\n", "\r\n")
+    pf = parse_text(text, "cam.mod")
+    fast, slow, served = _both(Task("cam", (pf,)), solver, "robtarget", monkeypatch)
+    assert served and "\r\n" in fast.modules[0].text and fast.summary()["compensated"] == 182
     _same(fast, slow)
 
 
@@ -296,8 +317,10 @@ def test_a_value_that_would_miss_is_left_as_written_and_the_rest_written_again(
     the output lexed again and parsed again."""
     from rapidcomp.compensate import place as P
     text = _miss_module()
-    if not relex:
-        monkeypatch.setattr(F, "relex", lambda *args: None)
+    served = []
+    real_relex = F.relex
+    monkeypatch.setattr(F, "relex", lambda *a: served.append(1) or (
+        real_relex(*a) if relex else None))
     rounds = []
     real = P.place
     monkeypatch.setattr(P, "place", lambda *a: (rounds.append(1), real(*a))[1])
@@ -311,3 +334,53 @@ def test_a_value_that_would_miss_is_left_as_written_and_the_rest_written_again(
     assert out[35] == src[35]                           # line 36 as written
     assert all(out[i] != src[i] for i in range(5, 35))  # the others compensated
     assert max(r.residual_um for r in result.rows if r.status == "compensated") <= 1.0
+    assert len(served) == 2         # asked in both rounds (edits of numbers only)
+
+
+def test_batched_quaternion_texts_are_those_of_one():
+    """numbers.quaternions normalises and signs row by row: on quaternions
+    whose 9th decimal lies on a rounding boundary, every text equals the one
+    a single quaternion gets (norm of one vector; a batch reduction flipped
+    about 4 % of them)."""
+    from rapidcomp.rewrite import numbers
+    rng = np.random.default_rng(5)
+    w = np.round(rng.uniform(0.2, 0.9, 3000), 9) + 5e-10   # w on a rounding boundary
+    v = rng.normal(size=(3000, 3))
+    v *= (np.sqrt(1 - w * w) / np.linalg.norm(v, axis=1))[:, None]
+    q = np.column_stack([w, v])                             # unit, up to the last bit
+    like = rng.normal(size=(3000, 4))
+
+    def one(v, ref):                                 # the formula for one, apart
+        v = v / np.linalg.norm(v)
+        v = -v if float(v @ ref) < 0 else v
+        return tuple(numbers.fmt(float(x), numbers.QUAT_DECIMALS) for x in v)
+    assert numbers.quaternions(q, like) == [one(v, r) for v, r in zip(q, like)]
+
+
+def test_batched_robtarget_values_are_those_of_one(solver):
+    """Values computes every compensated robtarget as one batch: with a
+    robot base, a work object and a tool that are not the identity, each
+    value equals, bit for bit, the one-at-a-time composition
+    wobj^-1 . (world_M_base . base_M_flange) . tframe."""
+    from rapidcomp.compensate import place as P
+    from rapidcomp.compensate.edit import Values
+    from rapidcomp.compensate.solve import solve
+    from rapidcomp.compensate.targets import compose_pose, invert_pose, parse_base
+    text = _cam(300, 4, "").replace(
+        "[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]",
+        "[FALSE,TRUE,\"\",[[12.5,-3.25,4],[0.9659258,0,0,0.258819]],"
+        "[[0.5,1.5,-2],[0.9990482,0,0,0.0436194]]]").replace(
+        "[[0,0,150],[1,0,0,0]]", "[[1.2,-0.7,150.3],[0.9998477,0,0.0174524,0]]")
+    base = parse_base([10.5, -20.25, 3.125, 0.9990482, 0, 0, 0.0436194])
+    plan = Plan(Task("cam.mod", (parse_text(text, "cam.mod"),)), base=base)
+    solved = solve(plan, solver)
+    gs = [g for g in P.groups(plan, solved, "robtarget") if g.failure is None]
+    items = [(g, k) for g in gs for k in g.elements]
+    assert len(items) > 250
+    R, p, _ = Values(plan, solved, 0.0)._robtarget_values(items)
+    for (g, k), Rj, pj in zip(items, R, p):
+        i = g.rows[k]
+        flange = (solved.flange_R[i], solved.flange_p[i])
+        want = compose_pose(compose_pose(invert_pose(g.wobj[1]), compose_pose(base, flange)),
+                            g.tool[1])
+        assert np.array_equal(want[0], Rj) and np.array_equal(want[1], pj)

@@ -47,11 +47,14 @@ def quaternion(q_wxyz, like=None) -> tuple[str, str, str, str]:
 
 
 def quaternions(q_wxyz, like=None) -> list[tuple[str, str, str, str]]:
-    """quaternion() of many (n, 4) at once."""
+    """quaternion() of many (n, 4) at once. Norms and signs row by row, as
+    one quaternion's are: a batch reduction may differ in the last bit,
+    and a 9th decimal on a rounding boundary with it."""
     q = np.asarray(q_wxyz, float)
-    q = q / np.sqrt(np.einsum("ij,ij->i", q, q))[:, None]
-    ref = np.asarray(like, float) if like is not None else np.array([[1.0, 0, 0, 0]])
-    q = np.where((np.einsum("ij,ij->i", q, np.broadcast_to(ref, q.shape)) < 0)[:, None], -q, q)
+    q = q / np.sqrt([row.dot(row) for row in q])[:, None]
+    ref = np.broadcast_to(np.asarray(like, float) if like is not None
+                          else np.array([1.0, 0, 0, 0]), q.shape)
+    q = np.where(np.array([a @ b < 0 for a, b in zip(q, ref)])[:, None], -q, q)
     f = QUAT_DECIMALS
     return [(fmt(w, f), fmt(x, f), fmt(y, f), fmt(z, f)) for w, x, y, z in q.tolist()]
 

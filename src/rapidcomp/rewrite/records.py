@@ -11,16 +11,23 @@ from __future__ import annotations
 import numpy as np
 
 from ..edits import SpanEdit
-from ..kinematics.frames import matrix_to_quat_wxyz, quat_wxyz_to_matrix, rotation_log
+from ..kinematics.frames import matrix_to_quat_wxyz, rotation_log, unit_quat_matrices
 from ..rapid.values import JointTarget, RobTarget
 from . import numbers
 
 
 def _rotation_angles(q_old, R_new) -> np.ndarray:
     """Angles (rad) between the rotations of quaternions q_old (n, 4) and
-    matrices R_new (n, 3, 3)."""
-    return np.linalg.norm(rotation_log(np.swapaxes(quat_wxyz_to_matrix(q_old), -1, -2)
-                                       @ R_new), axis=-1)
+    matrices R_new (n, 3, 3): the products and norms row by row, as for one
+    (a batch reduction may differ in the last bit, and a field's keep-or-
+    rewrite decision at ROT_KEEP_RAD with it); the rotation log as a batch
+    (elementwise)."""
+    unit = []
+    for w, x, y, z in np.asarray(q_old, float).tolist():
+        n = (w * w + x * x + y * y + z * z) ** 0.5    # as quat_wxyz_to_matrix of one
+        unit.append((w / n, x / n, y / n, z / n))
+    rel = np.array([a.T @ b for a, b in zip(unit_quat_matrices(unit), R_new)])
+    return np.array([np.linalg.norm(v) for v in rotation_log(rel)])
 
 
 def robtarget_texts(record: RobTarget, R: np.ndarray, p: np.ndarray,
