@@ -384,3 +384,25 @@ def test_batched_robtarget_values_are_those_of_one(solver):
         want = compose_pose(compose_pose(invert_pose(g.wobj[1]), compose_pose(base, flange)),
                             g.tool[1])
         assert np.array_equal(want[0], Rj) and np.array_equal(want[1], pj)
+
+
+def test_batched_flange_poses_are_those_of_one():
+    """The resolver composes every flange pose as one batch (Resolver.poses):
+    with a robot base, a work object, a tool and Offs/RelTool that are not
+    the identity, each pose equals, bit for bit, flange_pose of that one
+    target (the order and layout of the one-value products)."""
+    from rapidcomp.compensate.targets import flange_pose, parse_base
+    text = _cam(200, 6, "").replace(
+        "[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]",
+        "[FALSE,TRUE,\"\",[[12.5,-3.25,4],[0.9659258,0,0,0.258819]],"
+        "[[0.5,1.5,-2],[0.9990482,0,0,0.0436194]]]").replace(
+        "[[0,0,150],[1,0,0,0]]", "[[1.2,-0.7,150.3],[0.9998477,0,0.0174524,0]]")
+    text = text.replace("    MoveL p1,", "    MoveL Offs(p1,1.5,-2,3),").replace(
+        "    MoveL p2,", "    MoveL RelTool(p2,1,2,3\\Rx:=5\\Rz:=-7),")
+    base = parse_base([10.5, -20.25, 3.125, 0.9990482, 0, 0, 0.0436194])
+    plan = Plan(Task("cam.mod", (parse_text(text, "cam.mod"),)), base=base)
+    rob = [u for u in plan.uses if u.kind == "robtarget" and u.reason is None]
+    assert len(rob) == 200 and sum(u.source.call is not None for u in rob) == 2
+    for u in rob:
+        want = flange_pose(base, u.wobj[1], plan.resolver.target_pose(u.source), u.tool[1])
+        assert np.array_equal(want[0], u.R) and np.array_equal(want[1], u.p)
