@@ -22,7 +22,7 @@ from ..rewrite.names import NameAllocator
 from .place import Group, element_label, multi_index
 from .plan import Plan
 from .solve import Solved
-from .targets import Source, base_pose, invert_pose
+from .targets import Source, base_pose, wobj_targets
 
 
 class Values:
@@ -133,26 +133,15 @@ class Values:
         srcs = [self.source(g, k) for g, k in items]
         n = len(items)
         resolver = self.plan.resolver
-        # wobj_M_target = wobj^-1 . (world_M_base . base_M_flange) . tframe
-        # (targets.flange_pose inverted), each factor stacked, the products
-        # in that order and wobj^-1's rotation a transposed view, as for one
-        # value (otherwise the last bit differs, and a 6th decimal with it).
         B_R, B_p = np.empty((n, 3, 3)), np.empty((n, 3))
-        W, W_p = np.empty((n, 3, 3)), np.empty((n, 3))
+        W_R, W_p = np.empty((n, 3, 3)), np.empty((n, 3))
         T_R, T_p = np.empty((n, 3, 3)), np.empty((n, 3))
-        inverted: dict = {}    # one work object for a whole CAM program
         for j, ((g, k), src) in enumerate(zip(items, srcs)):
             B_R[j], B_p[j] = resolver.world_M_base(src.record)
-            w = g.wobj[1]      # the resolver's own (memoized) pose: its id is stable
-            if id(w) not in inverted:
-                inverted[id(w)] = invert_pose(w)[1]
-            W[j], W_p[j] = w[0], inverted[id(w)]
+            W_R[j], W_p[j] = g.wobj[1]
             T_R[j], T_p[j] = g.tool[1]
-        W_R = np.swapaxes(W, 1, 2)
-        F_R, F_p = s.flange_R[rows], s.flange_p[rows]
-        R, p = B_R @ F_R, (B_R @ F_p[..., None])[..., 0] + B_p
-        R, p = W_R @ R, (W_R @ p[..., None])[..., 0] + W_p
-        R, p = R @ T_R, (R @ T_p[..., None])[..., 0] + p
+        R, p = wobj_targets((B_R, B_p), (W_R, W_p), (s.flange_R[rows], s.flange_p[rows]),
+                            (T_R, T_p))
         for j, src in enumerate(srcs):
             if src.call is not None:
                 R[j], p[j] = base_pose(src, (R[j], p[j]))

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import RapidcompError
 from ..kinematics.frames import (DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z,
-                                 unit_quat_matrices)
+                                 unit_quat_matrices, unit_wxyz)
 from ..rapid import ast as A
 from ..rapid.model import Declaration, Module, Motion, ParsedFile
 from ..rapid.refs import literal_leaves, names_in, usage
@@ -127,9 +127,17 @@ def _invert_many(a):
 
 
 def flange_poses(base, wobj, target, tool):
-    """flange_pose of stacks: each argument (R (n, 3, 3), p (n, 3))."""
+    """flange_pose of stacks: each argument (R (n, 3, 3), p (n, 3)). The
+    products in the one-pose order and layout (inverses as transposed
+    views): each pose bit for bit flange_pose's (tested)."""
     return _compose_many(_compose_many(_invert_many(base), _compose_many(wobj, target)),
                          _invert_many(tool))
+
+
+def wobj_targets(base, wobj, flange, tool):
+    """wobj_M_target of stacks that put the flange at base_M_flange
+    (flange_poses inverted): wobj^-1 . (world_M_base . base_M_flange) . tframe."""
+    return _compose_many(_compose_many(_invert_many(wobj), _compose_many(base, flange)), tool)
 
 
 def flange_pose(base, wobj, target, tool):
@@ -564,11 +572,10 @@ class Resolver:
         home = src.home if src.home is not None else pf
         where = f"{src.decl.name}" if src.decl is not None else "the inline robtarget"
         rec = src.record
-        w, x, y, z = self._quaternion(rec.quat_wxyz, lambda: rec.span.start + rec.regs[3][0],
-                                      home, where)
-        n = (w * w + x * x + y * y + z * z) ** 0.5
+        q = unit_wxyz(*self._quaternion(rec.quat_wxyz, lambda: rec.span.start + rec.regs[3][0],
+                                        home, where))
         p = self._position(rec.xyz, lambda: rec.span.start + rec.regs[0][0], home, where)
-        return (w / n, x / n, y / n, z / n), p
+        return q, p
 
     def poses(self) -> None:
         """Every flange pose the resolved uses wait for, in one batch: the

@@ -25,25 +25,28 @@ def _quat_matrix_rows(w, x, y, z):
             (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)))
 
 
+def unit_wxyz(w: float, x: float, y: float, z: float) -> tuple[float, float, float, float]:
+    """One quaternion normalised in plain float arithmetic (the resolver's
+    case, 1e5 times per program: ~10x faster than numpy on 4 numbers).
+    Every one-quaternion path normalises here, so a batch built from these
+    is bit for bit what one quaternion gets."""
+    n = (w * w + x * x + y * y + z * z) ** 0.5
+    return w / n, x / n, y / n, z / n
+
+
 def quat_wxyz_to_matrix(q) -> np.ndarray:
     """Rotation matrix of a (possibly unnormalised) RAPID quaternion w,x,y,z."""
     q = np.asarray(q, dtype=float)
     if q.shape == (4,):
-        # One quaternion (the resolver's case, 1e5 times per program): plain
-        # float arithmetic is ~10x faster than broadcasting.
-        w, x, y, z = q.tolist()
-        n = (w * w + x * x + y * y + z * z) ** 0.5
-        return np.array(_quat_matrix_rows(w / n, x / n, y / n, z / n))
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    rows = _quat_matrix_rows(*np.moveaxis(q, -1, 0))
-    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+        return np.array(_quat_matrix_rows(*unit_wxyz(*q.tolist())))
+    return unit_quat_matrices(q / np.linalg.norm(q, axis=-1, keepdims=True))
 
 
 def unit_quat_matrices(q) -> np.ndarray:
-    """Rotation matrices (n, 3, 3) of unit quaternions (n, 4) w, x, y, z,
-    taken as given (the caller normalised them)."""
+    """Rotation matrices (..., 3, 3) of unit quaternions (..., 4) w, x, y,
+    z, taken as given (the caller normalised them)."""
     q = np.asarray(q, dtype=float)
-    rows = _quat_matrix_rows(*q.T)
+    rows = _quat_matrix_rows(*np.moveaxis(q, -1, 0))
     return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
 
 

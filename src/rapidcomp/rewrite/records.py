@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..edits import SpanEdit
-from ..kinematics.frames import matrix_to_quat_wxyz, rotation_log, unit_quat_matrices
+from ..kinematics.frames import (matrix_to_quat_wxyz, rotation_log, unit_quat_matrices,
+                                 unit_wxyz)
 from ..rapid.values import JointTarget, RobTarget
 from . import numbers
 
@@ -22,10 +23,7 @@ def _rotation_angles(q_old, R_new) -> np.ndarray:
     (a batch reduction may differ in the last bit, and a field's keep-or-
     rewrite decision at ROT_KEEP_RAD with it); the rotation log as a batch
     (elementwise)."""
-    unit = []
-    for w, x, y, z in np.asarray(q_old, float).tolist():
-        n = (w * w + x * x + y * y + z * z) ** 0.5    # as quat_wxyz_to_matrix of one
-        unit.append((w / n, x / n, y / n, z / n))
+    unit = [unit_wxyz(*q) for q in np.asarray(q_old, float).tolist()]
     rel = np.array([a.T @ b for a, b in zip(unit_quat_matrices(unit), R_new)])
     return np.array([np.linalg.norm(v) for v in rotation_log(rel)])
 
