@@ -232,6 +232,55 @@ def test_chooser_shortcut_gives_the_general_rules_results(confl, solver, monkeyp
         assert sum(taken) > 500
 
 
+@pytest.mark.parametrize("confl", ["", "    ConfL\\Off;\n"])
+def test_second_solution_chains_in_batch_give_what_one_by_one_gives(confl, solver,
+                                                                      monkeypatch):
+    """Where ConfL may be on or off, a move whose two solutions differ passes
+    both on to the moves after it; the chooser computes those chains of
+    second solutions in batches ahead (_Chooser._alternatives). The picks
+    are those the choice makes computing each closest solution on its own,
+    and the batches are really used."""
+    from rapidcomp.compensate import solve as S
+    from rapidcomp.kinematics import ik
+    tasks = [Task("cam.mod", (parse_text(_cam(400, seed, confl), "cam.mod"),))
+             for seed in (1, 2)]
+    tasks += [Task(p.name, (parse_file(p, p.name),)) for p in MODULES]
+    real = ik.Solver.closest
+    singles = []
+
+    def spy(self, cands, prev, with_branch=False):
+        singles.append(len(cands) == 1)
+        return real(self, cands, prev, with_branch)
+    monkeypatch.setattr(ik.Solver, "closest", spy)
+    counts = []
+    for task in tasks:
+        plan = Plan(task)
+        singles.clear()
+        fast = S.solve(plan, solver)
+        n_fast = sum(singles)
+        monkeypatch.setattr(S._Chooser, "_alternatives", lambda self, need: None)
+        singles.clear()
+        slow = S.solve(plan, solver)
+        counts.append((n_fast, sum(singles)))
+        monkeypatch.undo()
+        monkeypatch.setattr(ik.Solver, "closest", spy)
+        assert len(fast.picks) == len(slow.picks)
+        for a, b in zip(fast.picks, slow.picks):
+            assert (a.rule, a.failure, a.kind, a.caution, a.line) == \
+                (b.rule, b.failure, b.kind, b.caution, b.line)
+            for x, y in ((a.q, b.q), (a.prev, b.prev)):
+                assert (x is None) == (y is None)
+                if x is not None:
+                    assert np.array_equal(x, y)
+        assert np.array_equal(fast.nominal.q_deg, slow.nominal.q_deg, equal_nan=True)
+        assert np.array_equal(fast.deformed.q_deg, slow.deformed.q_deg, equal_nan=True)
+    # Each CAM module has chains of second solutions (the program starts
+    # where the robot stands, not known), computed one by one without the
+    # batches.
+    for n_fast, n_slow in counts[:2]:
+        assert n_slow >= 20 and n_fast <= n_slow // 5, counts
+
+
 def test_names_of_one_stem_are_those_a_search_from_1_gives():
     """NameAllocator resumes its search per stem (1e5 names of one stem,
     as transient verification makes, were quadratic): the names are those

@@ -34,6 +34,9 @@ from .targets import TargetUse
 
 # Two solutions closer than this (deg, Euclidean) are the same solution.
 SAME_DEG = 1e-6
+# How far the choice's batches follow chains of second solutions (each step
+# one batch for every chain); past it the choice computes them one by one.
+ALT_STEPS = 256
 
 
 @dataclass(frozen=True, eq=False)
@@ -166,6 +169,7 @@ class _Chooser:
         self.spec = np.full((n, 6), np.nan)
         self.pred1 = np.full(n, -1)
         self.off_spec = np.full((n, 6), np.nan)
+        self.more: dict[int, list] = {}   # row -> [(previous joints, closest)]
         if not self.rob_row:
             return
         for i, u in enumerate(self.uses):
@@ -195,10 +199,39 @@ class _Chooser:
                 continue
             self._follow_run(run)
             run = [i] if i >= 0 and np.isnan(self.spec[i]).any() and j >= 0 else []
-        sel = [i for i in need if self.pred1[i] >= 0 and not np.isnan(self.spec[self.pred1[i]]).any()]
-        if sel:
-            ks = [self.rob_row[i] for i in sel]
+        need = np.array(need, dtype=int)
+        need = need[self.pred1[need] >= 0]
+        pred = self.pred1[need]
+        sel = need[~np.isnan(self.spec[pred]).any(axis=1)]
+        if len(sel):
+            ks = [self.rob_row[i] for i in sel.tolist()]
             self.off_spec[sel] = self.solver.closest(self.cands[ks], self.spec[self.pred1[sel]])
+        self._alternatives(need)
+
+    def _alternatives(self, need: np.ndarray) -> None:
+        """Where supervision may be on or off, a move whose off solution is
+        another than its confdata's has both, and the move after it follows
+        from each: along such a chain the second solutions, one batch per
+        step of all chains at once, while they stay apart (for at most
+        ALT_STEPS steps; further on the choice computes them one by one)."""
+        succ: dict[int, list[int]] = {}
+        for i, j in zip(need.tolist(), self.pred1[need].tolist()):
+            succ.setdefault(j, []).append(i)
+        spec, off = self.spec[need], self.off_spec[need]
+        apart = ~np.isnan(off).any(axis=1) & ~(off == spec).all(axis=1)
+        rows, vals = need[apart].tolist(), off[apart]
+        for _ in range(ALT_STEPS):
+            pairs = [(i, n) for n, j in enumerate(rows) for i in succ.get(j, ())]
+            if not pairs:
+                return
+            nxt, at = (np.array(c, dtype=int) for c in zip(*pairs))
+            prev = vals[at]
+            got = self.solver.closest(self.cands[[self.rob_row[i] for i in nxt.tolist()]], prev)
+            for i, pv, q in zip(nxt.tolist(), prev, got):
+                self.more.setdefault(i, []).append((pv, q))
+            apart = ~np.isnan(got).any(axis=1) & ~(got == self.spec[nxt]).all(axis=1) & ~(
+                got == self.off_spec[nxt]).all(axis=1)
+            rows, vals = nxt[apart].tolist(), got[apart]
 
     def _follow_run(self, run: list[int]) -> None:
         if not run or np.isnan(self.spec[self.pred1[run[0]]]).any():
@@ -226,8 +259,10 @@ class _Chooser:
         if j >= 0 and self.pred1[i] == j and np.array_equal(prev, self.spec[j]):
             q = self.off_spec[i]      # computed in the batch from these very joints
         else:
-            k = self.rob_row[i]
-            q = self.solver.closest(self.cands[k][None], prev[None])[0]
+            q = next((q for pv, q in self.more.get(i, ()) if np.array_equal(prev, pv)), None)
+            if q is None:
+                k = self.rob_row[i]
+                q = self.solver.closest(self.cands[k][None], prev[None])[0]
         if np.isnan(q).any():
             return _fail("nominal: no solution within the joint limits")
         return Pick(q, rule, None, "closest", prev, line)
