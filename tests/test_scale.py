@@ -455,3 +455,44 @@ def test_batched_flange_poses_are_those_of_one():
     for u in rob:
         want = flange_pose(base, u.wobj[1], plan.resolver.target_pose(u.source), u.tool[1])
         assert np.array_equal(want[0], u.R) and np.array_equal(want[1], u.p)
+
+
+def test_source_with_record_is_dataclasses_replace():
+    """Source.with_record (the verification's per-target copy) keeps every
+    other field, as dataclasses.replace does."""
+    import dataclasses
+    from rapidcomp.compensate.targets import Source
+    values = {f.name: object() for f in dataclasses.fields(Source)}
+    src = Source(**values)
+    record = object()
+    got, want = src.with_record(record), dataclasses.replace(src, record=record)
+    assert all(getattr(got, f.name) is getattr(want, f.name) for f in dataclasses.fields(Source))
+    assert got.record is record
+
+
+def test_reserved_word_search_in_a_one_token_call_is_the_word_rule():
+    """The lexer refuses a FAST_CALL holding a reserved word (then lexes it
+    token by token) with one regex search: the same answer as asking each
+    identifier of it (in any letter case; not after '.' or a digit: the E
+    of 9E+09), on seeded random statements."""
+    import random
+    from rapidcomp.rapid import lalr
+    from rapidcomp.rapid.grammar import engine
+    eng = engine()
+    kw = eng._keywords
+
+    def by_words(t):
+        return any(w.upper() in kw for w in lalr._WORD.findall(t))
+    rnd = random.Random(5)
+    words = sorted(kw) + ["v100", "z1", "tool0", "WObj", "wobj1", "iff", "IF_1", "xIF", "For",
+                          "ENDIF2", "e", "E", "Offs", "p10", "Then"]
+    hits = 0
+    for _ in range(20000):
+        parts = [rnd.choice(words) for _ in range(rnd.randint(1, 6))]
+        seps = [rnd.choice([",", "\\", ":=", " ", ",9E+09,", ",1.5e3,", ".", "_"]) for _ in parts]
+        t = "MoveL " + "".join(a + b for a, b in zip(parts, seps)) + ";"
+        t = "".join(c.lower() if rnd.random() < 0.3 else c for c in t)
+        want = by_words(t)
+        assert (eng._keyword_in(t) is not None) == want, t
+        hits += want
+    assert 5000 < hits < 19000

@@ -233,13 +233,16 @@ class Editor:
         return self.plan.files[fi].source.text
 
     def edit(self, fi: int, span, text: str, why: str, field: bool = False) -> None:
+        self.put(fi, SpanEdit(span.start, span.end, text, why), field)
+
+    def put(self, fi: int, e: SpanEdit, field: bool = False) -> None:
         self.structural = self.structural or not field
-        key = (fi, span.start, span.end)
+        key = (fi, e.start, e.end)
         old = self.edits.get(key)
-        if old is not None and old.replacement != text:
+        if old is not None and old.replacement != e.replacement:
             raise InternalError(f"{self.plan.files[fi].source.display_path}: conflicting edits "
-                                f"at offset {span.start}: {why}")
-        self.edits[key] = SpanEdit(span.start, span.end, text, why)
+                                f"at offset {e.start}: {e.why}")
+        self.edits[key] = e
 
     # -------------------------------------------------------- declarations
     def _anchor(self, g: Group) -> tuple[int, int, str, str, bool]:
@@ -330,7 +333,7 @@ class Editor:
                       else g.uses[0].key[0])
                 self.fields[(fi, record.span.start)] = (record, texts[k])
                 for e in changes[k]:
-                    self.edit(fi, e, e.replacement, e.why, field=True)
+                    self.put(fi, e, field=True)
             what = (f"inline {type_name} rewritten" if g.decl is None
                     else f"{type_name} {g.decl.name} rewritten in place")
             for u in g.uses:

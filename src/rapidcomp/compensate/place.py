@@ -34,6 +34,7 @@ ABSJ_OPTIONALS = frozenset({"conc", "id", "v", "t", "z", "inpos", "wobj", "tload
 TO_ABSJ = frozenset({"movej", "movel"})
 # Which instructions each mode turns into MoveAbsJ.
 ABSJ_FROM = {"auto": frozenset({"movej"}), "absj": TO_ABSJ, "robtarget": frozenset()}
+_LEFT = Warn.ORIENTATION_LEFT    # (an enum member looked up once, not per group)
 
 
 @dataclass(eq=False, slots=True)
@@ -113,11 +114,14 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
     by_key: dict = {}
     out: list[Group] = []
     loop_first = sorted(solved.uses, key=lambda u: not u.source.by_loop)
+    # Each use's solution, rounded, as a key (all rows at once: 1e5 uses).
+    q_all = solved.nominal.q_deg
+    q_keys = [None if bad else tuple(q) for bad, q in zip(
+        np.isnan(q_all).any(axis=1).tolist(), np.round(q_all, 3).tolist())]
     for u in loop_first:
         src = u.source
         m = mode_of(u, mode, plan, solved)
         row = solved.row[u.key]
-        q = solved.nominal.q_deg[row]
         if src.decl is not None and file_index[id(src.home)] < plan.n_written:
             home = (file_index[id(src.home)], src.home_module)
         else:
@@ -134,7 +138,7 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
                     solved, array.rows_seen[src.element], row):
                 key = base + (None,)
             else:
-                key = base + (None if np.isnan(q).any() else tuple(np.round(q, 3)),)
+                key = base + (q_keys[row],)
         g = by_key.get(key)
         if g is None:
             g = by_key[key] = Group(m, src, u.tool, u.wobj, home)
@@ -177,7 +181,7 @@ def _elements(g: Group, solved: Solved) -> None:
     if g.failure is None:
         for k in g.elements:
             i = seen[k]
-            if g.mode == "rob" and solved.deformed.warnings[i] & Warn.ORIENTATION_LEFT:
+            if g.mode == "rob" and solved.deformed.warnings[i] & _LEFT:
                 g.failure = (
                     f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
                     "compensation needs a J4/J6 split a robtarget cannot carry (the "

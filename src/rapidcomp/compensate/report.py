@@ -20,8 +20,18 @@ def _num(x, fmt: str) -> str:
     return "-" if x is None else format(x, fmt)
 
 
+_ROW_FORMATS: dict = {}
+
+
 def _joints(q, fmt: str = ".4f") -> str:
-    return "-" if q is None else " ".join(format(v, fmt) for v in q)
+    """The values of q, each format(v, fmt), space separated: with one %
+    operation (the same conversion; a CAM report has 3e5 of these)."""
+    if q is None:
+        return "-"
+    f = _ROW_FORMATS.get((len(q), fmt))
+    if f is None:
+        f = _ROW_FORMATS[(len(q), fmt)] = " ".join(["%" + fmt] * len(q))
+    return f % tuple(q)
 
 
 def _conf(c) -> str:

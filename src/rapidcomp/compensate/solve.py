@@ -525,10 +525,11 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
             R[i], p[i] = Rj[i], pj[i]
     # Joint limits of the chosen joints (MoveAbsJ targets) are failures too.
     status = seed.status.copy()
+    bad = (status != Status.OK).tolist()
     for i in range(n):
         if picks[i].failure is not None:
             status[i] = Status.NO_CONFIGURATION
-        elif status[i] != Status.OK:
+        elif bad[i]:
             picks[i] = _fail(f"nominal: {seed.reason(i)}")
     seed = IKBatch(np.where(np.isnan(q_nom), np.nan, seed.q_deg), status, seed.detail,
                    seed.detail_joint, seed.conf, seed.residual_mm, seed.residual_rad,

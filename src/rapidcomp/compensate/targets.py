@@ -23,7 +23,7 @@ a name no given module declares), which fails the compensation.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -73,6 +73,12 @@ class Source:
     rel_R: np.ndarray | None       # RelTool rotation (identity for Offs)
     rel_d: np.ndarray | None       # Offs/RelTool displacement, mm
     home_module: Module | None = None  # the module holding decl
+
+    def with_record(self, record) -> "Source":
+        """The same source holding `record` (as an output writes it);
+        dataclasses.replace costs ~10 times more, once per target."""
+        return Source(record, self.decl, self.home, self.element, self.by_loop, self.ref,
+                      self.expr, self.call, self.rel_R, self.rel_d, self.home_module)
 
 
 @dataclass(frozen=True, eq=False, slots=True)
@@ -709,11 +715,37 @@ class Resolver:
             record = self.written.get((id(src.home if src.home is not None else pf),
                                        src.record.span.start))
             if record is not None:
-                src = replace(src, record=record)
+                src = src.with_record(record)
         if isinstance(src, Unresolved):
             if src.blocked and kind == "robtarget" and src.reason.endswith(f"({MISSING_HINT})"):
                 return fail(self._all_missing(src, module, motion))
             return fail(src)
+        return self._complete(pf, module, motion, t.role, kind, label, line, envt, key, src)
+
+    def again(self, u: TargetUse) -> TargetUse:
+        """A use resolve() gave for the input, resolved again by this
+        resolver (float32, the records as written) on the same structure:
+        what resolve() of its motion gives, without looking up again what
+        the structure decides (its source, the move's checks). For an output
+        whose every edit is numbers of existing literals (verify.py)."""
+        src = u.source
+        self._notes = []
+        record = self.written.get((id(src.home if src.home is not None else u.file),
+                                   src.record.span.start))
+        if record is not None:
+            src = src.with_record(record)
+        return self._complete(u.file, u.module, u.motion, u.role, u.kind, u.label, u.line,
+                              u.env, u.key, src)
+
+    def _complete(self, pf, module, motion, role, kind, label, line, envt, key,
+                  src: Source) -> TargetUse:
+        """The use of a resolved source: its values checked, its tool, work
+        object and base resolved."""
+        def fail(why: Unresolved):
+            return TargetUse(motion, role, label, line, kind, None, None, None, None,
+                             why.reason, env=envt, blocked=why.blocked, file=pf, module=module,
+                             key=key)
+
         if kind == "jointtarget":
             if not isinstance(src.record, JointTarget):
                 return fail(Unresolved("not a jointtarget", True))
@@ -724,7 +756,7 @@ class Resolver:
                     raise home.source.error(src.record.span.start + src.record.regs[i][0],
                                             f"J{i + 1} is {src.record.texts[i]} deg: not a "
                                             f"joint angle (|J| <= {MAX_JOINT_DEG:g})")
-            return TargetUse(motion, t.role, label, line, kind, None, None, None, joints, None,
+            return TargetUse(motion, role, label, line, kind, None, None, None, joints, None,
                              src, env=envt, file=pf, module=module, ext=src.record.ext, key=key)
         if not isinstance(src.record, RobTarget):
             return fail(Unresolved("not a robtarget", True))
@@ -739,7 +771,7 @@ class Resolver:
             return fail(base)
         self._confdata(src, pf)
         q, p = self._target_parts(src, pf)
-        u = TargetUse(motion, t.role, label, line, kind, None, None, src.record.conf, None, None,
+        u = TargetUse(motion, role, label, line, kind, None, None, src.record.conf, None, None,
                       src, tool, wobj, envt, file=pf, module=module, ext=src.record.ext,
                       key=key, notes=tuple(self._notes))
         self._pending.append((u, q, p, base, wobj[1], tool[1]))

@@ -1,7 +1,9 @@
 """Stage 5 of `fix`: the written output, checked as the controller will run it.
 
-Every edited module is parsed again; every compensated use is resolved on
-the output with its numbers rounded to float32 (as the controller stores
+Every edited module is parsed again (or, when every edit is numbers of
+existing literals, the edited literals are lexed again where the output
+holds them: relex); every compensated use is resolved on the output with
+its numbers rounded to float32 (as the controller stores
 them), turned into joints the way the controller does (MoveAbsJ: as
 written; a robtarget: the ideal controller's IK, on the confdata's branch
 or, where supervision is off, the solution closest to the previous move's
@@ -105,7 +107,15 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
         for o in batch:
             found[o.key] = _Written(o.kind, o.R, o.p, o.conf, o.joints_deg, o.reason)
         batch.clear()
-    for fi, pf in enumerate(files[:plan.n_written]):
+    if written is not None:
+        # The structure is the input's (relex() made sure every edit is
+        # numbers of a literal): each use's source, tool and work object are
+        # the plan's, evaluated again on the numbers as written.
+        for k in keys:
+            batch.append(res.again(solved.uses[solved.row[k]]))
+            if len(batch) >= 8192:
+                keep()
+    for fi, pf in enumerate(files[:plan.n_written] if written is None else ()):
         mi = 0
         for m in pf.modules:
             for motion in m.motions:

@@ -92,6 +92,11 @@ class Engine:
             f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in regular
             if t.name not in ("FAST_CALL", "FAST_DECL")))
         self._keywords = keywords
+        # A reserved word anywhere in a FAST_CALL (as a whole identifier, in
+        # any letter case): one search instead of a word list per statement.
+        self._keyword_in = re.compile(
+            r"(?<![\w.])(?:" + "|".join(sorted(keywords, key=lambda k: (-len(k), k)))
+            + r")(?![A-Za-z0-9_])", re.IGNORECASE | re.ASCII).search
         self._ignore = frozenset(ignore)
         self.terminal_names = frozenset(t.name for t in terms)
 
@@ -149,11 +154,13 @@ class Engine:
             if m is None:
                 raise LexFailure(pos)
             kind = m.lastgroup
-            if kind == "FAST_CALL" or kind == "FAST_DECL":
-                words = _WORD.findall(m.group())
-                if kind == "FAST_DECL":  # only type and name must be identifiers
-                    words = words[-2:]
-                if any(w.upper() in keywords for w in words):
+            if kind == "FAST_CALL":
+                if self._keyword_in(m.group()) is not None:
+                    m = self._master_plain.match(text, pos)
+                    kind = m.lastgroup
+            elif kind == "FAST_DECL":
+                # Only type and name must be identifiers.
+                if any(w.upper() in keywords for w in _WORD.findall(m.group())[-2:]):
                     m = self._master_plain.match(text, pos)
                     kind = m.lastgroup
             stop = m.end()
