@@ -16,13 +16,23 @@ _WORD = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 
 class NameAllocator:
     def __init__(self, texts: list[str]):
-        self.taken: set[str] = set()
-        for text in texts:
-            self.taken.update(w.lower() for w in _WORD.findall(text))
+        self._texts = texts
+        self._taken: set[str] | None = None
         # Per stem, the first suffix not known to be taken: names are only
         # ever added, so the search resumes there (1e5 names of one stem
         # would otherwise cost 1e10 probes).
         self._next: dict[str, int] = {}
+
+    @property
+    def taken(self) -> set[str]:
+        """Every word of the texts, lower case; collected when a first name
+        is asked for (an edit of numbers only needs none: a CAM module's
+        millions of words are not read for nothing)."""
+        if self._taken is None:
+            self._taken = set()
+            for text in self._texts:
+                self._taken.update(map(str.lower, _WORD.findall(text)))
+        return self._taken
 
     def new(self, stem: str) -> str:
         """A fresh identifier like `stem`, or `stem_2`, `stem_3`, ..."""
