@@ -496,3 +496,49 @@ def test_reserved_word_search_in_a_one_token_call_is_the_word_rule():
         assert (eng._keyword_in(t) is not None) == want, t
         hits += want
     assert 5000 < hits < 19000
+
+
+ODD = """MODULE Odd
+  PERS tooldata tA:=[TRUE,[[1.5,-2,150.25],[0.9238795,0,0.3826834,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];
+  PERS wobjdata wA:=[FALSE,TRUE,"",[[300.125,-20,5],[0.7071068,0,0,0.7071068]],[[1,2,3],[0.9961947,0.0871557,0,0]]];
+  CONST robtarget pN:=[[500,0,600],[0.5,0.5,0.5,0.5],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  CONST robtarget pU:=[[450.1,10.2,610.3],[0.7071,0,0.7071,0],[0,0,-1,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  PROC Path()
+    MoveL pN,v100,z1,tA\\WObj:=wA;
+    MoveJ pU,v100,z1,tA;
+    MoveL Offs(pN,1,2,3),v100,z1,tA\\WObj:=wA;
+    MoveL [[520.5,-5.25,580],[0.000001,0.7071068,0.7071068,0.000001],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,fine,tool0;
+    MoveL [[520.5,-5.25,580],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,fine,tA\\WObj:=wA;
+    MoveAbsJ [[0,0,0,0,30,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,fine,tool0;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_uses_evaluated_again_as_arrays_are_again_bit_for_bit():
+    """Resolver.again_many (the verification of an output whose edits are
+    numbers only) gives, for each use it takes, again()'s pose and confdata
+    exactly (float32 rounding, quaternions off unit length, tools and work
+    objects, the base), and leaves Offs/RelTool and MoveAbsJ to again()."""
+    from rapidcomp.compensate.targets import Resolver
+    tasks = [Task("odd.mod", (parse_text(ODD, "odd.mod"),)),
+             Task("cam.mod", (parse_text(_cam(300, 3, ""), "cam.mod"),))]
+    tasks += [Task(p.name, (parse_file(p, p.name),)) for p in MODULES]
+    taken = 0
+    for task in tasks:
+        plan = Plan(task)
+        uses = [u for u in plan.uses if u.reason is None]
+        res = Resolver(list(task.files), float32=True, usages=plan.resolver.usages,
+                       writes=False, track=plan.track, base=plan.resolver.base)
+        done, R, p, conf = res.again_many(uses)
+        for j, n in enumerate(done):
+            one = res.again(uses[n])
+            res.poses()
+            assert np.array_equal(one.R, R[j]) and np.array_equal(one.p, p[j]), uses[n].label
+            assert one.conf == tuple(conf[j].tolist())
+        left = [(u.label, u.kind) for n, u in enumerate(uses) if n not in set(done)]
+        if task.name == "odd.mod":
+            assert len(done) == 4
+            assert left == [("Offs(pN,1,2,3)", "robtarget"), ("inline", "jointtarget")]
+        taken += len(done)
+    assert taken > 400

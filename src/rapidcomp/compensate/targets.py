@@ -737,6 +737,64 @@ class Resolver:
         return self._complete(u.file, u.module, u.motion, u.role, u.kind, u.label, u.line,
                               u.env, u.key, src)
 
+    def again_many(self, uses: list[TargetUse]):
+        """again() of many robtarget uses at once, as arrays: (indices of
+        `uses` done here, R (m, 3, 3), p (m, 3), conf (m, 4)); the others
+        (MoveAbsJ, Offs/RelTool, --track, a value outside what a checked
+        use holds) are again()'s. Bit for bit again()'s arithmetic: the
+        same float32 rounding, the products and sums in its order (a sum of
+        squares elementwise, the ** 0.5 of Python floats), the poses
+        composed by flange_poses, as poses() does."""
+        if self.track or not self.float32:
+            return [], None, None, None
+        done, recs, tools, wobjs = [], [], [], []
+        for n, u in enumerate(uses):
+            src = u.source
+            if u.kind != "robtarget" or src.call is not None:
+                continue
+            tool = self.tool(u.motion.tool, u.module, u.motion.routine)
+            wobj = self.wobj(u.motion.wobj, u.module, u.motion.routine)
+            if isinstance(tool, Unresolved) or isinstance(wobj, Unresolved):
+                continue
+            record = self.written.get((id(src.home if src.home is not None else u.file),
+                                       src.record.span.start), src.record)
+            if not isinstance(record, RobTarget):
+                continue
+            done.append(n)
+            recs.append(record.values)
+            tools.append(tool[1])
+            wobjs.append(wobj[1])
+        if not done:
+            return [], None, None, None
+        m = len(done)
+        v = np.array(recs, float).reshape(m, 17)
+        # Contiguous, as poses() stacks them: a product's bits may depend
+        # on the layout of its operands.
+        f32 = v[:, :7].astype(np.float32).astype(float)
+        q, p = np.ascontiguousarray(f32[:, 3:7]), np.ascontiguousarray(f32[:, :3])
+        conf = v[:, 7:11]
+        w, x, y, z = q.T
+        norm = np.sqrt(w * w + x * x + y * y + z * z)
+        # What again() would refuse or note goes to again() (it says why).
+        ok = ((norm > 1e-6) & np.all(np.abs(p) <= MAX_POSITION_MM, axis=1)
+              & np.all(conf == np.round(conf), axis=1)
+              & np.all(np.abs(conf[:, :3]) <= MAX_QUADRANT, axis=1)
+              & (conf[:, 3] >= 0) & (conf[:, 3] <= 7))
+        q = np.where((np.abs(norm - 1.0) > 1e-12)[:, None], q / norm[:, None], q)
+        w, x, y, z = q.T
+        n2 = np.array([s ** 0.5 for s in (w * w + x * x + y * y + z * z).tolist()])
+        R = unit_quat_matrices(q / n2[:, None])
+        base = (np.repeat(np.asarray(self.base[0], float)[None], m, axis=0),
+                np.repeat(np.asarray(self.base[1], float)[None], m, axis=0))
+
+        def stack(poses):
+            return (np.array([t[0] for t in poses]).reshape(m, 3, 3),
+                    np.array([t[1] for t in poses]).reshape(m, 3))
+        Rf, pf = flange_poses(base, stack(wobjs), (R, p), stack(tools))
+        keep = np.flatnonzero(ok)
+        return ([done[k] for k in keep.tolist()], Rf[keep], pf[keep],
+                conf[keep].astype(int))
+
     def _complete(self, pf, module, motion, role, kind, label, line, envt, key,
                   src: Source) -> TargetUse:
         """The use of a resolved source: its values checked, its tool, work

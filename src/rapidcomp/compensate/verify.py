@@ -111,10 +111,16 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
         # The structure is the input's (relex() made sure every edit is
         # numbers of a literal): each use's source, tool and work object are
         # the plan's, evaluated again on the numbers as written.
-        for k in keys:
-            batch.append(res.again(solved.uses[solved.row[k]]))
-            if len(batch) >= 8192:
-                keep()
+        uses = [solved.uses[solved.row[k]] for k in keys]
+        for at in range(0, len(uses), 8192):
+            block = uses[at:at + 8192]
+            done, R, p, conf = res.again_many(block)
+            for j, n in enumerate(done):
+                found[block[n].key] = _Written("robtarget", R[j], p[j], tuple(conf[j].tolist()),
+                                               None, None)
+            done = set(done)
+            batch.extend(res.again(u) for n, u in enumerate(block) if n not in done)
+            keep()
     for fi, pf in enumerate(files[:plan.n_written] if written is None else ()):
         mi = 0
         for m in pf.modules:
