@@ -542,3 +542,40 @@ def test_uses_evaluated_again_as_arrays_are_again_bit_for_bit():
             assert left == [("Offs(pN,1,2,3)", "robtarget"), ("inline", "jointtarget")]
         taken += len(done)
     assert taken > 400
+
+
+def test_rounded_rows_are_pythons_round():
+    """rows.rounded_rows (the reports' joint columns, in bulk) gives what
+    round(x, 6) gives for each value, sign of zero included: random
+    joints, decimal ties and their binary neighbours, tiny and huge
+    values, NaN rows (None) and infinities."""
+    from rapidcomp.compensate.rows import rounded_rows
+    rng = np.random.default_rng(7)
+    ties = np.array([(k + 0.5) / 1e6 for k in range(-30000, 30000)])
+    vals = np.concatenate([
+        rng.uniform(-400, 400, 120000), ties, np.nextafter(ties, np.inf),
+        np.nextafter(ties, -np.inf), [k / 1e6 + 5e-7 for k in range(-30000, 30000)],
+        rng.uniform(-1e-5, 1e-5, 30000), rng.uniform(-1e9, 1e9, 30000),
+        [0.0, -0.0, 1e-9, -1e-9, 5e-7, -5e-7, 1.5e-6, 2.5e-6, 1e10 + 0.25, -3e12 + 0.5,
+         4.5e15, 1e300, -1e300, 7.0000005, 12.3456785, np.inf, -np.inf]])
+    vals = vals[:len(vals) // 6 * 6].reshape(-1, 6)
+    got = rounded_rows(vals)
+    want = [tuple(round(x, 6) for x in r) for r in vals.tolist()]
+    assert [tuple(map(repr, g)) for g in got] == [tuple(map(repr, w)) for w in want]
+    vals[3, 2] = np.nan
+    assert rounded_rows(vals[2:5]) == [want[2], None, want[4]]
+
+
+def test_joint_columns_format_as_each_value_does():
+    """report._joints formats a row with one % operation: the text of
+    format(v, fmt) for each value, on rounding ties, signed zeros and
+    tiny values."""
+    import random
+    from rapidcomp.compensate.report import _joints
+    rnd = random.Random(3)
+    pool = [-0.0, 0.0, -1e-7, 1e-7, 12.34565, -0.000049999, 5e-5, -5e-5, 0.00005, 179.99995]
+    for _ in range(20000):
+        q = tuple(rnd.choice(pool + [rnd.uniform(-400, 400), float(rnd.randint(-5, 5))])
+                  for _ in range(6))
+        for fmt in (".4f", "+.5f"):
+            assert _joints(q, fmt) == " ".join(format(v, fmt) for v in q)

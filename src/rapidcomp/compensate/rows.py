@@ -40,12 +40,26 @@ class UseRow:
     reason: str | None
 
 
-def _t(a) -> tuple[float, ...] | None:
-    if a is None:
-        return None
-    if not isinstance(a, list):
-        a = a.tolist()
-    return None if any(x != x for x in a) else tuple([round(x, 6) for x in a])  # x != x: NaN
+def rounded_rows(a: np.ndarray) -> list[tuple[float, ...] | None]:
+    """Each row of a (n, k) as a tuple of round(x, 6), None for a row with
+    a NaN: the reports' joint columns (a CAM program has 1e5 rows, 3 columns
+    of 6). Bulk, with Python's round's results: round(x, 6) is the double
+    nearest N / 1e6, N = x * 10**6 rounded half to even exactly; rint of
+    the product in floating point is that N wherever the product lies
+    further than a few ulps from a half (the rest, ~1e-8 of random values,
+    is rounded by round itself); N / 1e6, one correctly rounded division of
+    exact numbers, is that nearest double (tested against round on ties,
+    near-ties, signed zeros and large values)."""
+    a = np.asarray(a, float)
+    scaled = a * 1e6
+    out = np.rint(scaled) / 1e6
+    with np.errstate(invalid="ignore"):
+        near_half = np.abs(scaled - np.floor(scaled) - 0.5) <= 4 * np.spacing(np.abs(scaled))
+        odd = near_half | ~(np.abs(scaled) < 2.0 ** 52)    # NaN, inf, too large
+    rows = out.tolist()
+    for i, j in zip(*np.nonzero(odd)):
+        rows[i][j] = round(float(a[i, j]), 6)
+    return [None if any(x != x for x in r) else tuple(r) for r in rows]  # x != x: NaN
 
 
 class _Columns:
@@ -55,7 +69,8 @@ class _Columns:
 
     def __init__(self, solved: Solved):
         qn, qc = solved.nominal.q_deg, solved.deformed.q_deg
-        self.qn, self.qc, self.dq = qn.tolist(), qc.tolist(), (qc - qn).tolist()
+        self.qn, self.qc, self.dq = (rounded_rows(qn), rounded_rows(qc),
+                                     rounded_rows(qc - qn))
         self.err_p, self.err_r = solved.err_p.tolist(), solved.err_r.tolist()
         self.res_mm = solved.deformed.residual_mm.tolist()
         self.res_rad = solved.deformed.residual_rad.tolist()
@@ -118,7 +133,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
     if why is not None:
         why = _hint(why, u, tracked)
         return UseRow(**base, status=fail_label, rule=pick.rule, action=None,
-                      nominal_deg=_t(qn) if has_q else None, compensated_deg=None,
+                      nominal_deg=qn if has_q else None, compensated_deg=None,
                       delta_deg=None, error_um=error[0], error_deg=error[1], residual_um=None,
                       residual_deg=None, conf_before=conf_before, conf_after=None,
                       warnings=d_warnings, reason=why)
@@ -154,7 +169,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         res = (cols.res_mm[i] * 1000, cols.res_rad[i] / DEG)
     return UseRow(**base, status=ok_label, rule=pick.rule,
                   action=actions.get(u.key) if actions is not None else None,
-                  nominal_deg=_t(qn), compensated_deg=_t(cols.qc[i]), delta_deg=_t(cols.dq[i]),
+                  nominal_deg=qn, compensated_deg=cols.qc[i], delta_deg=cols.dq[i],
                   error_um=error[0], error_deg=error[1], residual_um=res[0], residual_deg=res[1],
                   conf_before=conf_before, conf_after=after,
                   warnings=warnings, reason=None)
