@@ -579,3 +579,19 @@ def test_joint_columns_format_as_each_value_does():
                   for _ in range(6))
         for fmt in (".4f", "+.5f"):
             assert _joints(q, fmt) == " ".join(format(v, fmt) for v in q)
+
+
+def test_row_as_dict_encodes_as_asdict(solver):
+    """UseRow.as_dict (the JSON reports' rows, without asdict's deep copy)
+    gives the same JSON as dataclasses.asdict, on every row of the fixtures
+    (compensated, not compensated, untouched)."""
+    import dataclasses
+    import json
+    statuses = set()
+    for p in MODULES:
+        result = F.fix(Task(p.name, (parse_file(p, p.name),)), solver, "auto")
+        for r in result.rows:
+            assert json.dumps(r.as_dict(), indent=2) == json.dumps(dataclasses.asdict(r),
+                                                                  indent=2)
+            statuses.add(r.status)
+    assert len(statuses) == 3

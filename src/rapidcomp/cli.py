@@ -159,7 +159,7 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, ba
 
     Exit code 1 when some targets could not be compensated.
     """
-    from dataclasses import asdict, replace
+    from dataclasses import replace
 
     from .compensate.check import check as run_check
     from .compensate.check import render_text
@@ -180,7 +180,7 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, ba
         _fail(exc)
     if as_json:
         docs = [{"program": r.program, "summary": r.summary(), "notes": list(r.notes),
-                 "targets": [asdict(x) for x in r.rows]} for r in results]
+                 "targets": [x.as_dict() for x in r.rows]} for r in results]
         doc = docs[0] if len(docs) == 1 else {"program": program, "tasks": docs}
         click.echo(json.dumps(doc, indent=2))
     else:

@@ -9,7 +9,6 @@ per module the diff and the rows of its motions.
 from __future__ import annotations
 
 import json
-from dataclasses import asdict
 
 from .fix import FixResult
 from .plan import line_ranges
@@ -152,6 +151,6 @@ def as_json(result: FixResult, meta: dict) -> str:
         "notes": list(result.notes),
         "modules": [{"path": m.path, "changed": bool(m.edits), "diff": list(m.diff)}
                     for m in result.modules],
-        "targets": [asdict(r) for r in result.rows],
+        "targets": [r.as_dict() for r in result.rows],
     }
     return json.dumps(doc, indent=2) + "\n"

