@@ -92,11 +92,7 @@ class Engine:
             f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in regular
             if t.name not in ("FAST_CALL", "FAST_DECL")))
         self._keywords = keywords
-        # A reserved word anywhere in a FAST_CALL (as a whole identifier, in
-        # any letter case): one search instead of a word list per statement.
-        self._keyword_in = re.compile(
-            r"(?<![\w.])(?:" + "|".join(sorted(keywords, key=lambda k: (-len(k), k)))
-            + r")(?![A-Za-z0-9_])", re.IGNORECASE | re.ASCII).search
+        self._reserved = frozenset(keywords)
         self._ignore = frozenset(ignore)
         self.terminal_names = frozenset(t.name for t in terms)
 
@@ -155,7 +151,7 @@ class Engine:
                 raise LexFailure(pos)
             kind = m.lastgroup
             if kind == "FAST_CALL":
-                if self._keyword_in(m.group()) is not None:
+                if self._keyword_in(m.group()):
                     m = self._master_plain.match(text, pos)
                     kind = m.lastgroup
             elif kind == "FAST_DECL":
@@ -171,6 +167,16 @@ class Engine:
                 yield Tok(kind, value, pos, stop)
             pos = stop
         yield Tok("$END", "", end, end)
+
+    def _keyword_in(self, call: str) -> bool:
+        """A FAST_CALL holds a reserved word (as a whole identifier, in any
+        letter case). Its numeric aggregate, if any, holds none (the E of
+        9E+09 follows a digit): only the name before it and the arguments
+        after it are looked at, upper-cased at once (the text is ASCII)."""
+        cut = call.rfind("]")
+        if cut >= 0:
+            call = call[:call.index("[")] + " " + call[cut + 1:]
+        return not self._reserved.isdisjoint(_WORD.findall(call.upper()))
 
     # ------------------------------------------------------------------ parser
     def _viable(self, state_stack: list) -> frozenset[str]:
