@@ -127,10 +127,19 @@ def test_unified_diff_matches_difflib():
         edits = []
         for k in sorted(rng.sample(range(n), rng.randint(1, min(n, 8)))):
             s, length = starts[k], len(lines[k])
-            if rng.random() < 0.5:
+            r = rng.random()
+            if r < 0.4:
                 edits.append(SpanEdit(s + 4, s + 9, "MoveAbsJ"))
-            else:
+            elif r < 0.7:
                 edits.append(SpanEdit(s + length, s + length, sep + "    CONST num x := 1;"))
+            else:
+                # Several edits on one line (the numbers of a literal), one
+                # of them maybe writing what was there.
+                cuts = sorted(rng.sample(range(10, length), 4))
+                for a, b in ((cuts[0], cuts[1]), (cuts[2], cuts[3])):
+                    edits.append(SpanEdit(s + a, s + b, rng.choice(["9", text[s + a:s + b]])))
+                if rng.random() < 0.5:
+                    edits.append(SpanEdit(s + length, s + length, sep + "    CONST num y:=2;"))
         new = apply_edits(text, edits)
         expected = list(difflib.unified_diff(text.splitlines(), new.splitlines(), "a", "b",
                                              n=3, lineterm=""))

@@ -8,6 +8,7 @@ the caller and are refused rather than silently merged.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from operator import attrgetter
 
 
 @dataclass(frozen=True, slots=True)
@@ -18,6 +19,11 @@ class SpanEdit:
     why: str = ""
 
 
+# The order edits are applied in (a C-level key: 1e5-target programs sort
+# 1e6 edits more than once).
+BY_SPAN = attrgetter("start", "end")
+
+
 class OverlappingEdits(ValueError):
     pass
 
@@ -26,7 +32,7 @@ def apply_edits(text: str, edits: list[SpanEdit] | tuple[SpanEdit, ...]) -> str:
     """Return `text` with every edit applied. No edits -> `text` itself."""
     if not edits:
         return text
-    ordered = sorted(edits, key=lambda e: (e.start, e.end))
+    ordered = sorted(edits, key=BY_SPAN)
     parts: list[str] = []
     pos = 0
     for edit in ordered:

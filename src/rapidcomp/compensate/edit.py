@@ -12,7 +12,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..edits import SpanEdit
+from ..edits import BY_SPAN, SpanEdit
 from ..kinematics.conf import quadrant_miss
 from ..kinematics.frames import matrix_to_quat_wxyz
 from ..errors import InternalError
@@ -539,7 +539,7 @@ class Editor:
             out.setdefault(fi, []).append(SpanEdit(pos, pos, "".join(nl + indent + d
                                                                      for d in decls),
                                                    "new declarations"))
-        return {fi: sorted(es, key=lambda e: (e.start, e.end)) for fi, es in out.items()}
+        return {fi: sorted(es, key=BY_SPAN) for fi, es in out.items()}
 
 
 def _conf(c) -> str:

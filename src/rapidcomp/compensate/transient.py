@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..edits import SpanEdit, apply_edits
+from ..edits import BY_SPAN, SpanEdit, apply_edits
 from ..errors import InternalError, RapidcompError
 from ..rapid import ast as A
 from ..rapid.parse import parse_text
@@ -369,7 +369,7 @@ def _state_text(text: str, cold, dq, func: str, s: float, dims=()) -> str:
         edits += [SpanEdit(f.span.start - base, f.span.end - base, _text(v), "state value")
                   for f, v in zip(fields, new)]
     return apply_edits(text[cold.span.start:cold.span.end],
-                       sorted(edits, key=lambda e: (e.start, e.end)))
+                       sorted(edits, key=BY_SPAN))
 
 
 def _text(v) -> str:
@@ -432,7 +432,7 @@ def materialize(texts: dict, parsed: dict, s: float) -> dict:
                                 "state value"))
                         new = made[key] + text[cold.span.start:cold.span.end][len(cold.name):]
                 edits[fi].append(SpanEdit(node.span.start, node.span.end, new, "state value"))
-    return {fi: apply_edits(texts[fi], sorted(es, key=lambda e: (e.start, e.end)))
+    return {fi: apply_edits(texts[fi], sorted(es, key=BY_SPAN))
             for fi, es in edits.items()}
 
 

@@ -8,7 +8,7 @@ lineterm="") prints for the same two texts; the tests check that.
 
 from __future__ import annotations
 
-from ..edits import SpanEdit, apply_edits
+from ..edits import BY_SPAN, SpanEdit, apply_edits
 
 
 def _line_starts(text: str) -> list[int]:
@@ -37,18 +37,24 @@ def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
     # Changed blocks: (first line, last line) of the original, edits merged
     # when they touch the same lines.
     blocks: list[list] = []
-    for e in sorted(edits, key=lambda e: (e.start, e.end)):
-        a = bisect.bisect_right(starts, e.start) - 1
+    top = len(lines) - 1
+    block_end = -1            # offset where the line after the last block starts
+    for e in sorted(edits, key=BY_SPAN):
         # An edit that removes a line end joins the next line to its block.
         last = e.end if e.end > e.start and text[e.end - 1] in "\r\n" else max(e.end - 1, e.start)
-        b = bisect.bisect_right(starts, last) - 1
-        a = min(a, len(lines) - 1)
-        b = min(max(a, b), len(lines) - 1)
+        if e.start < block_end and last < block_end:
+            # Within the last block's lines (a CAM line has 7 edits): it
+            # joins that block, which it does not extend.
+            blocks[-1][2].append(e)
+            continue
+        a = min(bisect.bisect_right(starts, e.start) - 1, top)
+        b = min(max(a, bisect.bisect_right(starts, last) - 1), top)
         if blocks and a <= blocks[-1][1]:
             blocks[-1][1] = max(blocks[-1][1], b)
             blocks[-1][2].append(e)
         else:
             blocks.append([a, b, [e]])
+        block_end = starts[blocks[-1][1] + 1]
     # New text of each block; lines an edit leaves as they were (e.g. the
     # line a declaration is inserted after) are context, as difflib has it.
     changed: list[list] = []  # [first old line, end old line (exclusive), new lines]
