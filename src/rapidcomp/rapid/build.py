@@ -19,13 +19,36 @@ from .lalr import Tok
 _FAST_HEAD = re.compile(r"([A-Za-z][A-Za-z0-9_]*)[ \t]+")
 _FAST_DECL = re.compile(r"(?:(LOCAL|TASK)[ \t]+)?(CONST|PERS|VAR)[ \t]+([A-Za-z][A-Za-z0-9_]*)"
                         r"[ \t]+([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*", re.IGNORECASE)
-_NUMAGG = re.compile(r"\[(?:[^\[\]]|\[[^\[\]]*\])*\]")
 _FAST_ITEM = re.compile(
     r"\\([A-Za-z][A-Za-z0-9_]*)(?::=([A-Za-z][A-Za-z0-9_]*|\d+(?:\.\d*)?))?"
     r"|([A-Za-z][A-Za-z0-9_]*)")
 
 
 _INF = float("inf")
+
+# The arguments after a FAST_CALL's first, by their text: a CAM program
+# repeats ",v100,z1,tool1\WObj:=wobj1;" 1e5 times. Lexed once, relative
+# offsets; the names' strings shared by every call that has them.
+_TAILS: dict[str, tuple] = {}
+
+
+def _fast_tail(tail: str) -> tuple:
+    hit = _TAILS.get(tail)
+    if hit is None:
+        items = []
+        for m in _FAST_ITEM.finditer(tail):
+            opt, val, word = m.group(1, 2, 3)
+            if word is not None:
+                items.append((None, None, word, m.start(3), m.end(3), 0, 0, False, None))
+            else:
+                is_num = val is not None and val[0].isdigit()
+                items.append((opt, val, None, m.start(), m.end(),
+                              m.start(2), m.end(2), is_num,
+                              number_value(val) if is_num else None))
+        if len(_TAILS) >= 4096:        # bounded: many programs in one process
+            _TAILS.clear()
+        hit = _TAILS[tail] = tuple(items)
+    return hit
 
 
 class NumberOutOfRange(Exception):
@@ -243,24 +266,28 @@ class NodeBuilder:
         args = []
         pos = head.end()
         if text[pos] == "[":
-            m = _NUMAGG.match(text, pos)
-            args.append(A.Arg("pos", None, A.NumAgg(m.group(), Span(base + pos, base + m.end())),
-                              Span(base + pos, base + m.end())))
-            pos = m.end()
-        for m in _FAST_ITEM.finditer(text, pos):
-            opt, val, word = m.group(1, 2, 3)
+            # The aggregate ends at the statement's last ']' (nothing after
+            # it has brackets).
+            end = text.rindex("]") + 1
+            span = Span(base + pos, base + end)
+            args.append(A.Arg("pos", None, A.NumAgg(text[pos:end], span), span))
+            pos = end
+        else:
+            first = _FAST_ITEM.match(text, pos)      # a name
+            span = Span(base + pos, base + first.end())
+            args.append(A.Arg("pos", None, A.Ref(first.group(3), (), span), span))
+            pos = first.end()
+        at = base + pos
+        for opt, val, word, s0, e0, s2, e2, is_num, num in _fast_tail(text[pos:]):
             if word is not None:
-                span = Span(base + m.start(3), base + m.end(3))
+                span = Span(at + s0, at + e0)
                 args.append(A.Arg("pos", None, A.Ref(word, (), span), span))
             elif val is None:
-                args.append(A.Arg("opt", opt, None, Span(base + m.start(), base + m.end())))
+                args.append(A.Arg("opt", opt, None, Span(at + s0, at + e0)))
             else:
-                vspan = Span(base + m.start(2), base + m.end(2))
-                if val[0].isdigit():
-                    value = A.Num(number_value(val), val, vspan)
-                else:
-                    value = A.Ref(val, (), vspan)
-                args.append(A.Arg("optval", opt, value, Span(base + m.start(), base + m.end())))
+                vspan = Span(at + s2, at + e2)
+                value = A.Num(num, val, vspan) if is_num else A.Ref(val, (), vspan)
+                args.append(A.Arg("optval", opt, value, Span(at + s0, at + e0)))
         return A.ProcCall(name, Span(base, base + len(name)), tuple(args),
                           Span(base, base + len(text)))
 
