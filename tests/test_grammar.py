@@ -171,3 +171,29 @@ def test_fast_path_refuses_reserved_words():
     assert isinstance(b[0].args[1].value, A.Bool)
     pf, b = body("Foo a, b;")
     assert [x.value.name for x in b[0].args] == ["a", "b"]
+
+
+def test_one_token_calls_give_the_general_grammars_tree(monkeypatch):
+    """A one-line call lexed as one FAST_CALL token (its arguments after the
+    first lexed once per distinct text) gives the tree the grammar's own
+    rules give, spans included, for calls repeated at other offsets."""
+    import random
+    from rapidcomp.rapid.grammar import engine
+    rnd = random.Random(11)
+    agg = "[[1.5,-2,3E+2],[1,0,0,0],[0,-1,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    firsts = [agg, "p1", "pLong_2", "[0,1.25]"]
+    tails = [",v100,z1,tool1\\WObj:=wobj1;", ",v1000,fine,tool0;", "\\Conc,v10,z5,t;",
+             ",v5\\V:=100,z1,t\\WObj:=w;", ",a\\T:=1.5,b\\Opt;", ",v100,z1,tool1\\WObj:=wobj1;"]
+    lines = []
+    for _ in range(300):
+        name = rnd.choice(["MoveL", "MoveJ", "Foo"])
+        first = rnd.choice(firsts if name == "Foo" else firsts[:3])
+        lines.append(f"    {name}{rnd.choice([' ', '  ', chr(9)])}{first}{rnd.choice(tails)}")
+    text = "MODULE m\n  PROC p()\n" + "\n".join(lines) + "\n  ENDPROC\nENDMODULE\n"
+    fast = parse_text(text)
+    eng = engine()
+    monkeypatch.setattr(type(eng), "_keyword_in", lambda self, call: True)
+    general = parse_text(text)
+    assert repr(fast.modules) == repr(general.modules)
+    calls = fast.module.routines[0].node.body
+    assert len(calls) == 300 and all(type(c) is A.ProcCall for c in calls)
