@@ -275,7 +275,7 @@ def _compact(t: str, expr, where: str) -> Record:
         if m is not None:
             texts = m.groups()
             values = tuple(map(float, texts))
-            if not all(abs(v) <= NUM_MAX for v in values):
+            if not max(map(abs, values)) <= NUM_MAX:      # (no NaN: the regex's numbers)
                 k = next(i for i, v in enumerate(values) if not abs(v) <= NUM_MAX)
                 s, e = m.regs[k + 1]
                 raise DecodeIssue(f"{where} component {texts[k]} is beyond what a RAPID num "
@@ -298,10 +298,10 @@ def relex(record: Record, text: str, want) -> Record | None:
     if m is None:
         return None
     texts = m.groups()
-    if list(texts) != list(want):
+    if texts != tuple(want):
         return None
     values = tuple(map(float, texts))
-    if not all(abs(v) <= NUM_MAX for v in values):
+    if not max(map(abs, values)) <= NUM_MAX:
         return None
     return type(record)(values, text, record.span)
 
