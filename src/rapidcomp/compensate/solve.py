@@ -154,6 +154,7 @@ class _Chooser:
         scale = (solver.joint_map.scale if solver.joint_map is not None else np.zeros(6))
         self.scaled = [j for j in (0, 3, 5) if scale[j] != 0]
         self._speculate()
+        self._quick_data()
 
     # ------------------------------------------------------------ speed
     def _speculate(self) -> None:
@@ -207,6 +208,28 @@ class _Chooser:
             ks = [self.rob_row[i] for i in sel.tolist()]
             self.off_spec[sel] = self.solver.closest(self.cands[ks], self.spec[self.pred1[sel]])
         self._alternatives(need)
+
+    def _quick_data(self) -> None:
+        """What _quick asks of every row, as Python values at once: the
+        predecessor, the guess as a list (exact floats: == is array_equal),
+        whether the batch's closest solution is valid, and whether it is
+        within SAME_DEG of the confdata's (decided here by a sum of squares
+        where that is 0.1 % away from the bound, by np.linalg.norm as the
+        choice computes it elsewhere)."""
+        n = len(self.uses)
+        self.pred1_l = self.pred1.tolist()
+        self.spec_l = self.spec.tolist()
+        self.off_ok = (~np.isnan(self.off_spec).any(axis=1)).tolist()
+        self.near_conf = [None] * n
+        if not self.rob_row:
+            return
+        rob = np.array(list(self.rob_row))
+        d = self.off_spec[rob] - self.by_conf.q_deg
+        sq = (d * d).sum(axis=1)
+        near = np.where(sq <= (0.999 * SAME_DEG) ** 2, 1, np.where(sq > (1.001 * SAME_DEG) ** 2,
+                                                                    0, -1))
+        for i, v, row in zip(rob.tolist(), near.tolist(), d):
+            self.near_conf[i] = bool(v) if v >= 0 else bool(np.linalg.norm(row) <= SAME_DEG)
 
     def _alternatives(self, need: np.ndarray) -> None:
         """Where supervision may be on or off, a move whose off solution is
@@ -379,21 +402,19 @@ class _Chooser:
         if last is None or len(last) != 1 or OFF not in sup:
             return None
         j = self.rows.get(next(iter(last)))
-        if j is None or self.pred1[i] != j or j not in self.chosen or len(self.sols[j]) != 1:
+        if j is None or self.pred1_l[i] != j or j not in self.chosen or len(self.sols[j]) != 1:
             return None
         s = self.sols[j][0]
-        if s.q is None or not np.array_equal(s.q, self.spec[j]):
+        if s.q is None or s.q.tolist() != self.spec_l[j] or not self.off_ok[i]:
             return None
         q = self.off_spec[i]
-        if np.isnan(q).any():
-            return None
         line = self.uses[j].line
         p = Pick(q, "", None, "closest", s.q, line, None if s.caution is None else (
             f"follows line {line}, whose configuration is assumed: kept a robtarget move"))
         if ON not in sup:
             return [p], p._replace(rule=f"closest to line {line} ({flag}\\Off)")
         on = self._by_conf(i, f"confdata ({flag} on or off: the same solution)")
-        if on.q is None or not np.linalg.norm(p.q - on.q) <= SAME_DEG:
+        if on.q is None or not self.near_conf[i]:
             return None
         if p.caution is not None:
             on = on._replace(caution=p.caution)
