@@ -34,7 +34,7 @@ ABSJ_OPTIONALS = frozenset({"conc", "id", "v", "t", "z", "inpos", "wobj", "tload
 TO_ABSJ = frozenset({"movej", "movel"})
 # Which instructions each mode turns into MoveAbsJ.
 ABSJ_FROM = {"auto": frozenset({"movej"}), "absj": TO_ABSJ, "robtarget": frozenset()}
-_LEFT = Warn.ORIENTATION_LEFT    # (an enum member looked up once, not per group)
+_LEFT = int(Warn.ORIENTATION_LEFT)   # (plain bits: an IntFlag's & costs ~3 us per group)
 
 
 @dataclass(eq=False, slots=True)
@@ -181,7 +181,7 @@ def _elements(g: Group, solved: Solved) -> None:
     if g.failure is None:
         for k in g.elements:
             i = seen[k]
-            if g.mode == "rob" and solved.deformed.warnings[i] & _LEFT:
+            if g.mode == "rob" and int(solved.deformed.warnings[i]) & _LEFT:
                 g.failure = (
                     f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
                     "compensation needs a J4/J6 split a robtarget cannot carry (the "
