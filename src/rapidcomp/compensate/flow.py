@@ -163,6 +163,7 @@ class _Walker:
         self.resolver = resolver
         self.track = track
         self.flow = Flow()
+        self.called: dict[int, tuple[str, ...]] = {}   # id(routine node) -> names it calls
         self.visits = 0
         self.memo: dict = {}
         self.recursed: set = set()
@@ -194,12 +195,20 @@ class _Walker:
             name in BUILTIN_INSTRUCTIONS or name in BUILTIN_FUNCTIONS
             or motion_spec(name) is not None or self.callee(rt.module, name) is not None)
 
+    def called_names(self, node: A.Routine) -> tuple[str, ...]:
+        """The distinct names a routine calls, once per routine (a CAM
+        routine calls MoveL 1e5 times)."""
+        names = self.called.get(id(node))
+        if names is None:
+            names = self.called[id(node)] = tuple(dict.fromkeys(_called_names(node)))
+        return names
+
     # ------------------------------------------------------------ entry
     def run(self) -> Flow:
         called = set()
         names = set()
         for rt in self.routines:
-            for name in _called_names(rt.node):
+            for name in self.called_names(rt.node):
                 names.add(name)
                 c = self.callee(rt.module, name)
                 if c is not None and c is not rt:
@@ -286,7 +295,7 @@ class _Walker:
             if id(r.node) in seen:
                 continue
             seen.add(id(r.node))
-            for name in _called_names(r.node):
+            for name in self.called_names(r.node):
                 out.add((r, name))
                 c = self.callee(r.module, name)
                 if c is not None:
