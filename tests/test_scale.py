@@ -596,3 +596,17 @@ def test_row_as_dict_encodes_as_asdict(solver):
                                                                   indent=2)
             statuses.add(r.status)
     assert len(statuses) == 3
+
+
+def test_walk_of_cam_moves_gives_the_general_walks_nodes(monkeypatch):
+    """refs.nodes takes a move whose arguments are names and literals in
+    one step: the same nodes in the same order as the general walk, on
+    every fixture and a CAM module."""
+    from rapidcomp.rapid import refs
+    files = [parse_file(p, p.name) for p in MODULES]
+    files.append(parse_text(_cam(200, 4, ""), "cam.mod"))
+    files.append(parse_text(ODD, "odd.mod"))
+    fast = [[id(n) for n in refs.nodes(m.node.items)] for pf in files for m in pf.modules]
+    monkeypatch.setattr(refs, "_flat", lambda arg: False)
+    slow = [[id(n) for n in refs.nodes(m.node.items)] for pf in files for m in pf.modules]
+    assert fast == slow and sum(map(len, fast)) > 3000

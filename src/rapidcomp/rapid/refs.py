@@ -54,11 +54,29 @@ def nodes(root):
         elif t is A.Arg:
             yield node
             stack.append(node.value)
+        elif t is A.ProcCall and all(map(_flat, node.args)):
+            # A CAM move (names and literals only): its nodes in the order
+            # the general walk gives them (last argument first), without
+            # a push and pop per node.
+            yield node
+            for arg in reversed(node.args):
+                yield arg
+                v = arg.value
+                if v is not None and type(v) is not A.NumAgg:
+                    yield v
         elif not (t is A.NumAgg or node is None or t in (str, int, float, bool)):
             yield node
             if hasattr(t, "__dataclass_fields__"):
                 for name in _field_names(t):
                     stack.append(getattr(node, name))
+
+
+def _flat(arg) -> bool:
+    """An argument whose value holds no further node."""
+    v = arg.value
+    t = type(v)
+    return type(arg) is A.Arg and (v is None or t is A.NumAgg or t is A.Num or (
+        t is A.Ref and not v.selectors))
 
 
 def usage(module: A.ModuleNode) -> Usage:
