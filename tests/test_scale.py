@@ -94,6 +94,30 @@ def test_relex_on_task_folders(folder, solver, monkeypatch):
         _same(fast, slow)
 
 
+OFFS = """MODULE OffsTest
+    CONST robtarget pA:=[[400,300,250],[0.707107,0,0.707107,0],[0,0,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+    CONST robtarget pB:=[[150,-400,300],[0.707107,0,0.707107,0],[-1,1,2,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+    CONST jointtarget jHome:=[[0,0,0,0,30,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+    PROC main()
+        MoveAbsJ jHome, v1000, z50, tool0;
+        MoveL Offs(pA, 0.123, -200.3, 0.7), v200, fine, tool0;
+        MoveL RelTool(pB, 0.1, 0.3, 0.7 \\Rz:=33.3), v200, fine, tool0;
+    ENDPROC
+ENDMODULE
+"""
+
+
+def test_relex_evaluates_offs_and_reltool_as_the_controller(solver, monkeypatch):
+    """Offs/RelTool numbers that float32 does not hold exactly (0.123,
+    -200.3, 33.3 deg): verified on the numbers written as a second parse
+    verifies them, each in float32 (found by review: the plan's float64
+    displacement was reused)."""
+    pf = parse_text(OFFS, "offs.mod")
+    fast, slow, served = _both(Task("offs.mod", (pf,)), solver, "robtarget", monkeypatch)
+    assert served and fast.summary()["compensated"] == 3
+    _same(fast, slow)
+
+
 def test_relex_serves_programs_edited_in_place(solver, monkeypatch):
     """A CAM program in robtarget mode is edited in its literals only: relex
     serves it; in auto mode its MoveJ become MoveAbsJ (new jointtargets)

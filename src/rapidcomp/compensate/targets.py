@@ -726,10 +726,22 @@ class Resolver:
         """A use resolve() gave for the input, resolved again by this
         resolver (float32, the records as written) on the same structure:
         what resolve() of its motion gives, without looking up again what
-        the structure decides (its source, the move's checks). For an output
-        whose every edit is numbers of existing literals (verify.py)."""
+        the structure decides (which literal, the move's checks; an
+        Offs/RelTool is evaluated again, its numbers being values too). For
+        an output whose every edit is numbers of existing literals
+        (verify.py)."""
         src = u.source
         self._notes = []
+        if src.call is not None:
+            # Offs/RelTool: their own numbers (displacement, angles) are
+            # evaluated by this resolver too (float32), not taken from the
+            # plan's source.
+            self._guarded = {lp.var.lower() for lp in u.motion.loops if lp.guarded and lp.var}
+            src = self._source(u.file, src.expr, u.module, u.motion.routine, dict(u.env))
+            if isinstance(src, Unresolved):
+                return TargetUse(u.motion, u.role, u.label, u.line, u.kind, None, None, None,
+                                 None, src.reason, env=u.env, blocked=src.blocked, file=u.file,
+                                 module=u.module, key=u.key)
         record = self.written.get((id(src.home if src.home is not None else u.file),
                                    src.record.span.start))
         if record is not None:
