@@ -59,9 +59,9 @@ def rounded_rows(a: np.ndarray) -> list[tuple[float, ...] | None]:
     exact numbers, is that nearest double (tested against round on ties,
     near-ties, signed zeros and large values)."""
     a = np.asarray(a, float)
-    scaled = a * 1e6
-    out = np.rint(scaled) / 1e6
-    with np.errstate(invalid="ignore"):
+    with np.errstate(over="ignore", invalid="ignore"):   # those go to round() below
+        scaled = a * 1e6
+        out = np.rint(scaled) / 1e6
         near_half = np.abs(scaled - np.floor(scaled) - 0.5) <= 4 * np.spacing(np.abs(scaled))
         odd = near_half | ~(np.abs(scaled) < 2.0 ** 52)    # NaN, inf, too large
     rows = out.tolist()

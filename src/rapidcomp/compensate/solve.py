@@ -67,6 +67,16 @@ class Solved:
         return self.deformed.reason(i)
 
 
+def _in_text_order(keys) -> list:
+    """The moves that may run before one (a set) in text order, the
+    program start last: a set of keys holding strings iterates in an order
+    that changes with every Python process (hash randomisation), and the
+    first solution found names the rule a report shows."""
+    if len(keys) < 2:
+        return list(keys)
+    return sorted(keys, key=lambda k: (0, k) if len(k) == 4 else (1, (0, 0, k[0], ())))
+
+
 def _flag(u: TargetUse) -> str:
     return "ConfJ" if u.motion.spec.interpolation == "joint" else "ConfL"
 
@@ -326,7 +336,7 @@ class _Chooser:
         chosen yet (later in a loop) adds nothing now: it is chosen, and
         this one again, until nothing changes."""
         picks, unknown, start, pending = [], preds is None, False, False
-        for pk in preds or ():
+        for pk in _in_text_order(preds or ()):
             if pk == PROGRAM_START:
                 start = True
                 continue
@@ -480,7 +490,7 @@ class _Chooser:
             u = self.uses[i]
             if u.kind != "robtarget":
                 continue
-            preds = self.plan.state(u).last or ()
+            preds = _in_text_order(self.plan.state(u).last or ())
             pred_rows = [self.rows[k] for k in preds if k in self.rows]
             for j in pred_rows:
                 succ.setdefault(j, []).append(i)
