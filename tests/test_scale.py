@@ -634,3 +634,33 @@ def test_walk_of_cam_moves_gives_the_general_walks_nodes(monkeypatch):
     monkeypatch.setattr(refs, "_flat", lambda arg: False)
     slow = [[id(n) for n in refs.nodes(m.node.items)] for pf in files for m in pf.modules]
     assert fast == slow and sum(map(len, fast)) > 3000
+
+
+def test_rotation_angles_and_quaternion_signs_are_the_pair_by_pair_formulas():
+    """records._rotation_angles and numbers.quaternions compute stacks:
+    the same bits as the pair-by-pair formulas written out here (a.T @ b,
+    np.linalg.norm, a @ b < 0), on rotations that differ by nothing, by the
+    keep bound, by ordinary corrections and by half turns, and quaternions
+    orthogonal to the one they replace."""
+    from rapidcomp.kinematics.frames import rotation_log, unit_quat_matrices, unit_wxyz
+    from rapidcomp.rewrite import numbers
+    from rapidcomp.rewrite.records import _rotation_angles
+    rng = np.random.default_rng(21)
+    n = 20000
+    q_old = rng.normal(size=(n, 4))
+    scale = rng.choice([0.0, 1e-9, 5e-10, 2e-9, 1e-5, 1e-3, 1.0], size=(n, 1))
+    q_new = q_old + rng.normal(size=(n, 4)) * scale
+    q_new[:50] = np.stack([-q_old[:50, 1], q_old[:50, 0], -q_old[:50, 3], q_old[:50, 2]], 1)
+    R_new = unit_quat_matrices([unit_wxyz(*q) for q in q_new.tolist()])
+
+    unit = [unit_wxyz(*q) for q in q_old.tolist()]
+    rel = np.array([a.T @ b for a, b in zip(unit_quat_matrices(unit), R_new)])
+    want = np.array([np.linalg.norm(v) for v in rotation_log(rel)])
+    assert np.array_equal(_rotation_angles(q_old, R_new), want)
+
+    q = q_new / np.sqrt([row.dot(row) for row in q_new])[:, None]
+    flip = np.array([a @ b < 0 for a, b in zip(q, q_old)])
+    q = np.where(flip[:, None], -q, q)
+    f = numbers.QUAT_DECIMALS
+    expected = [tuple(numbers.fmt(v, f) for v in row) for row in q.tolist()]
+    assert numbers.quaternions(q_new, like=q_old) == expected

@@ -54,7 +54,13 @@ def quaternions(q_wxyz, like=None) -> list[tuple[str, str, str, str]]:
     q = q / np.sqrt([row.dot(row) for row in q])[:, None]
     ref = np.broadcast_to(np.asarray(like, float) if like is not None
                           else np.array([1.0, 0, 0, 0]), q.shape)
-    q = np.where(np.array([a @ b < 0 for a, b in zip(q, ref)])[:, None], -q, q)
+    # The sign from one batch of dot products; where one is near 0 (the
+    # batch's sum could differ from a @ b in the last bits) row by row.
+    dots = np.einsum("ij,ij->i", q, ref)
+    flip = dots < 0
+    for i in np.flatnonzero(np.abs(dots) < 1e-9).tolist():
+        flip[i] = q[i] @ ref[i] < 0
+    q = np.where(flip[:, None], -q, q)
     f = QUAT_DECIMALS
     return [(fmt(w, f), fmt(x, f), fmt(y, f), fmt(z, f)) for w, x, y, z in q.tolist()]
 

@@ -8,6 +8,8 @@ external axes exactly as written in the source.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..edits import SpanEdit
@@ -19,13 +21,15 @@ from . import numbers
 
 def _rotation_angles(q_old, R_new) -> np.ndarray:
     """Angles (rad) between the rotations of quaternions q_old (n, 4) and
-    matrices R_new (n, 3, 3): the products and norms row by row, as for one
-    (a batch reduction may differ in the last bit, and a field's keep-or-
-    rewrite decision at ROT_KEEP_RAD with it); the rotation log as a batch
-    (elementwise)."""
+    matrices R_new (n, 3, 3), each as one pair's would be (a field's
+    keep-or-rewrite decision at ROT_KEEP_RAD depends on the last bit):
+    the quaternions normalised one by one, the products as a stack with
+    each left factor a transposed view (the layout of a.T @ b), the norms
+    as np.linalg.norm computes one, sqrt(v . v) (tested against the pair
+    by pair formulas)."""
     unit = [unit_wxyz(*q) for q in np.asarray(q_old, float).tolist()]
-    rel = np.array([a.T @ b for a, b in zip(unit_quat_matrices(unit), R_new)])
-    return np.array([np.linalg.norm(v) for v in rotation_log(rel)])
+    rel = np.matmul(np.swapaxes(unit_quat_matrices(unit), -1, -2), R_new)
+    return np.array([math.sqrt(v.dot(v)) for v in rotation_log(rel)])
 
 
 def robtarget_texts(record: RobTarget, R: np.ndarray, p: np.ndarray,
