@@ -604,10 +604,14 @@ def _plain(v) -> bool:
         t is A.Ref and not v.selectors)
 
 
+def _plain_arg(a) -> bool:
+    return _plain(a.value)
+
+
 def _function_calls(s) -> tuple:
     """Names of the functions (not built-ins) a statement's own expressions
     call, each once."""
-    if type(s) is A.ProcCall and all(_plain(a.value) for a in s.args):
+    if type(s) is A.ProcCall and all(map(_plain_arg, s.args)):
         return ()             # a move of a CAM program: asked 1e5 times
     out: dict = {}
     for c in calls_in(_heads(s)):
