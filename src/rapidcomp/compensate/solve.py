@@ -190,6 +190,7 @@ class _Chooser:
         rob = np.array(list(self.rob_row))
         self.spec[rob[ok]] = self.by_conf.q_deg[ok]
         need = []
+        pred1 = [-1] * n
         for i in self.order:
             u = self.uses[i]
             if u.kind != "robtarget":
@@ -199,17 +200,21 @@ class _Chooser:
                 continue
             if st.last is not None and len(st.last) == 1:
                 (pk,) = st.last
-                self.pred1[i] = self.rows.get(pk, -1)
+                pred1[i] = self.rows.get(pk, -1)
             need.append(i)
-        # Chains: consecutive rows each following the one before.
+        self.pred1 = np.array(pred1)
+        # Chains: consecutive rows each following the one before (rows
+        # without a guess yet: _follow_run sets only rows already passed).
+        unguessed = np.isnan(self.spec).any(axis=1).tolist()
         run: list[int] = []
         for i in need + [-1]:
-            j = self.pred1[i] if i >= 0 else -2
-            if i >= 0 and np.isnan(self.spec[i]).any() and run and j == run[-1]:
+            j = pred1[i] if i >= 0 else -2
+            if i >= 0 and unguessed[i] and run and j == run[-1]:
                 run.append(i)
                 continue
-            self._follow_run(run)
-            run = [i] if i >= 0 and np.isnan(self.spec[i]).any() and j >= 0 else []
+            if run:
+                self._follow_run(run)
+            run = [i] if i >= 0 and unguessed[i] and j >= 0 else []
         need = np.array(need, dtype=int)
         need = need[self.pred1[need] >= 0]
         pred = self.pred1[need]
