@@ -226,23 +226,25 @@ class Editor:
         # literal whose numeric fields are edited; structural: some edit
         # is of anything else (a new declaration, a reference, MoveAbsJ).
         self.fields: dict[tuple[int, int], tuple] = {}
+        # The field edits of each of those literals, as lists: no index by
+        # span per field (a CAM program has 7e5); a literal is written once.
+        self.field_lists: list[tuple[int, list[SpanEdit]]] = []
         self.structural = False
         self._per_module: dict = {}
 
     def text(self, fi: int) -> str:
         return self.plan.files[fi].source.text
 
-    def edit(self, fi: int, span, text: str, why: str, field: bool = False) -> None:
-        self.put(fi, SpanEdit(span.start, span.end, text, why), field)
-
-    def put(self, fi: int, e: SpanEdit, field: bool = False) -> None:
-        self.structural = self.structural or not field
-        key = (fi, e.start, e.end)
+    def edit(self, fi: int, span, text: str, why: str) -> None:
+        """An edit of anything but a literal's numbers (those are
+        field_lists): the output's structure changes."""
+        self.structural = True
+        key = (fi, span.start, span.end)
         old = self.edits.get(key)
-        if old is not None and old.replacement != e.replacement:
+        if old is not None and old.replacement != text:
             raise InternalError(f"{self.plan.files[fi].source.display_path}: conflicting edits "
-                                f"at offset {e.start}: {e.why}")
-        self.edits[key] = e
+                                f"at offset {span.start}: {why}")
+        self.edits[key] = SpanEdit(span.start, span.end, text, why)
 
     # -------------------------------------------------------- declarations
     def _anchor(self, g: Group) -> tuple[int, int, str, str, bool]:
@@ -331,9 +333,17 @@ class Editor:
                 record = vals.source(g, k).record
                 fi = (self.plan.file_index[id(g.src.home)] if g.decl is not None
                       else g.uses[0].key[0])
-                self.fields[(fi, record.span.start)] = (record, texts[k])
-                for e in changes[k]:
-                    self.put(fi, e, field=True)
+                key = (fi, record.span.start)
+                old = self.fields.get(key)
+                if old is not None:
+                    if old[1] != texts[k]:
+                        raise InternalError(f"{self.plan.files[fi].source.display_path}: "
+                                            f"conflicting edits of the literal at offset "
+                                            f"{record.span.start}: {element_label(g, k)}")
+                    continue
+                self.fields[key] = (record, texts[k])
+                if changes[k]:
+                    self.field_lists.append((fi, changes[k]))
             what = (f"inline {type_name} rewritten" if g.decl is None
                     else f"{type_name} {g.decl.name} rewritten in place")
             for u in g.uses:
@@ -534,6 +544,8 @@ class Editor:
         out: dict[int, list[SpanEdit]] = {}
         for (fi, _, _), e in self.edits.items():
             out.setdefault(fi, []).append(e)
+        for fi, es in self.field_lists:
+            out.setdefault(fi, []).extend(es)
         for (fi, pos), decls in self.inserts.items():
             nl, indent = self.insert_nl[(fi, pos)], self.insert_indent[(fi, pos)]
             out.setdefault(fi, []).append(SpanEdit(pos, pos, "".join(nl + indent + d

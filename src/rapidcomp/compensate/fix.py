@@ -121,7 +121,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         # Past this point per-target texts and the edits' index are not
         # needed (1e5 targets: ~200 MB before verification).
         values.forget_texts()
-        editor.edits = None
+        editor.edits = editor.field_lists = None
         texts = {fi: apply_edits(plan.files[fi].source.text, es)
                  for fi, es in file_edits.items()}
         clock("print")
