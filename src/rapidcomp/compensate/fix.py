@@ -148,7 +148,8 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     else:
         raise InternalError("the written values do not settle (verification keeps failing)")
     group_of = {u.key: g for g in gs for u in g.uses}
-    written_conf = {u.key: (values.robtarget_value(g, u.source.element)[2]
+    # The confdata written, as ints (once per use here, not per row later).
+    written_conf = {u.key: (tuple(int(c) for c in values.robtarget_value(g, u.source.element)[2])
                             if g.mode == "rob" else None)
                     for g in gs if g.failure is None for u in g.uses}
     # What each stage made per target is not needed past it (1e5 targets:

@@ -8,7 +8,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from ..kinematics.frames import DEG
-from ..kinematics.ik import WARN_TEXT, Warn
+from ..kinematics.ik import WARN_TEXT, Warn, warning_texts_of
 from .place import ABSJ_FROM, ABSJ_OPTIONALS, Group, element_label
 from .plan import Plan
 from .solve import Solved
@@ -83,6 +83,7 @@ class _Columns:
         self.res_mm = solved.deformed.residual_mm.tolist()
         self.res_rad = solved.deformed.residual_rad.tolist()
         self.disp = solved.displacement_um_per_mm.tolist()
+        self.warn_bits = solved.deformed.warnings.tolist()
 
 
 def displacement_warning(um_per_mm: float) -> str:
@@ -121,13 +122,13 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
          mode, written_conf, ok_label, fail_label, tracked) -> UseRow:
     i = solved.row[u.key]
     pick = solved.picks[i]
-    deformed = solved.deformed
     qn = cols.qn[i]
     has_q = pick.failure is None
     error = ((cols.err_p[i] * 1000, cols.err_r[i] / DEG) if has_q else (None, None))
-    # confdata is a robtarget's: a MoveAbsJ has none.
-    conf_before = tuple(int(c) for c in u.conf) if u.conf is not None else None
-    d_warnings = _warnings(solved, i, u, deformed.warning_texts(i)) if has_q else ()
+    # confdata is a robtarget's: a MoveAbsJ has none. (A record's conf is
+    # a tuple of ints already.)
+    conf_before = u.conf
+    d_warnings = _warnings(solved, i, u, warning_texts_of(cols.warn_bits[i])) if has_q else ()
     g: Group | None = group_of.get(u.key) if group_of is not None else None
     why = None
     if not solved.ok(i):
@@ -178,8 +179,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
 
 def _conf_after(solved: Solved, i: int, u: TargetUse, written_conf):
     if written_conf is not None:
-        c = written_conf.get(u.key)
-        return None if c is None else tuple(int(x) for x in c)
+        return written_conf.get(u.key)       # ints (fix.py)
     if u.kind != "robtarget":
         return None
     return tuple(int(c) for c in solved.conf_after[i])

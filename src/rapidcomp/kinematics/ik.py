@@ -152,7 +152,7 @@ class IKBatch:
         return "the solution is on another configuration branch (cfx changed)"
 
     def warning_texts(self, i: int) -> tuple[str, ...]:
-        return _warning_texts(int(self.warnings[i]))
+        return warning_texts_of(int(self.warnings[i]))
 
     def result(self, i: int) -> IKResult:
         ok = bool(self.status[i] == Status.OK)
@@ -165,11 +165,12 @@ class IKBatch:
             float(self.residual_mm[i]), float(self.residual_rad[i]), int(self.iterations[i]),
             tuple(float(x) for x in self.joint_change_deg[i])
             if self.joint_change_deg is not None and not np.isnan(q).any() else None,
-            _warning_texts(int(warn)))
+            warning_texts_of(int(warn)))
 
 
 @functools.lru_cache(maxsize=None)
-def _warning_texts(bits: int) -> tuple[str, ...]:
+def warning_texts_of(bits: int) -> tuple[str, ...]:
+    """The texts of a warnings bit set (IKBatch.warnings holds them)."""
     warn = Warn(bits)
     return tuple(text for flag, text in WARN_TEXT.items() if flag in warn)
 
