@@ -133,15 +133,10 @@ class Values:
         srcs = [self.source(g, k) for g, k in items]
         n = len(items)
         resolver = self.plan.resolver
-        B_R, B_p = np.empty((n, 3, 3)), np.empty((n, 3))
-        W_R, W_p = np.empty((n, 3, 3)), np.empty((n, 3))
-        T_R, T_p = np.empty((n, 3, 3)), np.empty((n, 3))
-        for j, ((g, k), src) in enumerate(zip(items, srcs)):
-            B_R[j], B_p[j] = resolver.world_M_base(src.record)
-            W_R[j], W_p[j] = g.wobj[1]
-            T_R[j], T_p[j] = g.tool[1]
-        R, p = wobj_targets((B_R, B_p), (W_R, W_p), (s.flange_R[rows], s.flange_p[rows]),
-                            (T_R, T_p))
+        R, p = wobj_targets(_stacked([resolver.world_M_base(src.record) for src in srcs]),
+                            _stacked([g.wobj[1] for g, _ in items]),
+                            (s.flange_R[rows], s.flange_p[rows]),
+                            _stacked([g.tool[1] for g, _ in items]))
         for j, src in enumerate(srcs):
             if src.call is not None:
                 R[j], p[j] = base_pose(src, (R[j], p[j]))
@@ -179,6 +174,24 @@ class Values:
         if g.mode == "joint":
             return records.jointtarget_literal(texts)
         return records.robtarget_literal(texts)
+
+
+def _stacked(poses: list) -> tuple[np.ndarray, np.ndarray]:
+    """(R (n, 3, 3), p (n, 3)) of poses (R, p), most of them one object (a
+    CAM program's tool, work object and base): each distinct pose converted
+    once, then copied into place."""
+    index: dict[int, int] = {}
+    distinct = []
+    at = []
+    for pose in poses:
+        k = index.get(id(pose))
+        if k is None:
+            k = index[id(pose)] = len(distinct)
+            distinct.append(pose)
+        at.append(k)
+    R = np.array([np.asarray(r, float).reshape(3, 3) for r, _ in distinct]).reshape(-1, 3, 3)
+    p = np.array([np.asarray(v, float).reshape(3) for _, v in distinct]).reshape(-1, 3)
+    return R[at], p[at]
 
 
 def _style(word: str, like: str) -> str:
