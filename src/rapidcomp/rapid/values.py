@@ -68,7 +68,10 @@ class _Numeric:
 
     @property
     def texts(self) -> tuple[str, ...]:
-        return self.lex()[0]
+        if type(self.lexed) is tuple:
+            return self.lexed[0]
+        # (Without the spans: 1e5 literals' texts are asked for at once.)
+        return _FAST[type(self).__name__.lower()].fullmatch(self.lexed).groups()
 
     @property
     def regs(self) -> tuple[tuple[int, int], ...]:
