@@ -22,7 +22,7 @@ from ..rewrite.names import NameAllocator
 from .place import Group, element_label, multi_index
 from .plan import Plan
 from .solve import Solved
-from .targets import Source, base_pose, wobj_targets
+from .targets import Source, base_pose, stacked_poses, wobj_targets
 
 
 class Values:
@@ -110,8 +110,11 @@ class Values:
             values = self._robtarget_values(new)
             for j, (g, k) in enumerate(new):
                 self._values[(id(g), k)] = (values[0][j], values[1][j], values[2][j])
-        R, p, conf = (np.array([self._values[(id(g), k)][n] for g, k in items])
-                      for n in range(3))
+        if len(new) == len(items):       # (the first round: the stacks just made)
+            R, p, conf = values
+        else:
+            R, p, conf = (np.array([self._values[(id(g), k)][n] for g, k in items])
+                          for n in range(3))
         texts = records.robtarget_texts_many([self.source(g, k).record for g, k in items],
                                              R, p, conf)
         for (g, k), t in zip(items, texts):
@@ -133,10 +136,10 @@ class Values:
         srcs = [self.source(g, k) for g, k in items]
         n = len(items)
         resolver = self.plan.resolver
-        R, p = wobj_targets(_stacked([resolver.world_M_base(src.record) for src in srcs]),
-                            _stacked([g.wobj[1] for g, _ in items]),
+        R, p = wobj_targets(stacked_poses([resolver.world_M_base(src.record) for src in srcs]),
+                            stacked_poses([g.wobj[1] for g, _ in items]),
                             (s.flange_R[rows], s.flange_p[rows]),
-                            _stacked([g.tool[1] for g, _ in items]))
+                            stacked_poses([g.tool[1] for g, _ in items]))
         for j, src in enumerate(srcs):
             if src.call is not None:
                 R[j], p[j] = base_pose(src, (R[j], p[j]))
@@ -174,24 +177,6 @@ class Values:
         if g.mode == "joint":
             return records.jointtarget_literal(texts)
         return records.robtarget_literal(texts)
-
-
-def _stacked(poses: list) -> tuple[np.ndarray, np.ndarray]:
-    """(R (n, 3, 3), p (n, 3)) of poses (R, p), most of them one object (a
-    CAM program's tool, work object and base): each distinct pose converted
-    once, then copied into place."""
-    index: dict[int, int] = {}
-    distinct = []
-    at = []
-    for pose in poses:
-        k = index.get(id(pose))
-        if k is None:
-            k = index[id(pose)] = len(distinct)
-            distinct.append(pose)
-        at.append(k)
-    R = np.array([np.asarray(r, float).reshape(3, 3) for r, _ in distinct]).reshape(-1, 3, 3)
-    p = np.array([np.asarray(v, float).reshape(3) for _, v in distinct]).reshape(-1, 3)
-    return R[at], p[at]
 
 
 def _style(word: str, like: str) -> str:

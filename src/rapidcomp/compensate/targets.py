@@ -132,6 +132,24 @@ def _invert_many(a):
     return Rt, -(Rt @ a[1][..., None])[..., 0]
 
 
+def stacked_poses(poses: list) -> tuple[np.ndarray, np.ndarray]:
+    """(R (n, 3, 3), p (n, 3)) of poses (R, p), most of them one object (a
+    CAM program's tool, work object and base): each distinct pose converted
+    once, then copied into place (C order, as the products expect)."""
+    index: dict[int, int] = {}
+    distinct = []
+    at = []
+    for pose in poses:
+        k = index.get(id(pose))
+        if k is None:
+            k = index[id(pose)] = len(distinct)
+            distinct.append(pose)
+        at.append(k)
+    R = np.array([np.asarray(r, float).reshape(3, 3) for r, _ in distinct]).reshape(-1, 3, 3)
+    p = np.array([np.asarray(v, float).reshape(3) for _, v in distinct]).reshape(-1, 3)
+    return R[at], p[at]
+
+
 def flange_poses(base, wobj, target, tool):
     """flange_pose of stacks: each argument (R (n, 3, 3), p (n, 3)). The
     products in the one-pose order and layout (inverses as transposed
@@ -602,10 +620,8 @@ class Resolver:
             if u.source.call is not None:
                 R[i], p[i] = _relative(u.source, R[i], p[i])
 
-        def stack(k):
-            return (np.array([item[k][0] for item in pending]).reshape(n, 3, 3),
-                    np.array([item[k][1] for item in pending]).reshape(n, 3))
-        Rf, pf = flange_poses(stack(3), stack(4), (R, p), stack(5))
+        Rf, pf = flange_poses(*(stacked_poses([item[k] for item in pending]) for k in (3, 4)),
+                              (R, p), stacked_poses([item[5] for item in pending]))
         for i, (u, *_) in enumerate(pending):
             # Two-phase construction: the use has not left the resolver's
             # client yet (Plan, verify call poses() before reading it).
@@ -716,16 +732,20 @@ class Resolver:
             src = Unresolved(t.issue)
         else:
             src = self._source(pf, t.expr, module, motion.routine, env)
-        if self.written and not isinstance(src, Unresolved):
-            record = self.written.get((id(src.home if src.home is not None else pf),
-                                       src.record.span.start))
-            if record is not None:
-                src = src.with_record(record)
-        if isinstance(src, Unresolved):
-            if src.blocked and kind == "robtarget" and src.reason.endswith(f"({MISSING_HINT})"):
-                return fail(self._all_missing(src, module, motion))
-            return fail(src)
+        src = self._as_written(src, pf)
+        if (isinstance(src, Unresolved) and src.blocked and kind == "robtarget"
+                and src.reason.endswith(f"({MISSING_HINT})")):
+            return fail(self._all_missing(src, module, motion))
         return self._complete(pf, module, motion, t.role, kind, label, line, envt, key, src)
+
+    def _as_written(self, src, pf):
+        """src holding its record as the output writes it (self.written),
+        where the output rewrote it."""
+        if isinstance(src, Unresolved) or not self.written:
+            return src
+        record = self.written.get((id(src.home if src.home is not None else pf),
+                                   src.record.span.start))
+        return src if record is None else src.with_record(record)
 
     def again(self, u: TargetUse) -> TargetUse:
         """A use resolve() gave for the input, resolved again by this
@@ -743,16 +763,8 @@ class Resolver:
             # plan's source.
             self._guarded = {lp.var.lower() for lp in u.motion.loops if lp.guarded and lp.var}
             src = self._source(u.file, src.expr, u.module, u.motion.routine, dict(u.env))
-            if isinstance(src, Unresolved):
-                return TargetUse(u.motion, u.role, u.label, u.line, u.kind, None, None, None,
-                                 None, src.reason, env=u.env, blocked=src.blocked, file=u.file,
-                                 module=u.module, key=u.key)
-        record = self.written.get((id(src.home if src.home is not None else u.file),
-                                   src.record.span.start))
-        if record is not None:
-            src = src.with_record(record)
         return self._complete(u.file, u.module, u.motion, u.role, u.kind, u.label, u.line,
-                              u.env, u.key, src)
+                              u.env, u.key, self._as_written(src, u.file))
 
     def again_many(self, uses: list[TargetUse]):
         """again() of many robtarget uses at once, as arrays: (indices of
@@ -773,8 +785,7 @@ class Resolver:
             wobj = self.wobj(u.motion.wobj, u.module, u.motion.routine)
             if isinstance(tool, Unresolved) or isinstance(wobj, Unresolved):
                 continue
-            record = self.written.get((id(src.home if src.home is not None else u.file),
-                                       src.record.span.start), src.record)
+            record = self._as_written(src, u.file).record
             if not isinstance(record, RobTarget):
                 continue
             done.append(n)
@@ -801,26 +812,23 @@ class Resolver:
         w, x, y, z = q.T
         n2 = np.array([s ** 0.5 for s in (w * w + x * x + y * y + z * z).tolist()])
         R = unit_quat_matrices(q / n2[:, None])
-        base = (np.repeat(np.asarray(self.base[0], float)[None], m, axis=0),
-                np.repeat(np.asarray(self.base[1], float)[None], m, axis=0))
-
-        def stack(poses):
-            return (np.array([t[0] for t in poses]).reshape(m, 3, 3),
-                    np.array([t[1] for t in poses]).reshape(m, 3))
-        Rf, pf = flange_poses(base, stack(wobjs), (R, p), stack(tools))
+        Rf, pf = flange_poses(stacked_poses([self.base] * m), stacked_poses(wobjs), (R, p),
+                              stacked_poses(tools))
         keep = np.flatnonzero(ok)
         return ([done[k] for k in keep.tolist()], Rf[keep], pf[keep],
                 conf[keep].astype(int))
 
     def _complete(self, pf, module, motion, role, kind, label, line, envt, key,
-                  src: Source) -> TargetUse:
-        """The use of a resolved source: its values checked, its tool, work
-        object and base resolved."""
+                  src: Source | Unresolved) -> TargetUse:
+        """The use of a source: its values checked, its tool, work object and
+        base resolved (or why it has none)."""
         def fail(why: Unresolved):
             return TargetUse(motion, role, label, line, kind, None, None, None, None,
                              why.reason, env=envt, blocked=why.blocked, file=pf, module=module,
                              key=key)
 
+        if isinstance(src, Unresolved):
+            return fail(src)
         if kind == "jointtarget":
             if not isinstance(src.record, JointTarget):
                 return fail(Unresolved("not a jointtarget", True))
