@@ -44,7 +44,7 @@ from ..rapid.model import Module, ParsedFile, RoutineTable
 from ..rapid.motions import (BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS, DISPLACEMENT_OFF,
                              DISPLACEMENT_ON, MOVES_OTHERWISE, SUPERVISION, TRACK_OFFSET_OFF,
                              TRACK_OFFSET_ON, UNKNOWN_TARGET_CALLS, motion_spec)
-from ..rapid.refs import calls_in, names_in
+from ..rapid.refs import calls_in, names_in, plain_arg
 
 ON, OFF = "on", "off"
 BOTH = frozenset((ON, OFF))
@@ -597,21 +597,10 @@ def _heads(s) -> tuple:
     return ()
 
 
-def _plain(v) -> bool:
-    """An argument that calls nothing: a plain name, a literal."""
-    t = type(v)
-    return v is None or t is A.NumAgg or t is A.Num or t is A.Str or (
-        t is A.Ref and not v.selectors)
-
-
-def _plain_arg(a) -> bool:
-    return _plain(a.value)
-
-
 def _function_calls(s) -> tuple:
     """Names of the functions (not built-ins) a statement's own expressions
     call, each once."""
-    if type(s) is A.ProcCall and all(map(_plain_arg, s.args)):
+    if type(s) is A.ProcCall and all(map(plain_arg, s.args)):
         return ()             # a move of a CAM program: asked 1e5 times
     out: dict = {}
     for c in calls_in(_heads(s)):

@@ -54,7 +54,7 @@ def nodes(root):
         elif t is A.Arg:
             yield node
             stack.append(node.value)
-        elif t is A.ProcCall and all(map(_flat, node.args)):
+        elif t is A.ProcCall and all(map(plain_arg, node.args)):
             # A CAM move (names and literals only): its nodes in the order
             # the general walk gives them (last argument first), without
             # a push and pop per node.
@@ -71,11 +71,12 @@ def nodes(root):
                     stack.append(getattr(node, name))
 
 
-def _flat(arg) -> bool:
-    """An argument whose value holds no further node."""
+def plain_arg(arg) -> bool:
+    """An argument that is a plain name or a literal (or none): it calls
+    nothing and holds no further node."""
     v = arg.value
     t = type(v)
-    return type(arg) is A.Arg and (v is None or t is A.NumAgg or t is A.Num or (
+    return type(arg) is A.Arg and (v is None or t is A.NumAgg or t is A.Num or t is A.Str or (
         t is A.Ref and not v.selectors))
 
 

@@ -47,9 +47,10 @@ def quaternion(q_wxyz, like=None) -> tuple[str, str, str, str]:
 
 
 def quaternions(q_wxyz, like=None) -> list[tuple[str, str, str, str]]:
-    """quaternion() of many (n, 4) at once. Norms and signs row by row, as
-    one quaternion's are: a batch reduction may differ in the last bit,
-    and a 9th decimal on a rounding boundary with it."""
+    """quaternion() of many (n, 4) at once. Norms row by row, as one
+    quaternion's is (a batch reduction may differ in the last bit, and a
+    9th decimal on a rounding boundary with it); signs from one batch of
+    dot products, row by row where one is near 0."""
     q = np.asarray(q_wxyz, float)
     q = q / np.sqrt([row.dot(row) for row in q])[:, None]
     ref = np.broadcast_to(np.asarray(like, float) if like is not None
