@@ -481,6 +481,65 @@ def test_batched_flange_poses_are_those_of_one():
         assert np.array_equal(want[0], u.R) and np.array_equal(want[1], u.p)
 
 
+
+@pytest.mark.parametrize("float32", [False, True])
+def test_batched_target_checks_give_the_parts_of_one(float32):
+    """The resolver checks and normalises every robtarget of a move in one
+    batch (Resolver._checked_parts): on quaternions exactly unit, off by
+    1e-13, 1e-9 and 2e-3 (a note), and positions and confdata at their
+    bounds, q and p equal, bit for bit, what _target_parts gives one by
+    one, and the notes are the same."""
+    from rapidcomp.compensate.targets import Resolver
+    rng = np.random.default_rng(11)
+    lines = ["MODULE Q", "  PERS tooldata t1:=[TRUE,[[0,0,150],[1,0,0,0]],"
+             "[2,[0,0,75],[1,0,0,0],0,0,0]];", "  PROC Path()"]
+    for i in range(400):
+        q = rng.normal(size=4)
+        q /= np.linalg.norm(q)
+        q *= [1.0, 1 + 1e-13, 1 - 1e-9, 1 + 2e-3][i % 4]
+        p = rng.uniform(-2000, 2000, 3) if i % 7 else [1e5, -1e5, 0.0]
+        conf = [-8, 8, 0, 7] if i % 5 == 0 else [0, -1, 1, 0]
+        lines.append("    MoveL [[" + ",".join(repr(float(v)) for v in p) + "],["
+                     + ",".join(repr(float(v)) for v in q) + "],["
+                     + ",".join(map(str, conf)) + "],[9E9,9E9,9E9,9E9,9E9,9E9]],v10,fine,t1;")
+    lines += ["  ENDPROC", "ENDMODULE", ""]
+    pf = parse_text("\n".join(lines), "q.mod")
+    plan = Plan(Task("q.mod", (pf,)))
+    uses = [u for u in plan.uses if u.reason is None]
+    assert len(uses) == 400
+    res = Resolver([pf], float32=float32)
+    want = []
+    for u in uses:
+        res._notes = []
+        want.append(res._target_parts(u.source, u.file))
+        assert u.notes == (tuple(res._notes) if not float32 else u.notes)
+    assert sum(bool(u.notes) for u in uses) == 100
+    res._notes = []
+    q, p = res._checked_parts([(u, u.source, u.file) for u in uses])
+    assert res._notes == []
+    for qi, pi, (want_q, want_p) in zip(q, p, want):
+        assert np.array_equal(qi, want_q) and np.array_equal(pi, want_p)
+
+
+def test_a_target_error_comes_before_a_later_moves_error(tmp_path):
+    """Robtargets are checked in a batch after their moves are resolved;
+    an error a later move raises meanwhile comes after the earlier
+    target's, as checking one by one gives it (here a confdata cfx of 9 on
+    line 4 before a joint of 2E5 deg on line 5)."""
+    text = ("MODULE E\n  PROC Path()\n    MoveL [[400,0,400],[0,0,1,0],[0,0,0,0],"
+            "[9E9,9E9,9E9,9E9,9E9,9E9]],v10,fine,tool0;\n"
+            "    MoveL [[400,0,400],[0,0,1,0],[0,0,0,9],[9E9,9E9,9E9,9E9,9E9,9E9]],v10,fine,"
+            "tool0;\n    MoveAbsJ [[2E5,0,0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v10,fine,tool0;\n"
+            "  ENDPROC\nENDMODULE\n")
+    from rapidcomp.errors import InputError
+    with pytest.raises(InputError) as exc:
+        Plan(Task("e.mod", (parse_text(text, "e.mod"),)))
+    assert exc.value.line == 4 and "cfx is 9" in str(exc.value)
+    later = text.replace("[0,0,0,9]", "[0,0,0,1]")
+    with pytest.raises(InputError) as exc:
+        Plan(Task("e.mod", (parse_text(later, "e.mod"),)))
+    assert exc.value.line == 5 and "J1 is 2E5" in str(exc.value)
+
 def test_source_with_record_is_dataclasses_replace():
     """Source.with_record (the verification's per-target copy) keeps every
     other field, as dataclasses.replace does."""
@@ -604,6 +663,28 @@ def test_joint_columns_format_as_each_value_does():
                   for _ in range(6))
         for fmt in (".4f", "+.5f"):
             assert _joints(q, fmt) == " ".join(format(v, fmt) for v in q)
+
+
+def test_number_texts_in_bulk_are_those_of_one():
+    """numbers.fmt_many writes many numbers in one formatting and strips
+    zeros on the joined text: each text equals fmt()'s for that number
+    alone, on signed zeros (alone, in a row, first and last), values that
+    round to zero, integers whose zeros must stay (100, 1000000), trailing
+    zeros of every length, ties, inf/NaN and huge values."""
+    import random
+    from rapidcomp.rewrite.numbers import fmt, fmt_many
+    rnd = random.Random(7)
+    pool = [-0.0, 0.0, -4e-7, 4e-7, -5e-10, 100.0, -100.0, 1e6, 10.5, 0.1, 2.5e-7,
+            1.0000005, -1.0000005, 1e300, -1e300, float("inf"), float("-inf"), float("nan")]
+    values = pool + [-0.0, -0.0, -0.0] + [rnd.choice(pool) for _ in range(2000)]
+    values += [round(rnd.uniform(-1000, 1000), rnd.randint(0, 9)) for _ in range(20000)]
+    values += [rnd.uniform(-1, 1) * 10 ** rnd.randint(-12, 6) for _ in range(20000)]
+    for decimals in (0, 1, 3, 6, 9):
+        assert fmt_many(values, decimals) == [fmt(v, decimals) for v in values]
+        for v in pool:
+            assert fmt_many([v], decimals) == [fmt(v, decimals)]
+    assert fmt_many([], 6) == []
+    assert fmt_many([-0.0, 100.0, -1e-9], 6) == ["0", "100", "0"]
 
 
 def test_row_as_dict_encodes_as_asdict(solver):

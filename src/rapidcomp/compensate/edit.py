@@ -159,11 +159,20 @@ class Values:
         record = self.source(g, k).record
         if g.mode == "joint":
             return records.jointtarget_texts(record, self.joints(g, k))
-        texts = self._values.get(("texts", id(g), k))
-        if texts is not None:
-            return texts
+        prepared = self._values.get(("texts", id(g), k))
+        if prepared is not None:
+            return prepared[0]
         R, p, conf = self.robtarget_value(g, k)
         return records.robtarget_texts(record, R, p, conf)
+
+    def field_edits(self, g: Group, k) -> tuple[list[str], list[SpanEdit]]:
+        """Element k's field texts and the edits that write them."""
+        why = f"{element_label(g, k)} compensated"
+        prepared = self._values.get(("texts", id(g), k))
+        if prepared is not None:
+            return prepared[0], [SpanEdit(s, e, new, why) for s, e, new in prepared[1]]
+        texts = self.field_texts(g, k)
+        return texts, records.field_edits(self.source(g, k).record, texts, why)
 
     def literal(self, g: Group, k, texts: list[str] | None = None) -> str:
         """The new literal of element k (`texts`: its field texts, when the
@@ -316,10 +325,11 @@ class Editor:
             return
         vals = self.values
         type_name = "jointtarget" if g.mode in ("absj", "joint") else "robtarget"
-        texts = {} if g.mode == "absj" else {k: vals.field_texts(g, k) for k in g.elements}
-        changes = {k: records.field_edits(vals.source(g, k).record, texts[k],
-                                          f"{element_label(g, k)} compensated")
-                   for k in texts}
+        texts: dict = {}
+        changes: dict = {}
+        if g.mode != "absj":
+            for k in g.elements:
+                texts[k], changes[k] = vals.field_edits(g, k)
         if g.mode != "absj" and not any(changes.values()):
             # Nothing moves beyond the precision a new text would carry: the
             # value stays as written (a zero profile changes no byte).

@@ -613,9 +613,8 @@ class Resolver:
         pending, self._pending = self._pending, []
         if not pending:
             return
-        n = len(pending)
-        R = unit_quat_matrices(np.array([item[1] for item in pending]).reshape(n, 4))
-        p = np.array([item[2] for item in pending]).reshape(n, 3)
+        q, p = self._checked_parts(pending)
+        R = unit_quat_matrices(q)
         for i, (u, _, _, _, _, _) in enumerate(pending):
             if u.source.call is not None:
                 R[i], p[i] = _relative(u.source, R[i], p[i])
@@ -627,6 +626,44 @@ class Resolver:
             # client yet (Plan, verify call poses() before reading it).
             object.__setattr__(u, "R", Rf[i])
             object.__setattr__(u, "p", pf[i])
+
+    def _checked_parts(self, pending: list) -> tuple[np.ndarray, np.ndarray]:
+        """_confdata and _target_parts of every pending use, as arrays (q
+        (n, 4), p (n, 3)): the arithmetic of one (the sums of squares in
+        its order, math.sqrt's correctly rounded root as np.sqrt, the
+        ** 0.5 of unit_wxyz on Python floats); a use that any check would
+        stop or note goes through them one by one, in order (so the first
+        error, its message and the notes are theirs)."""
+        n = len(pending)
+        if not n:
+            return np.zeros((0, 4)), np.zeros((0, 3))
+        v = np.array([item[1].record.values[:11] for item in pending], float).reshape(n, 11)
+        conf = v[:, 7:11]
+        qp = v[:, :7].astype(np.float32).astype(float) if self.float32 else v[:, :7]
+        p, q = np.ascontiguousarray(qp[:, :3]), np.ascontiguousarray(qp[:, 3:7])
+        w, x, y, z = q.T
+        norm = np.sqrt(w * w + x * x + y * y + z * z)
+        odd = ~((norm > 1e-6) & np.all(np.abs(p) <= MAX_POSITION_MM, axis=1)
+                & np.all(np.floor(conf) == conf, axis=1)
+                & np.all(np.abs(conf[:, :3]) <= MAX_QUADRANT, axis=1)
+                & (conf[:, 3] >= 0) & (conf[:, 3] <= 7))
+        if not self.float32:
+            odd |= np.abs(norm - 1.0) > QUAT_TOLERANCE
+        with np.errstate(divide="ignore", invalid="ignore"):   # (a zero one is odd)
+            q = np.where((np.abs(norm - 1.0) > 1e-12)[:, None], q / norm[:, None], q)
+            w, x, y, z = q.T
+            q = q / np.array([s ** 0.5 for s in (w * w + x * x + y * y + z * z).tolist()])[:, None]
+        for i in np.flatnonzero(odd).tolist():
+            u, src, pf = pending[i][:3]
+            notes, self._notes = self._notes, []
+            try:
+                self._confdata(src, pf)
+                q[i], p[i] = self._target_parts(src, pf)
+            finally:
+                extra, self._notes = self._notes, notes
+            if extra:
+                object.__setattr__(u, "notes", u.notes + tuple(extra))
+        return q, p
 
     def integer(self, expr, module, routine: str | None) -> int | None:
         """A literal integer, or a CONST num with a literal integer value."""
@@ -660,6 +697,13 @@ class Resolver:
                 index: tuple[int, int] = (0, 0)) -> list[TargetUse]:
         """Every target use of a motion; index = (file index, motion index in
         the file), the first part of each use's key."""
+        try:
+            return self._resolve(pf, module, motion, index)
+        except RapidcompError:
+            self._checked_parts(self._pending)      # an earlier use's error comes first
+            raise
+
+    def _resolve(self, pf, module, motion, index) -> list[TargetUse]:
         out = []
         for t in motion.targets:
             if t.role == "search":
@@ -755,6 +799,13 @@ class Resolver:
         Offs/RelTool is evaluated again, its numbers being values too). For
         an output whose every edit is numbers of existing literals
         (verify.py)."""
+        try:
+            return self._again(u)
+        except RapidcompError:
+            self._checked_parts(self._pending)      # an earlier use's error comes first
+            raise
+
+    def _again(self, u: TargetUse) -> TargetUse:
         src = u.source
         self._notes = []
         if src.call is not None:
@@ -852,12 +903,13 @@ class Resolver:
         base = self.world_M_base(src.record)
         if isinstance(base, Unresolved):
             return fail(base)
-        self._confdata(src, pf)
-        q, p = self._target_parts(src, pf)
+        # Its confdata, quaternion and position are checked with every
+        # other pending use's, in poses() (an error raised before that
+        # raises the first pending one's first, as one by one would).
         u = TargetUse(motion, role, label, line, kind, None, None, src.record.conf, None, None,
                       src, tool, wobj, envt, file=pf, module=module, ext=src.record.ext,
                       key=key, notes=tuple(self._notes))
-        self._pending.append((u, q, p, base, wobj[1], tool[1]))
+        self._pending.append((u, src, pf, base, wobj[1], tool[1]))
         return u
 
     def _confdata(self, src: Source, pf: ParsedFile) -> None:

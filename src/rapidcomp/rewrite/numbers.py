@@ -10,6 +10,8 @@ Trailing zeros are dropped so that a reviewer sees 41.85, not 41.850000.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 JOINT_DECIMALS = 6
@@ -28,6 +30,26 @@ def fmt(value: float, decimals: int) -> str:
     if "." in text:
         text = text.rstrip("0").rstrip(".")
     return "0" if text in ("-0", "") else text
+
+
+_TRAILING_ZEROS = re.compile("0+\x00")
+
+
+def fmt_many(values, decimals: int) -> list[str]:
+    """fmt() of each of `values` (Python floats): one formatting of all of
+    them, then C-level passes over the joined text (a CAM program writes
+    7e5). Each number ends in \x00; every finite one has a '.' (decimals
+    > 0), so only a fraction's zeros are stripped."""
+    if not values:
+        return []
+    if decimals <= 0:
+        return [fmt(v, decimals) for v in values]
+    text = "\x00" + (f"%.{decimals}f\x00" * len(values)) % tuple(values)
+    text = _TRAILING_ZEROS.sub("\x00", text).replace(".\x00", "\x00")
+    # A lone -0 (twice: a replace does not see a match that overlaps the
+    # one before it).
+    text = text.replace("\x00-0\x00", "\x000\x00").replace("\x00-0\x00", "\x000\x00")
+    return text[1:-1].split("\x00")
 
 
 def joint(value: float) -> str:
@@ -62,8 +84,8 @@ def quaternions(q_wxyz, like=None) -> list[tuple[str, str, str, str]]:
     for i in np.flatnonzero(np.abs(dots) < 1e-9).tolist():
         flip[i] = q[i] @ ref[i] < 0
     q = np.where(flip[:, None], -q, q)
-    f = QUAT_DECIMALS
-    return [(fmt(w, f), fmt(x, f), fmt(y, f), fmt(z, f)) for w, x, y, z in q.tolist()]
+    texts = fmt_many(q.ravel().tolist(), QUAT_DECIMALS)
+    return [tuple(texts[i:i + 4]) for i in range(0, len(texts), 4)]
 
 
 def integer(value: int) -> str:

@@ -38,32 +38,40 @@ def robtarget_texts(record: RobTarget, R: np.ndarray, p: np.ndarray,
     a field keeps its text unless its value changes beyond what the new
     text could express."""
     return robtarget_texts_many([record], np.asarray(R)[None], np.asarray(p)[None],
-                                np.asarray(conf)[None])[0]
+                                np.asarray(conf)[None])[0][0]
 
 
 def robtarget_texts_many(recs: list[RobTarget], R: np.ndarray, p: np.ndarray,
-                         conf: np.ndarray) -> list[list[str]]:
-    """robtarget_texts of many records at once (a CAM program has 1e5): the
-    rotations compared and converted as one batch."""
+                         conf: np.ndarray) -> list[tuple[list[str], list[tuple]]]:
+    """robtarget_texts of many records at once (a CAM program has 1e5), each
+    with its changed fields as (start, end, new text) in the source, what
+    field_edits gives (each literal lexed once for both): the rotations
+    compared and converted as one batch, the positions' texts formatted as
+    one."""
     if not recs:
         return []
     q_old = np.array([r.quat_wxyz for r in recs], float)
     turned = (_rotation_angles(q_old, R) > numbers.ROT_KEEP_RAD).tolist()
     quats = numbers.quaternions(matrix_to_quat_wxyz(R), like=q_old)
+    p = np.asarray(p, float)
+    mm = numbers.fmt_many(p.ravel().tolist(), numbers.MM_DECIMALS)
     out = []
-    for rec, pj, cj, moved, q in zip(recs, np.asarray(p, float).tolist(),
-                                     np.asarray(conf).tolist(), turned, quats):
-        texts = list(rec.texts)
+    for j, (rec, pj, cj, moved, q) in enumerate(zip(recs, p.tolist(), np.asarray(conf).tolist(),
+                                                    turned, quats)):
+        old, regs = rec.lex()
+        texts = list(old)
         values = rec.values
         for i in range(3):
             if abs(pj[i] - values[i]) > numbers.MM_KEEP:
-                texts[i] = numbers.mm(pj[i])
+                texts[i] = mm[3 * j + i]
         if moved:
             texts[3:7] = q
         for i in range(4):
             if int(cj[i]) != values[7 + i]:
                 texts[7 + i] = numbers.integer(cj[i])
-        out.append(texts)
+        base = rec.span.start
+        out.append((texts, [(base + regs[i][0], base + regs[i][1], texts[i])
+                            for i in range(17) if texts[i] != old[i]]))
     return out
 
 
@@ -76,6 +84,8 @@ def jointtarget_texts(record: JointTarget, q_deg) -> list[str]:
 
 
 def field_edits(record: RobTarget | JointTarget, texts: list[str], why: str) -> list[SpanEdit]:
+    """The edits that give `record`'s fields `texts` (only those whose text
+    changes)."""
     base = record.span.start
     old_texts, regs = record.lex()
     return [SpanEdit(base + s, base + e, new, why)
