@@ -85,8 +85,9 @@ class Values:
         quadrant (it stays as written)."""
         key = (id(g), k)
         if key not in self._values:
-            self._values[key] = self._robtarget_value(g, k)
-        return self._values[key]
+            self._values[key] = (self._robtarget_values([(g, k)]), 0)
+        stacks, j = self._values[key]
+        return stacks[0][j], stacks[1][j], stacks[2][j]
 
     def _unsupervised(self, g: Group) -> bool:
         """Every use of the group runs without configuration supervision
@@ -108,13 +109,15 @@ class Values:
         new = [(g, k) for g, k in items if (id(g), k) not in self._values]
         if new:
             values = self._robtarget_values(new)
+            # (Each value as its place in the stacks: no three row views
+            # per target.)
             for j, (g, k) in enumerate(new):
-                self._values[(id(g), k)] = (values[0][j], values[1][j], values[2][j])
+                self._values[(id(g), k)] = (values, j)
         if len(new) == len(items):       # (the first round: the stacks just made)
             R, p, conf = values
         else:
-            R, p, conf = (np.array([self._values[(id(g), k)][n] for g, k in items])
-                          for n in range(3))
+            got = [self.robtarget_value(g, k) for g, k in items]
+            R, p, conf = (np.array([v[n] for v in got]) for n in range(3))
         texts = records.robtarget_texts_many([self.source(g, k).record for g, k in items],
                                              R, p, conf)
         for (g, k), t in zip(items, texts):
@@ -124,9 +127,6 @@ class Values:
         """The field texts, once written (a retry prepares them again)."""
         for key in [k for k in self._values if k[0] == "texts"]:
             del self._values[key]
-
-    def _robtarget_value(self, g: Group, k):
-        return tuple(v[0] for v in self._robtarget_values([(g, k)]))
 
     def _robtarget_values(self, items):
         """(R (n, 3, 3), p (n, 3), conf (n, 4)) of robtarget_value for each
@@ -168,7 +168,8 @@ class Values:
     def field_edits(self, g: Group, k) -> tuple[list[str], list[SpanEdit]]:
         """Element k's field texts and the edits that write them."""
         why = f"{element_label(g, k)} compensated"
-        prepared = self._values.get(("texts", id(g), k))
+        # (Taken: a literal is written once; its edits are what stays.)
+        prepared = self._values.pop(("texts", id(g), k), None)
         if prepared is not None:
             return prepared[0], [SpanEdit(s, e, new, why) for s, e, new in prepared[1]]
         texts = self.field_texts(g, k)
