@@ -146,6 +146,51 @@ def test_unified_diff_matches_difflib():
         assert unified_diff(text, edits, "a", "b") == expected
 
 
+
+def test_diff_of_edits_within_lines_is_the_blocks_diff():
+    """Edits that touch no line break (fix's edits of numbers) are diffed
+    line by line (diff._changed_in_lines): the same changes as cutting
+    blocks (_changed_blocks), with LF, CRLF and CR, lines holding form feeds
+    and NEL, edits that write what was there, at the end of the text;
+    edits that add or remove a line break go the general way."""
+    from rapidcomp.edits import OverlappingEdits
+    from rapidcomp.rewrite import diff as D
+    rng = random.Random(3)
+    fast = general = 0
+    for _ in range(3000):
+        n = rng.randint(1, 30)
+        lines = [f"    MoveL p{i},{rng.choice(['', chr(12), chr(0x85), 'x'])} v100, "
+                 f"{'z' * rng.randint(0, 5)}, tool0;" for i in range(n)]
+        sep = rng.choice(["\n", "\r\n", "\r"])
+        text = sep.join(lines) + (sep if rng.random() < 0.8 else "")
+        kept = text.splitlines(keepends=True)
+        starts = [0]
+        for line in kept:
+            starts.append(starts[-1] + len(line))
+        edits = []
+        for k in sorted(rng.sample(range(len(kept)), rng.randint(1, min(len(kept), 8)))):
+            s, length = starts[k], len(kept[k].rstrip("\r\n"))
+            if length < 4:
+                continue
+            cuts = sorted(rng.sample(range(length + 1), 4))
+            for a, b in ((cuts[0], cuts[1]), (cuts[2], cuts[3])):
+                edits.append(SpanEdit(s + a, s + b, rng.choice(
+                    ["9", text[s + a:s + b], "", "ab"] + ["\n", "x\r"] * (rng.random() < 0.2))))
+            if rng.random() < 0.1:
+                edits.append(SpanEdit(s + length, s + length, rng.choice(["end", "\r\nX"])))
+        try:
+            new = apply_edits(text, edits)
+        except OverlappingEdits:
+            continue
+        got = D._changed_in_lines(text, kept, edits, new)
+        if got is None:
+            general += 1
+            continue
+        fast += 1
+        assert got == D._changed_blocks(text, kept, edits, new)
+    assert fast > 1000 and general > 100
+
+
 def test_new_names_avoid_every_identifier_case_insensitively():
     names = NameAllocator(["MODULE m ! JT_P1 and jt_p1_2 are taken\nCONST num x:=1;"])
     assert names.new("jt_p1") == "jt_p1_3"

@@ -29,10 +29,51 @@ def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
     """new_text: the text with the edits applied, when the caller has it."""
     if not edits:
         return []
-    import bisect
     if new_text is None:
         new_text = apply_edits(text, edits)
     lines = text.splitlines(keepends=True)
+    changed = _changed_in_lines(text, lines, edits, new_text)
+    if changed is None:
+        changed = _changed_blocks(text, lines, edits, new_text)
+    if not changed:
+        return []
+    return _hunks(lines, changed, old_name, new_name, context)
+
+
+def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list | None:
+    """The changes, when no edit touches a line break (fix's edits of
+    numbers; None otherwise): line i of the output is line i of the input
+    with its edits, and the lines an edit touches are compared as they are
+    (no blocks to cut, no offsets to shift)."""
+    import numpy as np
+    if not lines:
+        return None
+    replaced = "".join([text[e.start:e.end] for e in edits] + [e.replacement for e in edits])
+    if len((replaced + ".").splitlines()) != 1:
+        return None
+    new_lines = new_text.splitlines()
+    if len(new_lines) != len(lines):
+        return None
+    starts = np.array(_line_starts(text))
+    at = np.fromiter((e.start for e in edits), np.int64, len(edits))
+    touched = np.unique(np.minimum(np.searchsorted(starts, at, side="right") - 1,
+                                   len(lines) - 1)).tolist()
+    changed: list[list] = []
+    for i in touched:
+        new = new_lines[i]
+        if lines[i].rstrip("\r\n") == new:
+            continue
+        if changed and changed[-1][1] == i:   # adjacent: one change, as difflib sees it
+            changed[-1][1] = i + 1
+            changed[-1][2].append(new)
+        else:
+            changed.append([i, i + 1, [new]])
+    return changed
+
+
+def _changed_blocks(text: str, lines: list[str], edits, new_text: str) -> list:
+    """[first old line, end old line (exclusive), new lines] of each change."""
+    import bisect
     starts = _line_starts(text)
     # Changed blocks: (first line, last line) of the original, edits merged
     # when they touch the same lines.
@@ -77,8 +118,11 @@ def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
             changed[-1][2].extend(new_lines[lo:hi_new])  # in place: linear, not quadratic
         else:
             changed.append([a + lo, a + hi_old, new_lines[lo:hi_new]])
-    if not changed:
-        return []
+    return changed
+
+
+def _hunks(lines: list[str], changed: list, old_name: str, new_name: str,
+           context: int) -> list[str]:
     out = [f"--- {old_name}", f"+++ {new_name}"]
     n = len(lines)
     delta = 0  # new line index minus old line index before the current hunk
