@@ -147,7 +147,9 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
         g.rows_seen.setdefault(src.element, row)
     for g in out:
         _elements(g, solved)
-        g.local = all(u.module is g.home_module for u in g.uses)
+        uses = g.uses
+        g.local = (uses[0].module is g.home[1] if len(uses) == 1
+                   else all(u.module is g.home[1] for u in uses))
     return out
 
 
@@ -157,6 +159,15 @@ def _same(solved: Solved, a: int, b: int) -> bool:
 
 
 def _elements(g: Group, solved: Solved) -> None:
+    if len(g.uses) == 1:     # (most groups: one literal, one move)
+        u = g.uses[0]
+        k, row = u.source.element, solved.row[u.key]
+        g.array = u.source.by_loop
+        if not solved.ok(row):
+            g.failure = (solved.reason(row), k)
+        g.elements, g.rows = [k], {k: row}
+        _wrist(g, solved)
+        return
     g.array = any(u.source.by_loop for u in g.uses)
     seen: dict = {}
     for u in g.uses:
@@ -178,9 +189,15 @@ def _elements(g: Group, solved: Solved) -> None:
         g.failure = (solved.reason(solved.row[bad.key]), bad.source.element)
     g.elements = sorted(seen) if g.array else list(seen)
     g.rows = seen
+    _wrist(g, solved)
+
+
+def _wrist(g: Group, solved: Solved) -> None:
+    """A robtarget group fails where the compensation needs a J4/J6 split
+    at the wrist singularity."""
     if g.failure is None:
         for k in g.elements:
-            i = seen[k]
+            i = g.rows[k]
             if g.mode == "rob" and int(solved.deformed.warnings[i]) & _LEFT:
                 g.failure = (
                     f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "

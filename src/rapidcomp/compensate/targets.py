@@ -787,9 +787,13 @@ class Resolver:
         where the output rewrote it."""
         if isinstance(src, Unresolved) or not self.written:
             return src
-        record = self.written.get((id(src.home if src.home is not None else pf),
-                                   src.record.span.start))
-        return src if record is None else src.with_record(record)
+        record = self._written_record(src, pf)
+        return src if record is src.record else src.with_record(record)
+
+    def _written_record(self, src: Source, pf):
+        """src's record as the output writes it (itself where not rewritten)."""
+        return self.written.get((id(src.home if src.home is not None else pf),
+                                 src.record.span.start), src.record)
 
     def again(self, u: TargetUse) -> TargetUse:
         """A use resolve() gave for the input, resolved again by this
@@ -836,7 +840,7 @@ class Resolver:
             wobj = self.wobj(u.motion.wobj, u.module, u.motion.routine)
             if isinstance(tool, Unresolved) or isinstance(wobj, Unresolved):
                 continue
-            record = self._as_written(src, u.file).record
+            record = self._written_record(src, u.file) if self.written else src.record
             if not isinstance(record, RobTarget):
                 continue
             done.append(n)

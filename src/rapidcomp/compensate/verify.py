@@ -100,6 +100,10 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
     motions = {k[:2] for k in keys}
     found: dict = {}
     batch: list = []
+    # Robtargets evaluated as arrays (again_many): their solved rows and
+    # (R, p, conf) blocks, kept as arrays to the IK.
+    many_rows: list = []
+    many: list = []
 
     def keep():
         # Only what the check needs, a block at a time (not 1e5 TargetUse).
@@ -115,9 +119,9 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
         for at in range(0, len(uses), 8192):
             block = uses[at:at + 8192]
             done, R, p, conf = res.again_many(block)
-            for j, n in enumerate(done):
-                found[block[n].key] = _Written("robtarget", R[j], p[j], tuple(conf[j].tolist()),
-                                               None, None)
+            if done:
+                many_rows.extend(solved.row[block[n].key] for n in done)
+                many.append((R, p, conf))
             done = set(done)
             batch.extend(res.again(u) for n, u in enumerate(block) if n not in done)
             keep()
@@ -133,23 +137,32 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
                 mi += 1
     keep()
     rows = sorted((solved.row[k] for k in keys))
-    outs = {}
+    # Every robtarget's (R, p, conf) in one stack: the array blocks, then
+    # the others; at[row] is its place in it.
+    at = {i: n for n, i in enumerate(many_rows)}
+    q = {}
+    others = []
     for i in rows:
+        if i in at:
+            continue
         u = solved.uses[i]
         o = found.get(u.key)
         if o is None or o.reason is not None:
             raise InternalError(f"{u.file.source.display_path}:{u.line}: the written target of "
                                 f"{u.label} does not resolve ({o.reason if o else 'missing'})")
-        outs[i] = o
-    q = {}
-    for i in rows:
-        if outs[i].kind == "jointtarget":
-            q[i] = np.array(outs[i].joints_deg)
-    rob = [i for i in rows if outs[i].kind == "robtarget"]
+        if o.kind == "jointtarget":
+            q[i] = np.array(o.joints_deg)
+        else:
+            at[i] = len(many_rows) + len(others)
+            others.append(o)
+    if others:
+        many.append((np.array([o.R for o in others]), np.array([o.p for o in others]),
+                     np.array([o.conf for o in others])))
+    rob = [i for i in rows if i not in q]
     if rob:
-        R = np.array([outs[i].R for i in rob])
-        p = np.array([outs[i].p for i in rob])
-        conf = np.array([outs[i].conf for i in rob])
+        R_all, p_all, conf_all = (np.concatenate([b[n] for b in many]) for n in range(3))
+        order = [at[i] for i in rob]
+        R, p, conf = R_all[order], p_all[order], conf_all[order]
         by_conf = solver.solve_nominal(R, p, conf).q_deg
         # Supervision off (and circle points): the solution closest to the
         # joints the previous move's nominal solution has (its compensated
@@ -162,14 +175,19 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
             prev = np.array([solved.picks[i].prev for i in sel])
             got = by_conf.copy()
             got[closest] = solver.closest(solver.candidates(R[closest], p[closest]), prev)
-        for n, i in enumerate(rob):
-            if np.isnan(got[n]).any():
-                u = solved.uses[i]
-                raise InternalError(f"{u.file.source.display_path}:{u.line}: the ideal "
-                                    "controller finds no solution for the written target of "
-                                    f"{u.label}")
-            q[i] = got[n]
-    qa = np.array([q[i] for i in rows]).reshape(-1, 6)
+        for n in np.flatnonzero(np.isnan(got).any(axis=1))[:1].tolist():
+            u = solved.uses[rob[n]]
+            raise InternalError(f"{u.file.source.display_path}:{u.line}: the ideal "
+                                "controller finds no solution for the written target of "
+                                f"{u.label}")
+    if rob:
+        qa = np.empty((len(rows), 6))
+        place = {i: n for n, i in enumerate(rows)}
+        qa[[place[i] for i in rob]] = got
+        for i, qi in q.items():
+            qa[place[i]] = qi
+    else:
+        qa = np.array([q[i] for i in rows]).reshape(-1, 6)
     err_p, err_r = solver.deformed_pose_error(qa * DEG, solved.R[rows], solved.p[rows],
                                               tcp_of([solved.uses[i] for i in rows]))
     out = {}
