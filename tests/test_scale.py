@@ -665,6 +665,40 @@ def test_joint_columns_format_as_each_value_does():
             assert _joints(q, fmt) == " ".join(format(v, fmt) for v in q)
 
 
+
+def test_report_rows_format_as_the_general_row(solver):
+    """A report row with every number is written with one % operation
+    (report._row): the text of the general row (_row_general, format() of
+    each cell) on every row of the fixtures and on rows with signed zeros,
+    ties, ints, huge values, inf/NaN, '|' in a cell and missing numbers."""
+    import random
+    from rapidcomp.compensate.report import _row, _row_general
+    from rapidcomp.compensate.rows import UseRow
+    rows = []
+    for p in MODULES:
+        rows += F.fix(Task(p.name, (parse_file(p, p.name),)), solver, "auto").rows
+    rnd = random.Random(4)
+    pool = [-0.0, 0.0, 0.05, -0.05, 0.00005, 12.34565, 3, -7, 1e20, float("inf"),
+            float("-inf"), float("nan")]
+
+    def q():
+        return None if rnd.random() < 0.05 else tuple(
+            rnd.choice(pool + [rnd.uniform(-400, 400)]) for _ in range(rnd.choice([6] * 9 + [7])))
+
+    def x():
+        return None if rnd.random() < 0.05 else rnd.choice(pool + [rnd.uniform(-1, 1e4)])
+    for n in range(3000):
+        rows.append(UseRow("m.mod", n, "MoveL", rnd.choice(["p1", "a|b", "inline"]), "compensated",
+                           rnd.choice([None, "confdata (ConfL\\On)", "x|y"]),
+                           rnd.choice([None, "inline robtarget rewritten"]), q(), q(), q(),
+                           x(), x(), x(), x(), rnd.choice([None, (0, -1, 2, 1)]),
+                           rnd.choice([None, (1, 0, 0, 5)]), rnd.choice([(), ("w1", "w|2")]),
+                           rnd.choice([None, "why"])))
+    assert sum(r.nominal_deg is not None for r in rows) > 2000
+    for r in rows:
+        assert _row(r) == _row_general(r)
+
+
 def test_number_texts_in_bulk_are_those_of_one():
     """numbers.fmt_many writes many numbers in one formatting and strips
     zeros on the joined text: each text equals fmt()'s for that number

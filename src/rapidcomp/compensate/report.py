@@ -132,15 +132,34 @@ def _table(rows: list[UseRow], transient: bool = False) -> list[str]:
            "compensated joints | delta joints | error um | error deg | after um | "
            "conf before | conf after | notes |",
            "|---:|---|---|---|---|---|---|---|---|---:|---:|---:|---|---|---|"]
-    for r in rows:
-        out.append(
-            f"| {r.line} | {r.instruction} | {_cell(r.target)} | {r.status} | "
+    out += map(_row, rows)
+    return out
+
+
+# A row with every number (a CAM report has 1e5): one % operation, the same
+# conversions as format() (tested against _row_general).
+_FULL_ROW = ("| %s | %s | %s | %s | %s | %s | " + " ".join(["%.4f"] * 6) + " | "
+             + " ".join(["%.4f"] * 6) + " | " + " ".join(["%+.5f"] * 6)
+             + " | %.1f | %.4f | %.3f | %s | %s | %s |")
+
+
+def _row(r: UseRow) -> str:
+    qn, qc, dq = r.nominal_deg, r.compensated_deg, r.delta_deg
+    if (qn is None or qc is None or dq is None or len(qn) != 6 or len(qc) != 6 or len(dq) != 6
+            or r.error_um is None or r.error_deg is None or r.residual_um is None):
+        return _row_general(r)
+    return _FULL_ROW % (r.line, r.instruction, _cell(r.target), r.status, _cell(r.rule or "-"),
+                        _cell(r.action or "-"), *qn, *qc, *dq, r.error_um, r.error_deg,
+                        r.residual_um, _conf(r.conf_before), _conf(r.conf_after), _notes(r))
+
+
+def _row_general(r: UseRow) -> str:
+    return (f"| {r.line} | {r.instruction} | {_cell(r.target)} | {r.status} | "
             f"{_cell(r.rule or '-')} | {_cell(r.action or '-')} | {_joints(r.nominal_deg)} | "
             f"{_joints(r.compensated_deg)} | {_joints(r.delta_deg, '+.5f')} | "
             f"{_num(r.error_um, '.1f')} | {_num(r.error_deg, '.4f')} | "
             f"{_num(r.residual_um, '.3f')} | {_conf(r.conf_before)} | {_conf(r.conf_after)} | "
             f"{_notes(r)} |")
-    return out
 
 
 def as_json(result: FixResult, meta: dict) -> str:
