@@ -411,20 +411,22 @@ class Resolver:
     def _memo(self, kind: str, expr, module, routine: str | None, how):
         """tool()/wobj() once per name and scope (a CAM program names the
         same tool 1e5 times), the notes of the first resolution repeated."""
-        node = (kind, id(expr))          # a move's own argument: one module, one routine
-        hit = self._memos.get(node)
+        if type(expr) is not A.Ref or expr.selectors:
+            return how(expr, module, routine)
+        # First as written (a CAM program's moves share the name strings:
+        # one lookup), then in RAPID's case-insensitive terms.
+        written = (kind, id(module), routine, expr.name)
+        hit = self._memos.get(written)
         if hit is None:
-            if not (isinstance(expr, A.Ref) and not expr.selectors):
-                return how(expr, module, routine)
             key = (kind, id(module), routine.lower() if routine else None, expr.name.lower())
             hit = self._memos.get(key)
             if hit is None:
                 before = len(self._notes)
                 result = how(expr, module, routine)
                 hit = self._memos[key] = (result, tuple(self._notes[before:]))
-                self._memos[node] = hit
+                self._memos[written] = hit
                 return result
-            self._memos[node] = hit
+            self._memos[written] = hit
         self._notes.extend(hit[1])
         return hit[0]
 
