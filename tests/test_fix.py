@@ -178,6 +178,12 @@ def test_diff_of_edits_within_lines_is_the_blocks_diff():
                     ["9", text[s + a:s + b], "", "ab"] + ["\n", "x\r"] * (rng.random() < 0.2))))
             if rng.random() < 0.1:
                 edits.append(SpanEdit(s + length, s + length, rng.choice(["end", "\r\nX"])))
+        if sep == "\r" and len(kept) > 2 and rng.random() < 0.2:
+            # Right after a CR: an edit there may make or split a CRLF
+            # with no line break in any edit (found by review).
+            edits = [e for e in edits if e.start > starts[2] or e.end < starts[1] - 1]
+            edits.append(SpanEdit(starts[1], starts[1] + 2, rng.choice(["", "\n", "q"])))
+            edits.sort(key=lambda e: (e.start, e.end))
         try:
             new = apply_edits(text, edits)
         except OverlappingEdits:
@@ -189,6 +195,14 @@ def test_diff_of_edits_within_lines_is_the_blocks_diff():
         fast += 1
         assert got == D._changed_blocks(text, kept, edits, new)
     assert fast > 1000 and general > 100
+    # The review's case: text inserted between a CR and an LF splits a
+    # line, text removed between a CR and an LF joins two; the line count
+    # stays, and the fast path must decline.
+    text, edits = "x\r\ny\rABC\nz\n", [SpanEdit(2, 2, "A"), SpanEdit(5, 8, "")]
+    new = apply_edits(text, edits)
+    kept = text.splitlines(keepends=True)
+    assert len(new.splitlines()) == len(kept)
+    assert D._changed_in_lines(text, kept, edits, new) is None
 
 
 def test_new_names_avoid_every_identifier_case_insensitively():

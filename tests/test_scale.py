@@ -539,6 +539,27 @@ def test_a_target_error_comes_before_a_later_moves_error(tmp_path):
     with pytest.raises(InputError) as exc:
         Plan(Task("e.mod", (parse_text(later, "e.mod"),)))
     assert exc.value.line == 5 and "J1 is 2E5" in str(exc.value)
+    # Any error of a later move, not only an input error (found by review:
+    # an index through CONSTs defined by each other recurses without end).
+    cyclic = text.replace("MODULE E\n", "MODULE E\n  CONST num a:=b;\n  CONST num b:=a;\n"
+                          "  CONST robtarget pA{1}:=[[[400,0,400],[0,0,1,0],[0,0,0,0],"
+                          "[9E9,9E9,9E9,9E9,9E9,9E9]]];\n").replace(
+        "MoveAbsJ [[2E5,0,0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", "MoveL pA{a}")
+    with pytest.raises(InputError) as exc:
+        Plan(Task("e.mod", (parse_text(cyclic, "e.mod"),)))
+    assert exc.value.line == 7 and "cfx is 9" in str(exc.value)
+
+
+def test_a_quaternion_note_follows_the_uses_other_notes():
+    """The batch adds a quaternion's note after the notes the use has from
+    resolving it (here: a PERS assigned its own value), as one by one."""
+    text = ("MODULE N\n  PERS robtarget pSelf:=[[400,0,400],[1.414214,0,1.414214,0],[0,0,0,1],"
+            "[9E9,9E9,9E9,9E9,9E9,9E9]];\n  PROC main()\n    pSelf := [[400,0,400],[1.414214,0,"
+            "1.414214,0],[0,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]];\n    MoveL pSelf,v10,fine,tool0;"
+            "\n  ENDPROC\nENDMODULE\n")
+    notes = Plan(Task("n.mod", (parse_text(text, "n.mod"),))).uses[0].notes
+    assert len(notes) == 2 and "assigned at run time" in notes[0]
+    assert "quaternion norm 2" in notes[1]
 
 def test_source_with_record_is_dataclasses_replace():
     """Source.with_record (the verification's per-target copy) keeps every

@@ -701,8 +701,10 @@ class Resolver:
         the file), the first part of each use's key."""
         try:
             return self._resolve(pf, module, motion, index)
-        except RapidcompError:
-            self._checked_parts(self._pending)      # an earlier use's error comes first
+        except Exception:
+            # An earlier use's error comes first, before any other (an
+            # input error, or the nesting limit's RecursionError).
+            self._checked_parts(self._pending)
             raise
 
     def _resolve(self, pf, module, motion, index) -> list[TargetUse]:
@@ -807,7 +809,7 @@ class Resolver:
         (verify.py)."""
         try:
             return self._again(u)
-        except RapidcompError:
+        except Exception:
             self._checked_parts(self._pending)      # an earlier use's error comes first
             raise
 

@@ -41,8 +41,8 @@ def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
 
 
 def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list | None:
-    """The changes, when no edit touches a line break (fix's edits of
-    numbers; None otherwise): line i of the output is line i of the input
+    """The changes, when no edit touches a line break or follows a CR
+    (fix's edits of numbers; None otherwise): line i of the output is line i of the input
     with its edits, and the lines an edit touches are compared as they are
     (no blocks to cut, no offsets to shift)."""
     import numpy as np
@@ -50,6 +50,10 @@ def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list
         return None
     replaced = "".join([text[e.start:e.end] for e in edits] + [e.replacement for e in edits])
     if len((replaced + ".").splitlines()) != 1:
+        return None
+    # Nor one right after a CR: between a CR and an LF it would split or
+    # join a CRLF (a line more or less, with no line break in any edit).
+    if "\r" in text and any(text[e.start - 1] == "\r" for e in edits if e.start):
         return None
     new_lines = new_text.splitlines()
     if len(new_lines) != len(lines):
