@@ -162,6 +162,10 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     if transient is not None:
         notes += _transient_notes(transient[0], state_errors if any(
             r.status == COMPENSATED for r in rows) else {})
+    # Past the rows the plan, the solutions, the groups and the editor are
+    # not needed (1e5 targets: some 300 MB the diffs and the report reuse
+    # instead of growing the process further).
+    plan = solved = gs = editor = group_of = written_conf = verified = None
     modules = []
     for fi, pf in enumerate(task.files):
         es = file_edits.get(fi, [])
