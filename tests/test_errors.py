@@ -71,3 +71,26 @@ def test_python_dash_m_entry_point():
                           capture_output=True, text=True)
     assert proc.returncode == 2 and proc.stdout == ""
     assert "module_name_digit.mod:1:8:" in proc.stderr
+
+
+@pytest.mark.parametrize("consts, where, chain", [
+    ("  CONST num a:=b;\n  CONST num b:=a;\n", "2:13", "a -> b -> a"),
+    ("  CONST num a:=(-a);\n", "2:13", "a -> a"),
+])
+def test_a_const_defined_through_itself_is_bad_input(tmp_path, consts, where, chain):
+    """A CONST num an index or a loop bound reads, defined through itself,
+    has no value: file:line:col of its declaration, the chain, exit 2 and
+    no output (found by review: Python's recursion limit gave a message
+    with no place)."""
+    path = tmp_path / "cyc.mod"
+    path.write_text("MODULE Cyc\n" + consts + "  CONST robtarget pA{2}:=[[[400,0,400],[0,0,1,0],"
+                    "[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],[[400,0,400],[0,0,1,0],[0,0,0,0],"
+                    "[9E9,9E9,9E9,9E9,9E9,9E9]]];\n  PROC main()\n    FOR i FROM 1 TO 2 DO\n"
+                    "      MoveL pA{i},v10,fine,tool0;\n    ENDFOR\n    MoveL pA{a},v10,fine,tool0;\n"
+                    "  ENDPROC\nENDMODULE\n")
+    result = CliRunner().invoke(main, ["fix", str(path), "--profile",
+                                       str(FIXTURES / "warm.csv")])
+    assert result.exit_code == 2
+    first = result.stderr.splitlines()[0]
+    assert first.startswith(f"cyc.mod:{where}") and f"({chain}): it has no value" in first
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cyc.mod"]

@@ -239,6 +239,7 @@ class Resolver:
         self.usages: dict[int, object] = {}   # id(Module) -> refs.Usage
         self._notes: list[str] = []             # of the use being resolved
         self._guarded: set = set()              # FOR variables of the use behind a condition
+        self._consts: list = []                 # CONST nums being evaluated (integer())
         for pf in files:
             for m in pf.modules:
                 mid = id(m)
@@ -679,8 +680,20 @@ class Resolver:
         if isinstance(expr, A.Ref) and not expr.selectors:
             d = self.lookup(expr.name, module, routine)
             if isinstance(d, Declaration) and d.storage == "CONST" and d.type == "num":
-                # Its value's names are those of the module that declares it.
-                return self.integer(d.node.init, self.home_module[id(d)], d.routine)
+                if any(c is d for c in self._consts):
+                    # CONST a:=b; CONST b:=a; has no value: the controller
+                    # does not load it (and the evaluation would not end).
+                    chain = self._consts[next(i for i, c in enumerate(self._consts) if c is d):]
+                    raise self.home[id(d)].source.error(
+                        d.node.name_span.start,
+                        f"CONST {d.name} is defined through itself ("
+                        + " -> ".join(c.name for c in chain + [d]) + "): it has no value")
+                self._consts.append(d)
+                try:
+                    # Its value's names are those of the module that declares it.
+                    return self.integer(d.node.init, self.home_module[id(d)], d.routine)
+                finally:
+                    self._consts.pop()
         return None
 
     def loop_range(self, loop, module, routine: str, bounded: bool = True) -> range | None:
