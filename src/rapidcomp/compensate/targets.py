@@ -630,33 +630,43 @@ class Resolver:
             object.__setattr__(u, "R", Rf[i])
             object.__setattr__(u, "p", pf[i])
 
+    def _unit_parts(self, v: np.ndarray):
+        """(unit quaternions (n, 4), positions (n, 3), confdata (n, 4), ok
+        (n,)) of robtargets' values v (n, >= 11) as this resolver reads
+        them (float32 when it verifies), with the arithmetic of one target:
+        the sums of squares in its order, math.sqrt's correctly rounded
+        root as np.sqrt, then unit_wxyz's ** 0.5 on Python floats. ok: no
+        check of _confdata, _quaternion or _position stops or notes it."""
+        conf = v[:, 7:11]
+        qp = v[:, :7].astype(np.float32).astype(float) if self.float32 else v[:, :7]
+        # Contiguous, as poses() of one stack them: a product's bits may
+        # depend on the layout of its operands.
+        p, q = np.ascontiguousarray(qp[:, :3]), np.ascontiguousarray(qp[:, 3:7])
+        w, x, y, z = q.T
+        norm = np.sqrt(w * w + x * x + y * y + z * z)
+        ok = ((norm > 1e-6) & np.all(np.abs(p) <= MAX_POSITION_MM, axis=1)
+              & np.all(np.floor(conf) == conf, axis=1)
+              & np.all(np.abs(conf[:, :3]) <= MAX_QUADRANT, axis=1)
+              & (conf[:, 3] >= 0) & (conf[:, 3] <= 7))
+        if not self.float32:
+            ok &= np.abs(norm - 1.0) <= QUAT_TOLERANCE
+        with np.errstate(divide="ignore", invalid="ignore"):   # (a zero one is not ok)
+            q = np.where((np.abs(norm - 1.0) > 1e-12)[:, None], q / norm[:, None], q)
+            w, x, y, z = q.T
+            q = q / np.array([s ** 0.5 for s in (w * w + x * x + y * y + z * z).tolist()])[:, None]
+        return q, p, conf, ok
+
     def _checked_parts(self, pending: list) -> tuple[np.ndarray, np.ndarray]:
         """_confdata and _target_parts of every pending use, as arrays (q
-        (n, 4), p (n, 3)): the arithmetic of one (the sums of squares in
-        its order, math.sqrt's correctly rounded root as np.sqrt, the
-        ** 0.5 of unit_wxyz on Python floats); a use that any check would
-        stop or note goes through them one by one, in order (so the first
+        (n, 4), p (n, 3)) by _unit_parts; a use that any check would stop
+        or note goes through them one by one, in order (so the first
         error, its message and the notes are theirs)."""
         n = len(pending)
         if not n:
             return np.zeros((0, 4)), np.zeros((0, 3))
         v = np.array([item[1].record.values[:11] for item in pending], float).reshape(n, 11)
-        conf = v[:, 7:11]
-        qp = v[:, :7].astype(np.float32).astype(float) if self.float32 else v[:, :7]
-        p, q = np.ascontiguousarray(qp[:, :3]), np.ascontiguousarray(qp[:, 3:7])
-        w, x, y, z = q.T
-        norm = np.sqrt(w * w + x * x + y * y + z * z)
-        odd = ~((norm > 1e-6) & np.all(np.abs(p) <= MAX_POSITION_MM, axis=1)
-                & np.all(np.floor(conf) == conf, axis=1)
-                & np.all(np.abs(conf[:, :3]) <= MAX_QUADRANT, axis=1)
-                & (conf[:, 3] >= 0) & (conf[:, 3] <= 7))
-        if not self.float32:
-            odd |= np.abs(norm - 1.0) > QUAT_TOLERANCE
-        with np.errstate(divide="ignore", invalid="ignore"):   # (a zero one is odd)
-            q = np.where((np.abs(norm - 1.0) > 1e-12)[:, None], q / norm[:, None], q)
-            w, x, y, z = q.T
-            q = q / np.array([s ** 0.5 for s in (w * w + x * x + y * y + z * z).tolist()])[:, None]
-        for i in np.flatnonzero(odd).tolist():
+        q, p, _, ok = self._unit_parts(v)
+        for i in np.flatnonzero(~ok).tolist():
             u, src, pf = pending[i][:3]
             notes, self._notes = self._notes, []
             try:
@@ -867,23 +877,10 @@ class Resolver:
         if not done:
             return [], None, None, None
         m = len(done)
-        v = np.array(recs, float).reshape(m, 17)
-        # Contiguous, as poses() stacks them: a product's bits may depend
-        # on the layout of its operands.
-        f32 = v[:, :7].astype(np.float32).astype(float)
-        q, p = np.ascontiguousarray(f32[:, 3:7]), np.ascontiguousarray(f32[:, :3])
-        conf = v[:, 7:11]
-        w, x, y, z = q.T
-        norm = np.sqrt(w * w + x * x + y * y + z * z)
-        # What again() would refuse or note goes to again() (it says why).
-        ok = ((norm > 1e-6) & np.all(np.abs(p) <= MAX_POSITION_MM, axis=1)
-              & np.all(conf == np.round(conf), axis=1)
-              & np.all(np.abs(conf[:, :3]) <= MAX_QUADRANT, axis=1)
-              & (conf[:, 3] >= 0) & (conf[:, 3] <= 7))
-        q = np.where((np.abs(norm - 1.0) > 1e-12)[:, None], q / norm[:, None], q)
-        w, x, y, z = q.T
-        n2 = np.array([s ** 0.5 for s in (w * w + x * x + y * y + z * z).tolist()])
-        R = unit_quat_matrices(q / n2[:, None])
+        # What again() would refuse or note (not ok) goes to again(): it
+        # says why.
+        q, p, conf, ok = self._unit_parts(np.array(recs, float).reshape(m, 17))
+        R = unit_quat_matrices(q)
         Rf, pf = flange_poses(stacked_poses([self.base] * m), stacked_poses(wobjs), (R, p),
                               stacked_poses(tools))
         keep = np.flatnonzero(ok)

@@ -180,7 +180,6 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
             raise InternalError(f"{u.file.source.display_path}:{u.line}: the ideal "
                                 "controller finds no solution for the written target of "
                                 f"{u.label}")
-    if rob:
         qa = np.empty((len(rows), 6))
         place = {i: n for n, i in enumerate(rows)}
         qa[[place[i] for i in rob]] = got

@@ -42,9 +42,9 @@ def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
 
 def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list | None:
     """The changes, when no edit touches a line break or follows a CR
-    (fix's edits of numbers; None otherwise): line i of the output is line i of the input
-    with its edits, and the lines an edit touches are compared as they are
-    (no blocks to cut, no offsets to shift)."""
+    (fix's edits of numbers; None otherwise): line i of the output is line
+    i of the input with its edits, and the lines an edit touches are
+    compared as they are (no blocks to cut, no offsets to shift)."""
     import numpy as np
     if not lines:
         return None

@@ -69,9 +69,7 @@ def robtarget_texts_many(recs: list[RobTarget], R: np.ndarray, p: np.ndarray,
         for i in range(4):
             if int(cj[i]) != values[7 + i]:
                 texts[7 + i] = numbers.integer(cj[i])
-        base = rec.span.start
-        out.append((texts, [(base + regs[i][0], base + regs[i][1], texts[i])
-                            for i in range(17) if texts[i] != old[i]]))
+        out.append((texts, changed_fields(rec.span.start, regs, old, texts)))
     return out
 
 
@@ -83,13 +81,20 @@ def jointtarget_texts(record: JointTarget, q_deg) -> list[str]:
     return texts
 
 
+def changed_fields(base: int, regs, old, texts) -> list[tuple[int, int, str]]:
+    """(start, end, new text) in the source of each field whose text
+    changes: a literal at offset `base`, its fields at `regs` (relative)
+    holding `old`, to hold `texts`."""
+    return [(base + s, base + e, new) for (s, e), was, new in zip(regs, old, texts)
+            if new != was]
+
+
 def field_edits(record: RobTarget | JointTarget, texts: list[str], why: str) -> list[SpanEdit]:
     """The edits that give `record`'s fields `texts` (only those whose text
     changes)."""
-    base = record.span.start
-    old_texts, regs = record.lex()
-    return [SpanEdit(base + s, base + e, new, why)
-            for (s, e), old, new in zip(regs, old_texts, texts) if new != old]
+    old, regs = record.lex()
+    return [SpanEdit(s, e, new, why) for s, e, new in changed_fields(record.span.start, regs,
+                                                                      old, texts)]
 
 
 def robtarget_literal(texts: list[str]) -> str:
