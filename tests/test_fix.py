@@ -300,3 +300,33 @@ def test_cli_several_modules_into_a_directory(tmp_path):
                    "-o", str(tmp_path / "one.mod"), "-q"])
     assert single.exit_code == 0
     assert (out / "paper_front.mod").read_bytes() == (tmp_path / "one.mod").read_bytes()
+
+
+FAR = """MODULE Far
+  PERS wobjdata wFar:=[FALSE,TRUE,"",[[-99500,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  CONST robtarget pA:=[[99999.95,0,500],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  PROC main()
+    ConfL\\On;
+    MoveL pA,v100,fine,tool0\\WObj:=wFar;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_compensation_past_the_input_position_bound_is_not_bad_input(tmp_path):
+    """A position within the 100 m plausibility bound of input, moved past
+    it by the compensation (x 99999.95 -> 100000.02 mm in its work object),
+    is rapidcomp's own output: verification must not call it bad input at
+    the input's line (it did: exit 2 with the written numbers). As a
+    MoveAbsJ it is compensated. As a robtarget, float32 near 1e5 mm has a
+    7.8 um step, so the written value cannot hold the pose to 1 um: not
+    compensated, and the report says by how much it would miss."""
+    prog = tmp_path / "far.mod"
+    prog.write_text(FAR)
+    out = tmp_path / "o.mod"
+    r = _run(["fix", str(prog), "--profile", WARM, "--emit", "absj", "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "MoveAbsJ jt_pA,v100,fine,tool0\\WObj:=wFar;" in out.read_text()
+    r = _run(["fix", str(prog), "--profile", WARM, "--emit", "robtarget", "-o", str(out)])
+    assert r.exit_code == 1, r.output
+    assert "line 6 MoveL pA: the written value would miss by 1.692 um" in r.output

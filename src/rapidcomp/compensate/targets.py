@@ -285,7 +285,10 @@ class Resolver:
         is written (or a function giving it: a compact literal's fields are
         lexed again only for a message)."""
         p = self._floats(xyz)
-        if not all(abs(v) <= MAX_POSITION_MM for v in p):
+        # The bound is a plausibility check of input. Verification reads
+        # rapidcomp's own output, where compensation may move a position
+        # that was within it a fraction of a millimetre past it.
+        if not self.float32 and not all(abs(v) <= MAX_POSITION_MM for v in p):
             raise pf.source.error(_at(offset), f"{what}: the position [{', '.join(f'{v:g}' for v in p)}] "
                                           f"mm is beyond {MAX_POSITION_MM:g} mm of the robot")
         return p
@@ -644,12 +647,12 @@ class Resolver:
         p, q = np.ascontiguousarray(qp[:, :3]), np.ascontiguousarray(qp[:, 3:7])
         w, x, y, z = q.T
         norm = np.sqrt(w * w + x * x + y * y + z * z)
-        ok = ((norm > 1e-6) & np.all(np.abs(p) <= MAX_POSITION_MM, axis=1)
-              & np.all(np.floor(conf) == conf, axis=1)
+        ok = ((norm > 1e-6) & np.all(np.floor(conf) == conf, axis=1)
               & np.all(np.abs(conf[:, :3]) <= MAX_QUADRANT, axis=1)
               & (conf[:, 3] >= 0) & (conf[:, 3] <= 7))
         if not self.float32:
-            ok &= np.abs(norm - 1.0) <= QUAT_TOLERANCE
+            ok &= (np.abs(norm - 1.0) <= QUAT_TOLERANCE) & np.all(np.abs(p) <= MAX_POSITION_MM,
+                                                                 axis=1)
         with np.errstate(divide="ignore", invalid="ignore"):   # (a zero one is not ok)
             q = np.where((np.abs(norm - 1.0) > 1e-12)[:, None], q / norm[:, None], q)
             w, x, y, z = q.T
