@@ -800,3 +800,79 @@ def test_rotation_angles_and_quaternion_signs_are_the_pair_by_pair_formulas():
     f = numbers.QUAT_DECIMALS
     expected = [tuple(numbers.fmt(v, f) for v in row) for row in q.tolist()]
     assert numbers.quaternions(q_new, like=q_old) == expected
+
+
+def test_plain_literals_in_columns_give_the_literal_loops_texts_and_edits(monkeypatch):
+    """robtarget_texts_many reads literals written without whitespace as
+    columns (_plain_fields: split at brackets and commas, field offsets
+    from their lengths). Oracle: the regex lexing of each literal (lex())
+    and the loop over literals, on numbers in every spelling, positions on
+    both sides of MM_KEEP, quaternions kept and turned (both signs),
+    confdata kept and changed (incl. -0 and a float one)."""
+    from rapidcomp.kinematics.frames import quat_wxyz_to_matrix
+    from rapidcomp.rewrite import numbers, records
+    rng = np.random.default_rng(11)
+    spell = [lambda v: f"{v:.3f}", lambda v: f"{v:.6f}", lambda v: f"{v:g}",
+             lambda v: f"{v:.2E}", lambda v: f"{v:.0f}", lambda v: f"{v:.1f}0"]
+    lines, P, Q, C = [], [], [], []
+    for i in range(600):
+        xyz = [round(float(x), 3) for x in rng.uniform(-900, 900, 3)]
+        q = rng.normal(size=4)
+        q /= np.linalg.norm(q)
+        conf = [int(c) for c in rng.integers(-3, 4, 3)] + [int(rng.integers(0, 8))]
+        sx = [spell[(i + j) % len(spell)] for j in range(3)]
+        lit = (f"[[{sx[0](xyz[0])},{sx[1](xyz[1])},{sx[2](xyz[2])}],"
+               f"[{','.join(f'{v:.9f}' if i % 3 else f'{v:.6f}' for v in q)}],"
+               f"[{','.join(str(c) for c in conf)}],[9E+09,9E+09,0,-0,1.5E3,9E9]]")
+        lines.append(f"  CONST robtarget p{i}:={lit};")
+    # A position of 0.0 moved by exactly MM_KEEP (kept: the bound is
+    # strict); a quaternion turned about z whose x and y stay "0" (fields
+    # rewritten to the same text: no edit).
+    lines += [f"  CONST robtarget z{i}:=[[0.0,-0.0,500],[1,0,0,0],[0,0,0,0],"
+              "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];" for i in range(6)]
+    text = "MODULE M\n" + "\n".join(lines) + "\nENDMODULE\n"
+    recs = [d.value for d in parse_text(text, "m.mod").module.declarations]
+    for i, rec in enumerate(recs):
+        if i >= 600:
+            P.append(np.array([numbers.MM_KEEP, -numbers.MM_KEEP if i % 2 else 0.0, 500.0]))
+            Q.append(quat_wxyz_to_matrix([np.cos(0.01 * (i - 600)), 0, 0, np.sin(0.01 * (i - 600))]))
+            C.append(np.zeros(4))
+            continue
+        v = np.array(rec.values)
+        step = [0.0, 4.9e-7, 5.1e-7, -5.1e-7, 1e-3, 0.25][i % 6]
+        P.append(v[:3] + np.array([step, -step / 2, 0.0 if i % 4 else step]))
+        q = np.array(rec.quat_wxyz) / np.linalg.norm(rec.quat_wxyz)
+        if i % 5 == 1:
+            q = q + rng.normal(scale=1e-4, size=4)
+        if i % 7 == 2:
+            q = -q
+        Q.append(quat_wxyz_to_matrix(q / np.linalg.norm(q)))
+        c = v[7:11].copy()
+        if i % 3 == 0:
+            c[i % 4] += 1 if i % 4 < 3 else 0
+        C.append(c if i % 11 else c + 0.25)
+    R, P, C = np.array(Q), np.array(P), np.array(C)
+    plain = records._plain_fields(recs)
+    assert plain is not None
+    flat, starts, ends = plain
+    for j, rec in enumerate(recs):
+        texts, regs = rec.lex()
+        assert list(texts) == flat[17 * j:17 * j + 17]
+        assert [tuple(r) for r in regs] == list(zip(starts[j].tolist(), ends[j].tolist()))
+    columns = records.robtarget_texts_many(recs, R, P, C)
+    monkeypatch.setattr(records, "_plain_fields", lambda recs: None)
+    assert columns == records.robtarget_texts_many(recs, R, P, C)
+    kinds = {(bool(ch), any(s - recs[j].span.start < 40 for s, _, _ in ch))
+             for j, (_, ch) in enumerate(columns)}
+    assert kinds >= {(False, False), (True, True)}, kinds
+    assert [(texts[:7], [t for _, _, t in ch]) for texts, ch in columns[600:602]] == [
+        (["0.0", "-0.0", "500", "1", "0", "0", "0"], []),
+        (["0.0", "-0.0", "500", "0.99995", "0", "0", "0.009999833"],
+         ["0.99995", "0.009999833"])]
+    assert numbers.MM_KEEP == 5e-7
+    # A literal with whitespace anywhere is the regex's.
+    spaced = parse_text("MODULE M\n  CONST robtarget a:=[[1,2,3],[1,0,0,0],[0,0,0,0],"
+                        "[9E9,9E9,9E9,9E9,9E9, 9E9]];\nENDMODULE\n", "m.mod")
+    monkeypatch.undo()
+    assert records._plain_fields([spaced.module.declarations[0].value]) is None
+    assert records._plain_fields(recs[:3] + [spaced.module.declarations[0].value]) is None

@@ -55,8 +55,12 @@ def robtarget_texts_many(recs: list[RobTarget], R: np.ndarray, p: np.ndarray,
     quats = numbers.quaternions(matrix_to_quat_wxyz(R), like=q_old)
     p = np.asarray(p, float)
     mm = numbers.fmt_many(p.ravel().tolist(), numbers.MM_DECIMALS)
+    conf = np.asarray(conf)
+    lexed = _plain_fields(recs)
+    if lexed is not None:
+        return _columns(recs, lexed, p, conf, turned, quats, mm)
     out = []
-    for j, (rec, pj, cj, moved, q) in enumerate(zip(recs, p.tolist(), np.asarray(conf).tolist(),
+    for j, (rec, pj, cj, moved, q) in enumerate(zip(recs, p.tolist(), conf.tolist(),
                                                     turned, quats)):
         old, regs = rec.lex()
         texts = list(old)
@@ -71,6 +75,72 @@ def robtarget_texts_many(recs: list[RobTarget], R: np.ndarray, p: np.ndarray,
                 texts[7 + i] = numbers.integer(cj[i])
         out.append((texts, changed_fields(rec.span.start, regs, old, texts)))
     return out
+
+
+# What follows each of a plain robtarget literal's 17 fields up to the
+# next one: ',' inside a group, '],[' between groups.
+_GAPS = np.array([1, 1, 3, 1, 1, 1, 3, 1, 1, 1, 3, 1, 1, 1, 1, 1])
+
+
+def _plain_fields(recs: list[RobTarget]):
+    """(the 17 field texts of every literal, one flat list; each field's
+    start and end in its literal (n, 17)) when every literal is a compact
+    one written without whitespace, else None. Such a literal is
+    [[x,y,z],[q1,q2,q3,q4],[c1,c2,c3,c4],[e1,...,e6]] exactly (the parser
+    matched it as all-numeric): its fields are what lies between its
+    brackets and commas, and where each starts follows from their lengths
+    (a CAM program's 1e5 literals are lexed by a few C-level passes)."""
+    lits = [r.lexed for r in recs]
+    if not all(type(t) is str for t in lits):
+        return None
+    joined = ",".join(lits)
+    # (Not printable: every whitespace character but ' '.)
+    if " " in joined or not joined.isprintable():
+        return None
+    flat = joined.replace("[", "").replace("]", "").split(",")
+    n = len(lits)
+    if len(flat) != 17 * n:
+        return None
+    lengths = np.fromiter(map(len, flat), np.int64, 17 * n).reshape(n, 17)
+    starts = np.empty((n, 17), np.int64)
+    starts[:, 0] = 0
+    np.cumsum(lengths[:, :16] + _GAPS, axis=1, out=starts[:, 1:])
+    starts += 2
+    ends = starts + lengths
+    if not np.array_equal(ends[:, 16] + 2, np.fromiter(map(len, lits), np.int64, n)):
+        return None
+    return flat, starts, ends
+
+
+def _columns(recs, lexed, p, conf, turned, quats, mm):
+    """The per-literal loop of robtarget_texts_many on plain literals, as
+    columns (object arrays of the texts): the same decisions (a position
+    beyond MM_KEEP, a rotation beyond ROT_KEEP_RAD, a confdata integer
+    that differs) on the same float64 numbers, the same texts; a field is
+    changed where its new text differs from the old."""
+    old, starts, ends = lexed
+    n = len(recs)
+    values = np.array([r.values for r in recs], float).reshape(n, 17)
+    was = np.array(old, dtype=object).reshape(n, 17)
+    new = was.copy()
+    touched = np.zeros((n, 17), bool)
+    touched[:, :3] = np.abs(p - values[:, :3]) > numbers.MM_KEEP
+    new[:, :3][touched[:, :3]] = np.array(mm, dtype=object).reshape(n, 3)[touched[:, :3]]
+    touched[:, 3:7] = np.asarray(turned, bool)[:, None]
+    if n:
+        new[:, 3:7][touched[:, 3:7]] = np.array(quats, dtype=object).reshape(n, 4)[
+            touched[:, 3:7]]
+    c = conf.astype(np.int64)
+    touched[:, 7:11] = c != values[:, 7:11]
+    new[:, 7:11][touched[:, 7:11]] = [numbers.integer(v) for v in c[touched[:, 7:11]].tolist()]
+    changed = np.zeros((n, 17), bool)
+    changed[touched] = new[touched] != was[touched]
+    f = np.flatnonzero(changed)
+    base = np.array([r.span.start for r in recs], np.int64)[:, None]
+    fields = list(zip((base + starts).ravel()[f].tolist(), (base + ends).ravel()[f].tolist(),
+                      new.ravel()[f].tolist()))
+    at = [0] + np.cumsum(np.bincount(f // 17, minlength=n)).tolist()
+    return list(zip(new.tolist(), [fields[i:j] for i, j in zip(at, at[1:])]))
 
 
 def jointtarget_texts(record: JointTarget, q_deg) -> list[str]:
