@@ -175,6 +175,47 @@ def test_relex_refuses_an_output_that_does_not_hold_the_numbers_meant():
     assert F.relex(plan, fields, {0: broken}, {0: apply_edits(TEXT, broken)}) is None
 
 
+def test_relex_of_a_plain_literal_is_the_regexs_verdict():
+    """values.relex reads a literal the input writes without whitespace by
+    comparing the output with the wanted texts in its frame. Oracle: the
+    regex's fullmatch and groups, on the literal as meant and on outputs
+    that are not it (a digit, a sign, a space, a bracket, two fields
+    swapped, a field merged into its neighbour), robtargets and
+    jointtargets, plain and spaced."""
+    from rapidcomp.rapid.values import _FAST, relex
+    text = ("MODULE M\n"
+            "  CONST robtarget a:=[[1,2.5,-3],[1,0,0,0],[0,-1,2,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];\n"
+            "  CONST robtarget b:=[[1, 2.5,-3],[1,0,0,0],[0,-1,2,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];\n"
+            "  CONST jointtarget c:=[[10,-20,30.5,0,45,-90],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];\n"
+            "ENDMODULE\n")
+    recs = [d.value for d in parse_text(text, "m.mod").module.declarations]
+    checked = 0
+    for rec in recs:
+        kind = type(rec).__name__.lower()
+        want = list(rec.texts)
+        want[0], want[2] = "501.25", "-0.000001"
+        if kind == "robtarget":
+            lit = (f"[[{','.join(want[0:3])}],[{','.join(want[3:7])}],"
+                   f"[{','.join(want[7:11])}],[{','.join(want[11:17])}]]")
+        else:
+            lit = f"[[{','.join(want[0:6])}],[{','.join(want[6:12])}]]"
+        if " " in rec.lexed:
+            lit = lit.replace(",", ", ", 1)
+        outputs = [lit, lit.replace("501.25", "501.26"), lit.replace("-0.000001", "0.000001"),
+                   lit.replace(",", " ,", 1), lit[:-1], lit.replace("501.25,", "501.25,,", 1),
+                   lit.replace("501.25", want[1], 1).replace("," + want[1], ",501.25", 1),
+                   lit.replace("501.25,", "501.25", 1)]
+        for out in outputs:
+            m = _FAST[kind].fullmatch(out)
+            regex = m is not None and m.groups() == tuple(want)
+            got = relex(rec, out, want)
+            assert (got is not None) == regex, (kind, out)
+            if got is not None:
+                assert got.values == tuple(float(t) for t in want) and got.span == rec.span
+                checked += 1
+    assert checked == 6       # each as meant, and with a space the regex allows
+
+
 def test_ik_in_blocks_gives_the_one_batch_results(monkeypatch):
     """A long program is solved in blocks of rows (bounded temporaries):
     every result equals the one-batch one, bit for bit."""
