@@ -132,3 +132,56 @@ def test_a_value_no_controller_loads_is_bad_input_at_its_place(value, col, messa
         parse_text(f"MODULE m\nPROC p()\nMoveL {value}, v100, fine, tool0;\nENDPROC\nENDMODULE\n",
                    "m.mod")
     assert (e.value.line, e.value.col) == (3, col) and message in e.value.message
+
+
+def test_numeric_literals_decode_by_their_frame_as_the_regex_decodes_them():
+    """_compact reads a NumAgg by the frame of its shape (numbers between
+    brackets and commas). Oracle: the shape regex's groups, float() of
+    each, on literals with whitespace anywhere NUMAGG allows it, every
+    number spelling, wrong shapes (they must go the regex's way: its
+    DecodeIssue), and a number beyond a num's range (its message and
+    place). The lexer's number inside NUMAGG is NUMBER_RE (what makes the
+    frame's fields numbers)."""
+    import random
+    import re
+    from pathlib import Path
+    from rapidcomp.rapid.values import DecodeIssue, _FAST, decode
+    grammar = (Path(__file__).resolve().parents[1] / "grammars" / "rapid.lark").read_text()
+    assert re.search(r"^_N: /(.*)/$", grammar, re.M).group(1) == A.NUMBER_RE.pattern
+    rnd = random.Random(3)
+    nums = ["1", "-2.5", "+3.", ".5", "-.25e-3", "1E+05", "9E9", "0", "-0", "007", "1e400",
+            "3.5E38", "-3.4028234663852886e38"]
+    ws = ["", "", "", " ", "\t", "\n", "\r\n  "]
+
+    def lit(shape):
+        parts = []
+        for n in shape:
+            inner = (rnd.choice(ws) + ",").join(rnd.choice(ws) + rnd.choice(nums) for _ in range(n))
+            parts.append("[" + rnd.choice(ws) + inner + rnd.choice(ws) + "]")
+        return "[" + rnd.choice(ws) + ("," + rnd.choice(ws)).join(parts) + rnd.choice(ws) + "]"
+    shapes = {"robtarget": [(3, 4, 4, 6), (3, 4, 4, 5), (3, 4, 5, 5), (4, 4, 4, 6), (17,)],
+              "jointtarget": [(6, 6), (6, 5, 1), (12,), (7, 5)]}
+    seen = set()
+    for _ in range(3000):
+        kind = rnd.choice(sorted(shapes))
+        shape = rnd.choice(shapes[kind])
+        text = lit(shape)
+        expr = A.NumAgg(text, A.Span(100, 100 + len(text)))
+        m = _FAST[kind].fullmatch(text)
+        try:
+            got = decode(kind, expr, "t")
+        except DecodeIssue as exc:
+            got = (exc.reason, exc.span, exc.illegal)
+        if m is not None and all(abs(float(t)) <= 3.4028234663852886e38 for t in m.groups()):
+            want = (tuple(float(t) for t in m.groups()), text, expr.span)
+            assert (got.values, got.lexed, got.span) == want, text
+            seen.add("decoded")
+        else:
+            assert isinstance(got, tuple), text
+            seen.add("beyond" if m is not None else "shape")
+            if m is not None:
+                assert "is beyond what a RAPID num holds" in got[0] and got[2]
+                k = next(i for i, t in enumerate(m.groups())
+                         if not abs(float(t)) <= 3.4028234663852886e38)
+                assert got[1] == A.Span(100 + m.start(k + 1), 100 + m.end(k + 1))
+    assert seen == {"decoded", "beyond", "shape"}
