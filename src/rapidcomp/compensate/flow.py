@@ -44,7 +44,7 @@ from ..rapid.model import Module, ParsedFile, RoutineTable
 from ..rapid.motions import (BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS, DISPLACEMENT_OFF,
                              DISPLACEMENT_ON, MOVES_OTHERWISE, SUPERVISION, TRACK_OFFSET_OFF,
                              TRACK_OFFSET_ON, UNKNOWN_TARGET_CALLS, motion_spec)
-from ..rapid.refs import calls_in, names_in, plain_args
+from ..rapid.refs import calls_in, names_in
 
 ON, OFF = "on", "off"
 BOTH = frozenset((ON, OFF))
@@ -600,7 +600,7 @@ def _heads(s) -> tuple:
 def _function_calls(s) -> tuple:
     """Names of the functions (not built-ins) a statement's own expressions
     call, each once."""
-    if type(s) is A.ProcCall and plain_args(s.args):
+    if type(s) is A.ProcCall and s.plain:
         return ()             # a move of a CAM program: asked 1e5 times
     out: dict = {}
     for c in calls_in(_heads(s)):

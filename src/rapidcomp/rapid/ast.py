@@ -167,6 +167,9 @@ class ProcCall:
     name_span: Span
     args: tuple[Arg, ...]
     span: Span
+    # Every argument a plain name or a literal (refs.plain_args), decided
+    # once by the builder: a CAM move is asked three times.
+    plain: bool = False
 
 
 @dataclass(frozen=True, slots=True)

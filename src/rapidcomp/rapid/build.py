@@ -14,6 +14,7 @@ import re
 from . import ast as A
 from .ast import Span
 from .lalr import Tok
+from .refs import plain_args
 
 
 _FAST_HEAD = re.compile(r"([A-Za-z][A-Za-z0-9_]*)[ \t]+")
@@ -254,7 +255,7 @@ class NodeBuilder:
         name = c[0]
         args = c[1] if len(c) == 3 else ()
         return A.ProcCall(name.value, Span(name.start_pos, name.end_pos), args,
-                          Span(name.start_pos, c[-1].end_pos))
+                          Span(name.start_pos, c[-1].end_pos), plain_args(args))
 
     def fast_call(self, c):
         """A FAST_CALL token: split it into name and arguments (see grammar)."""
@@ -288,8 +289,10 @@ class NodeBuilder:
                 vspan = Span(at + s2, at + e2)
                 value = A.Num(num, val, vspan) if is_num else A.Ref(val, (), vspan)
                 args.append(A.Arg("optval", opt, value, Span(at + s0, at + e0)))
+        # (Plain by construction: names, a numeric aggregate, \Opt, \Opt:=name
+        # or number.)
         return A.ProcCall(name, Span(base, base + len(name)), tuple(args),
-                          Span(base, base + len(text)))
+                          Span(base, base + len(text)), True)
 
     def fast_decl(self, c):
         """A FAST_DECL token: one-line declaration with a numeric aggregate."""

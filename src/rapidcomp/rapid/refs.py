@@ -54,7 +54,7 @@ def nodes(root):
         elif t is A.Arg:
             yield node
             stack.append(node.value)
-        elif t is A.ProcCall and plain_args(node.args):
+        elif t is A.ProcCall and node.plain:
             # A CAM move (names and literals only): its nodes in the order
             # the general walk gives them (last argument first), without
             # a push and pop per node.
