@@ -162,6 +162,46 @@ def test_relex_reads_the_numbers_where_the_output_holds_them():
     assert [g.values[1:] for g in got] == [r.values[1:] for r in recs]
 
 
+def test_relex_rows_are_the_records_values_relex_reads():
+    """relex keeps robtargets written as their texts in the frame as rows
+    of one array (Written), the others as records: every literal, asked
+    for by key, is the record values.relex makes of the output's text
+    (values, text, span), on a module with plain and spaced literals,
+    robtargets and jointtargets; a number beyond a num's range in a plain
+    literal does not re-lex (as values.relex)."""
+    from rapidcomp.rapid.values import relex as relex_record
+    text = TEXT.replace("  PROC main()", "  CONST robtarget p2:=[[500, 0,600],[0.5,0,0.866025,0],"
+                        "[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+                        "  CONST jointtarget j1:=[[1,2,3,4,5,6],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+                        "  PROC main()")
+    pf = parse_text(text, "m.mod")
+    plan = Plan(Task("m.mod", (pf,)))
+    recs = [d.value for d in pf.module.declarations] + [plan.uses[1].source.record]
+    for big in (False, True):
+        fields, edits = {}, []
+        for n, rec in enumerate(recs):
+            texts = list(rec.texts)
+            texts[1] = "3.5E38" if big and n == 3 else f"{10.25 + n}"
+            fields[(0, rec.span.start)] = (rec, texts)
+            s, e = rec.regs[1]
+            edits.append(SpanEdit(rec.span.start + s, rec.span.start + e, texts[1]))
+        out_text = apply_edits(text, edits)
+        out = F.relex(plan, fields, {0: edits}, {0: out_text})
+        if big:
+            assert out is None
+            break
+        assert sorted(out.rows) == [(id(pf), recs[n].span.start) for n in (0, 3)]
+        shift = 0
+        for n, rec in enumerate(recs):
+            got = out[(id(pf), rec.span.start)]
+            start = rec.span.start + shift
+            shift += len(edits[n].replacement) - (edits[n].end - edits[n].start)
+            want = relex_record(rec, out_text[start:rec.span.end + shift], fields[
+                (0, rec.span.start)][1])
+            assert (type(got), got.values, got.lexed, got.span) == (
+                type(want), want.values, want.lexed, want.span)
+
+
 def test_relex_refuses_an_output_that_does_not_hold_the_numbers_meant():
     pf = parse_text(TEXT, "m.mod")
     plan = Plan(Task("m.mod", (pf,)))

@@ -208,6 +208,43 @@ def parse_track(specs) -> tuple[tuple[int, np.ndarray], ...]:
     return tuple(out)
 
 
+class Written:
+    """Records as an output writes them, by (id(file), offset of the literal
+    in the input): the written program's values on the input's structure
+    (verify.relex). A robtarget read by its frame is a row of one array
+    (a CAM program writes 1e5: no record, tuple and 17 floats each); its
+    record is made only when asked for (again(): Offs/RelTool, a message).
+    Others are records."""
+
+    def __init__(self, records: dict, keys: list, values: np.ndarray, where: list):
+        self.records = records
+        self.rows = {k: n for n, k in enumerate(keys)}
+        self.values = values              # (n, 17), rows in the order of keys
+        self.where = where                # per row: (input record, output text, start, end)
+
+    def __bool__(self) -> bool:
+        return bool(self.records) or bool(self.rows)
+
+    def row(self, key) -> int | None:
+        return self.rows.get(key)
+
+    def get(self, key, default=None):
+        record = self.records.get(key)
+        if record is not None:
+            return record
+        n = self.rows.get(key)
+        if n is None:
+            return default
+        rec, text, start, end = self.where[n]
+        return type(rec)(tuple(self.values[n].tolist()), text[start:end], rec.span)
+
+    def __getitem__(self, key):
+        record = self.get(key)
+        if record is None:
+            raise KeyError(key)
+        return record
+
+
 class Resolver:
     """Resolves motion targets of `files` (the task's modules, then --with
     modules). With float32=True every number is first rounded to a 32-bit
@@ -215,12 +252,11 @@ class Resolver:
 
     def __init__(self, files: list[ParsedFile], float32: bool = False,
                  usages: dict | None = None, writes: bool = True, track=(), base=None,
-                 observers=(), moved_by: str | None = None, written: dict | None = None):
+                 observers=(), moved_by: str | None = None, written: Written | None = None):
         self.float32 = float32
-        # Records as an output writes them, by (id(file), offset of the
-        # literal): the written program's values on the input's structure
-        # (verify.py, when every edit is of numeric fields).
-        self.written = written or {}
+        # Records as an output writes them (verify.py, when every edit is of
+        # numeric fields).
+        self.written = written if written is not None else Written({}, [], np.empty((0, 17)), [])
         self._memos: dict = {}
         # Robtarget uses whose flange pose is composed in one batch (poses()).
         self._pending: list = []
@@ -862,6 +898,9 @@ class Resolver:
         if self.track or not self.float32:
             return [], None, None, None
         done, recs, tools, wobjs = [], [], [], []
+        # Rows of the written array (at: their place in done), records' values.
+        at, rows = [], []
+        written = self.written
         for n, u in enumerate(uses):
             src = u.source
             if u.kind != "robtarget" or src.call is not None:
@@ -870,19 +909,30 @@ class Resolver:
             wobj = self.wobj(u.motion.wobj, u.module, u.motion.routine)
             if isinstance(tool, Unresolved) or isinstance(wobj, Unresolved):
                 continue
-            record = self._written_record(src, u.file) if self.written else src.record
-            if not isinstance(record, RobTarget):
+            if not isinstance(src.record, RobTarget):
                 continue
+            row = written.row((id(src.home if src.home is not None else u.file),
+                               src.record.span.start))
+            if row is not None:
+                at.append(len(done))
+                rows.append(row)
+            else:
+                record = self._written_record(src, u.file)
+                if not isinstance(record, RobTarget):
+                    continue
+                recs.append(record.values)
             done.append(n)
-            recs.append(record.values)
             tools.append(tool[1])
             wobjs.append(wobj[1])
         if not done:
             return [], None, None, None
         m = len(done)
+        v = np.empty((m, 17))
+        v[at] = written.values[rows]
+        v[np.setdiff1d(np.arange(m), at)] = np.array(recs, float).reshape(-1, 17)
         # What again() would refuse or note (not ok) goes to again(): it
         # says why.
-        q, p, conf, ok = self._unit_parts(np.array(recs, float).reshape(m, 17))
+        q, p, conf, ok = self._unit_parts(v)
         R = unit_quat_matrices(q)
         Rf, pf = flange_poses(stacked_poses([self.base] * m), stacked_poses(wobjs), (R, p),
                               stacked_poses(tools))

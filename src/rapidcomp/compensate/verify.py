@@ -23,10 +23,11 @@ from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
+from ..rapid.values import NUM_MAX, ROBTARGET_FRAME, RobTarget
 from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
-from .targets import Resolver
+from .targets import Resolver, Written
 
 # Acceptance of a written value, after float32 rounding.
 VERIFY_UM = 1.0
@@ -45,18 +46,25 @@ def reparse(plan: Plan, texts: dict[int, str]) -> dict[int, ParsedFile]:
     return out
 
 
-def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> dict | None:
+def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> Written | None:
     """When every edit replaces numeric fields of literals (fields: (file,
     offset) -> (record, its new field texts)), the output has the input's
     structure: instead of parsing it again, each edited literal is lexed
     again where the output holds it, and must decode to the numbers the
     editor meant. Returns the records as written, by (id(file), offset),
     for the verification's resolver; None when a literal does not re-lex
-    (the output is then parsed again)."""
+    (the output is then parsed again). A robtarget the output writes as
+    its wanted texts in the frame of a literal without whitespace (what
+    values.relex compares first) is a row of one array of numbers: the
+    texts converted as values.relex converts them, float() of each."""
     by_file: dict = {}
     for (fi, start), item in fields.items():
         by_file.setdefault(fi, []).append((start, item))
     out = {}
+    keys: list = []
+    where: list = []
+    numbers: list[str] = []
+    frame = ROBTARGET_FRAME
     for fi, items in by_file.items():
         # Offsets shift by what the edits before them add: a literal's
         # brackets lie outside every field edit.
@@ -69,12 +77,21 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
         home = id(plan.files[fi])
         for start, (record, want) in items:
             end = record.span.end
-            got = relex_record(record, text[start + shift[bisect_right(ends, start)]:
-                                            end + shift[bisect_right(ends, end)]], want)
+            a, b = start + shift[bisect_right(ends, start)], end + shift[bisect_right(ends, end)]
+            if type(record) is RobTarget and text[a:b] == frame % tuple(want):
+                keys.append((home, start))
+                where.append((record, text, a, b))
+                numbers.extend(want)
+                continue
+            got = relex_record(record, text[a:b], want)
             if got is None:
                 return None
             out[(home, start)] = got
-    return out
+    values = np.fromiter(map(float, numbers), float, len(numbers)).reshape(-1, 17)
+    # (As values.relex: a number beyond a num's range does not re-lex.)
+    if not (np.abs(values) <= NUM_MAX).all():
+        return None
+    return Written(out, keys, values, where)
 
 
 class _Written(NamedTuple):
@@ -87,7 +104,7 @@ class _Written(NamedTuple):
 
 
 def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFile],
-           solver: Solver, written: dict | None = None) -> dict:
+           solver: Solver, written: Written | None = None) -> dict:
     """Residual (um, deg) of each compensated use (by key), evaluated on
     the written output: out_files parsed again, or (written) the input's
     structure with the records as relex() read them."""

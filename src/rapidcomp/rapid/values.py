@@ -268,8 +268,8 @@ def _shape_regex(counts: tuple[int, ...]) -> re.Pattern:
 
 _FAST = {"robtarget": _shape_regex((3, 4, 4, 6)), "jointtarget": _shape_regex((6, 6))}
 # A literal's 17 (12) numbers in their frame (as written without whitespace).
-_PLAIN = {RobTarget: "[[%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s,%s,%s]]",
-          JointTarget: "[[%s,%s,%s,%s,%s,%s],[%s,%s,%s,%s,%s,%s]]"}
+ROBTARGET_FRAME = "[[%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s,%s,%s]]"
+_PLAIN = {RobTarget: ROBTARGET_FRAME, JointTarget: "[[%s,%s,%s,%s,%s,%s],[%s,%s,%s,%s,%s,%s]]"}
 _COMPACT = {"robtarget": RobTarget, "jointtarget": JointTarget}
 _COUNT = {RobTarget: 17, JointTarget: 12}
 
