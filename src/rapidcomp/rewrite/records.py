@@ -136,8 +136,8 @@ def _columns(recs, lexed, p, conf, turned, quats, mm):
     changed = np.zeros((n, 17), bool)
     changed[touched] = new[touched] != was[touched]
     f = np.flatnonzero(changed)
-    base = np.array([r.span.start for r in recs], np.int64)[:, None]
-    fields = list(zip((base + starts).ravel()[f].tolist(), (base + ends).ravel()[f].tolist(),
+    base = np.array([r.span.start for r in recs], np.int64)[f // 17]
+    fields = list(zip((base + starts.ravel()[f]).tolist(), (base + ends.ravel()[f]).tolist(),
                       new.ravel()[f].tolist()))
     at = [0] + np.cumsum(np.bincount(f // 17, minlength=n)).tolist()
     return list(zip(new.tolist(), [fields[i:j] for i, j in zip(at, at[1:])]))
