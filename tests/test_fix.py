@@ -330,3 +330,31 @@ def test_compensation_past_the_input_position_bound_is_not_bad_input(tmp_path):
     r = _run(["fix", str(prog), "--profile", WARM, "--emit", "robtarget", "-o", str(out)])
     assert r.exit_code == 1, r.output
     assert "line 6 MoveL pA: the written value would miss by 1.692 um" in r.output
+    # Input past the bound is still bad input, at its place.
+    prog.write_text(FAR.replace("99999.95", "100000.01"))
+    r = _run(["fix", str(prog), "--profile", WARM, "--emit", "absj", "-o", str(out)])
+    assert r.exit_code == 2 and "far.mod:3:25: pA: the position [100000, 0, 500] mm is beyond " \
+        "100000 mm of the robot" in r.output, r.output
+
+
+def test_a_kept_hexadecimal_field_is_verified_by_parsing_the_output(tmp_path):
+    """A robtarget whose confdata is written 0x1 (a jointtarget with an
+    external axis 0x0) is decoded field by field; fix keeps that field's
+    text. Verification reads the written literal as the parser does: the
+    regex does not read 0x1, so the output is parsed again (it crashed
+    with a ValueError when float() was asked). Each alone in its module
+    (the first literal that does not re-lex decides for the module)."""
+    decl = {"p1": "CONST robtarget p1:=[[400,300,250],[0.707107,0,0.707107,0],[0,0,-1,0x1],"
+                  "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];",
+            "j1": "CONST jointtarget j1:=[[10,20,30,0,45,0],[0x0,9E+09,9E+09,9E+09,9E+09,9E+09]];"}
+    move = {"p1": "MoveL p1,v100,fine,tool0;", "j1": "MoveAbsJ j1,v100,fine,tool0;"}
+    kept = {"p1": "[0,0,-1,0x1],[9E+09", "j1": "],[0x0,9E+09,9E+09,9E+09,9E+09,9E+09]];"}
+    for name in ("p1", "j1"):
+        prog = tmp_path / f"{name}.mod"
+        prog.write_text(f"MODULE Hex\n  {decl[name]}\n  PROC main()\n    {move[name]}\n"
+                        "  ENDPROC\nENDMODULE\n")
+        out = tmp_path / f"{name}_out.mod"
+        r = _run(["fix", str(prog), "--profile", WARM, "--emit", "robtarget", "-o", str(out)])
+        assert r.exit_code == 0, r.output
+        text = out.read_text()
+        assert kept[name] in text and decl[name][-60:] not in text

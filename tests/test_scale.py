@@ -221,12 +221,15 @@ def test_relex_of_a_plain_literal_is_the_regexs_verdict():
     regex's fullmatch and groups, on the literal as meant and on outputs
     that are not it (a digit, a sign, a space, a bracket, two fields
     swapped, a field merged into its neighbour), robtargets and
-    jointtargets, plain and spaced."""
+    jointtargets, plain and spaced, and literals the parser decoded field
+    by field that keep a hexadecimal or binary field."""
     from rapidcomp.rapid.values import _FAST, relex
     text = ("MODULE M\n"
             "  CONST robtarget a:=[[1,2.5,-3],[1,0,0,0],[0,-1,2,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];\n"
             "  CONST robtarget b:=[[1, 2.5,-3],[1,0,0,0],[0,-1,2,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];\n"
             "  CONST jointtarget c:=[[10,-20,30.5,0,45,-90],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];\n"
+            "  CONST robtarget d:=[[1,2.5,-3],[1,0,0,0],[0,-1,2,0x1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];\n"
+            "  CONST jointtarget e:=[[10,-20,30.5,0,45,-90],[0b1,9E+09,9E+09,9E+09,9E+09,9E+09]];\n"
             "ENDMODULE\n")
     recs = [d.value for d in parse_text(text, "m.mod").module.declarations]
     checked = 0
@@ -253,7 +256,9 @@ def test_relex_of_a_plain_literal_is_the_regexs_verdict():
             if got is not None:
                 assert got.values == tuple(float(t) for t in want) and got.span == rec.span
                 checked += 1
-    assert checked == 6       # each as meant, and with a space the regex allows
+    # Each decimal one as meant, and with a space the regex allows; d and e
+    # keep a field the regex does not read (0x1, 0b1): never.
+    assert checked == 6
 
 
 def test_ik_in_blocks_gives_the_one_batch_results(monkeypatch):
@@ -957,9 +962,17 @@ def test_plain_literals_in_columns_give_the_literal_loops_texts_and_edits(monkey
         (["0.0", "-0.0", "500", "0.99995", "0", "0", "0.009999833"],
          ["0.99995", "0.009999833"])]
     assert numbers.MM_KEEP == 5e-7
-    # A literal with whitespace anywhere is the regex's.
-    spaced = parse_text("MODULE M\n  CONST robtarget a:=[[1,2,3],[1,0,0,0],[0,0,0,0],"
-                        "[9E9,9E9,9E9,9E9,9E9, 9E9]];\nENDMODULE\n", "m.mod")
+    # A literal with whitespace of any kind anywhere is the regex's (and
+    # its whitespace stays in the output).
     monkeypatch.undo()
-    assert records._plain_fields([spaced.module.declarations[0].value]) is None
-    assert records._plain_fields(recs[:3] + [spaced.module.declarations[0].value]) is None
+    for ws in (" ", "\t", "\n", "\r\n", "\f", "\v", "\xa0", "\u2003"):
+        spaced = parse_text("MODULE M\n  CONST robtarget a:=[[1,2,3],[1,0,0,0],[0,0,0,0],"
+                            f"[9E9,9E9,9E9,9E9,9E9,{ws}9E9]];\nENDMODULE\n", "m.mod")
+        rec = spaced.module.declarations[0].value
+        assert records._plain_fields([rec]) is None, repr(ws)
+        assert records._plain_fields(recs[:3] + [rec]) is None, repr(ws)
+        texts, changed = records.robtarget_texts_many(
+            [rec], quat_wxyz_to_matrix([1.0, 0, 0, 0])[None], np.array([[1.5, 2, 3]]),
+            np.zeros((1, 4)))[0]
+        assert texts[0] == "1.5" and [t for _, _, t in changed] == ["1.5"]
+        assert rec.lexed[changed[0][1] - rec.span.start:].endswith(f"9E9,{ws}9E9]]")

@@ -23,7 +23,7 @@ from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
-from ..rapid.values import NUM_MAX, ROBTARGET_FRAME, RobTarget
+from ..rapid.values import NOT_DECIMAL, NUM_MAX, ROBTARGET_FRAME, RobTarget
 from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
@@ -56,7 +56,7 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     (the output is then parsed again). A robtarget the output writes as
     its wanted texts in the frame of a literal without whitespace (what
     values.relex compares first) is a row of one array of numbers: the
-    texts converted as values.relex converts them, float() of each."""
+    texts converted as values.relex converts them (values.decimals)."""
     by_file: dict = {}
     for (fi, start), item in fields.items():
         by_file.setdefault(fi, []).append((start, item))
@@ -64,6 +64,7 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     keys: list = []
     where: list = []
     numbers: list[str] = []
+    wants: list = []
     frame = ROBTARGET_FRAME
     for fi, items in by_file.items():
         # Offsets shift by what the edits before them add: a literal's
@@ -81,17 +82,38 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
             if type(record) is RobTarget and text[a:b] == frame % tuple(want):
                 keys.append((home, start))
                 where.append((record, text, a, b))
+                wants.append(want)
                 numbers.extend(want)
                 continue
             got = relex_record(record, text[a:b], want)
             if got is None:
                 return None
             out[(home, start)] = got
-    values = np.fromiter(map(float, numbers), float, len(numbers)).reshape(-1, 17)
+    values = _decimals(numbers)
+    if values is None:
+        # A kept field written otherwise than as a decimal number (0x1F in
+        # a value the parser decoded field by field): values.relex's verdict.
+        for key, (record, text, a, b), want in zip(keys, where, wants):
+            got = relex_record(record, text[a:b], want)
+            if got is None:
+                return None
+            out[key] = got
+        keys, where, values = [], [], np.empty((0, 17))
     # (As values.relex: a number beyond a num's range does not re-lex.)
     if not (np.abs(values) <= NUM_MAX).all():
         return None
     return Written(out, keys, values, where)
+
+
+def _decimals(texts: list[str]) -> np.ndarray | None:
+    """values.decimals as one array (n, 17) of a flat list of robtargets'
+    texts (no tuple of 1.7e6 floats)."""
+    if ",".join(texts).translate(NOT_DECIMAL):
+        return None
+    try:
+        return np.fromiter(map(float, texts), float, len(texts)).reshape(-1, 17)
+    except ValueError:
+        return None
 
 
 class _Written(NamedTuple):

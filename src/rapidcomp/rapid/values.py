@@ -272,6 +272,20 @@ ROBTARGET_FRAME = "[[%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s,%s,%s]]"
 _PLAIN = {RobTarget: ROBTARGET_FRAME, JointTarget: "[[%s,%s,%s,%s,%s,%s],[%s,%s,%s,%s,%s,%s]]"}
 _COMPACT = {"robtarget": RobTarget, "jointtarget": JointTarget}
 _COUNT = {RobTarget: 17, JointTarget: 12}
+# Over these characters float() reads exactly what NUMBER_RE matches (a
+# sign, digits, one '.', an exponent); hex, octal and binary have others.
+NOT_DECIMAL = str.maketrans("", "", "0123456789.eE+-,")
+
+
+def decimals(texts) -> tuple[float, ...] | None:
+    """float() of each text when every one is a decimal number as NUMBER_RE
+    writes it (the regex's verdict, in two C-level passes), else None."""
+    if ",".join(texts).translate(NOT_DECIMAL):
+        return None
+    try:
+        return tuple(map(float, texts))
+    except ValueError:
+        return None
 
 
 def _compact(t: str, expr, where: str) -> Record:
@@ -284,10 +298,15 @@ def _compact(t: str, expr, where: str) -> Record:
     if isinstance(expr, A.NumAgg):
         text = expr.text
         fields = text.replace("[", "").replace("]", "").split(",")
-        # (A NumAgg's numbers are NUMBER_RE's: the lexer's NUMAGG matched them.)
+        # (A NumAgg's numbers are NUMBER_RE's, the lexer's NUMAGG matched
+        # them, with whitespace around them that float() drops, but for
+        # \x1c-\x1f: those go the regex's way.)
         if len(fields) == _COUNT[cls] and text == _PLAIN[cls] % tuple(fields):
-            values = tuple(map(float, fields))
-            if max(map(abs, values)) <= NUM_MAX:
+            try:
+                values = tuple(map(float, fields))
+            except ValueError:
+                values = None
+            if values is not None and max(map(abs, values)) <= NUM_MAX:
                 return cls(values, text, expr.span)
         m = _FAST[t].fullmatch(expr.text)
         if m is not None:
@@ -312,14 +331,14 @@ def relex(record: Record, text: str, want) -> Record | None:
     """`record` as `text` (the same literal with other numbers) writes it,
     or None when the text is not an all-numeric literal of its type with
     the field texts `want` (its span stays where the input holds it).
-    The text is first compared with the texts `want` (numbers, as the
-    editor writes them) in the frame of a literal without whitespace:
-    equal, the regex would find them there (how the editor writes a
-    literal the input writes so; 1e5 times in a CAM program, for a third
-    of the time)."""
-    if text == _PLAIN[type(record)] % tuple(want):
-        values = tuple(map(float, want))
-    else:
+    The text is first compared with the texts `want` in the frame of a
+    literal without whitespace: equal, and every text a decimal number,
+    the regex would find them there (how the editor writes a literal the
+    input writes so; 1e5 times in a CAM program, for a third of the time).
+    A kept field may be written otherwise (0x1F in a value the parser
+    decoded field by field): the regex's verdict."""
+    values = decimals(want) if text == _PLAIN[type(record)] % tuple(want) else None
+    if values is None:
         m = _FAST[type(record).__name__.lower()].fullmatch(text)
         if m is None or m.groups() != tuple(want):
             return None
