@@ -735,6 +735,49 @@ def test_uses_evaluated_again_as_arrays_are_again_bit_for_bit():
     assert taken > 400
 
 
+def test_written_rows_evaluated_again_are_again_of_the_records_written():
+    """With the output's numbers (a Written from relex: plain literals as
+    rows of one array, spaced ones as records), again_many gives for each
+    use again()'s pose and confdata exactly, again() reading the written
+    record (Written.get), and both read the written numbers, not the
+    input's: on a CAM module whose literals are plain and spaced in turn,
+    and a module with Offs/RelTool, loops and arrays."""
+    from rapidcomp.compensate.targets import Resolver
+    from rapidcomp.rapid.values import RobTarget
+    lines = _cam(300, 3, "").split("\n")
+    cam = "\n".join(ln.replace("],[", "], [", 1) if i % 3 == 0 else ln
+                    for i, ln in enumerate(lines))
+    kinds = set()
+    for name, text in (("cam.mod", cam), ("odd.mod", ODD)):
+        pf = parse_text(text, name)
+        plan = Plan(Task(name, (pf,)))
+        uses = [u for u in plan.uses if u.reason is None]
+        fields, edits = {}, []
+        for u in uses:
+            rec = u.source.record if u.kind == "robtarget" else None
+            if not isinstance(rec, RobTarget) or (0, rec.span.start) in fields:
+                continue
+            texts = list(rec.texts)
+            texts[0] = f"{rec.values[0] + 0.5:.3f}"
+            fields[(0, rec.span.start)] = (rec, texts)
+            s0, e0 = rec.regs[0]
+            edits.append(SpanEdit(rec.span.start + s0, rec.span.start + e0, texts[0]))
+        written = F.relex(plan, fields, {0: edits}, {0: apply_edits(text, edits)})
+        assert written is not None
+        kinds |= {"rows" for _ in written.rows} | {"records" for _ in written.records}
+        res = Resolver([pf], float32=True, usages=plan.resolver.usages, writes=False,
+                       track=plan.track, base=plan.resolver.base, written=written)
+        done, R, p, conf = res.again_many(uses)
+        assert len(done) > (250 if name == "cam.mod" else 3)
+        for j, n in enumerate(done):
+            one = res.again(uses[n])
+            res.poses()
+            assert np.array_equal(one.R, R[j]) and np.array_equal(one.p, p[j]), uses[n].label
+            assert one.conf == tuple(conf[j].tolist())
+            assert one.source.record.values[0] == uses[n].source.record.values[0] + 0.5
+    assert kinds == {"rows", "records"}
+
+
 def test_rounded_rows_are_pythons_round():
     """rows.rounded_rows (the reports' joint columns, in bulk) gives what
     round(x, 6) gives for each value, sign of zero included: random
