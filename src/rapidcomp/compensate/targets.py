@@ -208,6 +208,12 @@ def parse_track(specs) -> tuple[tuple[int, np.ndarray], ...]:
     return tuple(out)
 
 
+def _written_key(src: Source, pf) -> tuple[int, int]:
+    """Where src's literal is written: (id(its file), its offset in the
+    input), the key of Written (verify.relex makes them so)."""
+    return (id(src.home if src.home is not None else pf), src.record.span.start)
+
+
 class Written:
     """Records as an output writes them, by (id(file), offset of the literal
     in the input): the written program's values on the input's structure
@@ -858,8 +864,7 @@ class Resolver:
 
     def _written_record(self, src: Source, pf):
         """src's record as the output writes it (itself where not rewritten)."""
-        return self.written.get((id(src.home if src.home is not None else pf),
-                                 src.record.span.start), src.record)
+        return self.written.get(_written_key(src, pf), src.record)
 
     def again(self, u: TargetUse) -> TargetUse:
         """A use resolve() gave for the input, resolved again by this
@@ -911,8 +916,7 @@ class Resolver:
                 continue
             if not isinstance(src.record, RobTarget):
                 continue
-            row = written.row((id(src.home if src.home is not None else u.file),
-                               src.record.span.start))
+            row = written.row(_written_key(src, u.file))
             if row is not None:
                 at.append(len(done))
                 rows.append(row)

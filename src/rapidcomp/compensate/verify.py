@@ -23,7 +23,7 @@ from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
-from ..rapid.values import NOT_DECIMAL, NUM_MAX, ROBTARGET_FRAME, RobTarget
+from ..rapid.values import NUM_MAX, ROBTARGET_FRAME, RobTarget, decimal_chars
 from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
@@ -108,7 +108,7 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
 def _decimals(texts: list[str]) -> np.ndarray | None:
     """values.decimals as one array (n, 17) of a flat list of robtargets'
     texts (no tuple of 1.7e6 floats)."""
-    if ",".join(texts).translate(NOT_DECIMAL):
+    if not decimal_chars(texts):
         return None
     try:
         return np.fromiter(map(float, texts), float, len(texts)).reshape(-1, 17)

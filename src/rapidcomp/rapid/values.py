@@ -274,13 +274,19 @@ _COMPACT = {"robtarget": RobTarget, "jointtarget": JointTarget}
 _COUNT = {RobTarget: 17, JointTarget: 12}
 # Over these characters float() reads exactly what NUMBER_RE matches (a
 # sign, digits, one '.', an exponent); hex, octal and binary have others.
-NOT_DECIMAL = str.maketrans("", "", "0123456789.eE+-,")
+_NOT_DECIMAL = str.maketrans("", "", "0123456789.eE+-,")
+
+
+def decimal_chars(texts) -> bool:
+    """Every text is written with those characters only: float() of it
+    (where it succeeds) is what the regex reads (one C-level pass)."""
+    return not ",".join(texts).translate(_NOT_DECIMAL)
 
 
 def decimals(texts) -> tuple[float, ...] | None:
     """float() of each text when every one is a decimal number as NUMBER_RE
-    writes it (the regex's verdict, in two C-level passes), else None."""
-    if ",".join(texts).translate(NOT_DECIMAL):
+    writes it (the regex's verdict), else None."""
+    if not decimal_chars(texts):
         return None
     try:
         return tuple(map(float, texts))
