@@ -1019,3 +1019,54 @@ def test_plain_literals_in_columns_give_the_literal_loops_texts_and_edits(monkey
             np.zeros((1, 4)))[0]
         assert texts[0] == "1.5" and [t for _, _, t in changed] == ["1.5"]
         assert rec.lexed[changed[0][1] - rec.span.start:].endswith(f"9E9,{ws}9E9]]")
+
+
+def test_the_collector_is_paused_through_fix_and_check_and_restored(tmp_path, monkeypatch):
+    """A 1e5-target run makes millions of acyclic objects: the cyclic
+    collector stays paused through the whole job (loading, the report,
+    the encoding), not only inside parse and fix; and it runs again after."""
+    import gc
+
+    from click.testing import CliRunner
+
+    from rapidcomp.cli import main
+    from rapidcomp.collector import paused
+    from rapidcomp.compensate import check as C
+    seen = {}
+
+    def spy(name, f):
+        def g(*a, **k):
+            seen[name] = gc.isenabled()
+            return f(*a, **k)
+        return g
+    monkeypatch.setattr(report, "markdown", spy("markdown", report.markdown))
+    monkeypatch.setattr(C, "use_rows", spy("check rows", C.use_rows))
+    monkeypatch.setattr(Plan, "__init__", spy("plan", Plan.__init__))
+    fixtures = Path(__file__).resolve().parents[1] / "fixtures"
+    assert gc.isenabled()
+    r = CliRunner().invoke(main, ["fix", str(fixtures / "cubes.mod"), "--profile",
+                                  str(fixtures / "warm.csv"), "--limit", "J5=-120:120",
+                                  "-o", str(tmp_path / "out.mod"), "-q"])
+    assert r.exit_code == 0, r.output
+    r = CliRunner().invoke(main, ["check", str(fixtures / "cubes.mod"), "--profile",
+                                  str(fixtures / "warm.csv"), "--limit", "J5=-120:120"])
+    assert r.exit_code == 0, r.output
+    assert seen == {"markdown": False, "check rows": False, "plan": False}
+    assert gc.isenabled()
+    # Pauses nest, restore the state they found, also on an error.
+    with paused():
+        with paused():
+            assert not gc.isenabled()
+        assert not gc.isenabled()
+    assert gc.isenabled()
+    with pytest.raises(ValueError):
+        with paused():
+            raise ValueError
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        with paused():
+            pass
+        assert not gc.isenabled()
+    finally:
+        gc.enable()

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..collector import paused
 from ..kinematics.ik import Solver
 from .place import groups
 from .plan import Plan, Task
@@ -35,6 +36,11 @@ class CheckResult:
 
 
 def check(task: Task, solver: Solver, track=(), start=None, base=None) -> CheckResult:
+    with paused():   # millions of acyclic objects at CAM scale (collector.py)
+        return _check(task, solver, track, start, base)
+
+
+def _check(task, solver, track, start, base) -> CheckResult:
     plan = Plan(task, track, base)
     solved = solve(plan, solver, start)
     # fix's groups (with its default --emit): an array element that cannot

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..collector import paused
 from ..edits import SpanEdit, apply_edits
 from ..errors import InternalError
 from ..kinematics.frames import DEG
@@ -81,17 +82,9 @@ def fix(task: Task, solver: Solver, mode: str = "auto", timings: dict | None = N
     the identity. transient: (Transient, {s: Solver of the robot deformed
     by s . profile}) writes the correction for the run-time thermal state
     (transient.py), verified at every s."""
-    import gc
-    # Like the parser: 1e5 targets make millions of small objects and no
-    # cycles; the cyclic collector would rescan them all, again and again.
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
+    with paused():
         return _fix(task, solver, mode, timings, track, output_names or {}, start, base,
                     transient)
-    finally:
-        if enabled:
-            gc.enable()
 
 
 def _fix(task, solver, mode, timings, track, output_names, start, base,

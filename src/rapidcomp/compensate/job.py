@@ -15,6 +15,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from ..collector import paused
 from ..errors import Errors, InputError, RapidcompError
 from ..progress import Progress
 from ..rapid.task import TaskSource
@@ -81,6 +82,13 @@ def allow_deep_nesting() -> None:
 
 
 def run(spec: JobSpec) -> JobOutcome:
+    # Loading, the report and the encoding make millions of objects too
+    # (fix and parse pause the collector for their own part).
+    with paused():
+        return _run(spec)
+
+
+def _run(spec: JobSpec) -> JobOutcome:
     from .targets import parse_track
     allow_deep_nesting()
     src = spec.source
