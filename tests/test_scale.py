@@ -545,6 +545,31 @@ def test_batched_robtarget_values_are_those_of_one(solver):
         assert np.array_equal(want[0], Rj) and np.array_equal(want[1], pj)
 
 
+
+def test_confdata_of_many_values_is_that_of_each(solver):
+    """Values.confs (fix's written confdata, converted once per batch) is,
+    item by item, the ints of robtarget_value's confdata: for items of the
+    prepared batch, items valued one by one since, and items never valued
+    before (their own batch), in any order."""
+    from rapidcomp.compensate import place as P
+    from rapidcomp.compensate.edit import Values
+    from rapidcomp.compensate.solve import solve
+    plan = Plan(Task("cam.mod", (parse_text(_cam(300, 4, ""), "cam.mod"),)))
+    solved = solve(plan, solver)
+    gs = [g for g in P.groups(plan, solved, "robtarget") if g.failure is None]
+    items = [(g, k) for g in gs for k in g.elements]
+    assert len(items) > 250
+    values = Values(plan, solved, 2.0)
+    values.prepare(gs[: len(gs) // 2])
+    values.robtarget_value(*items[-1])
+    order = items[::-1] + items[::3]
+    want = [tuple(int(c) for c in Values(plan, solved, 2.0).robtarget_value(g, k)[2])
+            for g, k in order]
+    got = values.confs(order)
+    assert got == want and all(type(c) is int for t in got for c in t)
+    # (Not vacuous: confdata written differ from one item to another.)
+    assert len(set(got)) > 3
+
 def test_batched_flange_poses_are_those_of_one():
     """The resolver composes every flange pose as one batch (Resolver.poses):
     with a robot base, a work object, a tool and Offs/RelTool that are not

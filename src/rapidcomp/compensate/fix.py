@@ -142,13 +142,13 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         raise InternalError("the written values do not settle (verification keeps failing)")
     group_of = {u.key: g for g in gs for u in g.uses}
     # The confdata written, as ints (once per use here, not per row later).
-    written_conf = {u.key: (tuple(int(c) for c in values.robtarget_value(g, u.source.element)[2])
-                            if g.mode == "rob" else None)
-                    for g in gs if g.failure is None for u in g.uses}
+    done = [(g, u) for g in gs if g.failure is None for u in g.uses]
+    confs = iter(values.confs([(g, u.source.element) for g, u in done if g.mode == "rob"]))
+    written_conf = {u.key: next(confs) if g.mode == "rob" else None for g, u in done}
     # What each stage made per target is not needed past it (1e5 targets:
     # hundreds of MB): the values and their texts, the edited literals as
     # written, the output parsed again.
-    values = written = out_files = None
+    values = written = out_files = done = confs = None
     rows = use_rows(plan, solved, group_of=group_of, actions=editor.actions, verified=verified,
                     mode=mode, written_conf=written_conf)
     notes = plan.notes() + _notes(rows, gs)
