@@ -262,8 +262,9 @@ def test_relex_of_a_plain_literal_is_the_regexs_verdict():
 
 
 def test_ik_in_blocks_gives_the_one_batch_results(monkeypatch):
-    """A long program is solved in blocks of rows (bounded temporaries):
-    every result equals the one-batch one, bit for bit."""
+    """A long program is solved in blocks of rows (bounded temporaries),
+    on two threads: every result equals the one-batch one, bit for bit,
+    and the one-thread one."""
     import numpy as np
     from rapidcomp.kinematics import ik
     solver = load_solver(str(PROFILE), None, False)
@@ -282,7 +283,15 @@ def test_ik_in_blocks_gives_the_one_batch_results(monkeypatch):
 
     one = run()
     monkeypatch.setattr(ik, "CHUNK", 64)
+    # The blocks on two threads (whatever this machine has), then on one.
+    pools = []
+    real_pool = ik.ThreadPoolExecutor
+    monkeypatch.setattr(ik, "ThreadPoolExecutor", lambda n: pools.append(n) or real_pool(n))
+    monkeypatch.setattr(ik, "_threads", lambda: 2)
     blocks = run()
+    assert pools and set(pools) == {2}
+    monkeypatch.setattr(ik, "_threads", lambda: 1)
+    single = run()
 
     def flat(x):
         if isinstance(x, tuple):
@@ -291,10 +300,10 @@ def test_ik_in_blocks_gives_the_one_batch_results(monkeypatch):
             return [getattr(x, f) for f in ("q_deg", "status", "detail", "conf", "residual_mm",
                                             "residual_rad", "iterations", "warnings")]
         return [x]
-    a, b = flat(tuple(one)), flat(tuple(blocks))
-    assert len(a) == len(b) == 23
-    for x, y in zip(a, b):
-        assert np.array_equal(x, y, equal_nan=True)
+    a, b, c = flat(tuple(one)), flat(tuple(blocks)), flat(tuple(single))
+    assert len(a) == len(b) == len(c) == 23
+    for x, y, z in zip(a, b, c):
+        assert np.array_equal(x, y, equal_nan=True) and np.array_equal(x, z, equal_nan=True)
 
 
 def _cam(n: int, seed: int, confl: str) -> str:

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from enum import IntEnum, IntFlag
 
@@ -215,17 +217,35 @@ def _join(parts: list):
     return np.concatenate(parts)
 
 
+def _threads() -> int:
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:          # (not Linux)
+        cores = os.cpu_count() or 1
+    return max(1, min(2, cores))
+
+
 def _chunked(method):
     """method(self, rows, ...) over blocks of CHUNK rows: every array
-    argument (and IKBatch) split along its first axis, results joined."""
+    argument (and IKBatch) split along its first axis, results joined in
+    block order. The blocks run on two threads where there are two cores:
+    numpy releases the GIL inside its loops, and each block is computed
+    alone, so the results are those of one thread, bit for bit. (A pool per
+    call: one kept would not survive a fork of the process.)"""
     @functools.wraps(method)
     def run(self, *args, **kw):
         n = len(args[0])
         if n <= CHUNK:
             return method(self, *args, **kw)
-        return _join([method(self, *(_rows(a, slice(i, i + CHUNK)) for a in args),
-                             **{k: _rows(v, slice(i, i + CHUNK)) for k, v in kw.items()})
-                      for i in range(0, n, CHUNK)])
+
+        def block(i):
+            return method(self, *(_rows(a, slice(i, i + CHUNK)) for a in args),
+                          **{k: _rows(v, slice(i, i + CHUNK)) for k, v in kw.items()})
+        threads = _threads()
+        if threads == 1:
+            return _join([block(i) for i in range(0, n, CHUNK)])
+        with ThreadPoolExecutor(threads) as pool:
+            return _join(list(pool.map(block, range(0, n, CHUNK))))
     return run
 
 
