@@ -225,6 +225,20 @@ def _threads() -> int:
     return max(1, min(2, cores))
 
 
+@functools.lru_cache(maxsize=None)
+def _one_malloc_arena() -> None:
+    """Threads share the main thread's malloc arena. glibc gives each thread
+    an arena of its own, and the blocks a worker thread frees there are
+    never reused by the main thread: 1e5 targets peaked 50 MB higher. (A
+    numpy block makes few allocations: one lock costs nothing.) Elsewhere
+    than glibc: nothing to do."""
+    import ctypes
+    try:
+        ctypes.CDLL(None).mallopt(-8, 1)           # M_ARENA_MAX
+    except (OSError, AttributeError, TypeError):
+        pass
+
+
 def _chunked(method):
     """method(self, rows, ...) over blocks of CHUNK rows: every array
     argument (and IKBatch) split along its first axis, results joined in
@@ -244,6 +258,7 @@ def _chunked(method):
         threads = _threads()
         if threads == 1:
             return _join([block(i) for i in range(0, n, CHUNK)])
+        _one_malloc_arena()
         with ThreadPoolExecutor(threads) as pool:
             return _join(list(pool.map(block, range(0, n, CHUNK))))
     return run
