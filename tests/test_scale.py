@@ -1104,3 +1104,42 @@ def test_the_collector_is_paused_through_fix_and_check_and_restored(tmp_path, mo
         assert not gc.isenabled()
     finally:
         gc.enable()
+
+
+def test_the_command_ends_its_process_at_once_with_everything_said(tmp_path):
+    """`python -m rapidcomp` (cli.run) ends its process without freeing its
+    objects one by one: what it printed is all there, its files complete,
+    its exit codes main()'s (0 written, 1 some targets not compensated and
+    nothing written, 2 bad input), and atexit handlers do not run (the
+    process was ended, not wound down)."""
+    import subprocess
+    import sys
+
+    from click.testing import CliRunner
+
+    from rapidcomp.cli import main
+    fixtures = Path(__file__).resolve().parents[1] / "fixtures"
+    cases = [(["fix", str(fixtures / "cubes.mod"), "--limit", "J5=-120:120"], 0),
+             (["fix", str(fixtures / "cubes.mod")], 1),
+             (["fix", str(fixtures / "invalid" / sorted(p.name for p in (
+                 fixtures / "invalid").iterdir())[0])], 2)]
+    for args, code in cases:
+        args = args + ["--profile", str(fixtures / "warm.csv")]
+        a, b = tmp_path / "a", tmp_path / "b"
+        a.mkdir(exist_ok=True)
+        b.mkdir(exist_ok=True)
+        proc = subprocess.run([sys.executable, "-m", "rapidcomp", *args, "-o",
+                               str(a / "out.mod")], capture_output=True, text=True)
+        ref = CliRunner().invoke(main, args + ["-o", str(b / "out.mod")])
+        assert proc.returncode == ref.exit_code == code, (proc.stderr, ref.output)
+        assert proc.stdout.replace(str(a), str(b)) + proc.stderr.replace(
+            str(a), str(b)) == ref.output
+        assert "Traceback" not in proc.stderr
+        assert sorted(p.name for p in a.iterdir()) == sorted(p.name for p in b.iterdir())
+        for p in a.iterdir():
+            assert p.read_bytes().replace(b"a/out", b"b/out") == (b / p.name).read_bytes()
+    probe = ("import atexit, sys\natexit.register(lambda: print('wound down'))\n"
+             "sys.argv = ['rapidcomp', '--version']\nfrom rapidcomp.cli import run\nrun()\n")
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    assert proc.returncode == 0 and "version" in proc.stdout
+    assert "wound down" not in proc.stdout
