@@ -73,11 +73,11 @@ def cam_module(n: int, seed: int = 1, name: str = "CAM_Fix") -> str:
 
 def one(n: int) -> dict:
     """Run one size in this process; returns figures."""
-    from rapidcomp.collector import paused
     from rapidcomp.compensate import report
     from rapidcomp.compensate.fix import fix
     from rapidcomp.compensate.load import load_solver
     from rapidcomp.compensate.plan import Task
+    from rapidcomp.process import own
     from rapidcomp.rapid.grammar import engine
     from rapidcomp.rapid.parse import parse_text
     text = cam_module(n)
@@ -85,16 +85,16 @@ def one(n: int) -> dict:
     engine()
     solver = load_solver(str(PROFILE), None, False)
     timings: dict[str, float] = {}
-    with paused():   # as `rapidcomp fix` runs (job.run)
-        t0 = time.perf_counter()
-        pf = parse_text(text, "cam.mod")
-        timings["parse"] = time.perf_counter() - t0
-        result = fix(Task("cam.mod", (pf,)), solver, "absj", timings,
-                     output_names={"cam.mod": "cam_comp.mod"})
-        t = time.perf_counter()
-        report.markdown(result, {"mode": "absj"})
-        timings["report"] += time.perf_counter() - t
-        total = time.perf_counter() - t0
+    own()            # the process as `rapidcomp` sets up its own (cli.run)
+    t0 = time.perf_counter()
+    pf = parse_text(text, "cam.mod")
+    timings["parse"] = time.perf_counter() - t0
+    result = fix(Task("cam.mod", (pf,)), solver, "absj", timings,
+                 output_names={"cam.mod": "cam_comp.mod"})
+    t = time.perf_counter()
+    report.markdown(result, {"mode": "absj"})
+    timings["report"] += time.perf_counter() - t
+    total = time.perf_counter() - t0
     s = result.summary()
     return {"targets": n, "MB": mb, "stages": timings, "total_s": total,
             "compensated": s["compensated"], "failed": s["not_compensated"],

@@ -273,12 +273,18 @@ def test_ik_in_blocks_gives_the_one_batch_results(monkeypatch):
                          rng.uniform(-60, 40, 300), rng.uniform(-150, 150, 300),
                          rng.uniform(-110, 110, 300), rng.uniform(-300, 300, 300)])
 
+    # A tool per row, given by keyword: a block must get its own rows of it.
+    tcp = np.column_stack([rng.uniform(-50, 50, 300), rng.uniform(-50, 50, 300),
+                           rng.uniform(0, 300, 300)])
+
     def run():
         R, p, seed = solver.seed_from_joints(q)
         conf = seed.conf
         out = [R, p, solver.solve_nominal(R, p, conf), solver.solve_deformed(R, p, seed),
                solver.candidates(R, p), solver.deformed_pose_error(q * np.pi / 180, R, p)]
         out.append(solver.closest(out[4], q + 3.0, with_branch=True))
+        out.append(solver.solve_deformed(R, p, seed, tcp=tcp))
+        out.append(solver.deformed_pose_error(q * np.pi / 180, R, p, tcp=tcp))
         return out
 
     one = run()
@@ -301,9 +307,37 @@ def test_ik_in_blocks_gives_the_one_batch_results(monkeypatch):
                                             "residual_rad", "iterations", "warnings")]
         return [x]
     a, b, c = flat(tuple(one)), flat(tuple(blocks)), flat(tuple(single))
-    assert len(a) == len(b) == len(c) == 23
+    assert len(a) == len(b) == len(c) == 33
     for x, y, z in zip(a, b, c):
         assert np.array_equal(x, y, equal_nan=True) and np.array_equal(x, z, equal_nan=True)
+    # (The tool changes the results: the keyword is not ignored.)
+    assert not np.array_equal(a[-1][0], a[15][0])
+
+
+def test_ik_threads_keep_the_callers_errstate_and_use_both_cores(monkeypatch):
+    """Blocks on worker threads run in the caller's context: numpy's
+    errstate there holds in every block (an overflow raises as it does in
+    one block). Two threads where the process may use two cores."""
+    import os
+
+    import numpy as np
+    from rapidcomp.kinematics import ik
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:
+        cores = os.cpu_count() or 1
+    assert ik._threads() == min(2, cores)
+    monkeypatch.setattr(ik, "CHUNK", 64)
+    monkeypatch.setattr(ik, "_threads", lambda: 2)
+    solver = load_solver(str(PROFILE), None, False)
+    R = np.broadcast_to(np.eye(3), (300, 3, 3)).copy()
+    p = np.tile([500.0, 0.0, 600.0], (300, 1))
+    p[250] = 1e300                   # in the fourth block (a worker thread's)
+    with np.errstate(all="raise"):
+        with pytest.raises(FloatingPointError):
+            solver.candidates(R, p)
+    with np.errstate(all="ignore"):
+        solver.candidates(R, p)      # (and no warning either: -W error in CI)
 
 
 def _cam(n: int, seed: int, confl: str) -> str:
@@ -1073,19 +1107,24 @@ def test_the_collector_is_paused_through_fix_and_check_and_restored(tmp_path, mo
             seen[name] = gc.isenabled()
             return f(*a, **k)
         return g
+    from rapidcomp.compensate import job
     monkeypatch.setattr(report, "markdown", spy("markdown", report.markdown))
+    monkeypatch.setattr(report, "as_json", spy("json", report.as_json))
+    monkeypatch.setattr(job, "load_task", spy("load", job.load_task))
     monkeypatch.setattr(C, "use_rows", spy("check rows", C.use_rows))
     monkeypatch.setattr(Plan, "__init__", spy("plan", Plan.__init__))
     fixtures = Path(__file__).resolve().parents[1] / "fixtures"
     assert gc.isenabled()
     r = CliRunner().invoke(main, ["fix", str(fixtures / "cubes.mod"), "--profile",
                                   str(fixtures / "warm.csv"), "--limit", "J5=-120:120",
-                                  "-o", str(tmp_path / "out.mod"), "-q"])
+                                  "-o", str(tmp_path / "out.mod"), "--json",
+                                  str(tmp_path / "out.json"), "-q"])
     assert r.exit_code == 0, r.output
     r = CliRunner().invoke(main, ["check", str(fixtures / "cubes.mod"), "--profile",
                                   str(fixtures / "warm.csv"), "--limit", "J5=-120:120"])
     assert r.exit_code == 0, r.output
-    assert seen == {"markdown": False, "check rows": False, "plan": False}
+    assert seen == {"markdown": False, "json": False, "load": False, "check rows": False,
+                    "plan": False}
     assert gc.isenabled()
     # Pauses nest, restore the state they found, also on an error.
     with paused():

@@ -48,14 +48,13 @@ class _Group(click.Group):
 
 def run() -> None:
     """The `rapidcomp` command (and `python -m rapidcomp`): main() in a
-    process of its own. The cyclic collector stays off throughout (a
-    command's data, 1e5 targets' millions of objects, hold no cycles: see
-    collector.py), and the process ends as soon as the command has written
-    its output and flushed its messages, without freeing its objects one by
-    one (the system takes the memory back at once; 1e5 targets: ~0.5 s).
-    Any other end than an exit (a crash) ends the usual way."""
-    import gc
-    gc.disable()
+    process of its own, set up for it (process.py: no cyclic collector, one
+    malloc arena). The process ends as soon as the command has written its
+    output and flushed its messages, without freeing its objects one by one
+    (the system takes the memory back at once; 1e5 targets: ~0.5 s). Any
+    other end than an exit (a crash) ends the usual way."""
+    from .process import own
+    own()
     try:
         main()
     except SystemExit as exc:

@@ -11,6 +11,7 @@ they change.
 
 from __future__ import annotations
 
+import contextvars
 import dataclasses
 import functools
 import os
@@ -225,27 +226,14 @@ def _threads() -> int:
     return max(1, min(2, cores))
 
 
-@functools.lru_cache(maxsize=None)
-def _one_malloc_arena() -> None:
-    """Threads share the main thread's malloc arena. glibc gives each thread
-    an arena of its own, and the blocks a worker thread frees there are
-    never reused by the main thread: 1e5 targets peaked 50 MB higher. (A
-    numpy block makes few allocations: one lock costs nothing.) Elsewhere
-    than glibc: nothing to do."""
-    import ctypes
-    try:
-        ctypes.CDLL(None).mallopt(-8, 1)           # M_ARENA_MAX
-    except (OSError, AttributeError, TypeError):
-        pass
-
-
 def _chunked(method):
     """method(self, rows, ...) over blocks of CHUNK rows: every array
     argument (and IKBatch) split along its first axis, results joined in
     block order. The blocks run on two threads where there are two cores:
     numpy releases the GIL inside its loops, and each block is computed
-    alone, so the results are those of one thread, bit for bit. (A pool per
-    call: one kept would not survive a fork of the process.)"""
+    alone, so the results are those of one thread, bit for bit; each block
+    runs in a copy of the caller's context (numpy's errstate lives there).
+    (A pool per call: one kept would not survive a fork of the process.)"""
     @functools.wraps(method)
     def run(self, *args, **kw):
         n = len(args[0])
@@ -258,9 +246,15 @@ def _chunked(method):
         threads = _threads()
         if threads == 1:
             return _join([block(i) for i in range(0, n, CHUNK)])
-        _one_malloc_arena()
         with ThreadPoolExecutor(threads) as pool:
-            return _join(list(pool.map(block, range(0, n, CHUNK))))
+            futures = [pool.submit(contextvars.copy_context().run, block, i)
+                       for i in range(0, n, CHUNK)]
+            try:
+                return _join([f.result() for f in futures])
+            except BaseException:
+                for f in futures:       # (the first block's error, as one thread raises it)
+                    f.cancel()
+                raise
     return run
 
 
