@@ -1151,6 +1151,7 @@ def test_the_command_ends_its_process_at_once_with_everything_said(tmp_path):
     its exit codes main()'s (0 written, 1 some targets not compensated and
     nothing written, 2 bad input), and atexit handlers do not run (the
     process was ended, not wound down)."""
+    import os
     import subprocess
     import sys
 
@@ -1158,6 +1159,8 @@ def test_the_command_ends_its_process_at_once_with_everything_said(tmp_path):
 
     from rapidcomp.cli import main
     fixtures = Path(__file__).resolve().parents[1] / "fixtures"
+    # (The tree under test, whatever rapidcomp is installed.)
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "src")}
     cases = [(["fix", str(fixtures / "cubes.mod"), "--limit", "J5=-120:120"], 0),
              (["fix", str(fixtures / "cubes.mod")], 1),
              (["fix", str(fixtures / "invalid" / sorted(p.name for p in (
@@ -1168,7 +1171,7 @@ def test_the_command_ends_its_process_at_once_with_everything_said(tmp_path):
         a.mkdir(exist_ok=True)
         b.mkdir(exist_ok=True)
         proc = subprocess.run([sys.executable, "-m", "rapidcomp", *args, "-o",
-                               str(a / "out.mod")], capture_output=True, text=True)
+                               str(a / "out.mod")], capture_output=True, text=True, env=env)
         ref = CliRunner().invoke(main, args + ["-o", str(b / "out.mod")])
         assert proc.returncode == ref.exit_code == code, (proc.stderr, ref.output)
         assert proc.stdout.replace(str(a), str(b)) + proc.stderr.replace(
@@ -1179,6 +1182,22 @@ def test_the_command_ends_its_process_at_once_with_everything_said(tmp_path):
             assert p.read_bytes().replace(b"a/out", b"b/out") == (b / p.name).read_bytes()
     probe = ("import atexit, sys\natexit.register(lambda: print('wound down'))\n"
              "sys.argv = ['rapidcomp', '--version']\nfrom rapidcomp.cli import run\nrun()\n")
-    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          env=env)
     assert proc.returncode == 0 and "version" in proc.stdout
     assert "wound down" not in proc.stdout
+    # Started with stdout closed (sys.stdout is None): the files are written
+    # and the exit is clean, as Python's own would be (review: a crash).
+    if os.name == "posix":
+        out = tmp_path / "closed.mod"
+        proc = subprocess.run([sys.executable, "-m", "rapidcomp", *cases[0][0], "--profile",
+                               str(fixtures / "warm.csv"), "-o", str(out)],
+                              stderr=subprocess.PIPE, text=True, env=env,
+                              preexec_fn=lambda: os.close(1))
+        assert proc.returncode == 0 and proc.stderr == "" and out.exists()
+    # Under a profiler (or a debugger, coverage) the process ends the usual
+    # way: the profiler writes its results at exit.
+    prof = tmp_path / "prof.out"
+    proc = subprocess.run([sys.executable, "-m", "cProfile", "-o", str(prof), "-m",
+                           "rapidcomp", "--version"], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0 and prof.exists()

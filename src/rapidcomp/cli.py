@@ -52,19 +52,22 @@ def run() -> None:
     malloc arena). The process ends as soon as the command has written its
     output and flushed its messages, without freeing its objects one by one
     (the system takes the memory back at once; 1e5 targets: ~0.5 s). Any
-    other end than an exit (a crash) ends the usual way."""
+    other end than an exit (a crash), and any run under a debugger, profiler
+    or coverage tool, ends the usual way."""
     from .process import own
     own()
     try:
         main()
     except SystemExit as exc:
+        if sys.gettrace() is not None or sys.getprofile() is not None:
+            raise    # (a debugger, profiler or coverage tool writes its results at exit)
         code = exc.code
         if code is not None and not isinstance(code, int):
-            print(code, file=sys.stderr)
-            code = 1
+            raise    # (Python's exit prints the message; rapidcomp's codes are ints)
         try:
-            sys.stdout.flush()
-            sys.stderr.flush()
+            for stream in (sys.stdout, sys.stderr):
+                if stream is not None:     # (None: started with the descriptor closed)
+                    stream.flush()
         except (OSError, ValueError):
             raise exc from None       # (a closed pipe: Python's own exit says so)
         os._exit(code or 0)
