@@ -182,8 +182,10 @@ class _Walker:
                     self.table.add(m, r, rt)
                 for mo in m.motions:
                     self.motion_index[(fi, mo.span.start)] = mi
+                    # (The names only where a loop's variable may be among them.)
                     self.target_names[(fi, mi)] = [
-                        (t.role, names_in(t.expr)) for t in mo.targets if t.role != "search"]
+                        (t.role, names_in(t.expr) if mo.loops else frozenset())
+                        for t in mo.targets if t.role != "search"]
                     mi += 1
 
     def callee(self, module: Module, name: str) -> _Routine | None:

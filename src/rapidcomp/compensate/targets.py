@@ -782,7 +782,7 @@ class Resolver:
                 continue
             kind = "jointtarget" if motion.spec.joint_space else "robtarget"
             inline = isinstance(t.expr, (A.Agg, A.NumAgg))
-            for env in self._loop_envs(pf, module, motion, names_in(t.expr)):
+            for env in self._loop_envs(pf, module, motion, t.expr):
                 label = pf.text(t.expr) if not inline else "inline"
                 if env:
                     label += " [" + ", ".join(f"{k}={v}" for k, v in env.items()) + "]"
@@ -790,10 +790,11 @@ class Resolver:
                                      index + (t.role, tuple(sorted(env.items())))))
         return out
 
-    def _loop_envs(self, pf, module, motion: Motion, names: set[str]) -> list[dict[str, int]]:
+    def _loop_envs(self, pf, module, motion: Motion, expr) -> list[dict[str, int]]:
         """One environment per iteration of the enclosing FOR loops whose
         variable the target expression uses."""
         envs: list[dict[str, int]] = [{}]
+        names = names_in(expr) if motion.loops else ()   # (a CAM move is in no loop)
         for lp in motion.loops:
             if lp.var is None or lp.var.lower() not in names:
                 continue

@@ -130,7 +130,7 @@ class RobTarget(_Numeric):
 
     @property
     def conf(self) -> tuple[int, int, int, int]:
-        return tuple(int(v) for v in self.values[7:11])
+        return tuple(map(int, self.values[7:11]))
 
     @property
     def ext(self) -> tuple[float, ...]:
