@@ -93,15 +93,17 @@ def usage(module: A.ModuleNode) -> Usage:
         t = type(node)
         if t is A.Ref:
             refs.setdefault(node.name.lower(), []).append(node)
+        elif t is A.Arg:      # (the next commonest: its value comes as a node of its own)
+            continue
         elif t is A.Assign:
             writes.setdefault(node.target.name.lower(), []).append(node.span)
             if not node.target.selectors:
                 assigns.setdefault(node.target.name.lower(), []).append(node)
         elif t is A.ProcCall:
             spec = motion_spec(node.name)
-            positional = [a for a in node.args if a.kind in ("pos", "named")]
             if spec is not None:
                 if "search" in spec.roles:
+                    positional = [a for a in node.args if a.kind in ("pos", "named")]
                     for role, arg in zip(spec.roles, positional):
                         if role == "search" and isinstance(arg.value, A.Ref):
                             writes.setdefault(arg.value.name.lower(), []).append(arg.span)
