@@ -1063,8 +1063,19 @@ def test_plain_literals_in_columns_give_the_literal_loops_texts_and_edits(monkey
         assert list(texts) == flat[17 * j:17 * j + 17]
         assert [tuple(r) for r in regs] == list(zip(starts[j].tolist(), ends[j].tolist()))
     columns = records.robtarget_texts_many(recs, R, P, C)
+    whys = [f"p{j} compensated" for j in range(len(recs))]
+    with_whys = records.robtarget_texts_many(recs, R, P, C, whys)
     monkeypatch.setattr(records, "_plain_fields", lambda recs: None)
     assert columns == records.robtarget_texts_many(recs, R, P, C)
+    # Given each literal's why, the edits field_edits makes (SpanEdits, the
+    # literal's own why), by columns and by the loop alike.
+    from rapidcomp.edits import SpanEdit
+    expected = [(texts, [SpanEdit(s, e, t, whys[j]) for s, e, t in ch])
+                for j, (texts, ch) in enumerate(columns)]
+    assert with_whys == expected == records.robtarget_texts_many(recs, R, P, C, whys)
+    assert all(type(e) is SpanEdit and e.why == whys[j]
+               for j, (_, es) in enumerate(with_whys) for e in es)
+    assert sum(len(es) for _, es in with_whys) > 1000
     kinds = {(bool(ch), any(s - recs[j].span.start < 40 for s, _, _ in ch))
              for j, (_, ch) in enumerate(columns)}
     assert kinds >= {(False, False), (True, True)}, kinds

@@ -135,8 +135,9 @@ class Values:
         else:
             got = [self.robtarget_value(g, k) for g, k in items]
             R, p, conf = (np.array([v[n] for v in got]) for n in range(3))
+        # (The edits made here, with their why: as field_edits makes them.)
         texts = records.robtarget_texts_many([self.source(g, k).record for g, k in items],
-                                             R, p, conf)
+                                             R, p, conf, [_why(g, k) for g, k in items])
         for (g, k), t in zip(items, texts):
             self._values[("texts", id(g), k)] = t
 
@@ -184,13 +185,12 @@ class Values:
 
     def field_edits(self, g: Group, k) -> tuple[list[str], list[SpanEdit]]:
         """Element k's field texts and the edits that write them."""
-        why = f"{element_label(g, k)} compensated"
         # (Taken: a literal is written once; its edits are what stays.)
         prepared = self._values.pop(("texts", id(g), k), None)
         if prepared is not None:
-            return prepared[0], [SpanEdit(s, e, new, why) for s, e, new in prepared[1]]
+            return prepared
         texts = self.field_texts(g, k)
-        return texts, records.field_edits(self.source(g, k).record, texts, why)
+        return texts, records.field_edits(self.source(g, k).record, texts, _why(g, k))
 
     def literal(self, g: Group, k, texts: list[str] | None = None) -> str:
         """The new literal of element k (`texts`: its field texts, when the
@@ -204,6 +204,11 @@ class Values:
         if g.mode == "joint":
             return records.jointtarget_literal(texts)
         return records.robtarget_literal(texts)
+
+
+def _why(g: Group, k) -> str:
+    """What an edit of element k's fields says it is for."""
+    return f"{element_label(g, k)} compensated"
 
 
 def _style(word: str, like: str) -> str:

@@ -8,6 +8,7 @@ external axes exactly as written in the source.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -42,12 +43,13 @@ def robtarget_texts(record: RobTarget, R: np.ndarray, p: np.ndarray,
 
 
 def robtarget_texts_many(recs: list[RobTarget], R: np.ndarray, p: np.ndarray,
-                         conf: np.ndarray) -> list[tuple[list[str], list[tuple]]]:
+                         conf: np.ndarray, whys: list[str] | None = None
+                         ) -> list[tuple[list[str], list[tuple]]]:
     """robtarget_texts of many records at once (a CAM program has 1e5), each
-    with its changed fields as (start, end, new text) in the source, what
-    field_edits gives (each literal lexed once for both): the rotations
-    compared and converted as one batch, the positions' texts formatted as
-    one."""
+    with its changed fields as (start, end, new text) in the source, or,
+    given each record's why, as the SpanEdits field_edits gives (each
+    literal lexed once for both): the rotations compared and converted as
+    one batch, the positions' texts formatted as one."""
     if not recs:
         return []
     q_old = np.array([r.quat_wxyz for r in recs], float)
@@ -58,7 +60,7 @@ def robtarget_texts_many(recs: list[RobTarget], R: np.ndarray, p: np.ndarray,
     conf = np.asarray(conf)
     lexed = _plain_fields(recs)
     if lexed is not None:
-        return _columns(recs, lexed, p, conf, turned, quats, mm)
+        return _columns(recs, lexed, p, conf, turned, quats, mm, whys)
     out = []
     for j, (rec, pj, cj, moved, q) in enumerate(zip(recs, p.tolist(), conf.tolist(),
                                                     turned, quats)):
@@ -73,7 +75,10 @@ def robtarget_texts_many(recs: list[RobTarget], R: np.ndarray, p: np.ndarray,
         for i in range(4):
             if int(cj[i]) != values[7 + i]:
                 texts[7 + i] = numbers.integer(cj[i])
-        out.append((texts, changed_fields(rec.span.start, regs, old, texts)))
+        changed = changed_fields(rec.span.start, regs, old, texts)
+        if whys is not None:
+            changed = [SpanEdit(s, e, new, whys[j]) for s, e, new in changed]
+        out.append((texts, changed))
     return out
 
 
@@ -112,7 +117,12 @@ def _plain_fields(recs: list[RobTarget]):
     return flat, starts, ends
 
 
-def _columns(recs, lexed, p, conf, turned, quats, mm):
+# A SpanEdit from a (start, end, replacement, why) tuple, made by tuple's
+# own constructor as SpanEdit's is (1e6 of them without a Python call each).
+_span_edit = functools.partial(tuple.__new__, SpanEdit)
+
+
+def _columns(recs, lexed, p, conf, turned, quats, mm, whys=None):
     """The per-literal loop of robtarget_texts_many on plain literals, as
     columns (object arrays of the texts): the same decisions (a position
     beyond MM_KEEP, a rotation beyond ROT_KEEP_RAD, a confdata integer
@@ -137,8 +147,12 @@ def _columns(recs, lexed, p, conf, turned, quats, mm):
     changed[touched] = new[touched] != was[touched]
     f = np.flatnonzero(changed)
     base = np.array([r.span.start for r in recs], np.int64)[f // 17]
-    fields = list(zip((base + starts.ravel()[f]).tolist(), (base + ends.ravel()[f]).tolist(),
-                      new.ravel()[f].tolist()))
+    spans = ((base + starts.ravel()[f]).tolist(), (base + ends.ravel()[f]).tolist(),
+             new.ravel()[f].tolist())
+    if whys is None:
+        fields = list(zip(*spans))
+    else:
+        fields = list(map(_span_edit, zip(*spans, np.array(whys, dtype=object)[f // 17])))
     at = [0] + np.cumsum(np.bincount(f // 17, minlength=n)).tolist()
     return list(zip(new.tolist(), [fields[i:j] for i, j in zip(at, at[1:])]))
 
