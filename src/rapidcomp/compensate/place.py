@@ -216,12 +216,16 @@ def place(plan: Plan, gs: list[Group]) -> None:
     change for that task too); the other groups get new declarations. A
     PERS target is shared data: a copy would not follow changes to it,
     which the report says."""
+    # Every reference to the names of the declarations groups may write
+    # (not those of speed, zone, tool: a CAM program has 1e5 of each).
+    needed = {g.decl.name.lower() for g in gs if g.decl is not None}
     refs: dict[str, set] = {}
     decl_count: dict[str, int] = {}
     for fi, pf in enumerate(plan.files):
         for m in pf.modules:
             for name, rs in plan.resolver.usages[id(m)].refs.items():
-                refs.setdefault(name, set()).update((fi, r.span) for r in rs)
+                if name in needed:
+                    refs.setdefault(name, set()).update((fi, r.span) for r in rs)
             for d in m.declarations:
                 decl_count[d.name.lower()] = decl_count.get(d.name.lower(), 0) + 1
     consumed = {(u.key[0], u.source.ref.span)
