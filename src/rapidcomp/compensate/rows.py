@@ -67,7 +67,8 @@ def rounded_rows(a: np.ndarray) -> list[tuple[float, ...] | None]:
     rows = out.tolist()
     for i, j in zip(*np.nonzero(odd)):
         rows[i][j] = round(float(a[i, j]), 6)
-    return [None if any(x != x for x in r) else tuple(r) for r in rows]  # x != x: NaN
+    # (A row with a NaN: round keeps NaN a NaN and inf an inf.)
+    return [None if bad else tuple(r) for r, bad in zip(rows, np.isnan(a).any(axis=1).tolist())]
 
 
 class _Columns:
