@@ -144,3 +144,29 @@ def test_report_does_not_depend_on_the_hash_seed(tmp_path):
         assert run.returncode in (0, 1), run.stderr
         outs.add(run.stdout)
     assert len(outs) == 1 and "closest to line" in outs.pop()
+
+
+def test_a_target_a_search_writes_is_assigned_at_run_time(tmp_path):
+    """A search instruction writes its search-point argument (the third
+    positional one of SearchL; the optional \\Stop before it is not
+    counted): a later move to that target reads a value only known at run
+    time, and is left untouched. The search's own target is compensable."""
+    prog = tmp_path / "search.mod"
+    rt = "[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    prog.write_text(
+        "MODULE SearchTest\n"
+        f"  PERS robtarget pk:=[[500,0,600],{rt};\n"
+        f"  CONST robtarget p4:=[[500,50,600],{rt};\n"
+        "  PROC main()\n"
+        "    MoveJ p4, v100, fine, tool0;\n"
+        "    SearchL \\Stop, di1, pk, p4, v100, tool0;\n"
+        "    MoveL pk, v100, fine, tool0;\n"
+        "  ENDPROC\nENDMODULE\n")
+    r = run(prog, "--profile", FIXTURES / "warm.csv", "--json")
+    assert r.exit_code == 0, r.output
+    rows = [(t["line"], t["target"], t["status"], t["reason"])
+            for t in json.loads(r.output)["targets"]]
+    assert [row[:3] for row in rows] == [(5, "p4", "compensable"), (6, "p4", "compensable"),
+                                         (7, "pk", "untouched")]
+    assert rows[0][3] is None and rows[1][3] is None
+    assert rows[2][3].startswith("pk is assigned at run time (search.mod:6)")

@@ -1212,3 +1212,22 @@ def test_the_command_ends_its_process_at_once_with_everything_said(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "cProfile", "-o", str(prof), "-m",
                            "rapidcomp", "--version"], capture_output=True, text=True, env=env)
     assert proc.returncode == 0 and prof.exists()
+
+
+@pytest.mark.parametrize("spaced", [False, True])
+def test_each_edit_says_which_literal_it_compensates(spaced, solver):
+    """Every edit fix makes of a literal's numbers carries that literal's
+    why ("pN compensated" for a declaration, "inline target compensated"
+    for an inline one), by the batch of plain literals and by the loop
+    over spaced ones alike."""
+    text = _cam(300, 4, "")
+    if spaced:
+        text = text.replace("],[", "], [")
+    result = F.fix(Task("cam.mod", (parse_text(text, "cam.mod"),)), solver, "robtarget")
+    assert result.failed == 0 and len(result.edits) > 1000
+    lines = text.splitlines()
+    for e in result.edits:
+        line = lines[text.count("\n", 0, e.start)]
+        want = (line.split("robtarget ", 1)[1].split(":=", 1)[0] if "CONST" in line
+                else "inline target")
+        assert e.why == f"{want} compensated", (line, e)
