@@ -83,11 +83,15 @@ class Values:
         supervision off (the controller does not read it: it stays as written)
         and for a J1/J4/J6 within the quadrant tolerance of the written
         quadrant (it stays as written)."""
+        stacks, j = self._stacked(g, k)
+        return stacks[0][j], stacks[1][j], stacks[2][j]
+
+    def _stacked(self, g: Group, k):
+        """(the stacks (R, p, conf) holding element k's value, its row)."""
         key = (id(g), k)
         if key not in self._values:
             self._values[key] = (self._robtarget_values([(g, k)]), 0)
-        stacks, j = self._values[key]
-        return stacks[0][j], stacks[1][j], stacks[2][j]
+        return self._values[key]
 
     def confs(self, items) -> list[tuple[int, ...]]:
         """The confdata of robtarget_value(g, k) of each (group, element),
@@ -96,10 +100,7 @@ class Values:
         out = []
         as_ints: dict = {}
         for g, k in items:
-            key = (id(g), k)
-            if key not in self._values:
-                self.robtarget_value(g, k)
-            stacks, j = self._values[key]
+            stacks, j = self._stacked(g, k)
             rows = as_ints.get(id(stacks))
             if rows is None:
                 rows = as_ints[id(stacks)] = list(map(tuple, stacks[2].tolist()))

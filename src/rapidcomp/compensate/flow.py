@@ -44,7 +44,7 @@ from ..rapid.model import Module, ParsedFile, RoutineTable
 from ..rapid.motions import (BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS, DISPLACEMENT_OFF,
                              DISPLACEMENT_ON, MOVES_OTHERWISE, SUPERVISION, TRACK_OFFSET_OFF,
                              TRACK_OFFSET_ON, UNKNOWN_TARGET_CALLS, motion_spec)
-from ..rapid.refs import calls_in, names_in
+from ..rapid.refs import calls_in, loop_names
 
 ON, OFF = "on", "off"
 BOTH = frozenset((ON, OFF))
@@ -182,9 +182,8 @@ class _Walker:
                     self.table.add(m, r, rt)
                 for mo in m.motions:
                     self.motion_index[(fi, mo.span.start)] = mi
-                    # (The names only where a loop's variable may be among them.)
                     self.target_names[(fi, mi)] = [
-                        (t.role, names_in(t.expr) if mo.loops else frozenset())
+                        (t.role, loop_names(t.expr, mo.loops))
                         for t in mo.targets if t.role != "search"]
                     mi += 1
 

@@ -33,7 +33,7 @@ from ..kinematics.frames import (DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z,
                                  unit_quat_matrices, unit_wxyz)
 from ..rapid import ast as A
 from ..rapid.model import Declaration, Module, Motion, ParsedFile
-from ..rapid.refs import literal_leaves, names_in, usage
+from ..rapid.refs import literal_leaves, loop_names, usage
 from ..rapid.writes import Writes, task_writes
 from ..rapid.values import DecodeIssue, JointTarget, Pose, RobTarget, ToolData, WobjData, decode
 
@@ -794,7 +794,7 @@ class Resolver:
         """One environment per iteration of the enclosing FOR loops whose
         variable the target expression uses."""
         envs: list[dict[str, int]] = [{}]
-        names = names_in(expr) if motion.loops else ()   # (a CAM move is in no loop)
+        names = loop_names(expr, motion.loops)
         for lp in motion.loops:
             if lp.var is None or lp.var.lower() not in names:
                 continue

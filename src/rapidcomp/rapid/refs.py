@@ -142,3 +142,11 @@ def literal_leaves(expr) -> tuple | None:
 def names_in(expr) -> set[str]:
     """Lower-case names of the data an expression refers to."""
     return {node.name.lower() for node in nodes(expr) if type(node) is A.Ref}
+
+
+def loop_names(expr, loops) -> set[str] | frozenset:
+    """The names of expr that a variable of its enclosing loops may be
+    among: none outside every loop (loop variables are lexical: no loop
+    environment reaches a statement outside its loops; a CAM move is in
+    none). The flow's use keys and the resolver's are made from these."""
+    return names_in(expr) if loops else frozenset()
