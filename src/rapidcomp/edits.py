@@ -7,8 +7,11 @@ the caller and are refused rather than silently merged.
 
 from __future__ import annotations
 
+import functools
 from operator import attrgetter
 from typing import NamedTuple
+
+import numpy as np
 
 
 class SpanEdit(NamedTuple):
@@ -32,10 +35,150 @@ class OverlappingEdits(ValueError):
     pass
 
 
-def apply_edits(text: str, edits: list[SpanEdit] | tuple[SpanEdit, ...]) -> str:
-    """Return `text` with every edit applied. No edits -> `text` itself."""
+# A SpanEdit from a (start, end, replacement, why) tuple, made by tuple's
+# own constructor as SpanEdit's is (1e6 of them without a Python call each).
+span_edit = functools.partial(tuple.__new__, SpanEdit)
+
+
+class EditColumns:
+    """Span edits as columns: a sequence of SpanEdit, each made when it is
+    read. A CAM program's compensation is 7e5 edits of numbers; as columns
+    they are spliced, shifted and counted by array operations, and no
+    tuple and two ints per edit outlive the batch that made them.
+    starts/ends: int64 arrays (read-only); replacements/whys: object
+    arrays of str."""
+
+    __slots__ = ("starts", "ends", "replacements", "whys")
+
+    def __init__(self, starts, ends, replacements, whys):
+        self.starts = np.asarray(starts, np.int64)
+        self.ends = np.asarray(ends, np.int64)
+        self.replacements = _objects(replacements)
+        self.whys = _objects(whys)
+        for a in (self.starts, self.ends, self.replacements, self.whys):
+            a.flags.writeable = False
+
+    @classmethod
+    def of(cls, edits) -> "EditColumns":
+        edits = list(edits)
+        return cls(np.fromiter((e.start for e in edits), np.int64, len(edits)),
+                   np.fromiter((e.end for e in edits), np.int64, len(edits)),
+                   [e.replacement for e in edits], [e.why for e in edits])
+
+    def take(self, index) -> "EditColumns":
+        return EditColumns(self.starts[index], self.ends[index], self.replacements[index],
+                           self.whys[index])
+
+    def __len__(self) -> int:
+        return len(self.starts)
+
+    def __iter__(self):
+        return map(span_edit, zip(self.starts.tolist(), self.ends.tolist(),
+                                  self.replacements.tolist(), self.whys.tolist()))
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return self.take(i)
+        return SpanEdit(int(self.starts[i]), int(self.ends[i]), self.replacements[i],
+                        self.whys[i])
+
+    def __eq__(self, other) -> bool:
+        if isinstance(other, (EditColumns, tuple, list)):
+            return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(tuple(self))
+
+    def __repr__(self) -> str:
+        return f"EditColumns({len(self)} edits)"
+
+
+def _objects(texts) -> np.ndarray:
+    if isinstance(texts, np.ndarray) and texts.dtype == object:
+        return texts
+    out = np.empty(len(texts), object)
+    out[:] = list(texts)
+    return out
+
+
+class EditRun:
+    """Edits [i, j) of an EditColumns: the field edits of one literal of a
+    batch (a sequence of SpanEdit; empty: false)."""
+
+    __slots__ = ("block", "i", "j")
+
+    def __init__(self, block: EditColumns, i: int, j: int):
+        self.block, self.i, self.j = block, i, j
+
+    def __len__(self) -> int:
+        return self.j - self.i
+
+    def __iter__(self):
+        return iter(self.block[self.i:self.j])
+
+    def __eq__(self, other) -> bool:
+        if isinstance(other, (EditRun, EditColumns, tuple, list)):
+            return list(self) == list(other)
+        return NotImplemented
+
+    __hash__ = None
+
+
+def columns_of(parts: list) -> EditColumns:
+    """One EditColumns of parts in order (lists of SpanEdit and EditRuns;
+    the runs of one block by one gather)."""
+    starts, ends, reps, whys = [], [], [], []
+    runs: list = []
+
+    def flush():
+        if runs:
+            block = runs[0].block
+            i = np.fromiter((r.i for r in runs), np.int64, len(runs))
+            j = np.fromiter((r.j for r in runs), np.int64, len(runs))
+            size = j - i
+            # The indices i..j-1 of every run, in order, as one array.
+            index = np.arange(int(size.sum())) + np.repeat(i - (np.cumsum(size) - size), size)
+            starts.append(block.starts[index])
+            ends.append(block.ends[index])
+            reps.append(block.replacements[index])
+            whys.append(block.whys[index])
+            runs.clear()
+    for part in parts:
+        if type(part) is EditRun:
+            if runs and part.block is not runs[0].block:
+                flush()
+            runs.append(part)
+            continue
+        flush()
+        cols = part if type(part) is EditColumns else EditColumns.of(part)
+        starts.append(cols.starts)
+        ends.append(cols.ends)
+        reps.append(cols.replacements)
+        whys.append(cols.whys)
+    flush()
+    if not starts:
+        return EditColumns([], [], [], [])
+    return EditColumns(np.concatenate(starts), np.concatenate(ends), np.concatenate(reps),
+                       np.concatenate(whys))
+
+
+def sorted_columns(cols: EditColumns) -> EditColumns:
+    """cols in the order BY_SPAN sorts them (stable: equal spans keep
+    their order)."""
+    order = np.lexsort((cols.ends, cols.starts))
+    if (order == np.arange(len(order))).all():
+        return cols
+    return cols.take(order)
+
+
+def apply_edits(text: str, edits) -> str:
+    """Return `text` with every edit applied (a sequence of SpanEdit, or
+    EditColumns). No edits -> `text` itself."""
     if not edits:
         return text
+    if type(edits) is EditColumns:
+        return _apply_columns(text, sorted_columns(edits))
     ordered = sorted(edits, key=BY_SPAN)
     parts: list[str] = []
     pos = 0
@@ -48,4 +191,21 @@ def apply_edits(text: str, edits: list[SpanEdit] | tuple[SpanEdit, ...]) -> str:
         parts.append(edit.replacement)
         pos = edit.end
     parts.append(text[pos:])
+    return "".join(parts)
+
+
+def _apply_columns(text: str, cols: EditColumns) -> str:
+    """apply_edits of sorted columns: the same checks and message, then the
+    text between the edits and their replacements joined in one pass."""
+    s, e = cols.starts, cols.ends
+    before = np.concatenate(([0], e[:-1]))
+    bad = np.flatnonzero((s < before) | (e < s) | (e > len(text)))
+    if len(bad):
+        k = int(bad[0])
+        raise OverlappingEdits(
+            f"edit {int(s[k])}:{int(e[k])} ({cols.whys[k]}) overlaps the previous edit "
+            f"ending at {int(before[k])} or lies outside the text")
+    parts: list = [None] * (2 * len(s) + 1)
+    parts[0::2] = [text[a:b] for a, b in zip([0] + e.tolist(), s.tolist() + [len(text)])]
+    parts[1::2] = cols.replacements.tolist()
     return "".join(parts)

@@ -12,11 +12,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..edits import BY_SPAN, SpanEdit
+from ..edits import BY_SPAN, EditColumns, EditRun, SpanEdit, columns_of, sorted_columns
 from ..kinematics.conf import quadrant_miss
 from ..kinematics.frames import matrix_to_quat_wxyz
 from ..errors import InternalError
 from ..rapid import ast as A
+from ..rapid.values import RobTarget
 from ..rewrite import numbers, records
 from ..rewrite.names import NameAllocator
 from .place import Group, element_label, multi_index
@@ -107,14 +108,24 @@ class Values:
             out.append(rows[j])
         return out
 
-    def _unsupervised(self, g: Group) -> bool:
-        """Every use of the group runs without configuration supervision
-        (once per group: an array group has a use per element)."""
-        key = ("unsupervised", id(g))
-        if key not in self._values:
-            s = self.solved
-            self._values[key] = all(s.picks[s.row[u.key]].kind == "closest" for u in g.uses)
-        return self._values[key]
+    def _unsupervised(self, gs: list[Group]) -> list[bool]:
+        """Whether every use of each group runs without configuration
+        supervision (once per group: an array group is given once per
+        element)."""
+        s = self.solved
+        picks, row = s.picks, s.row
+        out = []
+        seen: dict = {}
+        for g in gs:
+            uses = g.uses
+            if len(uses) == 1:
+                out.append(picks[row[uses[0].key]].kind == "closest")
+                continue
+            v = seen.get(id(g))
+            if v is None:
+                v = seen[id(g)] = all(picks[row[u.key]].kind == "closest" for u in uses)
+            out.append(v)
+        return out
 
     def prepare(self, gs: list[Group]) -> None:
         """Every robtarget value and field texts of the groups at once: a CAM
@@ -137,8 +148,18 @@ class Values:
             got = [self.robtarget_value(g, k) for g, k in items]
             R, p, conf = (np.array([v[n] for v in got]) for n in range(3))
         # (The edits made here, with their why: as field_edits makes them.)
-        texts = records.robtarget_texts_many([self.source(g, k).record for g, k in items],
-                                             R, p, conf, [_why(g, k) for g, k in items])
+        recs = [self.source(g, k).record for g, k in items]
+        whys = [_why(g, k) for g, k in items]
+        block = records.robtarget_block(recs, R, p, conf, whys)
+        if block is not None:
+            # Plain literals: each one's new text and its edits in the batch's
+            # columns.
+            at = block.at
+            for j, (g, k) in enumerate(items):
+                self._values[("texts", id(g), k)] = (block.literals[j],
+                                                     EditRun(block.edits, at[j], at[j + 1]))
+            return
+        texts = records.robtarget_texts_many(recs, R, p, conf, whys)
         for (g, k), t in zip(items, texts):
             self._values[("texts", id(g), k)] = t
 
@@ -170,11 +191,13 @@ class Values:
         # controller does not read it).
         keep = quadrant_miss(q[:, [0, 3, 5]], written[:, :3]) <= self.tol
         conf[:, :3] = np.where(keep, written[:, :3], conf[:, :3])
-        off = np.array([self._unsupervised(g) for g, _ in items])
+        off = np.array(self._unsupervised([g for g, _ in items]), bool).reshape(n)
         conf[off] = written[off]
         return R, p, conf
 
-    def field_texts(self, g: Group, k) -> list[str]:
+    def field_texts(self, g: Group, k) -> list[str] | str:
+        """Element k's new field texts, or (a plain literal prepared in a
+        batch) its new literal text."""
         record = self.source(g, k).record
         if g.mode == "joint":
             return records.jointtarget_texts(record, self.joints(g, k))
@@ -202,9 +225,20 @@ class Values:
         if k in g.slots or (g.array and k not in g.rows):
             return records.robtarget_literal(list(record.texts))  # unreached: as written
         texts = texts if texts is not None else self.field_texts(g, k)
+        if type(texts) is str:
+            return texts
         if g.mode == "joint":
             return records.jointtarget_literal(texts)
         return records.robtarget_literal(texts)
+
+
+def _as_literal(record, texts) -> str:
+    """A literal's new text from its field texts (or as the text itself)."""
+    if type(texts) is str:
+        return texts
+    if isinstance(record, RobTarget):
+        return records.robtarget_literal(list(texts))
+    return records.jointtarget_literal(list(texts))
 
 
 def _why(g: Group, k) -> str:
@@ -368,7 +402,7 @@ class Editor:
                 key = (fi, record.span.start)
                 old = self.fields.get(key)
                 if old is not None:
-                    if old[1] != texts[k]:
+                    if _as_literal(record, old[1]) != _as_literal(record, texts[k]):
                         raise InternalError(f"{self.plan.files[fi].source.display_path}: "
                                             f"conflicting edits of the literal at offset "
                                             f"{record.span.start}: {element_label(g, k)}")
@@ -572,18 +606,42 @@ class Editor:
                   f"{m.instruction} -> MoveAbsJ")
         self.edit(fi, u.source.expr.span, target_text, f"{u.label} -> {target_text[:40]}")
 
-    def file_edits(self) -> dict[int, list[SpanEdit]]:
-        out: dict[int, list[SpanEdit]] = {}
+    def file_edits(self) -> dict[int, list[SpanEdit] | EditColumns]:
+        """Each file's edits in the order BY_SPAN sorts them; as
+        EditColumns where a batch of plain literals wrote its fields (their
+        edits stay columns to the splice, the verification and the
+        result)."""
+        out: dict[int, list] = {}
+        runs: set[int] = set()
         for (fi, _, _), e in self.edits.items():
             out.setdefault(fi, []).append(e)
         for fi, es in self.field_lists:
-            out.setdefault(fi, []).extend(es)
+            if type(es) is EditRun:
+                runs.add(fi)
+                out.setdefault(fi, []).append(es)
+            else:
+                out.setdefault(fi, []).extend(es)
         for (fi, pos), decls in self.inserts.items():
             nl, indent = self.insert_nl[(fi, pos)], self.insert_indent[(fi, pos)]
             out.setdefault(fi, []).append(SpanEdit(pos, pos, "".join(nl + indent + d
                                                                      for d in decls),
                                                    "new declarations"))
-        return {fi: sorted(es, key=BY_SPAN) for fi, es in out.items()}
+        return {fi: (sorted_columns(columns_of(_parts(es))) if fi in runs
+                     else sorted(es, key=BY_SPAN)) for fi, es in out.items()}
+
+
+def _parts(items: list) -> list:
+    """Edits and EditRuns in order, consecutive edits as one list (for
+    columns_of)."""
+    out: list = []
+    for x in items:
+        if type(x) is EditRun:
+            out.append(x)
+        elif out and type(out[-1]) is list:
+            out[-1].append(x)
+        else:
+            out.append([x])
+    return out
 
 
 def _conf(c) -> str:

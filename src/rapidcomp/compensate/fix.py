@@ -22,7 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..collector import paused
-from ..edits import SpanEdit, apply_edits
+from ..edits import EditColumns, SpanEdit, apply_edits
 from ..errors import InternalError
 from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
@@ -43,7 +43,9 @@ class ModuleOutput:
 
     path: str                        # display path of the input module
     text: str
-    edits: tuple[SpanEdit, ...]
+    # (A batch of plain literals' field edits as EditColumns: 7e5 of them
+    # in a CAM program, no tuple each.)
+    edits: tuple[SpanEdit, ...] | EditColumns
     diff: tuple[str, ...]
 
 
@@ -165,7 +167,8 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         name = pf.source.display_path
         diff = unified_diff(pf.source.text, es, name, output_names.get(name, name),
                             new_text=texts.get(fi))
-        modules.append(ModuleOutput(name, texts.get(fi, pf.source.text), tuple(es), tuple(diff)))
+        modules.append(ModuleOutput(name, texts.get(fi, pf.source.text),
+                                    es if type(es) is EditColumns else tuple(es), tuple(diff)))
     clock("report")
     return FixResult(mode, task.name, tuple(modules), tuple(rows), tuple(notes))
 

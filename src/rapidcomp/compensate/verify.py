@@ -13,17 +13,17 @@ against the intended pose is what the report shows as "after".
 
 from __future__ import annotations
 
-from bisect import bisect_right
 from typing import NamedTuple
 
 import numpy as np
 
+from ..edits import EditColumns
 from ..errors import InternalError, RapidcompError
 from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
-from ..rapid.values import NUM_MAX, ROBTARGET_FRAME, RobTarget, decimal_chars
+from ..rapid.values import NUM_MAX, ROBTARGET_FRAME, RobTarget, decimal_chars, plain_bounds
 from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
@@ -48,53 +48,70 @@ def reparse(plan: Plan, texts: dict[int, str]) -> dict[int, ParsedFile]:
 
 def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> Written | None:
     """When every edit replaces numeric fields of literals (fields: (file,
-    offset) -> (record, its new field texts)), the output has the input's
-    structure: instead of parsing it again, each edited literal is lexed
-    again where the output holds it, and must decode to the numbers the
-    editor meant. Returns the records as written, by (id(file), offset),
-    for the verification's resolver; None when a literal does not re-lex
-    (the output is then parsed again). A robtarget the output writes as
-    its wanted texts in the frame of a literal without whitespace (what
-    values.relex compares first) is a row of one array of numbers: the
-    texts converted as values.relex converts them (values.decimals)."""
+    offset) -> (record, its new field texts, or its new literal text)),
+    the output has the input's structure: instead of parsing it again,
+    each edited literal is lexed again where the output holds it, and must
+    decode to the numbers the editor meant. Returns the records as
+    written, by (id(file), offset), for the verification's resolver; None
+    when a literal does not re-lex (the output is then parsed again). A
+    robtarget the output writes as its wanted literal, or as its wanted
+    texts in the frame of a literal without whitespace (what values.relex
+    compares first), is a row of one array of numbers: the texts
+    converted as values.relex converts them (values.decimals)."""
     by_file: dict = {}
     for (fi, start), item in fields.items():
         by_file.setdefault(fi, []).append((start, item))
     out = {}
     keys: list = []
     where: list = []
-    numbers: list[str] = []
     wants: list = []
     frame = ROBTARGET_FRAME
     for fi, items in by_file.items():
         # Offsets shift by what the edits before them add: a literal's
         # brackets lie outside every field edit.
         es = file_edits.get(fi, [])
-        ends = [e.end for e in es]
-        shift = [0]
-        for e in es:
-            shift.append(shift[-1] + len(e.replacement) - (e.end - e.start))
+        if type(es) is not EditColumns:
+            es = EditColumns.of(es)
+        grow = np.fromiter(map(len, es.replacements.tolist()), np.int64, len(es)) - (
+            es.ends - es.starts)
+        shift = np.concatenate(([0], np.cumsum(grow)))
         text = texts.get(fi, plan.files[fi].source.text)
         home = id(plan.files[fi])
-        for start, (record, want) in items:
-            end = record.span.end
-            a, b = start + shift[bisect_right(ends, start)], end + shift[bisect_right(ends, end)]
-            if type(record) is RobTarget and text[a:b] == frame % tuple(want):
+        at = np.fromiter((start for start, _ in items), np.int64, len(items))
+        to = np.fromiter((record.span.end for _, (record, _) in items), np.int64, len(items))
+        at = (at + shift[np.searchsorted(es.ends, at, "right")]).tolist()
+        to = (to + shift[np.searchsorted(es.ends, to, "right")]).tolist()
+        for (start, (record, want)), a, b in zip(items, at, to):
+            if type(record) is RobTarget and (text[a:b] == want if type(want) is str
+                                              else text[a:b] == frame % tuple(want)):
                 keys.append((home, start))
                 where.append((record, text, a, b))
                 wants.append(want)
-                numbers.extend(want)
                 continue
+            if type(want) is str:
+                # (Written whole and plainly: the output holds it, or not
+                # what was meant.)
+                return None
             got = relex_record(record, text[a:b], want)
             if got is None:
                 return None
             out[(home, start)] = got
-    values = _decimals(numbers)
+    # (A block at a time: the 1.7e6 field texts of a CAM program are not
+    # all alive at once.)
+    blocks = []
+    for at in range(0, len(wants), 8192):
+        flat = _flat_texts(wants[at:at + 8192])
+        if flat is None:
+            return None
+        blocks.append(_decimals(flat))
+    values = None if any(v is None for v in blocks) else (
+        np.concatenate(blocks) if blocks else np.empty((0, 17)))
     if values is None:
         # A kept field written otherwise than as a decimal number (0x1F in
         # a value the parser decoded field by field): values.relex's verdict.
         for key, (record, text, a, b), want in zip(keys, where, wants):
-            got = relex_record(record, text[a:b], want)
+            got = relex_record(record, text[a:b], want if type(want) is not str
+                               else _field_texts(want))
             if got is None:
                 return None
             out[key] = got
@@ -103,6 +120,36 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     if not (np.abs(values) <= NUM_MAX).all():
         return None
     return Written(out, keys, values, where)
+
+
+def _field_texts(literal: str) -> list[str]:
+    """The field texts of a literal the editor wrote whole (without
+    whitespace): what lies between its brackets and commas."""
+    return literal.replace("[", "").replace("]", "").split(",")
+
+
+def _flat_texts(wants: list) -> list[str] | None:
+    """The field texts of every wanted robtarget, in order. A literal's are
+    what lies between its brackets and commas (one split of all of them),
+    when every literal is a plain one (values.plain_bounds; None where
+    not)."""
+    lits = [w for w in wants if type(w) is str]
+    if not lits:
+        return [t for w in wants for t in w]
+    if plain_bounds(lits) is None:
+        return None
+    flat = ",".join(lits).replace("[", "").replace("]", "").split(",")
+    if len(lits) == len(wants):
+        return flat
+    out: list[str] = []
+    n = 0
+    for w in wants:
+        if type(w) is str:
+            out.extend(flat[n:n + 17])
+            n += 17
+        else:
+            out.extend(w)
+    return out
 
 
 def _decimals(texts: list[str]) -> np.ndarray | None:

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 import re
 from typing import NamedTuple, Union
 
+import numpy as np
+
 from . import ast as A
 from .ast import Span
 
@@ -275,6 +277,40 @@ _COUNT = {RobTarget: 17, JointTarget: 12}
 # Over these characters float() reads exactly what NUMBER_RE matches (a
 # sign, digits, one '.', an exponent); hex, octal and binary have others.
 _NOT_DECIMAL = str.maketrans("", "", "0123456789.eE+-,")
+
+
+# What follows each of a plain robtarget literal's 17 fields up to the
+# next one: ',' inside a group, '],[' between groups.
+_GAPS = np.array([1, 1, 3, 1, 1, 1, 3, 1, 1, 1, 3, 1, 1, 1, 1, 1])
+_SEPARATORS = np.frombuffer(b",[]", np.uint8)
+
+
+def plain_bounds(lits: list[str]):
+    """(the literals joined by ',', each one's offset in it (n,), each
+    field's start and end in its literal (n, 17)) when every one is a
+    robtarget literal written plainly, else None: in ASCII without
+    whitespace, [[x,y,z],[q1,q2,q3,q4],[c1,c2,c3,c4],[e1,...,e6]] with
+    each field a run of characters other than brackets and commas. One
+    pass over the bytes of all of them (a CAM program's 1e5 literals, no
+    string per field)."""
+    joined = ",".join(lits)
+    # (Not printable: every whitespace character but ' '.)
+    if " " in joined or not joined.isprintable() or not joined.isascii():
+        return None
+    n = len(lits)
+    sep = np.isin(np.frombuffer(joined.encode("ascii"), np.uint8), _SEPARATORS)
+    starts = np.flatnonzero(sep[:-1] & ~sep[1:]) + 1
+    ends = np.flatnonzero(~sep[:-1] & sep[1:]) + 1
+    if len(starts) != 17 * n or len(ends) != 17 * n or (n and not sep[0]):
+        return None
+    lengths = np.fromiter(map(len, lits), np.int64, n)
+    off = np.cumsum(lengths + 1) - lengths - 1
+    starts = starts.reshape(n, 17) - off[:, None]
+    ends = ends.reshape(n, 17) - off[:, None]
+    if not ((starts[:, 0] == 2).all() and (ends[:, 16] + 2 == lengths).all()
+            and (starts[:, 1:] - ends[:, :-1] == _GAPS).all()):
+        return None
+    return joined, off, starts, ends
 
 
 def decimal_chars(texts) -> bool:

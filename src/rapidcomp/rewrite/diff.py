@@ -8,7 +8,7 @@ lineterm="") prints for the same two texts; the tests check that.
 
 from __future__ import annotations
 
-from ..edits import BY_SPAN, SpanEdit, apply_edits
+from ..edits import BY_SPAN, EditColumns, SpanEdit, apply_edits
 
 
 def _line_starts(text: str) -> list[int]:
@@ -48,18 +48,24 @@ def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list
     import numpy as np
     if not lines:
         return None
-    replaced = "".join([text[e.start:e.end] for e in edits] + [e.replacement for e in edits])
+    if type(edits) is EditColumns:
+        at, ends = edits.starts.tolist(), edits.ends.tolist()
+        replacements = edits.replacements.tolist()
+    else:
+        at, ends = [e.start for e in edits], [e.end for e in edits]
+        replacements = [e.replacement for e in edits]
+    replaced = "".join([text[a:b] for a, b in zip(at, ends)] + replacements)
     if len((replaced + ".").splitlines()) != 1:
         return None
     # Nor one right after a CR: between a CR and an LF it would split or
     # join a CRLF (a line more or less, with no line break in any edit).
-    if "\r" in text and any(text[e.start - 1] == "\r" for e in edits if e.start):
+    if "\r" in text and any(text[a - 1] == "\r" for a in at if a):
         return None
     new_lines = new_text.splitlines()
     if len(new_lines) != len(lines):
         return None
     starts = np.array(_line_starts(text))
-    at = np.fromiter((e.start for e in edits), np.int64, len(edits))
+    at = np.array(at, np.int64)
     touched = np.unique(np.minimum(np.searchsorted(starts, at, side="right") - 1,
                                    len(lines) - 1)).tolist()
     changed: list[list] = []

@@ -8,15 +8,15 @@ external axes exactly as written in the source.
 
 from __future__ import annotations
 
-import functools
 import math
+from typing import NamedTuple
 
 import numpy as np
 
-from ..edits import SpanEdit
+from ..edits import EditColumns, SpanEdit, apply_edits, span_edit
 from ..kinematics.frames import (matrix_to_quat_wxyz, rotation_log, unit_quat_matrices,
                                  unit_wxyz)
-from ..rapid.values import JointTarget, RobTarget
+from ..rapid.values import JointTarget, RobTarget, plain_bounds
 from . import numbers
 
 
@@ -82,79 +82,121 @@ def robtarget_texts_many(recs: list[RobTarget], R: np.ndarray, p: np.ndarray,
     return out
 
 
-# What follows each of a plain robtarget literal's 17 fields up to the
-# next one: ',' inside a group, '],[' between groups.
-_GAPS = np.array([1, 1, 3, 1, 1, 1, 3, 1, 1, 1, 3, 1, 1, 1, 1, 1])
+def _plain_bounds(recs: list[RobTarget]):
+    """values.plain_bounds of the records' literals, when every one is a
+    compact literal (its text kept, not lexed field by field), else None."""
+    lits = [r.lexed for r in recs]
+    if not all(type(t) is str for t in lits):
+        return None
+    return plain_bounds(lits)
 
 
 def _plain_fields(recs: list[RobTarget]):
     """(the 17 field texts of every literal, one flat list; each field's
-    start and end in its literal (n, 17)) when every literal is a compact
-    one written without whitespace, else None. Such a literal is
-    [[x,y,z],[q1,q2,q3,q4],[c1,c2,c3,c4],[e1,...,e6]] exactly (the parser
-    matched it as all-numeric): its fields are what lies between its
-    brackets and commas, and where each starts follows from their lengths
-    (a CAM program's 1e5 literals are lexed by a few C-level passes)."""
-    lits = [r.lexed for r in recs]
-    if not all(type(t) is str for t in lits):
+    start and end in its literal (n, 17)) when every literal is a plain
+    one (_plain_bounds), else None."""
+    bounds = _plain_bounds(recs)
+    if bounds is None:
         return None
-    joined = ",".join(lits)
-    # (Not printable: every whitespace character but ' '.)
-    if " " in joined or not joined.isprintable():
-        return None
-    flat = joined.replace("[", "").replace("]", "").split(",")
-    n = len(lits)
-    if len(flat) != 17 * n:
-        return None
-    lengths = np.fromiter(map(len, flat), np.int64, 17 * n).reshape(n, 17)
-    starts = np.empty((n, 17), np.int64)
-    starts[:, 0] = 0
-    np.cumsum(lengths[:, :16] + _GAPS, axis=1, out=starts[:, 1:])
-    starts += 2
-    ends = starts + lengths
-    if not np.array_equal(ends[:, 16] + 2, np.fromiter(map(len, lits), np.int64, n)):
-        return None
-    return flat, starts, ends
+    joined, _, starts, ends = bounds
+    return joined.replace("[", "").replace("]", "").split(","), starts, ends
 
 
-# A SpanEdit from a (start, end, replacement, why) tuple, made by tuple's
-# own constructor as SpanEdit's is (1e6 of them without a Python call each).
-_span_edit = functools.partial(tuple.__new__, SpanEdit)
+def _touched(values, p, conf, turned, quats, mm):
+    """The fields whose value changes beyond what its new text could
+    express (a position beyond MM_KEEP, a rotation beyond ROT_KEEP_RAD, a
+    confdata integer that differs), on the same float64 numbers: their
+    flat indices in (n, 17), row by row, and their new texts (an object
+    array)."""
+    n = len(values)
+    touched = np.zeros((n, 17), bool)
+    touched[:, :3] = np.abs(p - values[:, :3]) > numbers.MM_KEEP
+    touched[:, 3:7] = np.asarray(turned, bool)[:, None]
+    c = conf.astype(np.int64)
+    touched[:, 7:11] = c != values[:, 7:11]
+    f = np.flatnonzero(touched)
+    rows, fields = np.divmod(f, 17)
+    new = np.empty(len(f), object)
+    at = fields < 3
+    new[at] = np.array(mm, dtype=object)[rows[at] * 3 + fields[at]]
+    at = (fields >= 3) & (fields < 7)
+    if at.any():
+        new[at] = np.array(quats, dtype=object).reshape(n, 4)[rows[at], fields[at] - 3]
+    at = fields >= 7
+    new[at] = [numbers.integer(v) for v in c[rows[at], fields[at] - 7].tolist()]
+    return f, new
 
 
 def _columns(recs, lexed, p, conf, turned, quats, mm, whys=None):
     """The per-literal loop of robtarget_texts_many on plain literals, as
-    columns (object arrays of the texts): the same decisions (a position
-    beyond MM_KEEP, a rotation beyond ROT_KEEP_RAD, a confdata integer
-    that differs) on the same float64 numbers, the same texts; a field is
-    changed where its new text differs from the old."""
+    columns (object arrays of the texts): the same decisions on the same
+    numbers (_touched), the same texts; a field is changed where its new
+    text differs from the old."""
     old, starts, ends = lexed
     n = len(recs)
     values = np.array([r.values for r in recs], float).reshape(n, 17)
-    was = np.array(old, dtype=object).reshape(n, 17)
+    was = np.array(old, dtype=object)
+    f, cand = _touched(values, p, conf, turned, quats, mm)
     new = was.copy()
-    touched = np.zeros((n, 17), bool)
-    touched[:, :3] = np.abs(p - values[:, :3]) > numbers.MM_KEEP
-    new[:, :3][touched[:, :3]] = np.array(mm, dtype=object).reshape(n, 3)[touched[:, :3]]
-    touched[:, 3:7] = np.asarray(turned, bool)[:, None]
-    if n:
-        new[:, 3:7][touched[:, 3:7]] = np.array(quats, dtype=object).reshape(n, 4)[
-            touched[:, 3:7]]
-    c = conf.astype(np.int64)
-    touched[:, 7:11] = c != values[:, 7:11]
-    new[:, 7:11][touched[:, 7:11]] = [numbers.integer(v) for v in c[touched[:, 7:11]].tolist()]
-    changed = np.zeros((n, 17), bool)
-    changed[touched] = new[touched] != was[touched]
-    f = np.flatnonzero(changed)
+    new[f] = cand
+    f = f[cand != was[f]]
     base = np.array([r.span.start for r in recs], np.int64)[f // 17]
     spans = ((base + starts.ravel()[f]).tolist(), (base + ends.ravel()[f]).tolist(),
-             new.ravel()[f].tolist())
+             new[f].tolist())
     if whys is None:
         fields = list(zip(*spans))
     else:
-        fields = list(map(_span_edit, zip(*spans, np.array(whys, dtype=object)[f // 17])))
+        fields = list(map(span_edit, zip(*spans, np.array(whys, dtype=object)[f // 17])))
     at = [0] + np.cumsum(np.bincount(f // 17, minlength=n)).tolist()
-    return list(zip(new.tolist(), [fields[i:j] for i, j in zip(at, at[1:])]))
+    return list(zip(new.reshape(n, 17).tolist(), [fields[i:j] for i, j in zip(at, at[1:])]))
+
+
+class Printed(NamedTuple):
+    """A batch of plain robtarget literals written again (robtarget_block)."""
+
+    literals: list[str]      # each literal's new text
+    edits: EditColumns       # every changed field, literal by literal, in the source
+    at: list[int]            # literal j's edits are edits[at[j]:at[j + 1]]
+
+
+def robtarget_block(recs: list[RobTarget], R: np.ndarray, p: np.ndarray, conf: np.ndarray,
+                    whys: list[str]) -> Printed | None:
+    """What robtarget_texts_many gives with whys, for literals written
+    plainly (_plain_bounds; else None), as columns: the edits as one
+    EditColumns, each literal's new text as one string made by splicing
+    them into the literals (no list of 17 field texts per literal: the
+    verification compares and decodes the literal as written)."""
+    bounds = _plain_bounds(recs)
+    if bounds is None or not recs:
+        return None
+    joined, off, starts, ends = bounds
+    n = len(recs)
+    values = np.array([r.values for r in recs], float).reshape(n, 17)
+    turned = _rotation_angles(values[:, 3:7], R) > numbers.ROT_KEEP_RAD
+    quats = numbers.quaternions(matrix_to_quat_wxyz(R), like=values[:, 3:7])
+    p = np.asarray(p, float)
+    mm = numbers.fmt_many(p.ravel().tolist(), numbers.MM_DECIMALS)
+    f, new = _touched(values, p, np.asarray(conf), turned, quats, mm)
+    rows = f // 17
+    a = off[rows] + starts.ravel()[f]
+    b = off[rows] + ends.ravel()[f]
+    # A field changes where its new text is not the text there (no string
+    # made of the 7e5 texts that are there).
+    size = np.fromiter(map(len, new), np.int64, len(new))
+    changed = ~((size == b - a) & np.fromiter(map(joined.startswith, new, a.tolist()), bool,
+                                              len(new)))
+    rows, a, b, new, size = rows[changed], a[changed], b[changed], new[changed], size[changed]
+    why = np.array(whys, dtype=object)[rows]
+    shift = np.array([r.span.start for r in recs], np.int64)[rows] - off[rows]
+    edits = EditColumns(a + shift, b + shift, new, why)
+    spliced = apply_edits(joined, EditColumns(a, b, new, why))
+    grow = size - (b - a)
+    size = np.fromiter(map(len, (r.lexed for r in recs)), np.int64, n) + np.bincount(
+        rows, weights=grow, minlength=n).astype(np.int64)
+    start = (np.cumsum(size + 1) - size - 1).tolist()
+    literals = [spliced[x:x + k] for x, k in zip(start, size.tolist())]
+    at = [0] + np.cumsum(np.bincount(rows, minlength=n)).tolist()
+    return Printed(literals, edits, at)
 
 
 def jointtarget_texts(record: JointTarget, q_deg) -> list[str]:
