@@ -32,36 +32,29 @@ def _literals(n: int, seed: int):
     for them: positions both sides of MM_KEEP, rotations kept and turned
     (both signs), confdata kept and changed."""
     rng = np.random.default_rng(seed)
-    spell = [lambda v: f"{v:.3f}", lambda v: f"{v:.6f}", lambda v: f"{v:g}",
-             lambda v: f"{v:.2E}", lambda v: f"{v:.0f}", lambda v: f"{v:.1f}0"]
-    lines = []
-    for i in range(n):
-        xyz = [round(float(x), 3) for x in rng.uniform(-900, 900, 3)]
-        q = rng.normal(size=4)
-        q /= np.linalg.norm(q)
-        conf = [int(c) for c in rng.integers(-3, 4, 3)] + [int(rng.integers(0, 8))]
-        sx = [spell[(i + j) % len(spell)] for j in range(3)]
-        lines.append(f"  CONST robtarget p{i}:=[[{sx[0](xyz[0])},{sx[1](xyz[1])},"
-                     f"{sx[2](xyz[2])}],[{','.join(f'{v:.9f}' if i % 3 else f'{v:.6f}' for v in q)}"
-                     f"],[{','.join(map(str, conf))}],[9E+09,9E+09,0,-0,1.5E3,9E9]];")
-    text = "MODULE M\n" + "\n".join(lines) + "\nENDMODULE\n"
+    i = np.arange(n)
+    xyz = np.round(rng.uniform(-900, 900, (n, 3)), 3)
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    conf = np.concatenate([rng.integers(-3, 4, (n, 3)), rng.integers(0, 8, (n, 1))], axis=1)
+    forms = ["{:.3f}", "{:.6f}", "{:g}", "{:.2E}", "{:.0f}", "{:.1f}0"]
+    body = "".join(
+        f"  CONST robtarget p{k}:=[["
+        + ",".join(forms[(k + j) % 6].format(v) for j, v in enumerate(xyz[k])) + "],["
+        + ",".join(("{:.9f}" if k % 3 else "{:.6f}").format(v) for v in q[k]) + "],["
+        + ",".join(map(str, conf[k])) + "],[9E+09,9E+09,0,-0,1.5E3,9E9]];\n" for k in range(n))
+    text = "MODULE M\n" + body + "ENDMODULE\n"
     recs = [d.value for d in parse_text(text, "m.mod").module.declarations]
-    P, Q, C = [], [], []
-    for i, rec in enumerate(recs):
-        v = np.array(rec.values)
-        step = [0.0, 4.9e-7, 5.1e-7, -5.1e-7, 1e-3, 0.25][i % 6]
-        P.append(v[:3] + np.array([step, -step / 2, 0.0 if i % 4 else step]))
-        q = np.array(rec.quat_wxyz) / np.linalg.norm(rec.quat_wxyz)
-        if i % 5 == 1:
-            q = q + rng.normal(scale=1e-4, size=4)
-        if i % 7 == 2:
-            q = -q
-        Q.append(quat_wxyz_to_matrix(q / np.linalg.norm(q)))
-        c = v[7:11].copy()
-        if i % 3 == 0:
-            c[i % 4] += 1
-        C.append(c)
-    return text, recs, np.array(Q), np.array(P), np.array(C)
+    values = np.array([r.values for r in recs])
+    step = np.array([0.0, 4.9e-7, 5.1e-7, -5.1e-7, 1e-3, 0.25])[i % 6]
+    P = values[:, :3] + np.stack([step, -step / 2, np.where(i % 4, 0.0, step)], axis=1)
+    w = values[:, 3:7] / np.linalg.norm(values[:, 3:7], axis=1)[:, None]
+    w = w + np.where((i % 5 == 1)[:, None], rng.normal(scale=1e-4, size=(n, 4)), 0.0)
+    w = np.where((i % 7 == 2)[:, None], -w, w)
+    R = np.array([quat_wxyz_to_matrix(x / np.linalg.norm(x)) for x in w])
+    C = values[:, 7:11].copy()
+    C[i[i % 3 == 0], (i % 4)[i % 3 == 0]] += 1
+    return text, recs, R, P, C
 
 
 def test_block_gives_the_loops_edits_and_literals(monkeypatch):
@@ -170,17 +163,18 @@ def test_diff_of_columns_is_the_diff_of_the_list():
         assert D.unified_diff(text, cols, "a", "b") == D.unified_diff(text, edits, "a", "b")
 
 
-TEXT = """MODULE M
-  CONST robtarget p1:=[[500,0,600],[0.5,0,0.866025,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
-  PROC main()
-    MoveL p1,v100,fine,tool0;
-    MoveL [[520,10,610],[0.5,0,0.866025,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,fine,tool0;
-  ENDPROC
-ENDMODULE
-"""
+_EXT = "[9E9,9E9,9E9,9E9,9E9,9E9]"
+TEXT = "\n".join([
+    "MODULE Whole",
+    f"  CONST robtarget pA:=[[300,-50,450],[0.707107,0,0.707107,0],[-1,0,-1,0],{_EXT}];",
+    "  PROC run()",
+    "    MoveJ pA,v200,z10,tool0;",
+    f"    MoveL [[320,-40,460],[0.707107,0,0.707107,0],[-1,0,-1,0],{_EXT}],v200,z10,tool0;",
+    "  ENDPROC",
+    "ENDMODULE", ""])
 
 
-def _whole(plan, x=("501.25", "521.5")):
+def _whole(plan, x=("301.25", "321.5")):
     """Both literals with x rewritten, as the block gives them: each one's
     new text, the edits as columns."""
     recs = [plan.uses[0].source.record, plan.uses[1].source.record]
@@ -200,8 +194,9 @@ def test_relex_reads_whole_literals_as_their_field_texts(hexa):
     field texts: the same records, with the edits as a list or as columns;
     a kept hex field (a literal the parser decoded field by field) is
     values.relex's verdict both ways (it does not re-lex)."""
-    text = TEXT.replace("[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100",
-                        "[0,0,0,0],[9E9,9E9,0x1F,9E9,9E9,9E9]],v100") if hexa else TEXT
+    text = TEXT.replace(f"[-1,0,-1,0],{_EXT}],v200", "[-1,0,-1,0],[9E9,9E9,0x1F,9E9,9E9,9E9]],v200"
+                        ) if hexa else TEXT
+    assert ("0x1F" in text) == hexa
     pf = parse_text(text, "m.mod")
     plan = Plan(Task("m.mod", (pf,)))
     recs, fields, edits = _whole(plan)
@@ -219,20 +214,20 @@ def test_relex_reads_whole_literals_as_their_field_texts(hexa):
         for r in recs:
             a, b = got[(id(pf), r.span.start)], want[(id(pf), r.span.start)]
             assert (a.values, a.lexed, a.span) == (b.values, b.lexed, b.span)
-        assert got[(id(pf), recs[0].span.start)].values[0] == 501.25
+        assert got[(id(pf), recs[0].span.start)].values[0] == 301.25
 
 
 def test_relex_refuses_a_whole_literal_the_output_does_not_hold():
     pf = parse_text(TEXT, "m.mod")
     plan = Plan(Task("m.mod", (pf,)))
     _, fields, edits = _whole(plan)
-    wrong = [edits[0], SpanEdit(edits[1].start, edits[1].end, "521.6")]
+    wrong = [edits[0], SpanEdit(edits[1].start, edits[1].end, "321.6")]
     assert F.relex(plan, fields, {0: edits}, {0: apply_edits(TEXT, wrong)}) is None
     # A literal meant with a field too many (in the frame's place): not
     # read as 17 numbers of some other split.
     (k0, (r0, lit0)), (k1, (r1, lit1)) = fields.items()
-    bad = {k0: (r0, lit0.replace("[[501.25,", "[[501.25,1,")),
-           k1: (r1, lit1.replace("[[521.5,10,", "[[521.5,"))}
+    bad = {k0: (r0, lit0.replace("[[301.25,", "[[301.25,1,")),
+           k1: (r1, lit1.replace("[[321.5,-40,", "[[321.5,"))}
     whole = [SpanEdit(r.span.start, r.span.end, lit, "w") for r, lit in bad.values()]
     assert F.relex(plan, bad, {0: whole}, {0: apply_edits(TEXT, whole)}) is None
     # The same, each literal as meant: read.
