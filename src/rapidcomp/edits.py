@@ -8,6 +8,7 @@ the caller and are refused rather than silently merged.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from operator import attrgetter
 from typing import NamedTuple
 
@@ -40,19 +41,20 @@ class OverlappingEdits(ValueError):
 span_edit = functools.partial(tuple.__new__, SpanEdit)
 
 
-class EditColumns:
-    """Span edits as columns: a sequence of SpanEdit, each made when it is
-    read. A CAM program's compensation is 7e5 edits of numbers; as columns
-    they are spliced, shifted and counted by array operations, and no
-    tuple and two ints per edit outlive the batch that made them.
-    starts/ends: int64 arrays (read-only); replacements/whys: object
-    arrays of str."""
+class EditColumns(Sequence):
+    """Span edits as columns: a sequence of SpanEdit (as a tuple of them
+    is, and equal to that tuple), each made when it is read; a slice is
+    EditColumns again. A CAM program's compensation is 7e5 edits of
+    numbers; as columns they are spliced, shifted and counted by array
+    operations, and no tuple and two ints per edit outlive the batch that
+    made them. starts/ends: int64 arrays; replacements/whys: object arrays
+    of str; copies of what they are made from, read-only."""
 
     __slots__ = ("starts", "ends", "replacements", "whys")
 
     def __init__(self, starts, ends, replacements, whys):
-        self.starts = np.asarray(starts, np.int64)
-        self.ends = np.asarray(ends, np.int64)
+        self.starts = np.array(starts, np.int64)
+        self.ends = np.array(ends, np.int64)
         self.replacements = _objects(replacements)
         self.whys = _objects(whys)
         for a in (self.starts, self.ends, self.replacements, self.whys):
@@ -83,7 +85,7 @@ class EditColumns:
                         self.whys[i])
 
     def __eq__(self, other) -> bool:
-        if isinstance(other, (EditColumns, tuple, list)):
+        if isinstance(other, (EditColumns, tuple)):
             return len(self) == len(other) and all(a == b for a, b in zip(self, other))
         return NotImplemented
 
@@ -95,16 +97,15 @@ class EditColumns:
 
 
 def _objects(texts) -> np.ndarray:
-    if isinstance(texts, np.ndarray) and texts.dtype == object:
-        return texts
     out = np.empty(len(texts), object)
-    out[:] = list(texts)
+    out[:] = texts if isinstance(texts, np.ndarray) else list(texts)
     return out
 
 
 class EditRun:
     """Edits [i, j) of an EditColumns: the field edits of one literal of a
-    batch (a sequence of SpanEdit; empty: false)."""
+    batch, where a list of SpanEdit was (iterated, counted, compared with
+    such a list; empty: false)."""
 
     __slots__ = ("block", "i", "j")
 

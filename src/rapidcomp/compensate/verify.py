@@ -29,6 +29,9 @@ from .plan import Plan
 from .solve import Solved, tcp_of
 from .targets import Resolver, Written
 
+# Literals decoded at once by relex (their field texts alive together).
+RELEX_BLOCK = 8192
+
 # Acceptance of a written value, after float32 rounding.
 VERIFY_UM = 1.0
 VERIFY_DEG = 1e-4
@@ -99,8 +102,8 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     # (A block at a time: the 1.7e6 field texts of a CAM program are not
     # all alive at once.)
     blocks = []
-    for at in range(0, len(wants), 8192):
-        flat = _flat_texts(wants[at:at + 8192])
+    for at in range(0, len(wants), RELEX_BLOCK):
+        flat = _flat_texts(wants[at:at + RELEX_BLOCK])
         if flat is None:
             return None
         blocks.append(_decimals(flat))

@@ -280,9 +280,11 @@ _NOT_DECIMAL = str.maketrans("", "", "0123456789.eE+-,")
 
 
 # What follows each of a plain robtarget literal's 17 fields up to the
-# next one: ',' inside a group, '],[' between groups.
+# next one: ',' inside a group, '],[' between groups; and the separators
+# of one literal and the ',' that joins it to the next, in order.
 _GAPS = np.array([1, 1, 3, 1, 1, 1, 3, 1, 1, 1, 3, 1, 1, 1, 1, 1])
 _SEPARATORS = np.frombuffer(b",[]", np.uint8)
+_FRAME_SEPARATORS = np.frombuffer(b"[[,,],[,,,],[,,,],[,,,,,]],", np.uint8)
 
 
 def plain_bounds(lits: list[str]):
@@ -298,7 +300,12 @@ def plain_bounds(lits: list[str]):
     if " " in joined or not joined.isprintable() or not joined.isascii():
         return None
     n = len(lits)
-    sep = np.isin(np.frombuffer(joined.encode("ascii"), np.uint8), _SEPARATORS)
+    chars = np.frombuffer(joined.encode("ascii"), np.uint8)
+    sep = np.isin(chars, _SEPARATORS)
+    # The separators are the frame's, in the frame's order: with the gaps
+    # below, every literal is the frame with 17 fields in it.
+    if not np.array_equal(chars[sep], np.tile(_FRAME_SEPARATORS, n)[:-1]):
+        return None
     starts = np.flatnonzero(sep[:-1] & ~sep[1:]) + 1
     ends = np.flatnonzero(~sep[:-1] & sep[1:]) + 1
     if len(starts) != 17 * n or len(ends) != 17 * n or (n and not sep[0]):
