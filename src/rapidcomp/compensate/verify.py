@@ -23,7 +23,8 @@ from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
-from ..rapid.values import NUM_MAX, ROBTARGET_FRAME, RobTarget, decimal_chars, plain_bounds
+from ..rapid.values import (NUM_MAX, ROBTARGET_FRAME, RobTarget, decimal_chars,
+                             frame_fields, plain_bounds)
 from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
@@ -114,7 +115,7 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
         # a value the parser decoded field by field): values.relex's verdict.
         for key, (record, text, a, b), want in zip(keys, where, wants):
             got = relex_record(record, text[a:b], want if type(want) is not str
-                               else _field_texts(want))
+                               else frame_fields(want))
             if got is None:
                 return None
             out[key] = got
@@ -125,12 +126,6 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     return Written(out, keys, values, where)
 
 
-def _field_texts(literal: str) -> list[str]:
-    """The field texts of a literal the editor wrote whole (without
-    whitespace): what lies between its brackets and commas."""
-    return literal.replace("[", "").replace("]", "").split(",")
-
-
 def _flat_texts(wants: list) -> list[str] | None:
     """The field texts of every wanted robtarget, in order. A literal's are
     what lies between its brackets and commas (one split of all of them),
@@ -139,9 +134,10 @@ def _flat_texts(wants: list) -> list[str] | None:
     lits = [w for w in wants if type(w) is str]
     if not lits:
         return [t for w in wants for t in w]
-    if plain_bounds(lits) is None:
+    bounds = plain_bounds(lits)
+    if bounds is None:
         return None
-    flat = ",".join(lits).replace("[", "").replace("]", "").split(",")
+    flat = frame_fields(bounds[0])
     if len(lits) == len(wants):
         return flat
     out: list[str] = []

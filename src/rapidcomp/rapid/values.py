@@ -320,6 +320,13 @@ def plain_bounds(lits: list[str]):
     return joined, off, starts, ends
 
 
+def frame_fields(text: str) -> list[str]:
+    """What lies between the brackets and commas of an all-numeric literal
+    (or of such literals joined by ','): its field texts, where it is
+    written in its frame."""
+    return text.replace("[", "").replace("]", "").split(",")
+
+
 def decimal_chars(texts) -> bool:
     """Every text is written with those characters only: float() of it
     (where it succeeds) is what the regex reads (one C-level pass)."""
@@ -346,7 +353,7 @@ def _compact(t: str, expr, where: str) -> Record:
     cls = _COMPACT[t]
     if isinstance(expr, A.NumAgg):
         text = expr.text
-        fields = text.replace("[", "").replace("]", "").split(",")
+        fields = frame_fields(text)
         # (A NumAgg's numbers are NUMBER_RE's, the lexer's NUMAGG matched
         # them, with whitespace around them that float() drops, but for
         # \x1c-\x1f: those go the regex's way.)

@@ -48,12 +48,8 @@ def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list
     import numpy as np
     if not lines:
         return None
-    if type(edits) is EditColumns:
-        at, ends = edits.starts.tolist(), edits.ends.tolist()
-        replacements = edits.replacements.tolist()
-    else:
-        at, ends = [e.start for e in edits], [e.end for e in edits]
-        replacements = [e.replacement for e in edits]
+    cols = edits if type(edits) is EditColumns else EditColumns.of(edits)
+    at, ends, replacements = cols.starts.tolist(), cols.ends.tolist(), cols.replacements.tolist()
     replaced = "".join([text[a:b] for a, b in zip(at, ends)] + replacements)
     if len((replaced + ".").splitlines()) != 1:
         return None

@@ -16,7 +16,7 @@ import numpy as np
 from ..edits import EditColumns, SpanEdit, apply_edits, span_edit
 from ..kinematics.frames import (matrix_to_quat_wxyz, rotation_log, unit_quat_matrices,
                                  unit_wxyz)
-from ..rapid.values import JointTarget, RobTarget, plain_bounds
+from ..rapid.values import JointTarget, RobTarget, frame_fields, plain_bounds
 from . import numbers
 
 
@@ -52,11 +52,9 @@ def robtarget_texts_many(recs: list[RobTarget], R: np.ndarray, p: np.ndarray,
     one batch, the positions' texts formatted as one."""
     if not recs:
         return []
-    q_old = np.array([r.quat_wxyz for r in recs], float)
-    turned = (_rotation_angles(q_old, R) > numbers.ROT_KEEP_RAD).tolist()
-    quats = numbers.quaternions(matrix_to_quat_wxyz(R), like=q_old)
     p = np.asarray(p, float)
-    mm = numbers.fmt_many(p.ravel().tolist(), numbers.MM_DECIMALS)
+    turned, quats, mm = _new_numbers(np.array([r.quat_wxyz for r in recs], float), R, p)
+    turned = turned.tolist()
     conf = np.asarray(conf)
     lexed = _plain_fields(recs)
     if lexed is not None:
@@ -82,6 +80,15 @@ def robtarget_texts_many(recs: list[RobTarget], R: np.ndarray, p: np.ndarray,
     return out
 
 
+def _new_numbers(q_old: np.ndarray, R: np.ndarray, p: np.ndarray):
+    """What a batch's decisions compare and write: whether each rotation
+    turned beyond ROT_KEEP_RAD from its quaternion q_old (n, 4), the new
+    quaternions' texts (signed as q_old), the positions' texts."""
+    turned = _rotation_angles(q_old, R) > numbers.ROT_KEEP_RAD
+    quats = numbers.quaternions(matrix_to_quat_wxyz(R), like=q_old)
+    return turned, quats, numbers.fmt_many(p.ravel().tolist(), numbers.MM_DECIMALS)
+
+
 def _plain_bounds(recs: list[RobTarget]):
     """values.plain_bounds of the records' literals, when every one is a
     compact literal (its text kept, not lexed field by field), else None."""
@@ -99,7 +106,7 @@ def _plain_fields(recs: list[RobTarget]):
     if bounds is None:
         return None
     joined, _, starts, ends = bounds
-    return joined.replace("[", "").replace("]", "").split(","), starts, ends
+    return frame_fields(joined), starts, ends
 
 
 def _touched(values, p, conf, turned, quats, mm):
@@ -172,10 +179,8 @@ def robtarget_block(recs: list[RobTarget], R: np.ndarray, p: np.ndarray, conf: n
     joined, off, starts, ends = bounds
     n = len(recs)
     values = np.array([r.values for r in recs], float).reshape(n, 17)
-    turned = _rotation_angles(values[:, 3:7], R) > numbers.ROT_KEEP_RAD
-    quats = numbers.quaternions(matrix_to_quat_wxyz(R), like=values[:, 3:7])
     p = np.asarray(p, float)
-    mm = numbers.fmt_many(p.ravel().tolist(), numbers.MM_DECIMALS)
+    turned, quats, mm = _new_numbers(np.ascontiguousarray(values[:, 3:7]), R, p)
     f, new = _touched(values, p, np.asarray(conf), turned, quats, mm)
     rows = f // 17
     a = off[rows] + starts.ravel()[f]
@@ -191,7 +196,9 @@ def robtarget_block(recs: list[RobTarget], R: np.ndarray, p: np.ndarray, conf: n
     edits = EditColumns(a + shift, b + shift, new, why)
     spliced = apply_edits(joined, EditColumns(a, b, new, why))
     grow = size - (b - a)
-    size = np.fromiter(map(len, (r.lexed for r in recs)), np.int64, n) + np.bincount(
+    # (Each literal's length as written: the distance to the next one's
+    # offset, less the ',' joining them.)
+    size = np.diff(off, append=len(joined) + 1) - 1 + np.bincount(
         rows, weights=grow, minlength=n).astype(np.int64)
     start = (np.cumsum(size + 1) - size - 1).tolist()
     literals = [spliced[x:x + k] for x, k in zip(start, size.tolist())]
