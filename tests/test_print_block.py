@@ -148,11 +148,13 @@ def test_columns_are_a_sequence_of_span_edits():
     run = EditRun(cols, 1, 3)
     assert run and len(run) == 2 and list(run) == edits[1:] and run == edits[1:]   # (a list's place)
     assert not EditRun(cols, 2, 2) and list(EditRun(cols, 2, 2)) == []
-    # Runs of a block and lists, in any order: one EditColumns in that order.
+    # Runs of two blocks and edits, in any order: one EditColumns in that order.
     other = EditColumns.of([SpanEdit(9, 9, "q", "d")])
-    parts = [EditRun(cols, 2, 3), [SpanEdit(0, 0, "s", "e")], EditRun(cols, 0, 1),
-             EditRun(other, 0, 1), EditRun(cols, 1, 2), EditRun(cols, 1, 1)]
-    want = [edits[2], SpanEdit(0, 0, "s", "e"), edits[0], other[0], edits[1]]
+    parts = [EditRun(cols, 2, 3), SpanEdit(0, 0, "s", "e"), SpanEdit(3, 3, "t", "f"),
+             EditRun(cols, 0, 1), EditRun(other, 0, 1), EditRun(cols, 1, 2),
+             EditRun(cols, 1, 1)]
+    want = [edits[2], SpanEdit(0, 0, "s", "e"), SpanEdit(3, 3, "t", "f"), edits[0],
+            other[0], edits[1]]
     assert list(columns_of(parts)) == want and len(columns_of([])) == 0
 
 

@@ -126,11 +126,12 @@ class EditRun:
     __hash__ = None
 
 
-def columns_of(parts: list) -> EditColumns:
-    """One EditColumns of parts in order (lists of SpanEdit and EditRuns;
-    the runs of one block by one gather)."""
-    starts, ends, reps, whys = [], [], [], []
+def columns_of(items) -> EditColumns:
+    """One EditColumns of SpanEdits and EditRuns in order: the consecutive
+    runs of one block by one gather, consecutive edits by one conversion."""
+    parts: list[EditColumns] = []
     runs: list = []
+    edits: list = []
 
     def flush():
         if runs:
@@ -139,29 +140,26 @@ def columns_of(parts: list) -> EditColumns:
             j = np.fromiter((r.j for r in runs), np.int64, len(runs))
             size = j - i
             # The indices i..j-1 of every run, in order, as one array.
-            index = np.arange(int(size.sum())) + np.repeat(i - (np.cumsum(size) - size), size)
-            starts.append(block.starts[index])
-            ends.append(block.ends[index])
-            reps.append(block.replacements[index])
-            whys.append(block.whys[index])
+            parts.append(block.take(np.arange(int(size.sum()))
+                                    + np.repeat(i - (np.cumsum(size) - size), size)))
             runs.clear()
-    for part in parts:
-        if type(part) is EditRun:
-            if runs and part.block is not runs[0].block:
+        if edits:
+            parts.append(EditColumns.of(edits))
+            edits.clear()
+    for item in items:
+        if type(item) is EditRun:
+            if edits or (runs and item.block is not runs[0].block):
                 flush()
-            runs.append(part)
-            continue
-        flush()
-        cols = part if type(part) is EditColumns else EditColumns.of(part)
-        starts.append(cols.starts)
-        ends.append(cols.ends)
-        reps.append(cols.replacements)
-        whys.append(cols.whys)
+            runs.append(item)
+        else:
+            if runs:
+                flush()
+            edits.append(item)
     flush()
-    if not starts:
+    if not parts:
         return EditColumns([], [], [], [])
-    return EditColumns(np.concatenate(starts), np.concatenate(ends), np.concatenate(reps),
-                       np.concatenate(whys))
+    return EditColumns(*(np.concatenate([getattr(c, name) for c in parts])
+                         for name in EditColumns.__slots__))
 
 
 def sorted_columns(cols: EditColumns) -> EditColumns:

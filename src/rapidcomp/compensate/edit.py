@@ -626,22 +626,8 @@ class Editor:
             out.setdefault(fi, []).append(SpanEdit(pos, pos, "".join(nl + indent + d
                                                                      for d in decls),
                                                    "new declarations"))
-        return {fi: (sorted_columns(columns_of(_parts(es))) if fi in runs
+        return {fi: (sorted_columns(columns_of(es)) if fi in runs
                      else sorted(es, key=BY_SPAN)) for fi, es in out.items()}
-
-
-def _parts(items: list) -> list:
-    """Edits and EditRuns in order, consecutive edits as one list (for
-    columns_of)."""
-    out: list = []
-    for x in items:
-        if type(x) is EditRun:
-            out.append(x)
-        elif out and type(out[-1]) is list:
-            out[-1].append(x)
-        else:
-            out.append([x])
-    return out
 
 
 def _conf(c) -> str:
