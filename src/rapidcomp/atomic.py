@@ -6,7 +6,15 @@ from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Iterable
 from pathlib import Path
+from typing import Protocol
+
+
+class Chunked(Protocol):
+    """File data given in pieces (a report rendered as it is written)."""
+
+    def chunks(self) -> Iterable[bytes]: ...
 
 
 def _umask() -> int:
@@ -15,8 +23,10 @@ def _umask() -> int:
     return mask
 
 
-def write_all(files: list[tuple[Path, bytes]]) -> None:
-    """Write every file or none. OSError (with .filename) on failure."""
+def write_all(files: list[tuple[Path, bytes | Chunked]]) -> None:
+    """Write every file or none. OSError (with .filename) on failure. A
+    file's data are bytes, or an object whose chunks() gives them in
+    pieces (a report rendered as it is written)."""
     temps: list[tuple[str, Path]] = []
     # mkstemp creates 0600 files; a written file gets what open() would give.
     mode = 0o666 & ~_umask()
@@ -28,7 +38,11 @@ def write_all(files: list[tuple[Path, bytes]]) -> None:
                                            dir=path.parent)
                 temps.append((tmp, path))
                 with os.fdopen(fd, "wb") as f:
-                    f.write(data)
+                    if isinstance(data, (bytes, bytearray)):
+                        f.write(data)
+                    else:
+                        for piece in data.chunks():
+                            f.write(piece)
                 os.chmod(tmp, mode)
             except OSError as exc:
                 # Name the file the user asked for, not our temporary one.

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import sys
 
+from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, replace
@@ -48,10 +49,33 @@ class JobSpec:
 
 
 @dataclass(frozen=True)
+class Report:
+    """A report file, rendered as it is written: a CAM program's report is
+    ~100 MB of text (JSON: ~150 MB), not held whole as text and again as
+    bytes (1e5 targets with --json peaked at 1.9 GB so)."""
+
+    kind: str                        # "markdown" | "json"
+    result: FixResult
+    meta: dict
+
+    def chunks(self) -> Iterator[bytes]:
+        # (Millions of objects made and dropped: the collector paused, as
+        # for the job itself.)
+        with paused():
+            render = report.markdown if self.kind == "markdown" else report.as_json
+            for piece in render(self.result, self.meta, pieces=True):
+                yield piece.encode("utf-8")
+
+    def render(self) -> bytes:
+        return b"".join(self.chunks())
+
+
+@dataclass(frozen=True)
 class JobOutcome:
     spec: JobSpec
     result: FixResult
-    files: tuple[tuple[str, bytes], ...]   # (path, bytes) to write
+    # (path, bytes or a Report) to write: atomic.write_all takes both.
+    files: tuple[tuple[str, bytes | Report], ...]
 
 
 def default_output(path: str, folder: bool = False) -> str:
@@ -135,9 +159,9 @@ def _run(spec: JobSpec) -> JobOutcome:
     if spec.transient is not None:
         out += _support_files(spec, task)
     if spec.report:
-        out.append((spec.report, report.markdown(result, meta).encode("utf-8")))
+        out.append((spec.report, Report("markdown", result, meta)))
     if spec.json:
-        out.append((spec.json, report.as_json(result, meta).encode("utf-8")))
+        out.append((spec.json, Report("json", result, meta)))
     progress.done()
     return JobOutcome(spec, result, tuple(out))
 
@@ -199,7 +223,7 @@ def run_all(specs: list[JobSpec], workers: int = 2) -> list[JobOutcome]:
     outcomes = []
     try:
         with ProcessPoolExecutor(max_workers=min(workers, len(specs))) as pool:
-            futures = [pool.submit(run, s) for s in specs]
+            futures = [pool.submit(_run_rendered, s) for s in specs]
             for spec, f in zip(specs, futures):
                 try:
                     outcomes.append(f.result())
@@ -214,6 +238,14 @@ def run_all(specs: list[JobSpec], workers: int = 2) -> list[JobOutcome]:
     if errors:
         raise errors[0] if len(errors) == 1 else Errors(errors)
     return outcomes
+
+
+def _run_rendered(spec: JobSpec) -> JobOutcome:
+    """run() in a worker process: its reports rendered there, in parallel
+    with the other worker's, and returned as bytes."""
+    out = run(spec)
+    return replace(out, files=tuple((path, data.render() if isinstance(data, Report) else data)
+                                    for path, data in out.files))
 
 
 def layout(source: TaskSource) -> list[str]:

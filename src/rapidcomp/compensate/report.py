@@ -10,6 +10,9 @@ from __future__ import annotations
 
 import json
 
+from collections.abc import Iterable, Iterator
+from itertools import islice
+
 from .fix import FixResult
 from .plan import line_ranges
 from .rows import UNTOUCHED, UseRow
@@ -88,7 +91,29 @@ def _notes(r: UseRow) -> str:
     return _cell("; ".join(parts))
 
 
-def markdown(result: FixResult, meta: dict) -> str:
+def markdown(result: FixResult, meta: dict, pieces: bool = False) -> str | Iterator[str]:
+    """The Markdown report; pieces: the same text as an iterator of pieces
+    (a CAM program's report, ~100 MB, is written as it is made)."""
+    out = _pieces(_markdown_lines(result, meta))
+    return out if pieces else "".join(out)
+
+
+# Lines per piece of a report rendered in pieces (a CAM program's report has
+# 3e5 lines: written in pieces, not held whole as text and bytes).
+CHUNK_LINES = 4096
+
+
+def _pieces(lines: Iterable[str]) -> Iterator[str]:
+    """Each CHUNK_LINES lines, each line ended by a line break."""
+    it = iter(lines)
+    while True:
+        batch = list(islice(it, CHUNK_LINES))
+        if not batch:
+            return
+        yield "\n".join(batch) + "\n"
+
+
+def _markdown_lines(result: FixResult, meta: dict) -> Iterator[str]:
     out = [f"# rapidcomp fix: {result.program}", ""]
     out += ["| | |", "|---|---|"]
     for k, v in meta.items():
@@ -97,27 +122,31 @@ def markdown(result: FixResult, meta: dict) -> str:
     out += [f"- {line}" for line in summary_lines(result)]
     if result.notes:
         out += ["", "## Notes", ""] + [f"- {n}" for n in result.notes]
+    yield from out
     several = len(result.modules) > 1
     for m in result.modules:
         rows = [r for r in result.rows if r.file == m.path]
         if several:
-            out += ["", f"## {m.path}"]
+            yield from ["", f"## {m.path}"]
             if not rows and not m.edits:
-                out += ["", "No motion instructions; written byte for byte as it was."]
+                yield from ["", "No motion instructions; written byte for byte as it was."]
                 continue
         level = "###" if several else "##"
-        out += ["", f"{level} Diff", ""]
+        yield from ["", f"{level} Diff", ""]
         if m.diff:
-            out += ["```diff"] + list(m.diff) + ["```"]
+            yield "```diff"
+            yield from m.diff
+            yield "```"
         else:
-            out.append("No change.")
-        out += ["", f"{level} Targets", ""] + _table(rows, "transient" in meta)
-    return "\n".join(out) + "\n"
+            yield "No change."
+        yield from ["", f"{level} Targets", ""]
+        yield from _table(rows, "transient" in meta)
 
 
-def _table(rows: list[UseRow], transient: bool = False) -> list[str]:
+def _table(rows: list[UseRow], transient: bool = False) -> Iterator[str]:
     if not rows:
-        return ["No motion instructions."]
+        yield "No motion instructions."
+        return
     after = ("after = the written values as the controller computes them at run time "
              "(float32), the worst over the thermal states s = 0, 0.25, 0.5, 0.75, 1, each on "
              "the robot deformed by s x profile; compensated joints = the warm robot's (s = 1)."
@@ -132,8 +161,8 @@ def _table(rows: list[UseRow], transient: bool = False) -> list[str]:
            "compensated joints | delta joints | error um | error deg | after um | "
            "conf before | conf after | notes |",
            "|---:|---|---|---|---|---|---|---|---|---:|---:|---:|---|---|---|"]
-    out += map(_row, rows)
-    return out
+    yield from out
+    yield from map(_row, rows)
 
 
 # A row with every number (a CAM report has 1e5): one % operation, the same
@@ -162,12 +191,20 @@ def _row_general(r: UseRow) -> str:
             f"{_notes(r)} |")
 
 
-def as_json(result: FixResult, meta: dict) -> str:
-    """json.dumps(doc, indent=2) of the report, the targets last. Each
-    target is encoded on its own and indented to its place (a JSON string
-    holds no line break): the same text, without the one list of 1e7
-    pieces the encoder makes of a CAM program's 1e5 targets at once
-    (~600 MB; tested against json.dumps of the whole)."""
+def as_json(result: FixResult, meta: dict, pieces: bool = False) -> str | Iterator[str]:
+    """json.dumps(doc, indent=2) of the report, the targets last; pieces:
+    the same text as an iterator of pieces (a CAM program's, ~150 MB, is
+    written as it is made)."""
+    out = _json_pieces(result, meta)
+    return out if pieces else "".join(out)
+
+
+def _json_pieces(result: FixResult, meta: dict) -> Iterator[str]:
+    """Each target is encoded on its own and indented to its place (a JSON
+    string holds no line break): the same text as json.dumps of the whole,
+    without the one list of 1e7 pieces the encoder makes of a CAM
+    program's 1e5 targets at once (~600 MB; tested against json.dumps of
+    the whole)."""
     doc = {
         "program": result.program,
         **meta,
@@ -178,7 +215,13 @@ def as_json(result: FixResult, meta: dict) -> str:
     }
     head = json.dumps(doc, indent=2)
     if not result.rows:
-        return head[:-2] + ',\n  "targets": []\n}\n'
+        yield head[:-2] + ',\n  "targets": []\n}\n'
+        return
+    yield head[:-2] + ',\n  "targets": [\n    '
     encode = json.JSONEncoder(indent=2).encode
-    rows = ",\n    ".join([encode(r.as_dict()).replace("\n", "\n    ") for r in result.rows])
-    return head[:-2] + ',\n  "targets": [\n    ' + rows + "\n  ]\n}\n"
+    rows = result.rows
+    for at in range(0, len(rows), CHUNK_LINES):
+        piece = ",\n    ".join([encode(r.as_dict()).replace("\n", "\n    ")
+                                 for r in rows[at:at + CHUNK_LINES]])
+        yield piece if at == 0 else ",\n    " + piece
+    yield "\n  ]\n}\n"

@@ -1,0 +1,96 @@
+"""fix's reports are rendered as they are written (issue #14: a CAM
+program's JSON report is ~150 MB; held whole as text and again as bytes,
+1e5 targets with --json peaked at 1.9 GB). The pieces joined are the
+report: oracles are json.dumps of the whole document (written here) and
+the Markdown report rendered in one piece; the command writes the same
+report whether it renders it as it writes (one program) or a worker
+renders it whole (several programs)."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from rapidcomp.compensate import fix as F
+from rapidcomp.compensate import report
+from rapidcomp.compensate.job import Report
+from rapidcomp.compensate.load import load_solver
+from rapidcomp.compensate.plan import Task
+from rapidcomp.rapid.parse import parse_file, parse_text
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "bench"))
+from fix import cam_module  # noqa: E402
+
+
+def _whole_json(result, meta) -> str:
+    doc = {"program": result.program, **meta, "summary": result.summary(),
+           "notes": list(result.notes),
+           "modules": [{"path": m.path, "changed": bool(m.edits), "diff": list(m.diff)}
+                       for m in result.modules],
+           "targets": [r.as_dict() for r in result.rows]}
+    return json.dumps(doc, indent=2) + "\n"
+
+
+@pytest.fixture(scope="module")
+def results():
+    solver = load_solver(str(ROOT / "fixtures" / "warm.csv"), None, False, ("J5=-120:120",))
+    tasks = [Task("cubes.mod", (parse_file(ROOT / "fixtures" / "cubes.mod", "cubes.mod"),))]
+    # 3, 4 and 7 targets: as many rows as a piece holds, one more, and two
+    # pieces and one more with the pieces made 3 rows long below.
+    for n in (3, 4, 7):
+        tasks.append(Task(f"cam{n}.mod", (parse_text(cam_module(n, 5), f"cam{n}.mod"),)))
+    tasks.append(Task("none.mod", (parse_text("MODULE N\n  PROC p()\n    WaitTime 1;\n"
+                                              "  ENDPROC\nENDMODULE\n", "none.mod"),)))
+    return [F.fix(t, solver, "auto") for t in tasks]
+
+
+@pytest.mark.parametrize("lines", [1, 2, 3, 4, 10 ** 9])
+def test_pieces_join_to_the_whole_report(results, monkeypatch, lines):
+    meta = {"mode": "auto", "profile": 'wärm\n"x".csv'}
+    whole_md = [report.markdown(r, meta) for r in results]
+    monkeypatch.setattr(report, "CHUNK_LINES", lines)
+    for result, md in zip(results, whole_md):
+        pieces = list(report.as_json(result, meta, pieces=True))
+        assert "".join(pieces) == _whole_json(result, meta)
+        if lines == 3 and len(result.rows) > 3:
+            # The targets really are split: a piece per 3 rows.
+            assert len(pieces) == 2 + -(-len(result.rows) // 3)
+        md_pieces = list(report.markdown(result, meta, pieces=True))
+        assert "".join(md_pieces) == md
+        if lines < 10 ** 9:
+            # (Each piece ends a line; the meta's line break is inside one.)
+            assert len(md_pieces) == -(-(md.count("\n") - 1) // lines)
+        for kind, text in (("markdown", md), ("json", _whole_json(result, meta))):
+            assert Report(kind, result, meta).render() == text.encode("utf-8")
+
+
+def test_streamed_and_worker_reports_are_the_same_bytes(tmp_path):
+    # One program: the report is rendered as it is written. Two programs:
+    # each worker renders its report whole and returns its bytes.
+    for name, n, seed in (("a.mod", 9000, 2), ("b.mod", 40, 3)):
+        (tmp_path / name).write_text(cam_module(n, seed, name[0].upper() + "_M"))
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
+    prof = str(ROOT / "fixtures" / "warm.csv")
+    base = [sys.executable, "-m", "rapidcomp", "fix", "--profile", prof, "-q"]
+    (tmp_path / "one").mkdir()
+    subprocess.run(base + [str(tmp_path / "a.mod"), "-o", str(tmp_path / "one")], check=True,
+                   env=env)
+    subprocess.run(base + [str(tmp_path / "a.mod"), str(tmp_path / "b.mod"), "-o",
+                           str(tmp_path / "two")], check=True, env=env)
+    one = sorted(p.name for p in (tmp_path / "one").iterdir())
+    assert one == ["a.md", "a.mod"]
+    for name in one:
+        assert (tmp_path / "one" / name).read_bytes() == (tmp_path / "two" / name).read_bytes()
+    md = (tmp_path / "one" / "a.md").read_text()
+    assert md.count("| MoveL |") == 9000 and md.endswith("|\n")
+    # --json through the command, in pieces: valid, and the dump of itself.
+    subprocess.run(base + [str(tmp_path / "a.mod"), "-o", str(tmp_path / "j.mod"), "--json",
+                           str(tmp_path / "j.json")], check=True, env=env)
+    text = (tmp_path / "j.json").read_text()
+    doc = json.loads(text)
+    assert len(doc["targets"]) == 9000
+    assert text == json.dumps(doc, indent=2) + "\n"
