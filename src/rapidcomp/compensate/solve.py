@@ -435,11 +435,13 @@ class _Chooser:
             on = on._replace(caution=p.caution)
         return [on], on
 
-    def choose(self, i: int) -> tuple[list[Pick], Pick]:
-        """(the solutions a use may take, the one compensated)."""
+    def choose(self, i: int, st=None) -> tuple[list[Pick], Pick]:
+        """(the solutions a use may take, the one compensated); st: the
+        flow's state before the use, when the caller has it."""
         u = self.uses[i]
         flag = _flag(u)
-        st = self.plan.state(u)
+        if st is None:
+            st = self.plan.state(u)
         if u.role == "cir":
             # The circle point is passed on the way from the previous move:
             # its configuration follows from there, its confdata is not read.
@@ -451,7 +453,6 @@ class _Chooser:
         quick = self._quick(i, st, sup, flag)
         if quick is not None:
             return quick
-        c = _conf_text(u.conf)
         if OFF not in sup:
             p = self._by_conf(i, f"confdata ({flag}\\On)")
             return ([p] if p.q is not None else []), p
@@ -486,7 +487,8 @@ class _Chooser:
             return sols, rep._replace(rule=f"{rep.rule}; its confdata names no solution, so "
                                            f"{flag} is off here")
         return [], _fail(f"{flag} may be on or off here (not known statically): on, the "
-                         f"confdata {c} names no solution ({on.failure}); off, {off_fail}")
+                         f"confdata {_conf_text(u.conf)} names no solution ({on.failure}); "
+                         f"off, {off_fail}")
 
     def run(self) -> None:
         pending = []
@@ -495,13 +497,14 @@ class _Chooser:
             u = self.uses[i]
             if u.kind != "robtarget":
                 continue
-            preds = _in_text_order(self.plan.state(u).last or ())
+            st = self.plan.state(u)
+            preds = _in_text_order(st.last or ())
             pred_rows = [self.rows[k] for k in preds if k in self.rows]
             for j in pred_rows:
                 succ.setdefault(j, []).append(i)
             if any(j not in self.chosen for j in pred_rows):
                 pending.append(i)
-            self._set(i)
+            self._set(i, st)
         # Loops: a move whose predecessor comes later in the flow (the last
         # move of a loop body before its first) is chosen again once that
         # one is known, and a change propagates.
@@ -527,10 +530,10 @@ class _Chooser:
                     continue
                 work.extend(j for j in succ.get(i, []) if j not in work)
 
-    def _set(self, i: int) -> None:
+    def _set(self, i: int, st=None) -> None:
         if i in self.unsettled:
             return
-        sols, pick = self.choose(i)
+        sols, pick = self.choose(i, st)
         if len(sols) > 8:
             sols, pick = [], _fail("reached on more than 8 configurations")
         self.sols[i] = sols
