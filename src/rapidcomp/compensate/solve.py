@@ -142,8 +142,8 @@ class _Chooser:
         R = np.array([uses[i].R for i in rob]).reshape(-1, 3, 3)
         p = np.array([uses[i].p for i in rob]).reshape(-1, 3)
         conf = np.array([uses[i].conf for i in rob], dtype=int).reshape(-1, 4)
-        self.by_conf = solver.solve_nominal(R, p, conf) if rob else None
-        self.cands = solver.candidates(R, p) if rob else None
+        self.by_conf, self.cands = (solver.nominal_and_candidates(R, p, conf) if rob
+                                    else (None, None))
         self.rob_row = {i: k for k, i in enumerate(rob)}
         n = len(uses)
         self.q = np.full((n, 6), np.nan)

@@ -309,6 +309,18 @@ class Solver:
     @_chunked
     def solve_nominal(self, R: np.ndarray, p: np.ndarray, conf: np.ndarray) -> IKBatch:
         """Closed-form IK of flange poses on the branch and turns of `conf`."""
+        return self._nominal(R, p, conf)[0]
+
+    @_chunked
+    def nominal_and_candidates(self, R: np.ndarray, p: np.ndarray,
+                               conf: np.ndarray) -> tuple[IKBatch, np.ndarray]:
+        """(solve_nominal, candidates) of the same poses, their closed-form
+        solutions computed once (the choice needs both, of every robtarget
+        of a program)."""
+        batch, br = self._nominal(R, p, conf)
+        return batch, br.q / DEG
+
+    def _nominal(self, R: np.ndarray, p: np.ndarray, conf: np.ndarray):
         R = np.asarray(R, float).reshape(-1, 3, 3)
         p = np.asarray(p, float).reshape(-1, 3)
         conf = np.asarray(conf, dtype=int).reshape(-1, 4)
@@ -362,7 +374,7 @@ class Solver:
         res_rad = np.where(has_q, err_rad, np.nan)
         warnings = np.where(has_q, warnings, 0)
         return IKBatch(q_out, status, detail, djoint, conf_out, res_mm, res_rad,
-                       np.zeros(N, dtype=int), warnings)
+                       np.zeros(N, dtype=int), warnings), br
 
     # ------------------------------------------------------------ deformed
     @_chunked
