@@ -577,8 +577,7 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
     deformed = solver.solve_deformed(R, p, seed, tcp)
     err_p, err_r = solver.deformed_pose_error(np.nan_to_num(q_nom) * DEG, R, p, tcp)
     qc = np.nan_to_num(deformed.q_deg) * DEG
-    Rn, pn = solver.nominal_chain.fk(qc)
-    _, frames = solver.nominal_chain.joint_frames(qc)
+    (Rn, pn), (_, frames) = solver.nominal_chain.fk_and_frames(qc)
     conf_after = confdata(qc, frames[:, 4], solver.geometry.phi)
     disp = np.full(n, np.nan)
     moved = [i for i, u in enumerate(uses) if u.kind == "robtarget" and plan.may_be_displaced(u)

@@ -104,9 +104,13 @@ class Chain:
 
     def fk(self, q: np.ndarray):
         """base_M_flange for q (N, n) radians: R (N, 3, 3), p (N, 3) mm."""
+        return self.fk_and_frames(q)[0]
+
+    def fk_and_frames(self, q: np.ndarray):
+        """(fk(q), joint_frames(q)), the frames computed once."""
         Rs, ps = self.joint_frames(q)
         R = Rs[:, -1]
-        return R @ self.flange_rot, ps[:, -1] + R @ self.flange_trans
+        return (R @ self.flange_rot, ps[:, -1] + R @ self.flange_trans), (Rs, ps)
 
     def fk_jacobian(self, q: np.ndarray):
         """Flange pose and the geometric Jacobian (N, 6, n), rows (v; w), at
