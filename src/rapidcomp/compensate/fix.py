@@ -99,6 +99,13 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     solved = solve(plan, solver, start)
     clock("solve")
     gs = P.groups(plan, solved, mode)
+    # Past the groups nothing reads the flow (printing and verifying the
+    # values read the plan's uses and resolver; the rows its uses and
+    # track): the plan's notes are made now, and the flow's per-use states
+    # go before the values are printed and verified (1e5 targets: ~50 MB
+    # off the peak; a later use of them fails loudly).
+    plan_notes = plan.notes()
+    plan.flow = plan.by_key = None
     values = Values(plan, solved, solver.options.quadrant_tol_deg)
     state_errors: dict = {}
     # A written value that does not reproduce its compensated joints (the
@@ -151,12 +158,9 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # hundreds of MB): the values and their texts, the edited literals as
     # written, the output parsed again.
     values = written = out_files = done = confs = None
-    # The rows read the plan's uses and track only: its notes are made now,
-    # and the flow's states and the resolver's caches go before the rows
-    # are made (1e5 targets: ~45 MB off the peak; a later use of them fails
-    # loudly).
-    plan_notes = plan.notes()
-    plan.flow = plan.resolver = plan.by_key = None
+    # The rows read the plan's uses and track only: the resolver's caches
+    # go before the rows are made (a later use of them fails loudly).
+    plan.resolver = None
     rows = use_rows(plan, solved, group_of=group_of, actions=editor.actions, verified=verified,
                     mode=mode, written_conf=written_conf)
     notes = plan_notes + _notes(rows, gs)
