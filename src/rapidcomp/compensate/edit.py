@@ -26,6 +26,11 @@ from .solve import Solved
 from .targets import Source, base_pose, stacked_poses, wobj_targets
 
 
+# Robtarget values prepared at once (a CAM program's 1e5 in blocks: each
+# value and text is its own, whatever the block).
+PREPARE_BLOCK = 8192
+
+
 class Values:
     """The compensated value of each group element, as numbers and text."""
 
@@ -128,13 +133,16 @@ class Values:
         return out
 
     def prepare(self, gs: list[Group]) -> None:
-        """Every robtarget value and field texts of the groups at once: a CAM
-        program has 1e5, and one batch of rotations costs what a few
-        single ones do."""
+        """Every robtarget value and field texts of the groups, in batches: a
+        CAM program has 1e5, and one batch of rotations costs what a few
+        single ones do; PREPARE_BLOCK at a time, the batch's intermediate
+        numbers and texts are alive for one block, not for all."""
         items = [(g, k) for g in gs if g.failure is None and g.mode == "rob"
                  for k in g.elements if ("texts", id(g), k) not in self._values]
-        if not items:
-            return
+        for at in range(0, len(items), PREPARE_BLOCK):
+            self._prepare(items[at:at + PREPARE_BLOCK])
+
+    def _prepare(self, items: list) -> None:
         new = [(g, k) for g, k in items if (id(g), k) not in self._values]
         if new:
             values = self._robtarget_values(new)
