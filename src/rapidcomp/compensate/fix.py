@@ -26,6 +26,7 @@ from ..edits import EditColumns, SpanEdit, apply_edits
 from ..errors import InternalError
 from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
+from ..process import release
 from ..rewrite.diff import unified_diff
 from . import place as P
 from .edit import Editor, Values
@@ -161,6 +162,9 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # The rows read the plan's uses and track only: the resolver's caches
     # go before the rows are made (a later use of them fails loudly).
     plan.resolver = None
+    # (What malloc holds free handed back before the rows' 1e5 tuples are
+    # made: in the command's own process, process.py.)
+    release()
     rows = use_rows(plan, solved, group_of=group_of, actions=editor.actions, verified=verified,
                     mode=mode, written_conf=written_conf)
     notes = plan_notes + _notes(rows, gs)
