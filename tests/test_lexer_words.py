@@ -44,17 +44,37 @@ def test_fast_call_refused_exactly_when_a_word_is_reserved():
         return rnd.choice(reserved if rnd.random() < 0.05 else plain)
     agg = "[[1,2E+3,-4.5e-6],[1,0,0,0],[0,0,0,0],[9E+09,9E+09,1e5,0,0,0]]"
     seen = {True: 0, False: 0}
+    seen_no_comma = set()
     for _ in range(6000):
         name = word()
         first = rnd.choice([word(), agg])
-        rest = [word() for _ in range(rnd.randint(1, 4))]
-        opt = rnd.choice(["", "\\" + word(), "\\" + word() + ":=" +
-                          rnd.choice([word(), "100", "1.5"])])
-        text = f"{name} {first}," + ",".join(rest) + opt + ";"
-        used = [name] + ([] if first == agg else [first]) + rest + [
-            w for w in opt.replace(":=", " ").strip("\\").split() if not w[0].isdigit()]
+        # After the first argument: names after commas and options, in any
+        # order (a call without a comma too), spaces or tabs before them.
+        used = [name] + ([] if first == agg else [first])
+        after = ""
+        for _ in range(rnd.randint(1, 4)):
+            pad = rnd.choice(["", "", " ", "\t"])
+            kind = rnd.random()
+            if kind < 0.5:
+                w = word()
+                after += f"{pad},{rnd.choice(['', ' '])}{w}"
+                used.append(w)
+            else:
+                w = word()
+                after += f"{pad}\\{w}"
+                used.append(w)
+                if kind < 0.75:
+                    v = rnd.choice([word(), "100", "1.5"])
+                    after += ":=" + v
+                    used += [] if v[0].isdigit() else [v]
+        text = f"{name} {first}{after};"
         kinds = [t.type for t in eng.tokens(text)]
         fast = not any(w.upper() in kw for w in used)
         assert (kinds == ["FAST_CALL", "$END"]) == fast, text
         seen[fast] += 1
+        if "," not in text:
+            seen_no_comma.add(fast)
     assert min(seen.values()) > 1000
+    # (Calls without a comma were among them, with reserved words and
+    # without.)
+    assert seen_no_comma == {True, False}

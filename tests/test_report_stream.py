@@ -53,6 +53,7 @@ def test_pieces_join_to_the_whole_report(results, monkeypatch, lines):
     meta = {"mode": "auto", "profile": 'wärm\n"x".csv'}
     whole_md = [report.markdown(r, meta) for r in results]
     monkeypatch.setattr(report, "CHUNK_LINES", lines)
+    monkeypatch.setattr(report, "CHUNK_TARGETS", lines)
     for result, md in zip(results, whole_md):
         pieces = list(report.as_json(result, meta, pieces=True))
         assert "".join(pieces) == _whole_json(result, meta)
@@ -94,3 +95,17 @@ def test_streamed_and_worker_reports_are_the_same_bytes(tmp_path):
     doc = json.loads(text)
     assert len(doc["targets"]) == 9000
     assert text == json.dumps(doc, indent=2) + "\n"
+
+
+def test_the_progress_line_shows_the_report_being_written(results, capsys):
+    from rapidcomp.progress import Progress
+    progress = Progress("cam7.mod", True, delay_s=0.0)
+    meta = {"mode": "auto"}
+    for kind, says in (("markdown", "writing the report"), ("json", "writing the JSON report")):
+        data = b"".join(Report(kind, results[3], meta, progress).chunks())
+        assert data.decode() == (report.markdown if kind == "markdown" else report.as_json)(
+            results[3], meta)
+        err = capsys.readouterr().err
+        # Shown while written, then cleared.
+        assert err == f"\r\x1b[Krapidcomp: cam7.mod: {says} (" + err.split("(", 1)[1]
+        assert err.endswith(" s)\r\x1b[K")

@@ -13,7 +13,7 @@ import sys
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..collector import paused
@@ -57,14 +57,23 @@ class Report:
     kind: str                        # "markdown" | "json"
     result: FixResult
     meta: dict
+    # The job's progress line, shown again while the report is written.
+    progress: Progress | None = field(default=None, compare=False)
 
     def chunks(self) -> Iterator[bytes]:
         # (Millions of objects made and dropped: the collector paused, as
-        # for the job itself.)
+        # for the job itself.) A file name that is not UTF-8 (its bytes
+        # decoded as the file system does, os.fsdecode) is written back as
+        # the bytes it is.
+        if self.progress is not None:
+            self.progress.stage("writing the JSON report" if self.kind == "json"
+                                else "writing the report")
         with paused():
             render = report.markdown if self.kind == "markdown" else report.as_json
             for piece in render(self.result, self.meta, pieces=True):
-                yield piece.encode("utf-8")
+                yield piece.encode("utf-8", "surrogateescape")
+        if self.progress is not None:
+            self.progress.done()
 
     def render(self) -> bytes:
         return b"".join(self.chunks())
@@ -106,8 +115,9 @@ def allow_deep_nesting() -> None:
 
 
 def run(spec: JobSpec) -> JobOutcome:
-    # Loading, the report and the encoding make millions of objects too
-    # (fix and parse pause the collector for their own part).
+    # Loading and encoding the output make millions of objects too (fix
+    # and parse pause the collector for their own part, a Report its
+    # rendering).
     with paused():
         return _run(spec)
 
@@ -159,9 +169,9 @@ def _run(spec: JobSpec) -> JobOutcome:
     if spec.transient is not None:
         out += _support_files(spec, task)
     if spec.report:
-        out.append((spec.report, Report("markdown", result, meta)))
+        out.append((spec.report, Report("markdown", result, meta, progress)))
     if spec.json:
-        out.append((spec.json, Report("json", result, meta)))
+        out.append((spec.json, Report("json", result, meta, progress)))
     progress.done()
     return JobOutcome(spec, result, tuple(out))
 

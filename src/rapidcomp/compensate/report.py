@@ -98,9 +98,11 @@ def markdown(result: FixResult, meta: dict, pieces: bool = False) -> str | Itera
     return out if pieces else "".join(out)
 
 
-# Lines per piece of a report rendered in pieces (a CAM program's report has
-# 3e5 lines: written in pieces, not held whole as text and bytes).
+# A report rendered in pieces is written as such (a CAM program's Markdown
+# report has 3e5 lines, its JSON 4e6: not held whole as text and bytes):
+# lines per piece of the Markdown, targets per piece of the JSON.
 CHUNK_LINES = 4096
+CHUNK_TARGETS = 4096
 
 
 def _pieces(lines: Iterable[str]) -> Iterator[str]:
@@ -220,8 +222,8 @@ def _json_pieces(result: FixResult, meta: dict) -> Iterator[str]:
     yield head[:-2] + ',\n  "targets": [\n    '
     encode = json.JSONEncoder(indent=2).encode
     rows = result.rows
-    for at in range(0, len(rows), CHUNK_LINES):
+    for at in range(0, len(rows), CHUNK_TARGETS):
         piece = ",\n    ".join([encode(r.as_dict()).replace("\n", "\n    ")
-                                 for r in rows[at:at + CHUNK_LINES]])
+                                 for r in rows[at:at + CHUNK_TARGETS]])
         yield piece if at == 0 else ",\n    " + piece
     yield "\n  ]\n}\n"

@@ -28,7 +28,7 @@ import numpy as np
 from ..kinematics.conf import confdata
 from ..kinematics.frames import DEG
 from ..kinematics.ik import IKBatch, Solver, Status
-from .flow import OFF, ON, PROGRAM_START
+from .flow import OFF, ON, PROGRAM_START, State
 from .plan import Plan, line_ranges
 from .targets import TargetUse
 
@@ -435,7 +435,7 @@ class _Chooser:
             on = on._replace(caution=p.caution)
         return [on], on
 
-    def choose(self, i: int, st=None) -> tuple[list[Pick], Pick]:
+    def choose(self, i: int, st: State | None = None) -> tuple[list[Pick], Pick]:
         """(the solutions a use may take, the one compensated); st: the
         flow's state before the use, when the caller has it."""
         u = self.uses[i]
@@ -530,7 +530,7 @@ class _Chooser:
                     continue
                 work.extend(j for j in succ.get(i, []) if j not in work)
 
-    def _set(self, i: int, st=None) -> None:
+    def _set(self, i: int, st: State | None = None) -> None:
         if i in self.unsettled:
             return
         sols, pick = self.choose(i, st)

@@ -1,0 +1,83 @@
+"""All-or-nothing output with data given in pieces (a report rendered as
+it is written): the pieces joined are the file; a failure while writing
+or rendering a piece leaves nothing behind (no output, no temporary
+file) and names the file the user asked for. A file name that is not
+UTF-8 is written into the reports as the bytes it is (no traceback)."""
+
+import errno
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from rapidcomp.atomic import write_all
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+class Pieces:
+    def __init__(self, pieces, fail=None):
+        self.pieces, self.fail = pieces, fail
+
+    def chunks(self):
+        for n, p in enumerate(self.pieces):
+            if n == self.fail:
+                raise self.error
+            yield p
+
+
+def test_pieces_are_written_joined(tmp_path):
+    a, b = tmp_path / "a.mod", tmp_path / "sub" / "b.md"
+    write_all([(a, b"MODULE"), (b, Pieces([b"# r\n", b"", b"| 1 |\n" * 3]))])
+    assert a.read_bytes() == b"MODULE"
+    assert b.read_bytes() == b"# r\n" + b"| 1 |\n" * 3
+
+
+@pytest.mark.parametrize("error", [OSError(errno.ENOSPC, "No space left on device"),
+                                   ValueError("a rendering failed")])
+def test_a_failure_in_the_middle_of_a_piece_leaves_nothing(tmp_path, error):
+    (tmp_path / "old.md").write_bytes(b"kept")
+    data = Pieces([b"first piece\n", b"second\n"], fail=1)
+    data.error = error
+    files = [(tmp_path / "out.mod", b"MODULE"), (tmp_path / "old.md", data)]
+    with pytest.raises(type(error)) as got:
+        write_all(files)
+    if isinstance(error, OSError):
+        assert got.value.filename == str(tmp_path / "old.md")
+    # Nothing written, nothing left over, the existing file untouched.
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["old.md"]
+    assert (tmp_path / "old.md").read_bytes() == b"kept"
+
+
+def test_a_file_name_that_is_not_utf8_is_written_back_as_its_bytes(tmp_path):
+    name = os.fsdecode(b"caf\xe9.mod")
+    try:
+        (tmp_path / name).write_bytes((ROOT / "fixtures" / "cubes.mod").read_bytes())
+    except (OSError, UnicodeError):
+        pytest.skip("this file system does not take such a name")
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
+    r = subprocess.run([sys.executable, "-m", "rapidcomp", "fix", name, "--profile",
+                        str(ROOT / "fixtures" / "warm.csv"), "--limit", "J5=-120:120",
+                        "--json", "r.json"], cwd=tmp_path, env=env, capture_output=True)
+    assert r.returncode == 0, r.stderr
+    assert b"Traceback" not in r.stderr
+    report = (tmp_path / os.fsdecode(b"caf\xe9_comp.md")).read_bytes()
+    assert report.startswith(b"# rapidcomp fix: caf\xe9.mod\n")
+    assert b'"program": "caf\\udce9.mod"' in (tmp_path / "r.json").read_bytes()
+    assert (tmp_path / os.fsdecode(b"caf\xe9_comp.mod")).read_bytes().startswith(b"MODULE Cubes")
+
+
+def test_discover_reports_a_file_name_that_is_not_utf8_as_its_bytes(tmp_path):
+    name = os.fsdecode(b"m\xe9.csv")
+    try:
+        (tmp_path / name).write_bytes((ROOT / "fixtures" / "measured.csv").read_bytes())
+    except (OSError, UnicodeError):
+        pytest.skip("this file system does not take such a name")
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
+    r = subprocess.run([sys.executable, "-m", "rapidcomp", "discover", name, "--profile",
+                        str(ROOT / "fixtures" / "warm.csv"), "--report", "r.md", "-q"],
+                       cwd=tmp_path, env=env, capture_output=True)
+    assert r.returncode == 0, r.stderr
+    assert b"- measured: m\xe9.csv\n" in (tmp_path / "r.md").read_bytes()
