@@ -51,18 +51,25 @@ def test_a_failure_in_the_middle_of_a_piece_leaves_nothing(tmp_path, error):
     assert (tmp_path / "old.md").read_bytes() == b"kept"
 
 
-def test_a_file_name_that_is_not_utf8_is_written_back_as_its_bytes(tmp_path):
-    name = os.fsdecode(b"caf\xe9.mod")
+def _run_as(tmp_path, raw_name: bytes, fixture: str, *args: str):
+    """rapidcomp run in tmp_path on a copy of a fixture named raw_name (bytes
+    that are not UTF-8), the name as the file system decodes it."""
+    name = os.fsdecode(raw_name)
     try:
-        (tmp_path / name).write_bytes((ROOT / "fixtures" / "cubes.mod").read_bytes())
+        (tmp_path / name).write_bytes((ROOT / "fixtures" / fixture).read_bytes())
     except (OSError, UnicodeError):
         pytest.skip("this file system does not take such a name")
     env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
-    r = subprocess.run([sys.executable, "-m", "rapidcomp", "fix", name, "--profile",
-                        str(ROOT / "fixtures" / "warm.csv"), "--limit", "J5=-120:120",
-                        "--json", "r.json"], cwd=tmp_path, env=env, capture_output=True)
+    r = subprocess.run([sys.executable, "-m", "rapidcomp", args[0], name, "--profile",
+                        str(ROOT / "fixtures" / "warm.csv"), *args[1:]], cwd=tmp_path, env=env,
+                       capture_output=True)
     assert r.returncode == 0, r.stderr
     assert b"Traceback" not in r.stderr
+
+
+def test_a_file_name_that_is_not_utf8_is_written_back_as_its_bytes(tmp_path):
+    _run_as(tmp_path, b"caf\xe9.mod", "cubes.mod", "fix", "--limit", "J5=-120:120", "--json",
+            "r.json")
     report = (tmp_path / os.fsdecode(b"caf\xe9_comp.md")).read_bytes()
     assert report.startswith(b"# rapidcomp fix: caf\xe9.mod\n")
     assert b'"program": "caf\\udce9.mod"' in (tmp_path / "r.json").read_bytes()
@@ -70,14 +77,5 @@ def test_a_file_name_that_is_not_utf8_is_written_back_as_its_bytes(tmp_path):
 
 
 def test_discover_reports_a_file_name_that_is_not_utf8_as_its_bytes(tmp_path):
-    name = os.fsdecode(b"m\xe9.csv")
-    try:
-        (tmp_path / name).write_bytes((ROOT / "fixtures" / "measured.csv").read_bytes())
-    except (OSError, UnicodeError):
-        pytest.skip("this file system does not take such a name")
-    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
-    r = subprocess.run([sys.executable, "-m", "rapidcomp", "discover", name, "--profile",
-                        str(ROOT / "fixtures" / "warm.csv"), "--report", "r.md", "-q"],
-                       cwd=tmp_path, env=env, capture_output=True)
-    assert r.returncode == 0, r.stderr
+    _run_as(tmp_path, b"m\xe9.csv", "measured.csv", "discover", "--report", "r.md", "-q")
     assert b"- measured: m\xe9.csv\n" in (tmp_path / "r.md").read_bytes()

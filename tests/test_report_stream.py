@@ -24,15 +24,7 @@ from rapidcomp.rapid.parse import parse_file, parse_text
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
 from fix import cam_module  # noqa: E402
-
-
-def _whole_json(result, meta) -> str:
-    doc = {"program": result.program, **meta, "summary": result.summary(),
-           "notes": list(result.notes),
-           "modules": [{"path": m.path, "changed": bool(m.edits), "diff": list(m.diff)}
-                       for m in result.modules],
-           "targets": [r.as_dict() for r in result.rows]}
-    return json.dumps(doc, indent=2) + "\n"
+from test_report_json import _whole as _whole_json  # noqa: E402  (the oracle)
 
 
 @pytest.fixture(scope="module")
