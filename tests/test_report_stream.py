@@ -44,14 +44,18 @@ def results():
 def test_pieces_join_to_the_whole_report(results, monkeypatch, lines):
     meta = {"mode": "auto", "profile": 'wärm\n"x".csv'}
     whole_md = [report.markdown(r, meta) for r in results]
+    # (Targets per JSON piece one more than lines per Markdown piece: each
+    # counted by its own constant.)
     monkeypatch.setattr(report, "CHUNK_LINES", lines)
-    monkeypatch.setattr(report, "CHUNK_TARGETS", lines)
+    monkeypatch.setattr(report, "CHUNK_TARGETS", lines + 1)
     for result, md in zip(results, whole_md):
         pieces = list(report.as_json(result, meta, pieces=True))
         assert "".join(pieces) == _whole_json(result, meta)
-        if lines == 3 and len(result.rows) > 3:
-            # The targets really are split: a piece per 3 rows.
-            assert len(pieces) == 2 + -(-len(result.rows) // 3)
+        if lines < 10 ** 9:
+            # The targets really are split: a piece per lines + 1 rows,
+            # between the head and the tail.
+            assert len(pieces) == 2 + -(-len(result.rows) // (lines + 1)) if result.rows \
+                else len(pieces) == 1
         md_pieces = list(report.markdown(result, meta, pieces=True))
         assert "".join(md_pieces) == md
         if lines < 10 ** 9:
@@ -101,3 +105,14 @@ def test_the_progress_line_shows_the_report_being_written(results, capsys):
         # Shown while written, then cleared.
         assert err == f"\r\x1b[Krapidcomp: cam7.mod: {says} (" + err.split("(", 1)[1]
         assert err.endswith(" s)\r\x1b[K")
+
+
+def test_the_progress_line_is_cleared_when_the_write_fails(results, capsys):
+    from rapidcomp.progress import Progress
+    progress = Progress("cam7.mod", True, delay_s=0.0)
+    pieces = Report("markdown", results[3], {"mode": "auto"}, progress).chunks()
+    next(pieces)
+    pieces.close()            # (as when writing the first piece failed)
+    err = capsys.readouterr().err
+    assert err.startswith("\r\x1b[Krapidcomp: cam7.mod: writing the report (")
+    assert err.endswith(" s)\r\x1b[K")

@@ -38,7 +38,7 @@ def write_all(files: list[tuple[Path, bytes | Chunked]]) -> None:
                                            dir=path.parent)
                 temps.append((tmp, path))
                 with os.fdopen(fd, "wb") as f:
-                    if isinstance(data, (bytes, bytearray, memoryview)):
+                    if isinstance(data, (bytes, bytearray)):
                         f.write(data)
                     else:
                         for piece in data.chunks():

@@ -51,7 +51,7 @@ class JobSpec:
 @dataclass(frozen=True)
 class Report:
     """A report file, rendered as it is written: a CAM program's report is
-    ~100 MB of text (JSON: ~150 MB), not held whole as text and again as
+    ~75 MB of text (JSON: ~150 MB), not held whole as text and again as
     bytes (1e5 targets with --json peaked at 1.9 GB so)."""
 
     kind: str                        # "markdown" | "json"
@@ -68,12 +68,16 @@ class Report:
         if self.progress is not None:
             self.progress.stage("writing the JSON report" if self.kind == "json"
                                 else "writing the report")
-        with paused():
-            render = report.markdown if self.kind == "markdown" else report.as_json
-            for piece in render(self.result, self.meta, pieces=True):
-                yield piece.encode("utf-8", "surrogateescape")
-        if self.progress is not None:
-            self.progress.done()
+        try:
+            with paused():
+                render = report.markdown if self.kind == "markdown" else report.as_json
+                for piece in render(self.result, self.meta, pieces=True):
+                    yield piece.encode("utf-8", "surrogateescape")
+        finally:
+            # (Cleared also when the write fails: the error's message
+            # starts a line of its own.)
+            if self.progress is not None:
+                self.progress.done()
 
     def render(self) -> bytes:
         return b"".join(self.chunks())
