@@ -32,6 +32,9 @@ from .targets import Resolver, Written
 
 # Literals decoded at once by relex (their field texts alive together).
 RELEX_BLOCK = 8192
+# Uses whose written values are checked at once (their arrays alive
+# together).
+VERIFY_BLOCK = 8192
 
 # Acceptance of a written value, after float32 rounding.
 VERIFY_UM = 1.0
@@ -181,14 +184,33 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
     # Run-time writes were ruled out on the input; the output adds none.
     res = Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
                    track=plan.track, base=plan.resolver.base, written=written)
+    if written is not None:
+        # The structure is the input's (relex() made sure every edit is
+        # numbers of a literal): each use's source, tool and work object are
+        # the plan's, evaluated again on the numbers as written, and checked
+        # VERIFY_BLOCK uses at a time (each use's residual its own: a CAM
+        # program's arrays and records alive for one block, not for 1e5).
+        rows = sorted(solved.row[k] for k in keys)
+        out: dict = {}
+        for at in range(0, len(rows), VERIFY_BLOCK):
+            block = rows[at:at + VERIFY_BLOCK]
+            uses = [solved.uses[i] for i in block]
+            # Robtargets evaluated as arrays (again_many): their solved rows
+            # and (R, p, conf), kept as arrays to the IK.
+            done, R, p, conf = res.again_many(uses)
+            many = [(R, p, conf)] if done else []
+            many_rows = [block[n] for n in done]
+            done = set(done)
+            batch = [res.again(u) for n, u in enumerate(uses) if n not in done]
+            res.poses()
+            found = {o.key: _Written(o.kind, o.R, o.p, o.conf, o.joints_deg, o.reason)
+                     for o in batch}
+            out.update(_residuals(solved, solver, block, many_rows, many, found))
+        return out
     wanted = set(keys)
     motions = {k[:2] for k in keys}
     found: dict = {}
     batch: list = []
-    # Robtargets evaluated as arrays (again_many): their solved rows and
-    # (R, p, conf) blocks, kept as arrays to the IK.
-    many_rows: list = []
-    many: list = []
 
     def keep():
         # Only what the check needs, a block at a time (not 1e5 TargetUse).
@@ -196,21 +218,7 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
         for o in batch:
             found[o.key] = _Written(o.kind, o.R, o.p, o.conf, o.joints_deg, o.reason)
         batch.clear()
-    if written is not None:
-        # The structure is the input's (relex() made sure every edit is
-        # numbers of a literal): each use's source, tool and work object are
-        # the plan's, evaluated again on the numbers as written.
-        uses = [solved.uses[solved.row[k]] for k in keys]
-        for at in range(0, len(uses), 8192):
-            block = uses[at:at + 8192]
-            done, R, p, conf = res.again_many(block)
-            if done:
-                many_rows.extend(solved.row[block[n].key] for n in done)
-                many.append((R, p, conf))
-            done = set(done)
-            batch.extend(res.again(u) for n, u in enumerate(block) if n not in done)
-            keep()
-    for fi, pf in enumerate(files[:plan.n_written] if written is None else ()):
+    for fi, pf in enumerate(files[:plan.n_written]):
         mi = 0
         for m in pf.modules:
             for motion in m.motions:
@@ -221,7 +229,14 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
                         keep()
                 mi += 1
     keep()
-    rows = sorted((solved.row[k] for k in keys))
+    return _residuals(solved, solver, sorted((solved.row[k] for k in keys)), [], [], found)
+
+
+def _residuals(solved: Solved, solver: Solver, rows: list, many_rows: list, many: list,
+               found: dict) -> dict:
+    """Residual (um, deg) of the uses of solved rows `rows` (sorted): the
+    robtargets evaluated as arrays (many: (R, p, conf) blocks of the rows
+    many_rows), the others as found resolved again (use key -> _Written)."""
     # Every robtarget's (R, p, conf) in one stack: the array blocks, then
     # the others; at[row] is its place in it.
     at = {i: n for n, i in enumerate(many_rows)}
