@@ -17,6 +17,13 @@ class Chunked(Protocol):
     def chunks(self) -> Iterable[bytes]: ...
 
 
+def utf8(text: str) -> bytes:
+    """A report's text as it is written: UTF-8, and a file name in it that
+    is not UTF-8 (decoded as the file system does, os.fsdecode) as the
+    bytes it is."""
+    return text.encode("utf-8", "surrogateescape")
+
+
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)

@@ -16,6 +16,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from ..atomic import utf8
 from ..collector import paused
 from ..errors import Errors, InputError, RapidcompError
 from ..progress import Progress
@@ -62,9 +63,7 @@ class Report:
 
     def chunks(self) -> Iterator[bytes]:
         # (Millions of objects made and dropped: the collector paused, as
-        # for the job itself.) A file name that is not UTF-8 (its bytes
-        # decoded as the file system does, os.fsdecode) is written back as
-        # the bytes it is.
+        # for the job itself.)
         if self.progress is not None:
             self.progress.stage("writing the JSON report" if self.kind == "json"
                                 else "writing the report")
@@ -72,7 +71,7 @@ class Report:
             with paused():
                 render = report.markdown if self.kind == "markdown" else report.as_json
                 for piece in render(self.result, self.meta, pieces=True):
-                    yield piece.encode("utf-8", "surrogateescape")
+                    yield utf8(piece)
         finally:
             # (Cleared also when the write fails: the error's message
             # starts a line of its own.)

@@ -93,7 +93,7 @@ def _notes(r: UseRow) -> str:
 
 def markdown(result: FixResult, meta: dict, pieces: bool = False) -> str | Iterator[str]:
     """The Markdown report; pieces: the same text as an iterator of pieces
-    (a CAM program's report, ~100 MB, is written as it is made)."""
+    (a CAM program's report, ~75 MB, is written as it is made)."""
     out = _pieces(_markdown_lines(result, meta))
     return out if pieces else "".join(out)
 

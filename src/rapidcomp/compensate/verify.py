@@ -173,6 +173,11 @@ class _Written(NamedTuple):
     joints_deg: tuple | None
     reason: str | None
 
+    @classmethod
+    def of(cls, u) -> "_Written":
+        """What the check needs of a use resolved again (not the TargetUse)."""
+        return cls(u.kind, u.R, u.p, u.conf, u.joints_deg, u.reason)
+
 
 def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFile],
            solver: Solver, written: Written | None = None) -> dict:
@@ -203,8 +208,7 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
             done = set(done)
             batch = [res.again(u) for n, u in enumerate(uses) if n not in done]
             res.poses()
-            found = {o.key: _Written(o.kind, o.R, o.p, o.conf, o.joints_deg, o.reason)
-                     for o in batch}
+            found = {o.key: _Written.of(o) for o in batch}
             out.update(_residuals(solved, solver, block, many_rows, many, found))
         return out
     wanted = set(keys)
@@ -216,7 +220,7 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
         # Only what the check needs, a block at a time (not 1e5 TargetUse).
         res.poses()
         for o in batch:
-            found[o.key] = _Written(o.kind, o.R, o.p, o.conf, o.joints_deg, o.reason)
+            found[o.key] = _Written.of(o)
         batch.clear()
     for fi, pf in enumerate(files[:plan.n_written]):
         mi = 0

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import utf8
 from ..errors import InputError, RapidcompError
 from ..kinematics.gravity import Payload
 from ..progress import Progress
@@ -144,9 +145,9 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
             plot_note = plot.MISSING
             notes.append(plot.MISSING)
     if report_path:
-        files.append((report_path, report.markdown(d, meta, plot_note, heldout).encode("utf-8", "surrogateescape")))
+        files.append((report_path, utf8(report.markdown(d, meta, plot_note, heldout))))
     if json_path:
-        files.append((json_path, report.as_json(d, heldout).encode("utf-8", "surrogateescape")))
+        files.append((json_path, utf8(report.as_json(d, heldout))))
     if out_profile and d.far_apart:
         notes.append(f"{Path(out_profile).name} not written: the data and the model are far "
                      "apart (see the verdict); a profile from them would move the robot by what "
@@ -220,7 +221,7 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                              "effects are static (geometry); marked so, fix --transient refuses "
                              "it")
             text = _loadable_profile(nominal, base, kept, marked, Path(out_profile).name, notes)
-            files.append((out_profile, text.encode("utf-8", "surrogateescape")))
+            files.append((out_profile, utf8(text)))
     return Outcome(tuple(report.summary_lines(d, heldout)), tuple(notes), tuple(files), d)
 
 
@@ -407,8 +408,8 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
                             if any(campaign[4]) else "") + "".join(
                             f"; {n} {c:g}..{w:g} deg C (tau {lag or campaign[2]:g} min, noise "
                             f"{SENSOR_NOISE_C:g})" for n, c, w, lag in campaign[3]))
-    files = [(output, format_measured(names, q, xyz, comments, t_min,
-                                      temperatures, stood).encode("utf-8", "surrogateescape"))]
+    files = [(output, utf8(format_measured(names, q, xyz, comments, t_min, temperatures,
+                                           stood)))]
     rows = detectability(ParamModel(nominal, prof, q, tool), cat, noise if noise > 0 else 0.005)
     meta = {"points": f"{Path(points).name} ({len(names)})",
             "noise": f"{(noise if noise > 0 else 0.005) * 1000:g} um per axis"
@@ -416,7 +417,7 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
             "measuring point": f"({', '.join(f'{x:g}' for x in tool)}) mm in the flange frame"}
     table = report.detectability_markdown(rows, meta)
     if table_path:
-        files.append((table_path, table.encode("utf-8", "surrogateescape")))
+        files.append((table_path, utf8(table)))
     summary = (f"{len(names)} points, effects: {effect_text}; TCP shift by the effects max "
                f"{shift.max() * 1000:.1f} um, RMS {np.sqrt(np.mean(shift ** 2)) * 1000:.1f} um; "
                f"noise {noise:g} mm",)
