@@ -157,24 +157,26 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     written_conf = {u.key: next(confs) if g.mode == "rob" else None for g, u in done}
     # What each stage made per target is not needed past it (1e5 targets:
     # hundreds of MB): the values and their texts, the edited literals as
-    # written, the output parsed again.
-    values = written = out_files = done = confs = None
+    # written, the output parsed again; of the editor (which holds the
+    # values too) the rows read what it did per use only.
+    actions = editor.actions
+    values = written = out_files = done = confs = editor = None
     # The rows read the plan's uses and track only: the resolver's caches
     # go before the rows are made (a later use of them fails loudly).
     plan.resolver = None
     # (What malloc holds free handed back before the rows' 1e5 tuples are
     # made: in the command's own process, process.py.)
     release()
-    rows = use_rows(plan, solved, group_of=group_of, actions=editor.actions, verified=verified,
+    rows = use_rows(plan, solved, group_of=group_of, actions=actions, verified=verified,
                     mode=mode, written_conf=written_conf)
     notes = plan_notes + _notes(rows, gs)
     if transient is not None:
         notes += _transient_notes(transient[0], state_errors if any(
             r.status == COMPENSATED for r in rows) else {})
-    # Past the rows the plan, the solutions, the groups and the editor are
+    # Past the rows the plan, the solutions, the groups and the actions are
     # not needed (1e5 targets: some 300 MB the diffs and the report reuse
     # instead of growing the process further).
-    plan = solved = gs = editor = group_of = written_conf = verified = None
+    plan = solved = gs = actions = group_of = written_conf = verified = None
     modules = []
     for fi, pf in enumerate(task.files):
         es = file_edits.get(fi, [])

@@ -9,6 +9,7 @@ Anonymous punctuation is filtered by Lark, so rules keep named terminals
 from __future__ import annotations
 
 import re
+import sys
 
 
 from . import ast as A
@@ -263,7 +264,8 @@ class NodeBuilder:
         text = tok.value
         base = tok.start_pos
         head = _FAST_HEAD.match(text)
-        name = head.group(1)
+        # (Interned: "MoveL" 1e5 times in a CAM program is one string.)
+        name = sys.intern(head.group(1))
         args = []
         pos = head.end()
         if text[pos] == "[":
@@ -303,7 +305,8 @@ class NodeBuilder:
         scope = m.group(1).upper() if m.group(1) else None
         agg_end = text.rindex("]") + 1
         init = A.NumAgg(text[m.end():agg_end], Span(base + m.end(), base + agg_end))
-        return A.DataDecl(scope, m.group(2).upper(), m.group(3), m.group(4),
+        return A.DataDecl(scope, sys.intern(m.group(2).upper()), sys.intern(m.group(3)),
+                          m.group(4),
                           Span(base + m.start(4), base + m.end(4)), (), init,
                           Span(base, base + len(text)))
 

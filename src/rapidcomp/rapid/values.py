@@ -344,6 +344,36 @@ def decimals(texts) -> tuple[float, ...] | None:
         return None
 
 
+# A plain literal's last groups (a robtarget's confdata and external
+# axes, a jointtarget's external axes) repeat from target to target in a
+# CAM program: their floats are made once per distinct text and shared
+# (1e5 targets: 1e6 floats, ~24 MB). Bounded: many programs in one process.
+_TAIL_FLOATS: dict[str, tuple[float, ...]] = {}
+TAIL_FLOATS_MAX = 4096
+# (fields before the shared ones, the ']' that ends them: 0 the first)
+_HEAD = {RobTarget: (7, 1), JointTarget: (6, 0)}
+
+
+def _floats(cls, fields: list[str], text: str) -> tuple[float, ...]:
+    """float() of each field of a literal written in its plain frame:
+    `text` is the frame with `fields` in it, so the text from the ']' that
+    ends the head's fields on is the frame's tail with the other fields in
+    it (equal tails, equal field texts, equal floats). ValueError as
+    float's."""
+    head, bracket = _HEAD[cls]
+    cut = text.index("]")
+    if bracket:
+        cut = text.index("]", cut + 1)
+    tail = text[cut:]
+    shared = _TAIL_FLOATS.get(tail)
+    if shared is None:
+        shared = tuple(map(float, fields[head:]))
+        if len(_TAIL_FLOATS) >= TAIL_FLOATS_MAX:
+            _TAIL_FLOATS.clear()
+        _TAIL_FLOATS[tail] = shared
+    return tuple(map(float, fields[:head])) + shared
+
+
 def _compact(t: str, expr, where: str) -> Record:
     """An all-numeric record, by its shape's frame when the value is a
     NumAgg: its numbers are what lies between its brackets and commas,
@@ -359,7 +389,7 @@ def _compact(t: str, expr, where: str) -> Record:
         # \x1c-\x1f: those go the regex's way.)
         if len(fields) == _COUNT[cls] and text == _PLAIN[cls] % tuple(fields):
             try:
-                values = tuple(map(float, fields))
+                values = _floats(cls, fields, text)
             except ValueError:
                 values = None
             if values is not None and max(map(abs, values)) <= NUM_MAX:
