@@ -15,7 +15,7 @@ from itertools import islice
 
 from .fix import FixResult
 from .plan import line_ranges
-from .rows import UNTOUCHED, UseRow
+from .rows import FIELDS, UNTOUCHED, UseRow
 
 
 def _num(x, fmt: str) -> str:
@@ -220,10 +220,75 @@ def _json_pieces(result: FixResult, meta: dict) -> Iterator[str]:
         yield head[:-2] + ',\n  "targets": []\n}\n'
         return
     yield head[:-2] + ',\n  "targets": [\n    '
-    encode = json.JSONEncoder(indent=2).encode
     rows = result.rows
     for at in range(0, len(rows), CHUNK_TARGETS):
-        piece = ",\n    ".join([encode(r.as_dict()).replace("\n", "\n    ")
-                                 for r in rows[at:at + CHUNK_TARGETS]])
+        piece = ",\n    ".join([json_target(r) for r in rows[at:at + CHUNK_TARGETS]])
         yield piece if at == 0 else ",\n    " + piece
     yield "\n  ]\n}\n"
+
+
+# One target of the JSON report as json.dumps(indent=2) writes it, indented
+# to its place in the list: the field names and layout in one % template,
+# each value as the encoder writes it (a CAM report has 1e5 targets; the
+# encoder's Python code took ~40 us each). A value of another kind than
+# the fields hold (a bool, a numpy number, a dict) goes to the encoder.
+_ENCODE = json.JSONEncoder(indent=2).encode
+_STR = json.encoder.encode_basestring_ascii         # (ensure_ascii, as the encoder)
+_TARGET = "{\n" + ",\n".join(f'      "{name}": %s' for name in FIELDS) + "\n    }"
+_ITEMS = ",\n        "
+_INF = float("inf")
+
+
+class _Other(Exception):
+    """A value the template does not write: the encoder does."""
+
+
+def _text(x) -> str:
+    if x is None:
+        return "null"
+    if type(x) is not str:
+        raise _Other
+    return _STR(x)
+
+
+def _number(x) -> str:
+    t = type(x)
+    if t is float:
+        # (json's own spelling of the non-finite ones)
+        if x != x:
+            return "NaN"
+        if x == _INF:
+            return "Infinity"
+        if x == -_INF:
+            return "-Infinity"
+        return float.__repr__(x)
+    if t is int:
+        return int.__repr__(x)
+    if x is None:
+        return "null"
+    raise _Other
+
+
+def _array(xs, item) -> str:
+    if xs is None:
+        return "null"
+    if type(xs) is not tuple and type(xs) is not list:
+        raise _Other
+    if not xs:
+        return "[]"
+    return "[\n        " + _ITEMS.join(map(item, xs)) + "\n      ]"
+
+
+def json_target(r: UseRow) -> str:
+    """r as the JSON report's list holds it: the encoder's text of
+    r.as_dict(), each line after the first indented by 4 more."""
+    try:
+        return _TARGET % (
+            _text(r.file), _number(r.line), _text(r.instruction), _text(r.target),
+            _text(r.status), _text(r.rule), _text(r.action),
+            _array(r.nominal_deg, _number), _array(r.compensated_deg, _number),
+            _array(r.delta_deg, _number), _number(r.error_um), _number(r.error_deg),
+            _number(r.residual_um), _number(r.residual_deg), _array(r.conf_before, _number),
+            _array(r.conf_after, _number), _array(r.warnings, _text), _text(r.reason))
+    except _Other:
+        return _ENCODE(r.as_dict()).replace("\n", "\n    ")
