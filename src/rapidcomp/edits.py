@@ -32,6 +32,10 @@ class SpanEdit(NamedTuple):
 BY_SPAN = attrgetter("start", "end")
 
 
+# Edits spliced per block by _apply_columns.
+APPLY_BLOCK = 65536
+
+
 class OverlappingEdits(ValueError):
     pass
 
@@ -204,7 +208,17 @@ def _apply_columns(text: str, cols: EditColumns) -> str:
         raise OverlappingEdits(
             f"edit {int(s[k])}:{int(e[k])} ({cols.whys[k]}) overlaps the previous edit "
             f"ending at {int(before[k])} or lies outside the text")
-    parts: list = [None] * (2 * len(s) + 1)
-    parts[0::2] = [text[a:b] for a, b in zip([0] + e.tolist(), s.tolist() + [len(text)])]
-    parts[1::2] = cols.replacements.tolist()
-    return "".join(parts)
+    # A block of edits at a time: the offsets of 7e5 edits as ints, the
+    # texts between them and the list of them are not all alive at once
+    # (~90 MB of a CAM program's print).
+    out = []
+    pos = 0
+    for at in range(0, len(s), APPLY_BLOCK):
+        a, b = s[at:at + APPLY_BLOCK].tolist(), e[at:at + APPLY_BLOCK].tolist()
+        parts: list = [None] * (2 * len(a))
+        parts[0::2] = [text[x:y] for x, y in zip([pos] + b[:-1], a)]
+        parts[1::2] = cols.replacements[at:at + APPLY_BLOCK].tolist()
+        out.append("".join(parts))
+        pos = b[-1]
+    out.append(text[pos:])
+    return "".join(out)

@@ -79,7 +79,7 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
         es = file_edits.get(fi, [])
         if type(es) is not EditColumns:
             es = EditColumns.of(es)
-        grow = np.fromiter(map(len, es.replacements.tolist()), np.int64, len(es)) - (
+        grow = np.fromiter(map(len, es.replacements), np.int64, len(es)) - (
             es.ends - es.starts)
         shift = np.concatenate(([0], np.cumsum(grow)))
         text = texts.get(fi, plan.files[fi].source.text)
@@ -104,15 +104,21 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
                 return None
             out[(home, start)] = got
     # (A block at a time: the 1.7e6 field texts of a CAM program are not
-    # all alive at once.)
-    blocks = []
+    # all alive at once. Each block's numbers go to its rows of one array,
+    # not to a list of blocks then concatenated.)
+    values = np.empty((len(wants), 17))
+    decimal = True
     for at in range(0, len(wants), RELEX_BLOCK):
         flat = _flat_texts(wants[at:at + RELEX_BLOCK])
         if flat is None:
             return None
-        blocks.append(_decimals(flat))
-    values = None if any(v is None for v in blocks) else (
-        np.concatenate(blocks) if blocks else np.empty((0, 17)))
+        block = _decimals(flat) if decimal else None
+        if block is None:
+            decimal = False
+        else:
+            values[at:at + RELEX_BLOCK] = block
+    if not decimal:
+        values = None
     if values is None:
         # A kept field written otherwise than as a decimal number (0x1F in
         # a value the parser decoded field by field): values.relex's verdict.
