@@ -62,7 +62,7 @@ def test_plain_literals_decode_to_the_floats_of_their_texts():
 
 def test_equal_tails_share_their_floats_and_the_cache_is_bounded(monkeypatch):
     monkeypatch.setattr(V, "TAIL_FLOATS_MAX", 5)
-    V._TAIL_FLOATS.clear()
+    monkeypatch.setattr(V, "_TAIL_FLOATS", {})
     tail = "[0,0,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
     text = "\n".join(
         ["MODULE T"]
@@ -80,4 +80,3 @@ def test_equal_tails_share_their_floats_and_the_cache_is_bounded(monkeypatch):
     assert decls["j1"].values[:6] == (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
     assert decls["j2"].values[:6] == (6.0, 5.0, 4.0, 3.0, 2.0, 1.0)
     assert 0 < len(V._TAIL_FLOATS) <= 5
-    V._TAIL_FLOATS.clear()

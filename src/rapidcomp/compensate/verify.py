@@ -118,8 +118,6 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
         else:
             values[at:at + RELEX_BLOCK] = block
     if not decimal:
-        values = None
-    if values is None:
         # A kept field written otherwise than as a decimal number (0x1F in
         # a value the parser decoded field by field): values.relex's verdict.
         for key, (record, text, a, b), want in zip(keys, where, wants):

@@ -305,8 +305,9 @@ class NodeBuilder:
         scope = m.group(1).upper() if m.group(1) else None
         agg_end = text.rindex("]") + 1
         init = A.NumAgg(text[m.end():agg_end], Span(base + m.end(), base + agg_end))
-        return A.DataDecl(scope, sys.intern(m.group(2).upper()), sys.intern(m.group(3)),
-                          m.group(4),
+        # (Storage and type interned: "CONST" and "robtarget" 5e4 times.)
+        storage, type_name = sys.intern(m.group(2).upper()), sys.intern(m.group(3))
+        return A.DataDecl(scope, storage, type_name, m.group(4),
                           Span(base + m.start(4), base + m.end(4)), (), init,
                           Span(base, base + len(text)))
 

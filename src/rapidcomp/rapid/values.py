@@ -350,8 +350,9 @@ def decimals(texts) -> tuple[float, ...] | None:
 # (1e5 targets: 1e6 floats, ~24 MB). Bounded: many programs in one process.
 _TAIL_FLOATS: dict[str, tuple[float, ...]] = {}
 TAIL_FLOATS_MAX = 4096
-# (fields before the shared ones, the ']' that ends them: 0 the first)
-_HEAD = {RobTarget: (7, 1), JointTarget: (6, 0)}
+# (how many fields come before the shared ones; whether those end at the
+# second ']' rather than the first)
+_HEAD = {RobTarget: (7, True), JointTarget: (6, False)}
 
 
 def _floats(cls, fields: list[str], text: str) -> tuple[float, ...]:
@@ -360,9 +361,9 @@ def _floats(cls, fields: list[str], text: str) -> tuple[float, ...]:
     ends the head's fields on is the frame's tail with the other fields in
     it (equal tails, equal field texts, equal floats). ValueError as
     float's."""
-    head, bracket = _HEAD[cls]
+    head, second = _HEAD[cls]
     cut = text.index("]")
-    if bracket:
+    if second:
         cut = text.index("]", cut + 1)
     tail = text[cut:]
     shared = _TAIL_FLOATS.get(tail)
