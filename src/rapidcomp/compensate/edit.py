@@ -275,7 +275,11 @@ def _line_end(text: str, pos: int) -> tuple[int, str]:
 
 
 def _indent(text: str, pos: int) -> str:
-    start = max(text.rfind("\n", 0, pos), text.rfind("\r", 0, pos)) + 1
+    # The line starts after the last line break before pos: a '\r' is looked
+    # for after the last '\n' only (in a file without one, a search back to
+    # its start for each of 5e4 new declarations took 2 s).
+    nl = text.rfind("\n", 0, pos)
+    start = max(nl, text.rfind("\r", nl + 1, pos)) + 1
     i = start
     while i < len(text) and text[i] in " \t":
         i += 1
