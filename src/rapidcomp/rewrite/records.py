@@ -243,4 +243,6 @@ def jointtarget_literal(texts: list[str]) -> str:
 def absj_texts(q_deg, source: RobTarget) -> list[str]:
     """Field texts of the jointtarget that replaces a robtarget: new joints,
     the robtarget's external axes as written."""
-    return [numbers.joint(float(v)) for v in q_deg] + list(source.texts[11:17])
+    # (The six as one formatting: 1e5 in a CAM program turned to MoveAbsJ.)
+    return (numbers.fmt_many(np.asarray(q_deg, float).tolist(), numbers.JOINT_DECIMALS)
+            + list(source.texts[11:17]))
