@@ -36,7 +36,12 @@ ROOT = Path(__file__).resolve().parents[1]
 PROFILE = ROOT / "fixtures" / "warm.csv"
 
 
-def cam_module(n: int, seed: int = 1, name: str = "CAM_Fix") -> str:
+def cam_module(n: int, seed: int = 1, name: str = "CAM_Fix", main: bool = False) -> str:
+    """n targets, half declared, half inline, in PROC Path. main: Path is
+    called from PROC main, so the moves run under the controller's default
+    configuration supervision (ConfL\\On) and --emit absj turns each into
+    MoveAbsJ on a new jointtarget; else nothing calls Path and supervision
+    is unknown there: each stays a MoveL with a compensated robtarget."""
     from rapidcomp.kinematics.chain import Chain
     from rapidcomp.kinematics.conf import confdata
     from rapidcomp.kinematics.frames import DEG, matrix_to_quat_wxyz
@@ -68,7 +73,10 @@ def cam_module(n: int, seed: int = 1, name: str = "CAM_Fix") -> str:
     lines.append("  PROC Path()")
     lines += [f"    MoveL p{i},v100,z1,tSpindle\\WObj:=wPart;" for i in range(half)]
     lines += [f"    MoveL {rt(i)},v100,z1,tSpindle\\WObj:=wPart;" for i in range(half, n)]
-    lines += ["  ENDPROC", "ENDMODULE", ""]
+    lines.append("  ENDPROC")
+    if main:
+        lines += ["  PROC main()", "    Path;", "  ENDPROC"]
+    lines += ["ENDMODULE", ""]
     return "\n".join(lines)
 
 
@@ -147,9 +155,13 @@ def main() -> None:
         r = cli(str(path), str(Path(tmp) / "cam_comp.mod"))
         j = cli(str(path), str(Path(tmp) / "cam_comp.mod"), "--json",
                 str(Path(tmp) / "cam_comp.json"))
+        path.write_text(cam_module(n, main=True))
+        m = cli(str(path), str(Path(tmp) / "cam_comp.mod"))
     print(f"1 module x {n} targets, `rapidcomp fix --emit absj` end to end (start-up, "
           f"reading, report, writing): {r['s']:.2f} s, peak {r['peak_MB']:.0f} MB; "
           f"with --json too: {j['s']:.2f} s, peak {j['peak_MB']:.0f} MB")
+    print(f"the same with Path called from main (every MoveL -> MoveAbsJ on a new "
+          f"jointtarget, the output parsed again): {m['s']:.2f} s, peak {m['peak_MB']:.0f} MB")
     # Two modules in one call: the process pool uses both cores.
     n //= 2
     with tempfile.TemporaryDirectory() as tmp:
