@@ -307,6 +307,13 @@ class Editor:
         # span per field (a CAM program has 7e5); a literal is written once.
         self.field_lists: list[tuple[int, list[SpanEdit]]] = []
         self.structural = False
+        # Moves turned into MoveAbsJ on a jointtarget of their own, inline
+        # or newly declared: use key -> (the use, that literal, the new
+        # declaration's name or None); the output is checked on them by
+        # reading those statements again (verify.relex_absj). others: some
+        # structural edit is of another kind (the output is parsed again).
+        self.converted: dict = {}
+        self.others = False
         self._per_module: dict = {}
 
     def text(self, fi: int) -> str:
@@ -315,6 +322,10 @@ class Editor:
     def edit(self, fi: int, span, text: str, why: str) -> None:
         """An edit of anything but a literal's numbers (those are
         field_lists): the output's structure changes."""
+        self.others = True
+        self._edit(fi, span, text, why)
+
+    def _edit(self, fi: int, span, text: str, why: str) -> None:
         self.structural = True
         key = (fi, span.start, span.end)
         old = self.edits.get(key)
@@ -352,8 +363,11 @@ class Editor:
         end, nl = _line_end(text, span.end)
         return fi, end, nl, indent, in_routine
 
-    def declare(self, g: Group, type_name: str, name: str, dims: str, value: str) -> None:
+    def declare(self, g: Group, type_name: str, name: str, dims: str, value: str,
+                converted: bool = False) -> None:
+        """converted: the jointtarget of moves turned into MoveAbsJ."""
         self.structural = True
+        self.others = self.others or not converted
         fi, end, nl, indent, in_routine = self._anchor(g)
         scope = "" if in_routine or not g.local else "LOCAL "
         decl = f"{scope}CONST {type_name} {name}{dims}{self._assign(g, fi)}{value};"
@@ -429,7 +443,9 @@ class Editor:
             return
         if g.placement == "inline":  # absj of an inline robtarget: inline jointtarget
             for u in g.uses:
-                self._to_absj(u, vals.literal(g, None))
+                literal = vals.literal(g, None)
+                self._to_absj(u, literal)
+                self.converted[u.key] = (u, literal, None)
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ, inline jointtarget"
             return
         # A new declaration next to the source one.
@@ -439,10 +455,12 @@ class Editor:
             self.declare(g, type_name, name, _dims(g), self.array_value(g, nl, indent, texts))
             g.names["array"] = name
         else:
+            literals = {}
             for k in g.elements:
                 s = _stem(g, k)
                 name = self.names.new(("jt_" + s) if g.mode == "absj" else s + "_c")
-                self.declare(g, type_name, name, "", vals.literal(g, k, texts.get(k)))
+                literals[k] = vals.literal(g, k, texts.get(k))
+                self.declare(g, type_name, name, "", literals[k], converted=g.mode == "absj")
                 g.names[k] = name
         for u in g.uses:
             src = u.source
@@ -453,6 +471,8 @@ class Editor:
                 new_ref = g.names[src.element]
             if g.mode == "absj":
                 self._to_absj(u, new_ref)
+                if not g.array:
+                    self.converted[u.key] = (u, literals[src.element], new_ref)
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {new_ref}"
             else:
                 self.edit(u.key[0], src.ref.span, new_ref, f"{u.label} -> {new_ref}")
@@ -614,9 +634,9 @@ class Editor:
     def _to_absj(self, u, target_text: str) -> None:
         m = u.motion
         fi = u.key[0]
-        self.edit(fi, m.name_span, _style("MoveAbsJ", m.instruction),
-                  f"{m.instruction} -> MoveAbsJ")
-        self.edit(fi, u.source.expr.span, target_text, f"{u.label} -> {target_text[:40]}")
+        self._edit(fi, m.name_span, _style("MoveAbsJ", m.instruction),
+                   f"{m.instruction} -> MoveAbsJ")
+        self._edit(fi, u.source.expr.span, target_text, f"{u.label} -> {target_text[:40]}")
 
     def file_edits(self) -> dict[int, list[SpanEdit] | EditColumns]:
         """Each file's edits in the order BY_SPAN sorts them; as

@@ -33,7 +33,7 @@ from .edit import Editor, Values
 from .plan import Plan, Task, line_ranges
 from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, UseRow, summary, use_rows
 from .solve import solve
-from .verify import VERIFY_DEG, VERIFY_UM, relex, reparse, verify
+from .verify import VERIFY_DEG, VERIFY_UM, relex, relex_absj, reparse, verify
 
 MODES = P.MODES
 
@@ -128,15 +128,22 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         texts = {fi: apply_edits(plan.files[fi].source.text, es)
                  for fi, es in file_edits.items()}
         clock("print")
-        written = None if (transient is not None or editor.structural) else relex(
-            plan, editor.fields, file_edits, texts)
-        editor.fields = None
+        # Numbers edited, and moves turned into MoveAbsJ on jointtargets of
+        # their own: what was written is read again where the output holds
+        # it; any other structural edit: the output is parsed again.
+        written = converted = None
+        if transient is None and not editor.others:
+            written = relex(plan, editor.fields, file_edits, texts)
+            if written is not None and editor.converted:
+                converted = relex_absj(plan, editor.converted, file_edits, texts)
+                written = None if converted is None else written
+        editor.fields = editor.converted = None
         out_files = reparse(plan, texts) if written is None else {}
         clock("re-parse" if written is None else "re-lex")
         keys = [u.key for g in gs if g.failure is None for u in g.uses]
         if transient is None:
             verified = verify(plan, solved, keys, out_files, solver,
-                              written) if keys else {}
+                              written, converted) if keys else {}
         else:
             verified, state_errors = _verify_states(plan, solved, keys, texts, out_files,
                                                     transient[1])
@@ -160,7 +167,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # written, the output parsed again; of the editor (which holds the
     # values too) the rows read what it did per use only.
     actions = editor.actions
-    values = written = out_files = done = confs = editor = None
+    values = written = converted = out_files = done = confs = editor = None
     # The rows read the plan's uses and track only: the resolver's caches
     # go before the rows are made (a later use of them fails loudly).
     plan.resolver = None

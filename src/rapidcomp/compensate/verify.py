@@ -13,6 +13,7 @@ against the intended pose is what the report shows as "after".
 
 from __future__ import annotations
 
+import bisect
 from typing import NamedTuple
 
 import numpy as np
@@ -21,14 +22,17 @@ from ..edits import EditColumns
 from ..errors import InternalError, RapidcompError
 from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
+from ..rapid import ast as A
+from ..rapid.build import NodeBuilder
+from ..rapid.grammar import engine
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
-from ..rapid.values import (NUM_MAX, ROBTARGET_FRAME, RobTarget, decimal_chars,
-                             frame_fields, plain_bounds)
+from ..rapid.values import (NUM_MAX, ROBTARGET_FRAME, DecodeIssue, JointTarget, RobTarget,
+                             decimal_chars, decode, frame_fields, plain_bounds)
 from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
-from .targets import Resolver, Written
+from .targets import MAX_JOINT_DEG, Resolver, Written
 
 # Literals decoded at once by relex (their field texts alive together).
 RELEX_BLOCK = 8192
@@ -133,6 +137,128 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     return Written(out, keys, values, where)
 
 
+def relex_absj(plan: Plan, converted: dict, file_edits: dict,
+               texts: dict[int, str]) -> dict | None:
+    """When every structural edit turns a move into MoveAbsJ on a jointtarget
+    of its own (Editor.converted: use key -> (use, that literal, the new
+    declaration's name or None)), each such statement and each new
+    declaration is read again where the output holds it: lexed as one
+    one-line statement (FAST_CALL, FAST_DECL: a whole statement of the
+    grammar) and built as the parser builds it. The statement must be a
+    MoveAbsJ whose target is the literal or the name meant, the rest of it
+    as the input writes it; the name a CONST jointtarget of that literal,
+    declared in the move's module (and routine, where it is declared in
+    one). Returns use key -> its joints as the controller stores them
+    (float32, as the resolver reads a MoveAbsJ's), or None where anything
+    differs (the output is then parsed again)."""
+    eng, build = engine(), NodeBuilder()
+    by_file: dict = {}
+    for key, item in converted.items():
+        by_file.setdefault(key[0], []).append((key, *item))
+    out: dict = {}
+    for fi, items in by_file.items():
+        es = file_edits.get(fi, [])
+        if type(es) is not EditColumns:
+            es = EditColumns.of(es)
+        # Output offset of an input offset: what the edits ending at or
+        # before it add (edits in the order BY_SPAN sorts them).
+        grow = np.fromiter(map(len, es.replacements), np.int64, len(es)) - (
+            es.ends - es.starts)
+        shift = np.concatenate(([0], np.cumsum(grow))).tolist()
+        text, src = texts[fi], plan.files[fi].source.text
+        declared = _declared(eng, build, es, shift, text, plan.files[fi])
+        if declared is None:
+            return None
+        spans = np.array([it[1].motion.span for it in items], np.int64).reshape(-1, 2)
+        before = np.searchsorted(es.ends, spans, "right").tolist()
+        records = []
+        for (key, u, literal, name), (a, b), (ka, kb) in zip(items, spans.tolist(), before):
+            m = u.motion
+            piece = text[a + shift[ka]:b + shift[kb]]
+            tokens = list(eng.tokens(piece))
+            if [t.type for t in tokens] != ["FAST_CALL", "$END"] or tokens[0].end_pos != len(
+                    piece):
+                return None
+            call = build.fast_call(tokens[:1])
+            first = call.args[0]
+            expr = u.source.expr.span
+            if not (call.name.lower() == "moveabsj" and first.kind == "pos"
+                    and piece[len(call.name):first.span.start] == src[m.name_span.end:expr.start]
+                    and piece[first.span.end:] == src[expr.end:b]):
+                return None
+            v = first.value
+            if name is None:
+                agg = v if type(v) is A.NumAgg and v.text == literal else None
+            else:
+                hit = (type(v) is A.Ref and v.name == name and not v.selectors
+                       and declared.get(name.lower()))
+                agg = None
+                if hit and hit[0] <= a and b <= hit[1]:
+                    agg = hit[2] if hit[2].text == literal else None
+            if agg is None:
+                return None
+            try:
+                record = decode("jointtarget", agg)
+            except DecodeIssue:
+                return None
+            if not isinstance(record, JointTarget):
+                return None
+            records.append(record.joints)
+        # (As the resolver reads a jointtarget: float32, then floats.)
+        joints = np.array(records, float).reshape(-1, 6).astype(np.float32).astype(float)
+        if not (np.abs(joints) <= MAX_JOINT_DEG).all():
+            return None
+        out.update(zip((it[0] for it in items), map(tuple, joints.tolist())))
+    return out
+
+
+def _declared(eng, build, es: EditColumns, shift: list, text: str,
+              pf: ParsedFile) -> dict | None:
+    """The new declarations of a file read again where the output holds
+    them: lower-case name -> (start, end) of the input its scope spans (its
+    routine's, else its module's), its value. None where an inserted text
+    is not CONST jointtarget declarations each a one-line statement."""
+    out: dict = {}
+    inserts = np.flatnonzero(es.starts == es.ends).tolist()
+    if not inserts:
+        return out
+    routines = sorted((r.node.span.start, r.node.span.end)
+                      for m in pf.modules for r in m.routines)
+    starts = [a for a, _ in routines]
+    for k in inserts:
+        at = int(es.starts[k])
+        scope = _scope(pf, at, routines, starts)
+        if scope is None:
+            return None
+        a = at + shift[k]
+        piece = text[a:a + len(es.replacements[k])]
+        for tok in eng.tokens(piece):
+            if tok.type == "$END":
+                break
+            if tok.type != "FAST_DECL":
+                return None
+            node = build.fast_decl([tok])
+            if not (node.storage == "CONST" and node.type_name.lower() == "jointtarget"
+                    and not node.dims and type(node.init) is A.NumAgg):
+                return None
+            out[node.name.lower()] = (*scope, node.init)
+    return out
+
+
+def _scope(pf: ParsedFile, at: int, routines: list, starts: list) -> tuple[int, int] | None:
+    """(start, end) of the routine, else the module, holding input offset
+    `at`: where a declaration inserted there is seen (routines: the file's
+    routines' spans in order, starts: theirs)."""
+    k = bisect.bisect_right(starts, at) - 1
+    if k >= 0 and at < routines[k][1]:
+        return routines[k]
+    for m in pf.modules:
+        span = m.node.span
+        if span.start <= at < span.end:
+            return span.start, span.end
+    return None
+
+
 def _flat_texts(wants: list) -> list[str] | None:
     """The field texts of every wanted robtarget, in order. A literal's are
     what lies between its brackets and commas (one split of all of them),
@@ -184,10 +310,12 @@ class _Written(NamedTuple):
 
 
 def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFile],
-           solver: Solver, written: Written | None = None) -> dict:
+           solver: Solver, written: Written | None = None, converted: dict | None = None) -> dict:
     """Residual (um, deg) of each compensated use (by key), evaluated on
     the written output: out_files parsed again, or (written) the input's
-    structure with the records as relex() read them."""
+    structure with the records as relex() read them, but for the moves
+    turned into MoveAbsJ (converted: use key -> its joints as relex_absj()
+    read them)."""
     files = [out_files.get(fi, pf) for fi, pf in enumerate(plan.task.files)]
     files += list(plan.task.context)
     # Run-time writes were ruled out on the input; the output adds none.
@@ -200,19 +328,30 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
         # VERIFY_BLOCK uses at a time (each use's residual its own: a CAM
         # program's arrays and records alive for one block, not for 1e5).
         rows = sorted(solved.row[k] for k in keys)
+        converted = converted or {}
         out: dict = {}
         for at in range(0, len(rows), VERIFY_BLOCK):
             block = rows[at:at + VERIFY_BLOCK]
-            uses = [solved.uses[i] for i in block]
+            # A MoveAbsJ's joints as written; the others evaluated again.
+            found = {}
+            again = []
+            for i in block:
+                joints = converted.get(solved.uses[i].key)
+                if joints is None:
+                    again.append(i)
+                else:
+                    found[solved.uses[i].key] = _Written("jointtarget", None, None, None,
+                                                         joints, None)
+            uses = [solved.uses[i] for i in again]
             # Robtargets evaluated as arrays (again_many): their solved rows
             # and (R, p, conf), kept as arrays to the IK.
             done, R, p, conf = res.again_many(uses)
             many = [(R, p, conf)] if done else []
-            many_rows = [block[n] for n in done]
+            many_rows = [again[n] for n in done]
             done = set(done)
             batch = [res.again(u) for n, u in enumerate(uses) if n not in done]
             res.poses()
-            found = {o.key: _Written.of(o) for o in batch}
+            found.update({o.key: _Written.of(o) for o in batch})
             out.update(_residuals(solved, solver, block, many_rows, many, found))
         return out
     wanted = set(keys)

@@ -1,0 +1,146 @@
+"""Moves turned into MoveAbsJ on jointtargets of their own (inline or newly
+declared) are checked on the output by reading those statements and
+declarations again where it holds them (verify.relex_absj), not by parsing
+the whole output again. Oracle: the same `fix` with the output parsed
+again (relex_absj switched off), on a CAM program entered from main
+(1500 MoveL, declared and inline), the cubes program (MoveJ, MoveL) and
+the real-program fixtures; and an output that is not what was meant (a
+number, a name, a statement changed after the splice) is not taken."""
+
+import sys
+from pathlib import Path
+
+import pytest
+
+from rapidcomp.compensate import fix as F
+from rapidcomp.compensate import verify as V
+from rapidcomp.compensate.edit import Editor, Values
+from rapidcomp.compensate.load import load_solver
+from rapidcomp.compensate.plan import Plan, Task
+from rapidcomp.compensate.solve import solve
+from rapidcomp.compensate import place as P
+from rapidcomp.edits import apply_edits
+from rapidcomp.rapid.parse import parse_text
+from rapidcomp.source import read_source
+from rapidcomp.rapid.parse import parse_source
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def solver():
+    return load_solver(str(ROOT / "fixtures" / "warm.csv"), None, False, ("J5=-120:120",))
+
+
+def _cam(n: int) -> str:
+    sys.path.insert(0, str(ROOT / "bench"))
+    from fix import cam_module
+    return cam_module(n, 5, main=True)
+
+
+def _fix_both(monkeypatch, task, solver, mode):
+    served = []
+    real = F.relex_absj
+
+    def spy(*args):
+        out = real(*args)
+        served.append(out is not None and len(out))
+        return out
+    monkeypatch.setattr(F, "relex_absj", spy)
+    read = F.fix(task, solver, mode)
+    monkeypatch.setattr(F, "relex_absj", lambda *args: None)
+    parsed = F.fix(task, solver, mode)
+    monkeypatch.setattr(F, "relex_absj", real)
+    return read, parsed, served
+
+
+def _same(a, b):
+    assert [m.text for m in a.modules] == [m.text for m in b.modules]
+    assert a.rows == b.rows and a.notes == b.notes and a.modules == b.modules
+
+
+@pytest.mark.parametrize("mode", ["absj", "auto"])
+def test_cam_program_entered_from_main(monkeypatch, solver, mode):
+    task = Task("cam.mod", (parse_text(_cam(1500), "cam.mod"),))
+    read, parsed, served = _fix_both(monkeypatch, task, solver, mode)
+    _same(read, parsed)
+    if mode == "absj":
+        # Every MoveL turned, read again (not parsed): 750 declared, 750 inline.
+        assert served == [1500]
+        assert read.modules[0].text.count("MoveAbsJ") == 1500
+    else:
+        assert served == []        # (auto keeps MoveL: numbers only)
+
+
+@pytest.mark.parametrize("name", ["cubes.mod", "paper_front.mod", "rapid/robodk.mod",
+                                  "rapid/cam_inline.mod", "rapid/cam_confoff.mod",
+                                  "rapid/robotstudio_crlf.mod", "rapid/handwritten_cp1252.mod"])
+@pytest.mark.parametrize("mode", ["absj", "auto"])
+def test_real_programs(monkeypatch, solver, name, mode):
+    pf = parse_source(read_source(ROOT / "fixtures" / name))
+    task = Task(name, (pf,))
+    try:
+        read, parsed, served = _fix_both(monkeypatch, task, solver, mode)
+    except Exception as exc:            # (refused alike both ways)
+        monkeypatch.setattr(F, "relex_absj", lambda *args: None)
+        with pytest.raises(type(exc)):
+            F.fix(task, solver, mode)
+        return
+    _same(read, parsed)
+
+
+@pytest.mark.parametrize("mode, turned", [("absj", 180), ("auto", 1)])
+def test_a_real_cam_program_is_read_again(monkeypatch, solver, mode, turned):
+    # (The other fixtures write new robtargets too: their output is parsed
+    # again, and the test above compares that with itself.)
+    pf = parse_source(read_source(ROOT / "fixtures" / "rapid" / "cam_confoff.mod"))
+    _, _, served = _fix_both(monkeypatch, Task("cam_confoff.mod", (pf,)), solver, mode)
+    assert served == [turned]
+
+
+def _converted(solver, text):
+    """The first round of fix's print on `text` (absj): the plan, the
+    editor's conversions, the file edits and the output text."""
+    task = Task("cam.mod", (parse_text(text, "cam.mod"),))
+    plan = Plan(task)
+    solved = solve(plan, solver)
+    gs = P.groups(plan, solved, "absj")
+    values = Values(plan, solved, solver.options.quadrant_tol_deg)
+    values.prepare(gs)
+    P.place(plan, gs)
+    P.fill_slots(plan, solver, gs)
+    editor = Editor(plan, values)
+    for g in gs:
+        if g.failure is None:
+            editor.apply(g)
+    edits = editor.file_edits()
+    return plan, editor, edits, {0: apply_edits(task.files[0].source.text, edits[0])}
+
+
+def _flip(text: str, at: int) -> str:
+    """text with the first digit from `at` on another digit (the same
+    length)."""
+    at = next(i for i in range(at, len(text)) if text[i].isdigit())
+    return text[:at] + ("1" if text[at] != "1" else "2") + text[at + 1:]
+
+
+@pytest.mark.parametrize("change", [
+    ("jt_p3:=[[", 0),                           # a declared joint's first digit
+    ("MoveAbsJ [[", 0),                         # an inline joint's first digit
+    ("MoveAbsJ jt_p4,", "MoveAbsJ jt_p3,"),     # the name a move reads
+    ("MoveAbsJ jt_p5,v100", "MoveAbsJ jt_p5,v200"),   # the rest of a statement
+    ("LOCAL CONST jointtarget jt_p6", "LOCAL PERS  jointtarget jt_p6"),
+    ("MoveAbsJ jt_p7,v", "MoveAbsJ jt_p7 ,"),   # not one statement of the grammar
+])
+def test_an_output_that_is_not_what_was_meant_is_not_taken(solver, change):
+    plan, editor, edits, texts = _converted(solver, _cam(20))
+    assert V.relex_absj(plan, editor.converted, edits, texts) is not None
+    old, new = change
+    text = texts[0]
+    assert old in text
+    if type(new) is int:
+        bad = _flip(text, text.index(old) + len(old) + new)
+    else:
+        bad = text.replace(old, new, 1)
+    assert len(bad) == len(text) or old.endswith(",v")
+    assert V.relex_absj(plan, editor.converted, edits, {0: bad}) is None
