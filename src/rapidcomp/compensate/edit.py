@@ -309,9 +309,10 @@ class Editor:
         self.structural = False
         # Moves turned into MoveAbsJ on a jointtarget of their own, inline
         # or newly declared: use key -> (the use, that literal, the new
-        # declaration's name or None); the output is checked on them by
-        # reading those statements again (verify.relex_absj). others: some
-        # structural edit is of another kind (the output is parsed again).
+        # declaration's name or None, the instruction's name as written);
+        # the output is checked on them by reading those statements again
+        # (verify.relex_absj). others: some structural edit is of another
+        # kind (the output is parsed again).
         self.converted: dict = {}
         self.others = False
         self._per_module: dict = {}
@@ -444,8 +445,8 @@ class Editor:
         if g.placement == "inline":  # absj of an inline robtarget: inline jointtarget
             for u in g.uses:
                 literal = vals.literal(g, None)
-                self._to_absj(u, literal)
-                self.converted[u.key] = (u, literal, None)
+                called = self._to_absj(u, literal)
+                self.converted[u.key] = (u, literal, None, called)
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ, inline jointtarget"
             return
         # A new declaration next to the source one.
@@ -470,9 +471,9 @@ class Editor:
             else:
                 new_ref = g.names[src.element]
             if g.mode == "absj":
-                self._to_absj(u, new_ref)
+                called = self._to_absj(u, new_ref)
                 if not g.array:
-                    self.converted[u.key] = (u, literals[src.element], new_ref)
+                    self.converted[u.key] = (u, literals[src.element], new_ref, called)
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {new_ref}"
             else:
                 self.edit(u.key[0], src.ref.span, new_ref, f"{u.label} -> {new_ref}")
@@ -631,12 +632,15 @@ class Editor:
             cold_literal, "pose", self._pose_literal, dq_after_cold=False)
         self._use_transient(g, names, func, False)
 
-    def _to_absj(self, u, target_text: str) -> None:
+    def _to_absj(self, u, target_text: str) -> str:
+        """The move turned into MoveAbsJ on target_text; returns its new
+        instruction name as written."""
         m = u.motion
         fi = u.key[0]
-        self._edit(fi, m.name_span, _style("MoveAbsJ", m.instruction),
-                   f"{m.instruction} -> MoveAbsJ")
+        called = _style("MoveAbsJ", m.instruction)
+        self._edit(fi, m.name_span, called, f"{m.instruction} -> MoveAbsJ")
         self._edit(fi, u.source.expr.span, target_text, f"{u.label} -> {target_text[:40]}")
+        return called
 
     def file_edits(self) -> dict[int, list[SpanEdit] | EditColumns]:
         """Each file's edits in the order BY_SPAN sorts them; as

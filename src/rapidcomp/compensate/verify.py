@@ -23,6 +23,7 @@ from ..errors import InternalError, RapidcompError
 from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
 from ..rapid import ast as A
+from ..rapid.ast import Span
 from ..rapid.build import NodeBuilder
 from ..rapid.grammar import engine
 from ..rapid.model import ParsedFile
@@ -141,16 +142,17 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                texts: dict[int, str]) -> dict | None:
     """When every structural edit turns a move into MoveAbsJ on a jointtarget
     of its own (Editor.converted: use key -> (use, that literal, the new
-    declaration's name or None)), each such statement and each new
-    declaration is read again where the output holds it: lexed as one
-    one-line statement (FAST_CALL, FAST_DECL: a whole statement of the
-    grammar) and built as the parser builds it. The statement must be a
-    MoveAbsJ whose target is the literal or the name meant, the rest of it
-    as the input writes it; the name a CONST jointtarget of that literal,
-    declared in the move's module (and routine, where it is declared in
-    one). Returns use key -> its joints as the controller stores them
-    (float32, as the resolver reads a MoveAbsJ's), or None where anything
-    differs (the output is then parsed again)."""
+    declaration's name or None, the instruction's name as written)), each
+    such statement and each new declaration is read again where the output
+    holds it. The statement must be the input's with its instruction's name
+    and its target replaced by those meant, character for character (so a
+    statement of the grammar as the input's is: a name for a name, an
+    aggregate for an aggregate); each new declaration one one-line
+    declaration (FAST_DECL) built as the parser builds it, a CONST
+    jointtarget, in the move's routine or else its module, of the literal
+    meant. Returns use key -> its joints as the controller stores them
+    (the literal decoded, float32, as the resolver reads a MoveAbsJ's), or
+    None where anything differs (the output is then parsed again)."""
     eng, build = engine(), NodeBuilder()
     by_file: dict = {}
     for key, item in converted.items():
@@ -172,31 +174,21 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
         spans = np.array([it[1].motion.span for it in items], np.int64).reshape(-1, 2)
         before = np.searchsorted(es.ends, spans, "right").tolist()
         records = []
-        for (key, u, literal, name), (a, b), (ka, kb) in zip(items, spans.tolist(), before):
+        for (key, u, literal, name, called), (a, b), (ka, kb) in zip(items, spans.tolist(),
+                                                                      before):
             m = u.motion
-            piece = text[a + shift[ka]:b + shift[kb]]
-            tokens = list(eng.tokens(piece))
-            if [t.type for t in tokens] != ["FAST_CALL", "$END"] or tokens[0].end_pos != len(
-                    piece):
-                return None
-            call = build.fast_call(tokens[:1])
-            first = call.args[0]
             expr = u.source.expr.span
-            if not (call.name.lower() == "moveabsj" and first.kind == "pos"
-                    and piece[len(call.name):first.span.start] == src[m.name_span.end:expr.start]
-                    and piece[first.span.end:] == src[expr.end:b]):
+            head = called + src[m.name_span.end:expr.start]
+            at = a + shift[ka]
+            if text[at:b + shift[kb]] != head + (name or literal) + src[expr.end:b]:
                 return None
-            v = first.value
             if name is None:
-                agg = v if type(v) is A.NumAgg and v.text == literal else None
+                agg = A.NumAgg(literal, Span(at + len(head), at + len(head) + len(literal)))
             else:
-                hit = (type(v) is A.Ref and v.name == name and not v.selectors
-                       and declared.get(name.lower()))
-                agg = None
-                if hit and hit[0] <= a and b <= hit[1]:
-                    agg = hit[2] if hit[2].text == literal else None
-            if agg is None:
-                return None
+                hit = declared.get(name.lower())
+                if not (hit and hit[0] <= a and b <= hit[1] and hit[2].text == literal):
+                    return None
+                agg = hit[2]
             try:
                 record = decode("jointtarget", agg)
             except DecodeIssue:
