@@ -13,18 +13,20 @@ from pathlib import Path
 import pytest
 
 from rapidcomp.compensate import fix as F
+from rapidcomp.compensate import place as P
 from rapidcomp.compensate import verify as V
 from rapidcomp.compensate.edit import Editor, Values
 from rapidcomp.compensate.load import load_solver
 from rapidcomp.compensate.plan import Plan, Task
 from rapidcomp.compensate.solve import solve
-from rapidcomp.compensate import place as P
 from rapidcomp.edits import apply_edits
-from rapidcomp.rapid.parse import parse_text
+from rapidcomp.errors import InternalError
+from rapidcomp.rapid.parse import parse_source, parse_text
 from rapidcomp.source import read_source
-from rapidcomp.rapid.parse import parse_source
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "bench"))
+from fix import cam_module  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -33,8 +35,6 @@ def solver():
 
 
 def _cam(n: int) -> str:
-    sys.path.insert(0, str(ROOT / "bench"))
-    from fix import cam_module
     return cam_module(n, 5, main=True)
 
 
@@ -142,5 +142,53 @@ def test_an_output_that_is_not_what_was_meant_is_not_taken(solver, change):
         bad = _flip(text, text.index(old) + len(old) + new)
     else:
         bad = text.replace(old, new, 1)
-    assert len(bad) == len(text) or old.endswith(",v")
+    assert len(bad) == len(text) or new.endswith(" ,")
     assert V.relex_absj(plan, editor.converted, edits, {0: bad}) is None
+
+
+HAND = """MODULE Hand
+  PERS tooldata tSpindle:=[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];
+  PERS wobjdata wPart:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  VAR num n:=1;
+  PROC main()
+    CONST robtarget q1:=%s; ! the first point
+    movel q1,v100,z1,tSpindle\\WObj:=wPart;
+    IF n=1 THEN
+      MOVEL %s, v200, fine, tSpindle \\WObj:=wPart;
+    ENDIF
+    MoveL q1,v100,z1,tSpindle\\WObj:=wPart;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def _hand(ending: str = "\n", after: str = " ! the first point") -> str:
+    lits = [line.split(":=", 1)[1].rstrip(";")
+            for line in cam_module(2, 9).split("\n") if "CONST robtarget" in line]
+    lits.append(cam_module(2, 9).split("MoveL ")[-1].split(",v100")[0])
+    text = HAND % (lits[0], lits[1])
+    return text.replace("; ! the first point", ";" + after).replace("\n", ending)
+
+
+@pytest.mark.parametrize("ending", ["\n", "\r\n"])
+def test_hand_written_moves_in_a_routine_and_an_if(monkeypatch, solver, ending):
+    # A routine's own target, moves in an IF body, letter case and spaces
+    # of the writer's own, CRLF: read again, as parsing it again gives.
+    task = Task("hand.mod", (parse_text(_hand(ending), "hand.mod"),))
+    read, parsed, served = _fix_both(monkeypatch, task, solver, "absj")
+    _same(read, parsed)
+    assert served == [3] and "CONST jointtarget jt_q1:=" in read.modules[0].text
+
+
+@pytest.mark.parametrize("after", [" n:=1;", " IF n=1 THEN n:=2; ENDIF"])
+def test_a_declaration_line_going_on_with_a_statement_is_parsed_again(solver, after):
+    # The new declaration goes after the line of the one it comes from:
+    # there it follows a statement, which the output parsed again refuses
+    # (as before). Read again, it is not taken either.
+    text = _hand(after=after)
+    plan, editor, edits, texts = _converted(solver, text)
+    assert V.relex_absj(plan, editor.converted, edits, texts) is None
+    with pytest.raises(InternalError, match="does not parse"):
+        F.fix(Task("hand.mod", (parse_text(text, "hand.mod"),)), solver, "absj")
+    plan, editor, edits, texts = _converted(solver, _hand())
+    assert V.relex_absj(plan, editor.converted, edits, texts) is not None

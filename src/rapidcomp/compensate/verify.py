@@ -28,8 +28,8 @@ from ..rapid.build import NodeBuilder
 from ..rapid.grammar import engine
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
-from ..rapid.values import (NUM_MAX, ROBTARGET_FRAME, DecodeIssue, JointTarget, RobTarget,
-                             decimal_chars, decode, frame_fields, plain_bounds)
+from ..rapid.values import (NUM_MAX, ROBTARGET_FRAME, DecodeIssue, RobTarget, decimal_chars,
+                             decode, frame_fields, plain_bounds)
 from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
@@ -190,12 +190,9 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                     return None
                 agg = hit[2]
             try:
-                record = decode("jointtarget", agg)
+                records.append(decode("jointtarget", agg).joints)
             except DecodeIssue:
                 return None
-            if not isinstance(record, JointTarget):
-                return None
-            records.append(record.joints)
         # (As the resolver reads a jointtarget: float32, then floats.)
         joints = np.array(records, float).reshape(-1, 6).astype(np.float32).astype(float)
         if not (np.abs(joints) <= MAX_JOINT_DEG).all():
@@ -209,7 +206,11 @@ def _declared(eng, build, es: EditColumns, shift: list, text: str,
     """The new declarations of a file read again where the output holds
     them: lower-case name -> (start, end) of the input its scope spans (its
     routine's, else its module's), its value. None where an inserted text
-    is not CONST jointtarget declarations each a one-line statement."""
+    is not CONST jointtarget declarations each a one-line statement, or is
+    not where a declaration may follow: at the end of a line that ends with
+    a declaration (and a comment); the editor puts them after the line of
+    the declaration they come from, and that line may go on with a
+    statement (`CONST robtarget p:=[...]; n:=1;`)."""
     out: dict = {}
     inserts = np.flatnonzero(es.starts == es.ends).tolist()
     if not inserts:
@@ -217,10 +218,14 @@ def _declared(eng, build, es: EditColumns, shift: list, text: str,
     routines = sorted((r.node.span.start, r.node.span.end)
                       for m in pf.modules for r in m.routines)
     starts = [a for a, _ in routines]
+    src = pf.source.text
+    ends = sorted(d.node.span.end for m in pf.modules for d in m.declarations)
     for k in inserts:
         at = int(es.starts[k])
         scope = _scope(pf, at, routines, starts)
-        if scope is None:
+        last = bisect.bisect_right(ends, at) - 1
+        rest = src[ends[last]:at].lstrip(" \t") if last >= 0 else "\n"
+        if scope is None or "\n" in rest or "\r" in rest or rest[:1] not in ("", "!"):
             return None
         a = at + shift[k]
         piece = text[a:a + len(es.replacements[k])]
