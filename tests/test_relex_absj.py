@@ -20,7 +20,6 @@ from rapidcomp.compensate.load import load_solver
 from rapidcomp.compensate.plan import Plan, Task
 from rapidcomp.compensate.solve import solve
 from rapidcomp.edits import apply_edits
-from rapidcomp.errors import InternalError
 from rapidcomp.rapid.parse import parse_source, parse_text
 from rapidcomp.source import read_source
 
@@ -180,15 +179,36 @@ def test_hand_written_moves_in_a_routine_and_an_if(monkeypatch, solver, ending):
     assert served == [3] and "CONST jointtarget jt_q1:=" in read.modules[0].text
 
 
-@pytest.mark.parametrize("after", [" n:=1;", " IF n=1 THEN n:=2; ENDIF"])
-def test_a_declaration_line_going_on_with_a_statement_is_parsed_again(solver, after):
-    # The new declaration goes after the line of the one it comes from:
-    # there it follows a statement, which the output parsed again refuses
-    # (as before). Read again, it is not taken either.
+@pytest.mark.parametrize("after", [" n:=1;", " IF n=1 THEN n:=2; ENDIF", " ! a comment",
+                                   " n:=1; ! a comment"])
+def test_a_declaration_line_going_on_with_a_statement(monkeypatch, solver, after):
+    # The new declaration goes right after the one it comes from, the rest
+    # of that line after it (after the line, it would follow a statement:
+    # the output did not parse); after a comment, at the line's end.
     text = _hand(after=after)
-    plan, editor, edits, texts = _converted(solver, text)
-    assert V.relex_absj(plan, editor.converted, edits, texts) is None
-    with pytest.raises(InternalError, match="does not parse"):
-        F.fix(Task("hand.mod", (parse_text(text, "hand.mod"),)), solver, "absj")
-    plan, editor, edits, texts = _converted(solver, _hand())
+    task = Task("hand.mod", (parse_text(text, "hand.mod"),))
+    read, parsed, served = _fix_both(monkeypatch, task, solver, "absj")
+    _same(read, parsed)
+    assert served == [3]
+    out = read.modules[0].text
+    decl = out.index("CONST jointtarget jt_q1:=")
+    line = out[decl:out.index("\n", decl)]
+    assert line.endswith(";" + after if after.startswith(" n") or after.startswith(" IF")
+                         else "]];")
+
+
+def test_a_declaration_after_a_statement_is_not_taken(solver):
+    # Were the new declaration put after its line as it goes on with a
+    # statement, the output (which does not parse) is not taken.
+    plan, editor, edits, texts = _converted(solver, _hand(after=" n:=1;"))
     assert V.relex_absj(plan, editor.converted, edits, texts) is not None
+    src = plan.files[0].source.text
+    k = next(i for i, e in enumerate(edits[0]) if e.start == e.end)
+    e = edits[0][k]
+    at = src.index("\n", e.start)
+    moved = sorted(edits[0][:k] + edits[0][k + 1:] + [e._replace(start=at, end=at)],
+                   key=lambda x: (x.start, x.end))
+    bad = apply_edits(src, moved)
+    with pytest.raises(Exception):
+        parse_text(bad, "hand.mod")
+    assert V.relex_absj(plan, editor.converted, {0: moved}, {0: bad}) is None

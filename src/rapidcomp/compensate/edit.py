@@ -339,10 +339,12 @@ class Editor:
     def _anchor(self, g: Group) -> tuple[int, int, str, str, bool]:
         """Where a new declaration goes: after the source declaration when
         it is in the home module, else after the home module's last data
-        declaration (or its MODULE line). Returns (file, line end offset,
-        line break, indentation, in a routine)."""
+        declaration (or its MODULE line): at the end of its line, or where
+        the line goes on with anything but a comment, right after it.
+        Returns (file, offset, line break, indentation, in a routine)."""
         fi, module = g.home
         text = self.text(fi)
+        after_decl = True
         if g.decl is not None and g.src.home_module is module:
             span, in_routine = g.decl.span, g.decl.routine is not None
             indent = _indent(text, span.start)
@@ -361,7 +363,14 @@ class Editor:
             indent = _indent(text, span.start) if last is not None else (
                 _indent(text, span.start) + "    ")
             in_routine = False
+            after_decl = last is not None
         end, nl = _line_end(text, span.end)
+        # (`CONST robtarget p:=[...]; n:=1;`: after the line, the new
+        # declaration would follow a statement, which RAPID refuses; right
+        # after the declaration, the rest of its line follows the new one.)
+        rest = text[span.end:end].lstrip(" \t")
+        if after_decl and rest and not rest.startswith("!"):
+            end = span.end
         return fi, end, nl, indent, in_routine
 
     def declare(self, g: Group, type_name: str, name: str, dims: str, value: str,
