@@ -339,15 +339,17 @@ class Editor:
     def _anchor(self, g: Group) -> tuple[int, int, str, str, bool]:
         """Where a new declaration goes: after the source declaration when
         it is in the home module, else after the home module's last data
-        declaration (or its MODULE line): at the end of its line, or where
-        the line goes on with anything but a comment, right after it.
+        declaration (or its MODULE line): at the end of its line, or, where
+        that line goes on with anything but declarations and a comment,
+        right after the last declaration of the line.
         Returns (file, offset, line break, indentation, in a routine)."""
         fi, module = g.home
         text = self.text(fi)
-        after_decl = True
+        node = None                  # the declaration it goes after
         if g.decl is not None and g.src.home_module is module:
             span, in_routine = g.decl.span, g.decl.routine is not None
             indent = _indent(text, span.start)
+            node = g.decl.node
         else:
             key = ("last data", id(module))
             if key not in self._per_module:      # once per module, not per target
@@ -363,15 +365,42 @@ class Editor:
             indent = _indent(text, span.start) if last is not None else (
                 _indent(text, span.start) + "    ")
             in_routine = False
-            after_decl = last is not None
+            node = last
         end, nl = _line_end(text, span.end)
-        # (`CONST robtarget p:=[...]; n:=1;`: after the line, the new
-        # declaration would follow a statement, which RAPID refuses; right
-        # after the declaration, the rest of its line follows the new one.)
-        rest = text[span.end:end].lstrip(" \t")
-        if after_decl and rest and not rest.startswith("!"):
-            end = span.end
+        if node is not None:
+            # (`CONST robtarget p:=[...]; n:=1;` or `...; PROC main()`: after
+            # the line, the new declaration would follow a statement or lie
+            # in a routine; right after the line's declarations, the rest of
+            # the line follows the new one.)
+            after = self._line_decls_end(fi, module, node, g.decl.routine if in_routine
+                                         else None)
+            rest = text[after:end].lstrip(" \t")
+            if rest and not rest.startswith("!"):
+                end = after
         return fi, end, nl, indent, in_routine
+
+    def _line_decls_end(self, fi: int, module, node, routine: str | None) -> int:
+        """The end of declaration `node`, or of the last declaration that
+        follows it on its line with nothing but blanks between."""
+        if routine is None:
+            items = module.node.items
+        else:
+            key = ("decls", id(module), routine.lower())
+            if key not in self._per_module:
+                self._per_module[key] = next(r.node.decls for r in module.routines
+                                             if r.node.name.lower() == routine.lower())
+            items = self._per_module[key]
+        key = ("next", id(items))
+        following = self._per_module.get(key)
+        if following is None:        # once per list of declarations
+            following = self._per_module[key] = {id(a): b for a, b in zip(items, items[1:])}
+        text = self.text(fi)
+        end = node.span.end
+        while True:
+            b = following.get(id(node))
+            if type(b) is not A.DataDecl or text[end:b.span.start].strip(" \t"):
+                return end
+            node, end = b, b.span.end
 
     def declare(self, g: Group, type_name: str, name: str, dims: str, value: str,
                 converted: bool = False) -> None:

@@ -207,10 +207,10 @@ def _declared(eng, build, es: EditColumns, shift: list, text: str,
     them: lower-case name -> (start, end) of the input its scope spans (its
     routine's, else its module's), its value. None where an inserted text
     is not CONST jointtarget declarations each a one-line statement, or is
-    not where a declaration may follow: at the end of a line that ends with
-    a declaration (and a comment); the editor puts them after the line of
-    the declaration they come from, and that line may go on with a
-    statement (`CONST robtarget p:=[...]; n:=1;`)."""
+    not where a declaration may follow: right after a declaration, or at
+    the end of a line that ends with one (and a comment), as the editor
+    puts them (Editor._anchor; after a line that goes on with a statement,
+    the output would not parse)."""
     out: dict = {}
     inserts = np.flatnonzero(es.starts == es.ends).tolist()
     if not inserts:
