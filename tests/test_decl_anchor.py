@@ -79,3 +79,17 @@ def test_a_routine_line_going_on_with_a_statement(solver):
     assert {d.name for d in module.declarations if d.routine == "main"} >= {"jt_a1", "jt_a2"}
     assert f"CONST robtarget a2:={a2};\n    CONST jointtarget jt_a1:=" in out
     assert "\n    CONST jointtarget jt_a2:=" in out and out.count(" n:=2;") == 1
+
+
+def test_a_move_naming_its_target_stays_a_robtarget_move(solver):
+    # MoveAbsJ's target parameter is ToJointPos: `MoveL ToPoint:=a1,...`
+    # made MoveAbsJ would not load. It keeps its kind, said in its row.
+    a1, a2 = _lits(2)
+    text = (HEAD + f"  CONST robtarget a1:={a1};\n  CONST robtarget a2:={a2};\n  PROC main()\n"
+            + MOVES.replace("MoveL a1,", "MoveL ToPoint:=a1,") + "  ENDPROC\nENDMODULE\n")
+    out, module = _out(solver, text)
+    assert "MoveL ToPoint:=a1," in out and "MoveAbsJ jt_a2," in out
+    r = F.fix(Task("m.mod", (parse_text(text, "m.mod"),)), solver, "absj")
+    kept = [row for row in r.rows if row.target == "a1"]
+    assert len(kept) == 1 and any("ToPoint:= has no MoveAbsJ equivalent" in w
+                                  for w in kept[0].warnings)

@@ -77,11 +77,18 @@ def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved) -> str:
     m = u.motion
     name = m.spec.name.lower()
     if (name in (ABSJ_FROM[mode]) and all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional)
+            and not names_to_point(m)
             and not plan.may_be_displaced(u)
             and solved.picks[solved.row[u.key]].caution is None
             and not (u.source.decl is not None and u.source.decl.storage == "PERS")):
         return "absj"
     return "rob"
+
+
+def names_to_point(m) -> bool:
+    """The move names its target parameter (`MoveL ToPoint:=p10,...`):
+    MoveAbsJ's is ToJointPos, so it stays a robtarget move."""
+    return any(a.kind == "named" and a.name.lower() == "topoint" for a in m.args)
 
 
 def _call_key(src: Source):

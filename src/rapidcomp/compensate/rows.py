@@ -9,7 +9,7 @@ import numpy as np
 
 from ..kinematics.frames import DEG
 from ..kinematics.ik import WARN_TEXT, Warn, warning_texts_of
-from .place import ABSJ_FROM, ABSJ_OPTIONALS, Group, element_label
+from .place import ABSJ_FROM, ABSJ_OPTIONALS, Group, element_label, names_to_point
 from .plan import Plan
 from .solve import Solved
 from .targets import EXTAX_UNUSED, TargetUse
@@ -150,8 +150,9 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         if g.mode == "absj" and u.motion.spec.name == "MoveL":
             warnings = warnings + _LINEAR
         elif g.mode == "rob" and mode is not None and u.motion.spec.name.lower() in ABSJ_FROM[mode]:
-            extra = ", ".join("\\" + a.name for a in u.motion.optional
-                              if a.name.lower() not in ABSJ_OPTIONALS)
+            extra = ", ".join(["\\" + a.name for a in u.motion.optional
+                               if a.name.lower() not in ABSJ_OPTIONALS]
+                              + (["ToPoint:="] if names_to_point(u.motion) else []))
             if extra:
                 warnings = warnings + (f"kept as {u.motion.instruction}: {extra} has no "
                                        "MoveAbsJ equivalent",)

@@ -180,9 +180,14 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
             expr = u.source.expr.span
             head = called + src[m.name_span.end:expr.start]
             at = a + shift[ka]
-            if text[at:b + shift[kb]] != head + (name or literal) + src[expr.end:b]:
+            if (called.lower() != "moveabsj"
+                    or text[at:b + shift[kb]] != head + (name or literal) + src[expr.end:b]):
                 return None
             if name is None:
+                # (An aggregate of numbers as the lexer reads them, as
+                # parsing the statement would.)
+                if [t.type for t in eng.tokens(literal)] != ["NUMAGG", "$END"]:
+                    return None
                 agg = A.NumAgg(literal, Span(at + len(head), at + len(head) + len(literal)))
             else:
                 hit = declared.get(name.lower())
