@@ -4,11 +4,13 @@
 
 Each size runs in a fresh process (so peak memory is per size) and prints
 seconds and MB/s per stage: parse, resolve, solve, print (edits + splice),
-re-lex (the edited literals lexed again where the output holds them; the
-whole output parsed again when an edit is more than numbers) and verify of
+re-lex (the edited literals, and the moves turned into MoveAbsJ on
+jointtargets of their own, read again where the output holds them; the
+whole output parsed again when an edit is anything else) and verify of
 the output, report (rows, diff + Markdown). Then the
 largest size through the command line end to end (also with --json: the
-reports are written as they are rendered), and the same total with
+reports are written as they are rendered; and with Path called from main,
+every move turned into MoveAbsJ), and the same total with
 two modules in one call (`fix a.mod b.mod -o DIR`, one worker process per
 core). Goal: 100k targets end to end <= 10 s, <= 1 GB.
 
@@ -140,8 +142,8 @@ def main() -> None:
                              capture_output=True, text=True).stdout
         r = json.loads(out)
         assert r["failed"] == 0 and r["compensated"] == n, r
-        # The output is lexed again where it was edited, or (new
-        # declarations, MoveAbsJ) parsed again: one column.
+        # The output is read again where it was edited, or (edits of other
+        # kinds) parsed again: one column.
         r["stages"]["re-lex"] = r["stages"].get("re-lex", 0) + r["stages"].get("re-parse", 0)
         print(f"{n:>8} {r['MB']:>6.2f} "
               + " ".join(f"{r['stages'].get(s, 0):>8.2f}s" for s in stages)
@@ -160,8 +162,8 @@ def main() -> None:
     print(f"1 module x {n} targets, `rapidcomp fix --emit absj` end to end (start-up, "
           f"reading, report, writing): {r['s']:.2f} s, peak {r['peak_MB']:.0f} MB; "
           f"with --json too: {j['s']:.2f} s, peak {j['peak_MB']:.0f} MB")
-    print(f"the same with Path called from main (every MoveL -> MoveAbsJ on a new "
-          f"jointtarget, the output parsed again): {m['s']:.2f} s, peak {m['peak_MB']:.0f} MB")
+    print(f"the same with Path called from main (every MoveL -> MoveAbsJ on a jointtarget "
+          f"of its own, read again): {m['s']:.2f} s, peak {m['peak_MB']:.0f} MB")
     # Two modules in one call: the process pool uses both cores.
     n //= 2
     with tempfile.TemporaryDirectory() as tmp:
