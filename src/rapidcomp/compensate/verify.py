@@ -81,12 +81,7 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     for fi, items in by_file.items():
         # Offsets shift by what the edits before them add: a literal's
         # brackets lie outside every field edit.
-        es = file_edits.get(fi, [])
-        if type(es) is not EditColumns:
-            es = EditColumns.of(es)
-        grow = np.fromiter(map(len, es.replacements), np.int64, len(es)) - (
-            es.ends - es.starts)
-        shift = np.concatenate(([0], np.cumsum(grow)))
+        es, shift = _shifts(file_edits.get(fi, []))
         text = texts.get(fi, plan.files[fi].source.text)
         home = id(plan.files[fi])
         at = np.fromiter((start for start, _ in items), np.int64, len(items))
@@ -138,6 +133,17 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     return Written(out, keys, values, where)
 
 
+def _shifts(es) -> tuple[EditColumns, np.ndarray]:
+    """A file's edits as columns, and what the first k of them add to an
+    offset, for each k: an input offset x lies at x + shift[k] in the
+    output, k the number of edits ending at or before it (in the order
+    BY_SPAN sorts them)."""
+    if type(es) is not EditColumns:
+        es = EditColumns.of(es)
+    grow = np.fromiter(map(len, es.replacements), np.int64, len(es)) - (es.ends - es.starts)
+    return es, np.concatenate(([0], np.cumsum(grow)))
+
+
 def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                texts: dict[int, str]) -> dict | None:
     """When every structural edit turns a move into MoveAbsJ on a jointtarget
@@ -159,14 +165,8 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
         by_file.setdefault(key[0], []).append((key, *item))
     out: dict = {}
     for fi, items in by_file.items():
-        es = file_edits.get(fi, [])
-        if type(es) is not EditColumns:
-            es = EditColumns.of(es)
-        # Output offset of an input offset: what the edits ending at or
-        # before it add (edits in the order BY_SPAN sorts them).
-        grow = np.fromiter(map(len, es.replacements), np.int64, len(es)) - (
-            es.ends - es.starts)
-        shift = np.concatenate(([0], np.cumsum(grow))).tolist()
+        es, shift = _shifts(file_edits.get(fi, []))
+        shift = shift.tolist()
         text, src = texts[fi], plan.files[fi].source.text
         declared = _declared(eng, build, es, shift, text, plan.files[fi])
         if declared is None:
@@ -229,8 +229,10 @@ def _declared(eng, build, es: EditColumns, shift: list, text: str,
         at = int(es.starts[k])
         scope = _scope(pf, at, routines, starts)
         last = bisect.bisect_right(ends, at) - 1
-        rest = src[ends[last]:at].lstrip(" \t") if last >= 0 else "\n"
-        if scope is None or "\n" in rest or "\r" in rest or rest[:1] not in ("", "!"):
+        if scope is None or last < 0:
+            return None
+        rest = src[ends[last]:at].lstrip(" \t")
+        if "\n" in rest or "\r" in rest or rest[:1] not in ("", "!"):
             return None
         a = at + shift[k]
         piece = text[a:a + len(es.replacements[k])]
