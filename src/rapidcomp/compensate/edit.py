@@ -372,28 +372,23 @@ class Editor:
             # the line, the new declaration would follow a statement or lie
             # in a routine; right after the line's declarations, the rest of
             # the line follows the new one.)
-            after = self._line_decls_end(fi, module, node, g.decl.routine if in_routine
-                                         else None)
+            after = self._line_decls_end(fi, module, node)
             rest = text[after:end].lstrip(" \t")
             if rest and not rest.startswith("!"):
                 end = after
         return fi, end, nl, indent, in_routine
 
-    def _line_decls_end(self, fi: int, module, node, routine: str | None) -> int:
+    def _line_decls_end(self, fi: int, module, node) -> int:
         """The end of declaration `node`, or of the last declaration that
         follows it on its line with nothing but blanks between."""
-        if routine is None:
-            items = module.node.items
-        else:
-            key = ("decls", id(module), routine.lower())
-            if key not in self._per_module:
-                self._per_module[key] = next(r.node.decls for r in module.routines
-                                             if r.node.name.lower() == routine.lower())
-            items = self._per_module[key]
-        key = ("next", id(items))
+        key = ("next", id(module))
         following = self._per_module.get(key)
-        if following is None:        # once per list of declarations
-            following = self._per_module[key] = {id(a): b for a, b in zip(items, items[1:])}
+        if following is None:
+            # Once per module: what follows each module item, and each
+            # routine's declaration in its routine.
+            following = self._per_module[key] = {
+                id(a): b for items in (module.node.items, *(r.node.decls for r in module.routines))
+                for a, b in zip(items, items[1:])}
         text = self.text(fi)
         end = node.span.end
         while True:

@@ -326,11 +326,13 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
     res = Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
                    track=plan.track, base=plan.resolver.base, written=written)
     if written is not None:
-        # The structure is the input's (relex() made sure every edit is
-        # numbers of a literal): each use's source, tool and work object are
-        # the plan's, evaluated again on the numbers as written, and checked
-        # VERIFY_BLOCK uses at a time (each use's residual its own: a CAM
-        # program's arrays and records alive for one block, not for 1e5).
+        # The structure is the input's but for the moves turned into
+        # MoveAbsJ (relex() and relex_absj() made sure every other edit is
+        # numbers of a literal): each other use's source, tool and work
+        # object are the plan's, evaluated again on the numbers as written,
+        # and checked VERIFY_BLOCK uses at a time (each use's residual its
+        # own: a CAM program's arrays and records alive for one block, not
+        # for 1e5).
         rows = sorted(solved.row[k] for k in keys)
         converted = converted or {}
         out: dict = {}
