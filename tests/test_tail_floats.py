@@ -80,3 +80,22 @@ def test_equal_tails_share_their_floats_and_the_cache_is_bounded(monkeypatch):
     assert decls["j1"].values[:6] == (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
     assert decls["j2"].values[:6] == (6.0, 5.0, 4.0, 3.0, 2.0, 1.0)
     assert 0 < len(V._TAIL_FLOATS) <= 5
+
+
+def test_a_resolvers_uses_share_equal_confdata_and_external_axes_of_the_same_signs():
+    """Each use's confdata and external axes are one tuple per distinct
+    value in a resolver (Resolver._one). Oracle: the numbers as written,
+    by repr (a -0 keeps its sign), and which uses share which tuple."""
+    from rapidcomp.compensate.plan import Plan, Task
+    ext = ["9E+09,9E+09,9E+09,9E+09,9E+09,9E+09", "0,9E+09,9E+09,9E+09,9E+09,9E+09",
+           "-0,9E+09,9E+09,9E+09,9E+09,9E+09", "0,9E+09,9E+09,9E+09,9E+09,9E+09"]
+    conf = ["0,-1,0,1", "0,0,0,1", "0,-1,0,1", "-0,-1,0,1"]
+    moves = "".join(f"    MoveL [[500,{i},600],[0,0,1,0],[{c}],[{e}]],v100,fine,tool0;\n"
+                    for i, (c, e) in enumerate(zip(conf, ext)))
+    text = f"MODULE M\n  PROC main()\n{moves}  ENDPROC\nENDMODULE\n"
+    uses = Plan(Task("m.mod", (parse_text(text, "m.mod"),))).uses
+    assert len(uses) == 4 and all(u.reason is None for u in uses)
+    assert [repr(u.ext[0]) for u in uses] == ["9000000000.0", "0.0", "-0.0", "0.0"]
+    assert uses[1].ext is uses[3].ext and uses[1].ext is not uses[2].ext
+    assert [u.conf for u in uses] == [(0, -1, 0, 1), (0, 0, 0, 1), (0, -1, 0, 1), (0, -1, 0, 1)]
+    assert uses[0].conf is uses[2].conf is uses[3].conf

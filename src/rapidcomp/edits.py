@@ -51,17 +51,19 @@ class EditColumns(Sequence):
     EditColumns again. A CAM program's compensation is 7e5 edits of
     numbers; as columns they are spliced, shifted and counted by array
     operations, and no tuple and two ints per edit outlive the batch that
-    made them. starts/ends: int64 arrays; replacements/whys: object arrays
-    of str; copies of what they are made from, read-only."""
+    made them. starts/ends: int64 arrays; whys: an object array of str;
+    the replacements (read by texts/text/joined/lengths) packed (_packed)
+    where they are short ASCII texts, as a CAM program's numbers are; copies
+    of what they are made from, read-only."""
 
-    __slots__ = ("starts", "ends", "replacements", "whys")
+    __slots__ = ("starts", "ends", "_texts", "whys")
 
-    def __init__(self, starts, ends, replacements, whys):
+    def __init__(self, starts, ends, replacements, whys, pack: bool = True):
         self.starts = np.array(starts, np.int64)
         self.ends = np.array(ends, np.int64)
-        self.replacements = _objects(replacements)
+        self._texts = _packed(replacements) if pack else _objects(replacements)
         self.whys = _objects(whys)
-        for a in (self.starts, self.ends, self.replacements, self.whys):
+        for a in (self.starts, self.ends, self._texts, self.whys):
             a.flags.writeable = False
 
     @classmethod
@@ -72,21 +74,55 @@ class EditColumns(Sequence):
                    [e.replacement for e in edits], [e.why for e in edits])
 
     def take(self, index) -> "EditColumns":
-        return EditColumns(self.starts[index], self.ends[index], self.replacements[index],
+        return EditColumns(self.starts[index], self.ends[index], self._texts[index],
                            self.whys[index])
+
+    @classmethod
+    def concat(cls, parts: list["EditColumns"]) -> "EditColumns":
+        """The edits of `parts`, one after the other."""
+        if not parts:
+            return cls([], [], [], [])
+        texts = [c._texts for c in parts]
+        if any(t.dtype.kind != "S" for t in texts):
+            # (Packed bytes and str objects do not mix in one array.)
+            texts = [_objects(c.texts()) for c in parts]
+        return cls(np.concatenate([c.starts for c in parts]),
+                   np.concatenate([c.ends for c in parts]), np.concatenate(texts),
+                   np.concatenate([c.whys for c in parts]))
+
+    def texts(self, i: int = 0, j: int | None = None) -> list[str]:
+        """The replacements of edits [i, j), as str."""
+        t = self._texts[i:j]
+        return t.astype(str).tolist() if t.dtype.kind == "S" else t.tolist()
+
+    def text(self, k: int) -> str:
+        t = self._texts[k]
+        return t.decode("ascii") if type(t) is np.bytes_ else t
+
+    def joined(self) -> str:
+        """Every replacement, one after the other, as one str."""
+        if self._texts.dtype.kind == "S":
+            # (Packed texts hold no NUL: the padding is all there is.)
+            return self._texts.tobytes().replace(b"\0", b"").decode("ascii")
+        return "".join(self._texts.tolist())
+
+    def lengths(self) -> np.ndarray:
+        """len() of each replacement (int64)."""
+        if self._texts.dtype.kind == "S":
+            return np.char.str_len(self._texts).astype(np.int64)
+        return np.fromiter(map(len, self._texts), np.int64, len(self._texts))
 
     def __len__(self) -> int:
         return len(self.starts)
 
     def __iter__(self):
         return map(span_edit, zip(self.starts.tolist(), self.ends.tolist(),
-                                  self.replacements.tolist(), self.whys.tolist()))
+                                  self.texts(), self.whys.tolist()))
 
     def __getitem__(self, i):
         if isinstance(i, slice):
             return self.take(i)
-        return SpanEdit(int(self.starts[i]), int(self.ends[i]), self.replacements[i],
-                        self.whys[i])
+        return SpanEdit(int(self.starts[i]), int(self.ends[i]), self.text(i), self.whys[i])
 
     def __eq__(self, other) -> bool:
         if isinstance(other, (EditColumns, tuple)):
@@ -104,6 +140,30 @@ def _objects(texts) -> np.ndarray:
     out = np.empty(len(texts), object)
     out[:] = texts if isinstance(texts, np.ndarray) else list(texts)
     return out
+
+
+# The widest replacement packed as bytes: a number's text (wider ones, a
+# line inserted, stay str objects: every slot is as wide as the widest).
+PACK_WIDTH = 24
+
+
+def _packed(texts) -> np.ndarray:
+    """Replacements as one array of fixed-width ASCII bytes when every one
+    is ASCII, holds no NUL (the padding) and is at most PACK_WIDTH long, so
+    that they are decoded back to the same str; else an object array of
+    str. A CAM program's 7e5 numbers: ~9 bytes each, not a str object each
+    (~40 MB at 1e5 targets)."""
+    if isinstance(texts, np.ndarray) and texts.dtype.kind == "S":
+        return np.array(texts)
+    objs = _objects(texts)
+    if not len(objs):
+        return objs
+    every = objs.tolist()
+    joined = "".join(every)
+    if (not joined.isascii() or "\0" in joined
+            or max(map(len, every)) > PACK_WIDTH):
+        return objs
+    return np.array(every, dtype="S")
 
 
 class EditRun:
@@ -160,10 +220,7 @@ def columns_of(items) -> EditColumns:
                 flush()
             edits.append(item)
     flush()
-    if not parts:
-        return EditColumns([], [], [], [])
-    return EditColumns(*(np.concatenate([getattr(c, name) for c in parts])
-                         for name in EditColumns.__slots__))
+    return EditColumns.concat(parts)
 
 
 def sorted_columns(cols: EditColumns) -> EditColumns:
@@ -217,7 +274,7 @@ def _apply_columns(text: str, cols: EditColumns) -> str:
         a, b = s[at:at + APPLY_BLOCK].tolist(), e[at:at + APPLY_BLOCK].tolist()
         parts: list = [None] * (2 * len(a))
         parts[0::2] = [text[x:y] for x, y in zip([pos] + b[:-1], a)]
-        parts[1::2] = cols.replacements[at:at + APPLY_BLOCK].tolist()
+        parts[1::2] = cols.texts(at, at + APPLY_BLOCK)
         out.append("".join(parts))
         pos = b[-1]
     out.append(text[pos:])

@@ -102,14 +102,17 @@ class Values:
     def confs(self, items) -> list[tuple[int, ...]]:
         """The confdata of robtarget_value(g, k) of each (group, element),
         as tuples of ints (1e5 at once: each stack's rows converted once,
-        not four numpy integers per row)."""
+        not four numpy integers per row; equal ones one tuple: a CAM
+        program's 1e5 have a few values)."""
         out = []
         as_ints: dict = {}
+        same: dict = {}
         for g, k in items:
             stacks, j = self._stacked(g, k)
             rows = as_ints.get(id(stacks))
             if rows is None:
-                rows = as_ints[id(stacks)] = list(map(tuple, stacks[2].tolist()))
+                rows = as_ints[id(stacks)] = [same.setdefault(t, t) for t in
+                                              map(tuple, stacks[2].tolist())]
             out.append(rows[j])
         return out
 
@@ -171,10 +174,11 @@ class Values:
         for (g, k), t in zip(items, texts):
             self._values[("texts", id(g), k)] = t
 
-    def forget_texts(self) -> None:
-        """The field texts, once written (a retry prepares them again)."""
-        for key in [k for k in self._values if k[0] == "texts"]:
-            del self._values[key]
+    def forget(self) -> None:
+        """The values and their field texts, once written and their
+        confdata read (a retry prepares them again, each row as the first
+        round did: the batch's rows are computed one by one)."""
+        self._values.clear()
 
     def _robtarget_values(self, items):
         """(R (n, 3, 3), p (n, 3), conf (n, 4)) of robtarget_value for each

@@ -121,9 +121,14 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
             if g.failure is None:
                 editor.apply(g)
         file_edits = editor.file_edits()
-        # Past this point per-target texts and the edits' index are not
-        # needed (1e5 targets: ~200 MB before verification).
-        values.forget_texts()
+        # The confdata written, as ints, for the rows (once per use here,
+        # not per row later). Past this point the values, their texts and
+        # the edits' index are not needed (1e5 targets: ~230 MB before
+        # verification); a retry prepares them again.
+        done = [(g, u) for g in gs if g.failure is None for u in g.uses]
+        confs = iter(values.confs([(g, u.source.element) for g, u in done if g.mode == "rob"]))
+        written_conf = {u.key: next(confs) if g.mode == "rob" else None for g, u in done}
+        values.forget()
         editor.edits = editor.field_lists = None
         texts = {fi: apply_edits(plan.files[fi].source.text, es)
                  for fi, es in file_edits.items()}
@@ -158,14 +163,9 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     else:
         raise InternalError("the written values do not settle (verification keeps failing)")
     group_of = {u.key: g for g in gs for u in g.uses}
-    # The confdata written, as ints (once per use here, not per row later).
-    done = [(g, u) for g in gs if g.failure is None for u in g.uses]
-    confs = iter(values.confs([(g, u.source.element) for g, u in done if g.mode == "rob"]))
-    written_conf = {u.key: next(confs) if g.mode == "rob" else None for g, u in done}
     # What each stage made per target is not needed past it (1e5 targets:
-    # hundreds of MB): the values and their texts, the edited literals as
-    # written, the output parsed again; of the editor (which holds the
-    # values too) the rows read what it did per use only.
+    # hundreds of MB): the edited literals as written, the output parsed
+    # again; of the editor the rows read what it did per use only.
     actions = editor.actions
     values = written = converted = out_files = done = confs = editor = None
     # The rows read the plan's uses and track only: the resolver's caches

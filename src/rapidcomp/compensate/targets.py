@@ -90,8 +90,10 @@ class TargetUse:
     label: str                 # e.g. "pPath{3}" or "inline"
     line: int
     kind: str                  # "robtarget" or "jointtarget"
-    R: np.ndarray | None       # base_M_flange rotation
-    p: np.ndarray | None       # base_M_flange translation, mm
+    # base_M_flange: row `row` of its batch's (R (n, 3, 3), p (n, 3) mm),
+    # read as R and p (a CAM program's 1e5 uses: no two array views each).
+    flange: tuple | None
+    row: int | None
     conf: tuple[int, int, int, int] | None
     joints_deg: tuple[float, ...] | None  # jointtarget robax
     reason: str | None         # why it was not resolved
@@ -105,6 +107,16 @@ class TargetUse:
     ext: tuple[float, ...] = ()  # external axes of the target as written
     key: tuple = ()            # (file index, motion index in the file, role, env)
     notes: tuple[str, ...] = ()  # what was assumed of its values (a quaternion normalised)
+
+    @property
+    def R(self) -> np.ndarray | None:
+        """base_M_flange rotation."""
+        return None if self.flange is None else self.flange[0][self.row]
+
+    @property
+    def p(self) -> np.ndarray | None:
+        """base_M_flange translation, mm."""
+        return None if self.flange is None else self.flange[1][self.row]
 
 
 class Unresolved(NamedTuple):
@@ -282,6 +294,9 @@ class Resolver:
         self._notes: list[str] = []             # of the use being resolved
         self._guarded: set = set()              # FOR variables of the use behind a condition
         self._consts: list = []                 # CONST nums being evaluated (integer())
+        # A use's confdata and external axes as one tuple per distinct value
+        # (a CAM program's 1e5 uses have a few: ~15 MB).
+        self._same: dict = {}
         for pf in files:
             for m in pf.modules:
                 mid = id(m)
@@ -667,13 +682,13 @@ class Resolver:
             if u.source.call is not None:
                 R[i], p[i] = _relative(u.source, R[i], p[i])
 
-        Rf, pf = flange_poses(*(stacked_poses([item[k] for item in pending]) for k in (3, 4)),
+        flange = flange_poses(*(stacked_poses([item[k] for item in pending]) for k in (3, 4)),
                               (R, p), stacked_poses([item[5] for item in pending]))
         for i, (u, *_) in enumerate(pending):
             # Two-phase construction: the use has not left the resolver's
             # client yet (Plan, verify call poses() before reading it).
-            object.__setattr__(u, "R", Rf[i])
-            object.__setattr__(u, "p", pf[i])
+            object.__setattr__(u, "flange", flange)
+            object.__setattr__(u, "row", i)
 
     def _unit_parts(self, v: np.ndarray):
         """(unit quaternions (n, 4), positions (n, 3), confdata (n, 4), ok
@@ -967,7 +982,8 @@ class Resolver:
                                             f"J{i + 1} is {src.record.texts[i]} deg: not a "
                                             f"joint angle (|J| <= {MAX_JOINT_DEG:g})")
             return TargetUse(motion, role, label, line, kind, None, None, None, joints, None,
-                             src, env=envt, file=pf, module=module, ext=src.record.ext, key=key)
+                             src, env=envt, file=pf, module=module,
+                             ext=self._one(src.record.ext), key=key)
         if not isinstance(src.record, RobTarget):
             return fail(Unresolved("not a robtarget", True))
         tool = self.tool(motion.tool, module, motion.routine)
@@ -982,11 +998,19 @@ class Resolver:
         # Its confdata, quaternion and position are checked with every
         # other pending use's, in poses() (an error raised before that
         # raises the first pending one's first, as one by one would).
-        u = TargetUse(motion, role, label, line, kind, None, None, src.record.conf, None, None,
-                      src, tool, wobj, envt, file=pf, module=module, ext=src.record.ext,
-                      key=key, notes=tuple(self._notes))
+        u = TargetUse(motion, role, label, line, kind, None, None, self._one(src.record.conf),
+                      None, None, src, tool, wobj, envt, file=pf, module=module,
+                      ext=self._one(src.record.ext), key=key, notes=tuple(self._notes))
         self._pending.append((u, src, pf, base, wobj[1], tool[1]))
         return u
+
+    def _one(self, value: tuple) -> tuple:
+        """`value`, as the one tuple this resolver holds equal to it, of the
+        same signs (0.0 == -0.0, and the two print differently)."""
+        key = value
+        if 0.0 in value and any(type(v) is float for v in value):
+            key = (value, tuple(math.copysign(1.0, v) for v in value))
+        return self._same.setdefault(key, value)
 
     def _confdata(self, src: Source, pf: ParsedFile) -> None:
         """confdata of a robtarget a move uses: whole numbers, cfx one of

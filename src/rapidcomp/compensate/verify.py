@@ -14,6 +14,7 @@ against the intended pose is what the report shows as "after".
 from __future__ import annotations
 
 import bisect
+from array import array
 from typing import NamedTuple
 
 import numpy as np
@@ -140,12 +141,12 @@ def _shifts(es) -> tuple[EditColumns, np.ndarray]:
     BY_SPAN sorts them)."""
     if type(es) is not EditColumns:
         es = EditColumns.of(es)
-    grow = np.fromiter(map(len, es.replacements), np.int64, len(es)) - (es.ends - es.starts)
+    grow = es.lengths() - (es.ends - es.starts)
     return es, np.concatenate(([0], np.cumsum(grow)))
 
 
 def relex_absj(plan: Plan, converted: dict, file_edits: dict,
-               texts: dict[int, str]) -> dict | None:
+               texts: dict[int, str]) -> "Converted | None":
     """When every structural edit turns a move into MoveAbsJ on a jointtarget
     of its own (Editor.converted: use key -> (use, that literal, the new
     declaration's name or None, the instruction's name as written)), each
@@ -157,13 +158,15 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
     declaration (FAST_DECL) built as the parser builds it, a CONST
     jointtarget, in the move's routine or else its module, of the literal
     meant. Returns use key -> its joints as the controller stores them
-    (the literal decoded, float32, as the resolver reads a MoveAbsJ's), or
+    (the literal decoded, float32, as the resolver reads a MoveAbsJ's:
+    Converted), or
     None where anything differs (the output is then parsed again)."""
     eng, build = engine(), NodeBuilder()
     by_file: dict = {}
     for key, item in converted.items():
         by_file.setdefault(key[0], []).append((key, *item))
-    out: dict = {}
+    keys: list = []
+    rows: list = []
     for fi, items in by_file.items():
         es, shift = _shifts(file_edits.get(fi, []))
         shift = shift.tolist()
@@ -171,11 +174,13 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
         declared = _declared(eng, build, es, shift, text, plan.files[fi])
         if declared is None:
             return None
+        names, scopes, aggs = declared
         spans = np.array([it[1].motion.span for it in items], np.int64).reshape(-1, 2)
         before = np.searchsorted(es.ends, spans, "right").tolist()
-        records = []
-        for (key, u, literal, name, called), (a, b), (ka, kb) in zip(items, spans.tolist(),
-                                                                      before):
+        # (Each move's joints a row of one array, not a tuple of floats.)
+        records = np.empty((len(items), 6))
+        for n, ((key, u, literal, name, called), (a, b), (ka, kb)) in enumerate(zip(
+                items, spans.tolist(), before)):
             m = u.motion
             expr = u.source.expr.span
             head = called + src[m.name_span.end:expr.start]
@@ -190,36 +195,61 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                     return None
                 agg = A.NumAgg(literal, Span(at + len(head), at + len(head) + len(literal)))
             else:
-                hit = declared.get(name.lower())
-                if not (hit and hit[0] <= a and b <= hit[1] and hit[2].text == literal):
+                k = names.get(name.lower())
+                if k is None:
                     return None
-                agg = hit[2]
+                x, y = aggs[2 * k], aggs[2 * k + 1]
+                if not (scopes[2 * k] <= a and b <= scopes[2 * k + 1]
+                        and y - x == len(literal) and text.startswith(literal, x)):
+                    return None
+                agg = A.NumAgg(literal, Span(x, y))
             try:
-                records.append(decode("jointtarget", agg).joints)
+                records[n] = decode("jointtarget", agg).joints
             except DecodeIssue:
                 return None
         # (As the resolver reads a jointtarget: float32, then floats.)
-        joints = np.array(records, float).reshape(-1, 6).astype(np.float32).astype(float)
+        joints = records.astype(np.float32).astype(float)
         if not (np.abs(joints) <= MAX_JOINT_DEG).all():
             return None
-        out.update(zip((it[0] for it in items), map(tuple, joints.tolist())))
-    return out
+        keys.extend(it[0] for it in items)
+        rows.append(joints)
+    return Converted(dict(zip(keys, range(len(keys)))),
+                     np.concatenate(rows) if rows else np.empty((0, 6)))
+
+
+class Converted:
+    """The joints of each move turned into MoveAbsJ as relex_absj read them,
+    by use key: rows of one array (a CAM program has 1e5; no tuple of six
+    floats each until asked for)."""
+
+    def __init__(self, rows: dict, joints: np.ndarray):
+        self.rows, self.joints = rows, joints
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def get(self, key, default=None):
+        n = self.rows.get(key)
+        return default if n is None else tuple(self.joints[n].tolist())
 
 
 def _declared(eng, build, es: EditColumns, shift: list, text: str,
-              pf: ParsedFile) -> dict | None:
+              pf: ParsedFile) -> tuple[dict, array, array] | None:
     """The new declarations of a file read again where the output holds
-    them: lower-case name -> (start, end) of the input its scope spans (its
-    routine's, else its module's), its value. None where an inserted text
+    them: (lower-case name -> k; the (start, end) in the input of its scope
+    (its routine's, else its module's) at [2k, 2k + 1]; the (start, end) of
+    its value, an aggregate of numbers, in the output, likewise: offsets
+    in arrays, not a node and a tuple each). None where an inserted text
     is not CONST jointtarget declarations each a one-line statement, or is
     not where a declaration may follow: right after a declaration, or at
     the end of a line that ends with one (and a comment), as the editor
     puts them (Editor._anchor; after a line that goes on with a statement,
     the output would not parse)."""
     out: dict = {}
+    scopes, aggs = array("q"), array("q")
     inserts = np.flatnonzero(es.starts == es.ends).tolist()
     if not inserts:
-        return out
+        return out, scopes, aggs
     routines = sorted((r.node.span.start, r.node.span.end)
                       for m in pf.modules for r in m.routines)
     starts = [a for a, _ in routines]
@@ -235,7 +265,7 @@ def _declared(eng, build, es: EditColumns, shift: list, text: str,
         if "\n" in rest or "\r" in rest or rest[:1] not in ("", "!"):
             return None
         a = at + shift[k]
-        piece = text[a:a + len(es.replacements[k])]
+        piece = text[a:a + len(es.text(k))]
         for tok in eng.tokens(piece):
             if tok.type == "$END":
                 break
@@ -245,8 +275,12 @@ def _declared(eng, build, es: EditColumns, shift: list, text: str,
             if not (node.storage == "CONST" and node.type_name.lower() == "jointtarget"
                     and not node.dims and type(node.init) is A.NumAgg):
                 return None
-            out[node.name.lower()] = (*scope, node.init)
-    return out
+            # (A later one of the same name wins, as a dict's last value.)
+            out[node.name.lower()] = len(scopes) // 2
+            scopes.extend(scope)
+            init = node.init.span
+            aggs.extend((a + init.start, a + init.end))
+    return out, scopes, aggs
 
 
 def _scope(pf: ParsedFile, at: int, routines: list, starts: list) -> tuple[int, int] | None:
@@ -314,7 +348,8 @@ class _Written(NamedTuple):
 
 
 def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFile],
-           solver: Solver, written: Written | None = None, converted: dict | None = None) -> dict:
+           solver: Solver, written: Written | None = None,
+           converted: "Converted | None" = None) -> dict:
     """Residual (um, deg) of each compensated use (by key), evaluated on
     the written output: out_files parsed again, or (written) the input's
     structure with the records as relex() read them, but for the moves

@@ -49,8 +49,8 @@ def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list
     if not lines:
         return None
     cols = edits if type(edits) is EditColumns else EditColumns.of(edits)
-    at, ends, replacements = cols.starts.tolist(), cols.ends.tolist(), cols.replacements.tolist()
-    replaced = "".join([text[a:b] for a, b in zip(at, ends)] + replacements)
+    at, ends = cols.starts.tolist(), cols.ends.tolist()
+    replaced = "".join([text[a:b] for a, b in zip(at, ends)]) + cols.joined()
     if len((replaced + ".").splitlines()) != 1:
         return None
     # Nor one right after a CR: between a CR and an LF it would split or

@@ -194,7 +194,7 @@ def robtarget_block(recs: list[RobTarget], R: np.ndarray, p: np.ndarray, conf: n
     why = np.array(whys, dtype=object)[rows]
     shift = np.array([r.span.start for r in recs], np.int64)[rows] - off[rows]
     edits = EditColumns(a + shift, b + shift, new, why)
-    spliced = apply_edits(joined, EditColumns(a, b, new, why))
+    spliced = apply_edits(joined, EditColumns(a, b, new, why, pack=False))
     grow = size - (b - a)
     # (Each literal's length as written: the distance to the next one's
     # offset, less the ',' joining them.)
