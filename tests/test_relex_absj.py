@@ -58,8 +58,11 @@ def _same(a, b):
     assert a.rows == b.rows and a.notes == b.notes and a.modules == b.modules
 
 
-@pytest.mark.parametrize("mode", ["absj", "auto"])
-def test_cam_program_entered_from_main(monkeypatch, solver, mode):
+@pytest.mark.parametrize("mode, block", [("absj", None), ("absj", 7), ("auto", None)])
+def test_cam_program_entered_from_main(monkeypatch, solver, mode, block):
+    """(block: the moves read RELEX_BLOCK at a time, a last one short.)"""
+    if block is not None:
+        monkeypatch.setattr(V, "RELEX_BLOCK", block)
     task = Task("cam.mod", (parse_text(_cam(1500), "cam.mod"),))
     read, parsed, served = _fix_both(monkeypatch, task, solver, mode)
     _same(read, parsed)

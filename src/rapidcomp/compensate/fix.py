@@ -184,6 +184,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # not needed (1e5 targets: some 300 MB the diffs and the report reuse
     # instead of growing the process further).
     plan = solved = gs = actions = group_of = written_conf = verified = None
+    release()
     modules = []
     for fi, pf in enumerate(task.files):
         es = file_edits.get(fi, [])

@@ -163,55 +163,59 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
     None where anything differs (the output is then parsed again)."""
     eng, build = engine(), NodeBuilder()
     by_file: dict = {}
-    for key, item in converted.items():
-        by_file.setdefault(key[0], []).append((key, *item))
+    for key in converted:
+        by_file.setdefault(key[0], []).append(key)
     keys: list = []
     rows: list = []
-    for fi, items in by_file.items():
+    for fi, file_keys in by_file.items():
         es, shift = _shifts(file_edits.get(fi, []))
-        shift = shift.tolist()
         text, src = texts[fi], plan.files[fi].source.text
         declared = _declared(eng, build, es, shift, text, plan.files[fi])
         if declared is None:
             return None
         names, scopes, aggs = declared
-        spans = np.array([it[1].motion.span for it in items], np.int64).reshape(-1, 2)
-        before = np.searchsorted(es.ends, spans, "right").tolist()
-        # (Each move's joints a row of one array, not a tuple of floats.)
-        records = np.empty((len(items), 6))
-        for n, ((key, u, literal, name, called), (a, b), (ka, kb)) in enumerate(zip(
-                items, spans.tolist(), before)):
-            m = u.motion
-            expr = u.source.expr.span
-            head = called + src[m.name_span.end:expr.start]
-            at = a + shift[ka]
-            if (called.lower() != "moveabsj"
-                    or text[at:b + shift[kb]] != head + (name or literal) + src[expr.end:b]):
-                return None
-            if name is None:
-                # (An aggregate of numbers as the lexer reads them, as
-                # parsing the statement would.)
-                if [t.type for t in eng.tokens(literal)] != ["NUMAGG", "$END"]:
+        # (Each move's joints a row of one array, not a tuple of floats; the
+        # moves' offsets a block at a time, not 1e5 pairs of ints at once.)
+        records = np.empty((len(file_keys), 6))
+        for first in range(0, len(file_keys), RELEX_BLOCK):
+            block = file_keys[first:first + RELEX_BLOCK]
+            items = [converted[key] for key in block]
+            spans = np.array([it[0].motion.span for it in items], np.int64).reshape(-1, 2)
+            # (Where each statement's ends lie in the output.)
+            moved = spans + shift[np.searchsorted(es.ends, spans, "right")]
+            for n, ((u, literal, name, called), (a, b), (at, to)) in enumerate(zip(
+                    items, spans.tolist(), moved.tolist()), first):
+                m = u.motion
+                expr = u.source.expr.span
+                head = called + src[m.name_span.end:expr.start]
+                if (called.lower() != "moveabsj"
+                        or text[at:to] != head + (name or literal) + src[expr.end:b]):
                     return None
-                agg = A.NumAgg(literal, Span(at + len(head), at + len(head) + len(literal)))
-            else:
-                k = names.get(name.lower())
-                if k is None:
+                if name is None:
+                    # (An aggregate of numbers as the lexer reads them, as
+                    # parsing the statement would.)
+                    if [t.type for t in eng.tokens(literal)] != ["NUMAGG", "$END"]:
+                        return None
+                    agg = A.NumAgg(literal, Span(at + len(head),
+                                                 at + len(head) + len(literal)))
+                else:
+                    k = names.get(name.lower())
+                    if k is None:
+                        return None
+                    x, y = aggs[2 * k], aggs[2 * k + 1]
+                    if not (scopes[2 * k] <= a and b <= scopes[2 * k + 1]
+                            and y - x == len(literal) and text.startswith(literal, x)):
+                        return None
+                    agg = A.NumAgg(literal, Span(x, y))
+                try:
+                    records[n] = decode("jointtarget", agg).joints
+                except DecodeIssue:
                     return None
-                x, y = aggs[2 * k], aggs[2 * k + 1]
-                if not (scopes[2 * k] <= a and b <= scopes[2 * k + 1]
-                        and y - x == len(literal) and text.startswith(literal, x)):
-                    return None
-                agg = A.NumAgg(literal, Span(x, y))
-            try:
-                records[n] = decode("jointtarget", agg).joints
-            except DecodeIssue:
-                return None
         # (As the resolver reads a jointtarget: float32, then floats.)
         joints = records.astype(np.float32).astype(float)
         if not (np.abs(joints) <= MAX_JOINT_DEG).all():
             return None
-        keys.extend(it[0] for it in items)
+        keys += file_keys
         rows.append(joints)
     return Converted(dict(zip(keys, range(len(keys)))),
                      np.concatenate(rows) if rows else np.empty((0, 6)))
@@ -233,7 +237,7 @@ class Converted:
         return default if n is None else tuple(self.joints[n].tolist())
 
 
-def _declared(eng, build, es: EditColumns, shift: list, text: str,
+def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
               pf: ParsedFile) -> tuple[dict, array, array] | None:
     """The new declarations of a file read again where the output holds
     them: (lower-case name -> k; the (start, end) in the input of its scope
@@ -264,7 +268,7 @@ def _declared(eng, build, es: EditColumns, shift: list, text: str,
         rest = src[ends[last]:at].lstrip(" \t")
         if "\n" in rest or "\r" in rest or rest[:1] not in ("", "!"):
             return None
-        a = at + shift[k]
+        a = at + int(shift[k])
         piece = text[a:a + len(es.text(k))]
         for tok in eng.tokens(piece):
             if tok.type == "$END":
