@@ -215,3 +215,49 @@ def test_a_declaration_after_a_statement_is_not_taken(solver):
     with pytest.raises(Exception):
         parse_text(bad, "hand.mod")
     assert V.relex_absj(plan, editor.converted, {0: moved}, {0: bad}) is None
+
+
+def test_joint_rows_are_the_decoders_joints():
+    """verify._joint_rows (the moves' literals decoded as one batch) against
+    values.decode of each literal, by repr of each float (a -0 keeps its
+    sign), on seeded random batches: plain literals, and ones the batch must
+    leave to the decoder (a space, a hexadecimal number, a number beyond a
+    num's range, a field too many or too few; each a numeric aggregate as
+    the lexer reads one)."""
+    import random
+
+    import numpy as np
+
+    from rapidcomp.rapid.ast import NumAgg, Span
+    from rapidcomp.rapid.values import DecodeIssue, decode
+    rnd = random.Random(5)
+    plain = ["0", "-0", "12.5", "-170.25", "1E+09", "9E+09", ".5", "2.", "1e-3", "-0.0"]
+    odd = ["4E38", "-3.5E38", " 1", "1 ", "1,2"]
+    served = declined = 0
+    for _ in range(400):
+        lits = []
+        for _ in range(rnd.randint(1, 12)):
+            fields = [rnd.choice(plain) for _ in range(12)]
+            if rnd.random() < 0.05:
+                fields[rnd.randrange(12)] = rnd.choice(odd)
+            lit = f"[[{','.join(fields[:6])}],[{','.join(fields[6:])}]]"
+            if rnd.random() < 0.02:
+                lit = lit.replace("],[", "],[0,", 1)
+            lits.append(lit)
+        got = V._joint_rows(lits)
+        want = []
+        try:
+            for lit in lits:
+                want.append(decode("jointtarget", NumAgg(lit, Span(0, len(lit)))).joints)
+        except DecodeIssue:
+            want = None
+        if got is None:
+            declined += 1
+            continue
+        served += 1
+        assert want is not None and got.shape == (len(lits), 6)
+        assert [[repr(v) for v in row] for row in got.tolist()] == \
+            [[repr(v) for v in row] for row in want]
+        assert got.dtype == np.float64
+    assert served > 150 and declined > 40
+    assert V._joint_rows([]) is None

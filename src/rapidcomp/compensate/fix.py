@@ -243,12 +243,16 @@ def _missed(solved, gs, verified) -> dict:
     bound (the orientation bound widened by what a wrist-singular MoveAbsJ
     leaves over): group -> (use, um, deg)."""
     out = {}
+    # (Each row's residual in degrees converted once, not a numpy scalar per
+    # use: the same division of the same doubles.)
+    lefts = (solved.deformed.residual_rad.astype(float) / DEG).tolist()
+    row = solved.row
     for g in gs:
         if g.failure is not None:
             continue
         for u in g.uses:
             um, deg = verified[u.key]
-            left = float(solved.deformed.residual_rad[solved.row[u.key]]) / DEG
+            left = lefts[row[u.key]]
             if um > VERIFY_UM or deg > max(VERIFY_DEG, left + VERIFY_DEG):
                 out[g] = (u, um, deg)
                 break

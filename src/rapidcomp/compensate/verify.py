@@ -29,8 +29,8 @@ from ..rapid.build import NodeBuilder
 from ..rapid.grammar import engine
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
-from ..rapid.values import (NUM_MAX, ROBTARGET_FRAME, DecodeIssue, RobTarget, decimal_chars,
-                             decode, frame_fields, plain_bounds)
+from ..rapid.values import (JOINTTARGET_FRAME, NUM_MAX, ROBTARGET_FRAME, DecodeIssue, RobTarget,
+                             decimal_chars, decode, frame_fields, plain_bounds)
 from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
@@ -196,8 +196,6 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                     # parsing the statement would.)
                     if [t.type for t in eng.tokens(literal)] != ["NUMAGG", "$END"]:
                         return None
-                    agg = A.NumAgg(literal, Span(at + len(head),
-                                                 at + len(head) + len(literal)))
                 else:
                     k = names.get(name.lower())
                     if k is None:
@@ -206,11 +204,19 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                     if not (scopes[2 * k] <= a and b <= scopes[2 * k + 1]
                             and y - x == len(literal) and text.startswith(literal, x)):
                         return None
-                    agg = A.NumAgg(literal, Span(x, y))
-                try:
-                    records[n] = decode("jointtarget", agg).joints
-                except DecodeIssue:
-                    return None
+            # The block's literals, each the text of an aggregate of numbers
+            # where the output holds it: decoded as the parser decodes them.
+            lits = [it[1] for it in items]
+            rows_of = _joint_rows(lits)
+            if rows_of is None:
+                for n, literal in enumerate(lits, first):
+                    try:
+                        records[n] = decode("jointtarget",
+                                            A.NumAgg(literal, Span(0, len(literal)))).joints
+                    except DecodeIssue:
+                        return None
+            else:
+                records[first:first + len(lits)] = rows_of
         # (As the resolver reads a jointtarget: float32, then floats.)
         joints = records.astype(np.float32).astype(float)
         if not (np.abs(joints) <= MAX_JOINT_DEG).all():
@@ -235,6 +241,36 @@ class Converted:
     def get(self, key, default=None):
         n = self.rows.get(key)
         return default if n is None else tuple(self.joints[n].tolist())
+
+
+def _joint_rows(lits: list[str]) -> np.ndarray | None:
+    """decode("jointtarget", literal).joints of each literal, as rows (n, 6),
+    when every one is written in its plain frame (no whitespace) with
+    numbers float() reads within a num's range: the decoder's first way,
+    the same floats (a CAM program's 1e5 MoveAbsJ at once). Else None: the
+    literals are decoded one by one."""
+    n = len(lits)
+    if not n:
+        return None
+    joined = ",".join(lits)
+    fields = frame_fields(joined)
+    # The literals joined are the frames joined, and each literal is as long
+    # as its own frame: each is the frame with its 12 fields.
+    if (len(fields) != 12 * n
+            or joined != ",".join([JOINTTARGET_FRAME] * n) % tuple(fields)
+            or not np.array_equal(
+                np.fromiter(map(len, fields), np.int64, 12 * n).reshape(n, 12).sum(axis=1)
+                + len(JOINTTARGET_FRAME % (("",) * 12)),
+                np.fromiter(map(len, lits), np.int64, n))):
+        return None
+    try:
+        values = np.fromiter(map(float, fields), float, 12 * n)
+    except ValueError:
+        return None
+    # (No NaN, no infinity: those the decoder reads another way.)
+    if not (np.abs(values) <= NUM_MAX).all():
+        return None
+    return values.reshape(n, 12)[:, :6]
 
 
 def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,

@@ -271,7 +271,8 @@ def _shape_regex(counts: tuple[int, ...]) -> re.Pattern:
 _FAST = {"robtarget": _shape_regex((3, 4, 4, 6)), "jointtarget": _shape_regex((6, 6))}
 # A literal's 17 (12) numbers in their frame (as written without whitespace).
 ROBTARGET_FRAME = "[[%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s,%s,%s]]"
-_PLAIN = {RobTarget: ROBTARGET_FRAME, JointTarget: "[[%s,%s,%s,%s,%s,%s],[%s,%s,%s,%s,%s,%s]]"}
+JOINTTARGET_FRAME = "[[%s,%s,%s,%s,%s,%s],[%s,%s,%s,%s,%s,%s]]"
+_PLAIN = {RobTarget: ROBTARGET_FRAME, JointTarget: JOINTTARGET_FRAME}
 _COMPACT = {"robtarget": RobTarget, "jointtarget": JointTarget}
 _COUNT = {RobTarget: 17, JointTarget: 12}
 # Over these characters float() reads exactly what NUMBER_RE matches (a
