@@ -1,6 +1,7 @@
-"""EditColumns packs its replacements as fixed-width ASCII bytes when
-every one is short ASCII without NUL (a CAM program's 7e5 numbers: no
-str object each; edits._packed). Oracle: the same edits as a list of
+"""EditColumns packs its replacements as fixed-width ASCII bytes, those
+that are not short ASCII without NUL kept aside as str (a CAM program's 7e5
+numbers and a declaration inserted: no str object per number;
+edits.Texts). Oracle: the same edits as a list of
 SpanEdit (str replacements, the loop of apply_edits and the diff's own),
 on seeded random replacements of every kind: numbers, empty, non-ASCII,
 a NUL (which the bytes' padding would swallow), line breaks str sees and
@@ -25,10 +26,8 @@ def _edits(rnd, text, pool):
             for a, b in zip(cuts[::2], cuts[1::2])]
 
 
-def _packable(reps) -> bool:
-    joined = "".join(reps)
-    return bool(reps) and joined.isascii() and "\x00" not in joined and \
-        max(map(len, reps)) <= E.PACK_WIDTH
+def _aside(reps) -> list[str]:
+    return [r for r in reps if not (r.isascii() and "\x00" not in r and len(r) <= E.PACK_WIDTH)]
 
 
 def test_packed_columns_read_as_the_edits_they_are_made_of():
@@ -40,8 +39,8 @@ def test_packed_columns_read_as_the_edits_they_are_made_of():
         edits = _edits(rnd, text, pool)
         reps = [e.replacement for e in edits]
         cols = EditColumns.of(edits)
-        assert (cols._texts.dtype.kind == "S") == _packable(reps)
-        packed += cols._texts.dtype.kind == "S"
+        assert cols._texts.is_packed and cols._texts.wide == _aside(reps)
+        packed += bool(cols._texts.wide)
         assert list(cols) == edits and all(type(e.replacement) is str for e in cols)
         assert cols.texts() == reps and cols.joined() == "".join(reps)
         assert cols.lengths().tolist() == [len(r) for r in reps]
@@ -50,14 +49,22 @@ def test_packed_columns_read_as_the_edits_they_are_made_of():
             assert cols.text(k) == reps[k] and type(cols.text(k)) is str
             assert cols[k] == edits[k]
             assert cols.texts(k, k + 2) == reps[k:k + 2]
-        order = rnd.sample(range(len(edits)), len(edits))
+        order = rnd.sample(range(len(edits)), len(edits)) * 2
         assert list(cols.take(order)) == [edits[k] for k in order]
+        mask = [rnd.random() < 0.5 for _ in edits]
+        assert list(cols.take(np.array(mask, bool))) == [e for e, m in zip(edits, mask) if m]
+        assert list(cols[1::2]) == edits[1::2] and list(cols[::-1]) == edits[::-1]
+        if edits:
+            assert cols.text(-1) == reps[-1] and cols[-1] == edits[-1]
+        taken = cols.take(order)
+        assert taken.joined() == "".join(reps[k] for k in order)
+        assert taken.lengths().tolist() == [len(reps[k]) for k in order]
         assert apply_edits(text, cols) == apply_edits(text, tuple(edits))
         # The diff reads the line breaks of the replacements joined.
         ordered = sorted(edits, key=E.BY_SPAN)
         if all(a.end <= b.start for a, b in zip(ordered, ordered[1:])):
             assert D.unified_diff(text, cols, "a", "b") == D.unified_diff(text, edits, "a", "b")
-    assert 150 < packed < 550
+    assert 40 < packed < 300      # (columns with texts aside)
 
 
 def test_packed_and_unpacked_parts_join_in_order():
@@ -79,7 +86,7 @@ def test_packed_and_unpacked_parts_join_in_order():
                 want += edits
         got = columns_of(parts)
         assert list(got) == want and got.texts() == [e.replacement for e in want]
-        assert got._texts.dtype.kind in "SO"
+        assert got._texts.is_packed or not want
         blocks = [EditColumns.of(want[:2]), EditColumns.of(want[2:])]
         assert list(EditColumns.concat(blocks)) == want
     assert len(EditColumns.concat([])) == 0
@@ -87,5 +94,26 @@ def test_packed_and_unpacked_parts_join_in_order():
 
 def test_unpacked_when_asked():
     cols = EditColumns([0], [1], ["7"], ["w"], pack=False)
-    assert cols._texts.dtype == object and list(cols) == [SpanEdit(0, 1, "7", "w")]
-    assert EditColumns([0], [1], ["7"], ["w"])._texts.dtype.kind == "S"
+    assert cols._texts.packed.dtype == object and list(cols) == [SpanEdit(0, 1, "7", "w")]
+    packed = EditColumns([0], [1], ["7"], ["w"])
+    assert packed._texts.packed.dtype.kind == "S"
+    # Bytes given as such are texts, packed or not (never bytes read back).
+    again = EditColumns(packed.starts, packed.ends, packed._texts.packed, packed.whys,
+                        pack=False)
+    assert again.texts() == ["7"] and list(again) == list(packed)
+
+
+def test_a_cam_program_with_a_declaration_inserted_stays_packed():
+    """One long text among many numbers (a MoveJ turned into MoveAbsJ on a
+    new jointtarget in a CAM program): the numbers stay packed, through
+    columns_of, take and concat, and read back in order."""
+    nums = EditColumns.of([SpanEdit(10 * k, 10 * k + 3, f"{k}.5", "n") for k in range(1000)])
+    decl = SpanEdit(5, 5, "\n  CONST jointtarget jt_p0:=[[1,2,3,4,5,6],[9E+09,9E+09,9E+09,"
+                    "9E+09,9E+09,9E+09]];", "d")
+    got = columns_of([E.EditRun(nums, 0, 1), decl, E.EditRun(nums, 1, 1000)])
+    want = [nums[0], decl] + list(nums)[1:]
+    assert list(got) == want and got._texts.is_packed and got._texts.wide == [decl.replacement]
+    assert got._texts.wide_at.tolist() == [1] and got._texts.packed.dtype.itemsize == 5
+    assert got.joined() == "".join(e.replacement for e in want)
+    assert got.text(1) == decl.replacement and got.texts(1, 2) == [decl.replacement]
+    assert apply_edits("x" * 10000, got) == apply_edits("x" * 10000, want)

@@ -52,18 +52,17 @@ class EditColumns(Sequence):
     numbers; as columns they are spliced, shifted and counted by array
     operations, and no tuple and two ints per edit outlive the batch that
     made them. starts/ends: int64 arrays; whys: an object array of str;
-    the replacements (read by texts/text/joined/lengths) packed (_packed)
-    where they are short ASCII texts, as a CAM program's numbers are; copies
-    of what they are made from, read-only."""
+    the replacements a Texts column (read by texts/text/joined/lengths);
+    copies of what they are made from, read-only."""
 
     __slots__ = ("starts", "ends", "_texts", "whys")
 
     def __init__(self, starts, ends, replacements, whys, pack: bool = True):
         self.starts = np.array(starts, np.int64)
         self.ends = np.array(ends, np.int64)
-        self._texts = _packed(replacements) if pack else _objects(replacements)
+        self._texts = Texts.of(replacements, pack)
         self.whys = _objects(whys)
-        for a in (self.starts, self.ends, self._texts, self.whys):
+        for a in (self.starts, self.ends, self.whys):
             a.flags.writeable = False
 
     @classmethod
@@ -74,7 +73,7 @@ class EditColumns(Sequence):
                    [e.replacement for e in edits], [e.why for e in edits])
 
     def take(self, index) -> "EditColumns":
-        return EditColumns(self.starts[index], self.ends[index], self._texts[index],
+        return EditColumns(self.starts[index], self.ends[index], self._texts.take(index),
                            self.whys[index])
 
     @classmethod
@@ -82,35 +81,25 @@ class EditColumns(Sequence):
         """The edits of `parts`, one after the other."""
         if not parts:
             return cls([], [], [], [])
-        texts = [c._texts for c in parts]
-        if any(t.dtype.kind != "S" for t in texts):
-            # (Packed bytes and str objects do not mix in one array.)
-            texts = [_objects(c.texts()) for c in parts]
         return cls(np.concatenate([c.starts for c in parts]),
-                   np.concatenate([c.ends for c in parts]), np.concatenate(texts),
+                   np.concatenate([c.ends for c in parts]),
+                   Texts.concat([c._texts for c in parts]),
                    np.concatenate([c.whys for c in parts]))
 
     def texts(self, i: int = 0, j: int | None = None) -> list[str]:
         """The replacements of edits [i, j), as str."""
-        t = self._texts[i:j]
-        return t.astype(str).tolist() if t.dtype.kind == "S" else t.tolist()
+        return self._texts.list(i, j)
 
     def text(self, k: int) -> str:
-        t = self._texts[k]
-        return t.decode("ascii") if type(t) is np.bytes_ else t
+        return self._texts.item(k)
 
     def joined(self) -> str:
         """Every replacement, one after the other, as one str."""
-        if self._texts.dtype.kind == "S":
-            # (Packed texts hold no NUL: the padding is all there is.)
-            return self._texts.tobytes().replace(b"\0", b"").decode("ascii")
-        return "".join(self._texts.tolist())
+        return self._texts.joined()
 
     def lengths(self) -> np.ndarray:
         """len() of each replacement (int64)."""
-        if self._texts.dtype.kind == "S":
-            return np.char.str_len(self._texts).astype(np.int64)
-        return np.fromiter(map(len, self._texts), np.int64, len(self._texts))
+        return self._texts.lengths()
 
     def __len__(self) -> int:
         return len(self.starts)
@@ -143,27 +132,124 @@ def _objects(texts) -> np.ndarray:
 
 
 # The widest replacement packed as bytes: a number's text (wider ones, a
-# line inserted, stay str objects: every slot is as wide as the widest).
+# line inserted, are kept aside: every slot is as wide as the widest).
 PACK_WIDTH = 24
 
 
-def _packed(texts) -> np.ndarray:
-    """Replacements as one array of fixed-width ASCII bytes when every one
-    is ASCII, holds no NUL (the padding) and is at most PACK_WIDTH long, so
-    that they are decoded back to the same str; else an object array of
-    str. A CAM program's 7e5 numbers: ~9 bytes each, not a str object each
-    (~40 MB at 1e5 targets)."""
-    if isinstance(texts, np.ndarray) and texts.dtype.kind == "S":
-        return np.array(texts)
-    objs = _objects(texts)
-    if not len(objs):
-        return objs
-    every = objs.tolist()
-    joined = "".join(every)
-    if (not joined.isascii() or "\0" in joined
-            or max(map(len, every)) > PACK_WIDTH):
-        return objs
-    return np.array(every, dtype="S")
+class Texts:
+    """A column of replacement texts. Packed where most are short ASCII
+    texts without NUL (a CAM program's 7e5 numbers: ~9 bytes each in one
+    array of fixed-width bytes, not a str object each, ~40 MB at 1e5
+    targets): `packed` an 'S' array, NUL-padded, and the few others (a
+    declaration inserted; non-ASCII; a NUL, which the padding would lose)
+    kept aside as str, at the sorted indices `wide_at` (their slots hold
+    b""). Else `packed` an object array of str and no texts aside.
+    Read-only; a take or a concatenation is a new column."""
+
+    __slots__ = ("packed", "wide_at", "wide")
+
+    def __init__(self, packed: np.ndarray, wide_at: np.ndarray, wide: list[str]):
+        packed.flags.writeable = False
+        self.packed, self.wide_at, self.wide = packed, wide_at, wide
+
+    @classmethod
+    def of(cls, texts, pack: bool = True) -> "Texts":
+        if isinstance(texts, Texts):
+            return texts
+        if isinstance(texts, np.ndarray) and texts.dtype.kind == "S":
+            return cls(np.array(texts), _NONE, [])
+        objs = _objects(texts)
+        if not pack:
+            return cls(objs, _NONE, [])
+        if not len(objs):
+            return cls(np.zeros(0, "S1"), _NONE, [])
+        every = objs.tolist()
+        joined = "".join(every)
+        if joined.isascii() and "\0" not in joined and max(map(len, every)) <= PACK_WIDTH:
+            return cls(np.array(every, dtype="S"), _NONE, [])
+        aside = [k for k, t in enumerate(every)
+                 if not (t.isascii() and "\0" not in t and len(t) <= PACK_WIDTH)]
+        wide = [every[k] for k in aside]
+        for k in aside:
+            every[k] = ""
+        return cls(np.array(every, dtype="S"), np.array(aside, np.int64), wide)
+
+    @property
+    def is_packed(self) -> bool:
+        return self.packed.dtype.kind == "S"
+
+    def __len__(self) -> int:
+        return len(self.packed)
+
+    def take(self, index) -> "Texts":
+        packed = self.packed[index]
+        if not self.wide:
+            return Texts(packed, _NONE, [])
+        # Where each text aside went (an index array, a slice or a mask).
+        at = np.arange(len(self.packed))[index]
+        k = np.minimum(np.searchsorted(self.wide_at, at), len(self.wide_at) - 1)
+        hit = np.flatnonzero(self.wide_at[k] == at)
+        return Texts(packed, hit.astype(np.int64), [self.wide[j] for j in k[hit].tolist()])
+
+    @classmethod
+    def concat(cls, parts: list["Texts"]) -> "Texts":
+        # (Bytes and str objects do not mix in one array: a column of str
+        # is packed first, its long texts aside.)
+        parts = [p if p.is_packed else cls.of(p.list()) for p in parts]
+        offsets = np.cumsum([0] + [len(p) for p in parts[:-1]])
+        return cls(np.concatenate([p.packed for p in parts]),
+                   np.concatenate([p.wide_at + o for p, o in zip(parts, offsets)] + [_NONE]),
+                   [t for p in parts for t in p.wide])
+
+    def list(self, i: int = 0, j: int | None = None) -> list[str]:
+        """The texts [i, j) as str."""
+        t = self.packed[i:j]
+        if not self.is_packed:
+            return t.tolist()
+        out = t.astype(str).tolist()
+        if self.wide:
+            i, j, _ = slice(i, j).indices(len(self.packed))
+            a, b = np.searchsorted(self.wide_at, (i, j)).tolist()
+            for k, text in zip(self.wide_at[a:b].tolist(), self.wide[a:b]):
+                out[k - i] = text
+        return out
+
+    def item(self, k: int) -> str:
+        t = self.packed[k]
+        if type(t) is not np.bytes_:
+            return t
+        if self.wide:
+            k = range(len(self.packed))[k]           # (a negative k as its place)
+            n = int(np.searchsorted(self.wide_at, k))
+            if n < len(self.wide_at) and self.wide_at[n] == k:
+                return self.wide[n]
+        return t.decode("ascii")
+
+    def joined(self) -> str:
+        """Every text, one after the other, as one str."""
+        if not self.is_packed:
+            return "".join(self.packed.tolist())
+        # The packed runs between the texts aside, each as its bytes (packed
+        # texts hold no NUL: the padding is all there is), the texts aside
+        # between them.
+        out = []
+        at = 0
+        for k, text in zip(self.wide_at.tolist() + [len(self.packed)], self.wide + [""]):
+            out += [self.packed[at:k].tobytes().replace(b"\0", b"").decode("ascii"), text]
+            at = k + 1
+        return "".join(out)
+
+    def lengths(self) -> np.ndarray:
+        """len() of each text (int64)."""
+        if not self.is_packed:
+            return np.fromiter(map(len, self.packed), np.int64, len(self.packed))
+        out = np.char.str_len(self.packed).astype(np.int64)
+        if self.wide:
+            out[self.wide_at] = [len(t) for t in self.wide]
+        return out
+
+
+_NONE = np.zeros(0, np.int64)
 
 
 class EditRun:

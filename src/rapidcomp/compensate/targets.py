@@ -297,6 +297,7 @@ class Resolver:
         # A use's confdata and external axes as one tuple per distinct value
         # (a CAM program's 1e5 uses have a few: ~15 MB).
         self._same: dict = {}
+        self._same_floats: dict = {}
         for pf in files:
             for m in pf.modules:
                 mid = id(m)
@@ -983,7 +984,7 @@ class Resolver:
                                             f"joint angle (|J| <= {MAX_JOINT_DEG:g})")
             return TargetUse(motion, role, label, line, kind, None, None, None, joints, None,
                              src, env=envt, file=pf, module=module,
-                             ext=self._one(src.record.ext), key=key)
+                             ext=self._one(src.record.ext, True), key=key)
         if not isinstance(src.record, RobTarget):
             return fail(Unresolved("not a robtarget", True))
         tool = self.tool(motion.tool, module, motion.routine)
@@ -1000,17 +1001,20 @@ class Resolver:
         # raises the first pending one's first, as one by one would).
         u = TargetUse(motion, role, label, line, kind, None, None, self._one(src.record.conf),
                       None, None, src, tool, wobj, envt, file=pf, module=module,
-                      ext=self._one(src.record.ext), key=key, notes=tuple(self._notes))
+                      ext=self._one(src.record.ext, True), key=key, notes=tuple(self._notes))
         self._pending.append((u, src, pf, base, wobj[1], tool[1]))
         return u
 
-    def _one(self, value: tuple) -> tuple:
-        """`value`, as the one tuple this resolver holds equal to it, of the
-        same signs (0.0 == -0.0, and the two print differently)."""
+    def _one(self, value: tuple, floats: bool = False) -> tuple:
+        """`value`, as the one tuple this resolver holds equal to it; of
+        numbers that may be floats (floats), of the same signs too (0.0 ==
+        -0.0, and the two print differently)."""
+        if not floats:
+            return self._same.setdefault(value, value)
         key = value
-        if 0.0 in value and any(type(v) is float for v in value):
+        if 0.0 in value:
             key = (value, tuple(math.copysign(1.0, v) for v in value))
-        return self._same.setdefault(key, value)
+        return self._same_floats.setdefault(key, value)
 
     def _confdata(self, src: Source, pf: ParsedFile) -> None:
         """confdata of a robtarget a move uses: whole numbers, cfx one of
