@@ -164,12 +164,17 @@ class Assign:
 @dataclass(frozen=True, slots=True)
 class ProcCall:
     name: str
-    name_span: Span
     args: tuple[Arg, ...]
     span: Span
     # Every argument a plain name or a literal (refs.plain_args), decided
     # once by the builder: a CAM move is asked three times.
     plain: bool = False
+
+    @property
+    def name_span(self) -> Span:
+        """The procedure's name, where the statement starts (made when
+        asked: a CAM program has 1e5 calls)."""
+        return Span(self.span.start, self.span.start + len(self.name))
 
 
 @dataclass(frozen=True, slots=True)

@@ -255,8 +255,8 @@ class NodeBuilder:
     def call(self, c):
         name = c[0]
         args = c[1] if len(c) == 3 else ()
-        return A.ProcCall(name.value, Span(name.start_pos, name.end_pos), args,
-                          Span(name.start_pos, c[-1].end_pos), plain_args(args))
+        return A.ProcCall(name.value, args, Span(name.start_pos, c[-1].end_pos),
+                          plain_args(args))
 
     def fast_call(self, c):
         """A FAST_CALL token: split it into name and arguments (see grammar)."""
@@ -293,8 +293,7 @@ class NodeBuilder:
                 args.append(A.Arg("optval", opt, value, Span(at + s0, at + e0)))
         # (Plain by construction: names, a numeric aggregate, \Opt, \Opt:=name
         # or number.)
-        return A.ProcCall(name, Span(base, base + len(name)), tuple(args),
-                          Span(base, base + len(text)), True)
+        return A.ProcCall(name, tuple(args), Span(base, base + len(text)), True)
 
     def fast_decl(self, c):
         """A FAST_DECL token: one-line declaration with a numeric aggregate."""

@@ -42,7 +42,6 @@ class Motion:
     instruction: str        # as written
     spec: MotionSpec
     span: Span
-    name_span: Span
     routine: str
     loops: tuple[Loop, ...]
     args: tuple[A.Arg, ...]
@@ -52,6 +51,11 @@ class Motion:
     tool: A.Expr | None
     wobj: A.Expr | None
     optional: tuple[A.Arg, ...]  # optional arguments other than \WObj
+
+    @property
+    def name_span(self) -> Span:
+        """The instruction's name, where its statement starts."""
+        return Span(self.span.start, self.span.start + len(self.instruction))
 
 
 @dataclass(frozen=True, slots=True)

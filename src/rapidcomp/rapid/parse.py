@@ -117,7 +117,7 @@ def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops) -> 
             wobj = a.value
         elif a.kind not in ("pos", "named"):
             optional.append(a)
-    return Motion(call.name, spec, call.span, call.name_span, routine, tuple(loops),
+    return Motion(call.name, spec, call.span, routine, tuple(loops),
                   call.args, tuple(targets), slots.get("speed"), slots.get("zone"),
                   slots.get("tool"), wobj, tuple(optional))
 
