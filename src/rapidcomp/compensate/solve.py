@@ -554,6 +554,9 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
     chooser.run()
     q_nom = chooser.q
     picks = chooser.picks
+    # The chooser's candidates, guesses and solutions (1e5 targets: ~100
+    # MB) go before the deformed robot's batches are made.
+    chooser = None
     R = np.empty((n, 3, 3))
     p = np.empty((n, 3))
     Rj, pj, seed = solver.seed_from_joints(np.nan_to_num(q_nom))
@@ -579,6 +582,7 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
     qc = np.nan_to_num(deformed.q_deg) * DEG
     (Rn, pn), (_, frames) = solver.nominal_chain.fk_and_frames(qc)
     conf_after = confdata(qc, frames[:, 4], solver.geometry.phi)
+    frames = None
     disp = np.full(n, np.nan)
     moved = [i for i, u in enumerate(uses) if u.kind == "robtarget" and plan.may_be_displaced(u)
              and picks[i].failure is None and deformed.success[i]]
