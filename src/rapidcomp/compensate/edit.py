@@ -303,6 +303,7 @@ class Editor:
         self.insert_nl: dict[tuple[int, int], str] = {}
         self.insert_indent: dict[tuple[int, int], str] = {}
         self.actions: dict = {}                                # use key -> what was done
+        self._said_texts: dict = {}                            # (_said)
         # (file, record offset) -> (record, new field texts) of every
         # literal whose numeric fields are edited; structural: some edit
         # is of anything else (a new declaration, a reference, MoveAbsJ).
@@ -484,7 +485,8 @@ class Editor:
                 literal = vals.literal(g, None)
                 called = self._to_absj(u, literal)
                 self.converted[u.key] = (u, literal, None, called)
-                self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ, inline jointtarget"
+                self.actions[u.key] = self._said(
+                    f"{u.motion.instruction} -> MoveAbsJ, inline jointtarget")
             return
         # A new declaration next to the source one.
         if g.array:
@@ -669,13 +671,18 @@ class Editor:
             cold_literal, "pose", self._pose_literal, dq_after_cold=False)
         self._use_transient(g, names, func, False)
 
+    def _said(self, text: str) -> str:
+        """`text` as the one equal string this editor keeps (a CAM
+        program's 1e5 moves say the same few things: ~15 MB)."""
+        return self._said_texts.setdefault(text, text)
+
     def _to_absj(self, u, target_text: str) -> str:
         """The move turned into MoveAbsJ on target_text; returns its new
         instruction name as written."""
         m = u.motion
         fi = u.key[0]
         called = _style("MoveAbsJ", m.instruction)
-        self._edit(fi, m.name_span, called, f"{m.instruction} -> MoveAbsJ")
+        self._edit(fi, m.name_span, called, self._said(f"{m.instruction} -> MoveAbsJ"))
         self._edit(fi, u.source.expr.span, target_text, f"{u.label} -> {target_text[:40]}")
         return called
 
