@@ -137,14 +137,14 @@ PACK_WIDTH = 24
 
 
 class Texts:
-    """A column of replacement texts. Packed where most are short ASCII
-    texts without NUL (a CAM program's 7e5 numbers: ~9 bytes each in one
-    array of fixed-width bytes, not a str object each, ~40 MB at 1e5
-    targets): `packed` an 'S' array, NUL-padded, and the few others (a
-    declaration inserted; non-ASCII; a NUL, which the padding would lose)
-    kept aside as str, at the sorted indices `wide_at` (their slots hold
-    b""). Else `packed` an object array of str and no texts aside.
-    Read-only; a take or a concatenation is a new column."""
+    """A column of replacement texts. Packed (of(pack=True)): the short
+    ASCII texts without NUL in `packed`, an 'S' array, NUL-padded (a CAM
+    program's 7e5 numbers: ~9 bytes each, not a str object each, ~40 MB at
+    1e5 targets), and the others (a declaration inserted; non-ASCII; a NUL,
+    which the padding would lose) kept aside as str, at the sorted indices
+    `wide_at` (their slots hold b""). Unpacked: `packed` an object array of
+    str, none aside. Every reader gets str. Read-only; a take or a
+    concatenation is a new column."""
 
     __slots__ = ("packed", "wide_at", "wide")
 

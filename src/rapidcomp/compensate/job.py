@@ -166,16 +166,17 @@ def _run(spec: JobSpec) -> JobOutcome:
         meta = {"input": f"{src.kind} {src.input.name}" + (f", task {src.task}" if src.task
                                                            else ""),
                 "modules": len(src.modules), **meta}
-    support = _support_files(spec, task) if spec.transient is not None else []
     # Past the result the parsed task is not needed, but for each module's
-    # encoding (1e5 targets: ~300 MB gone before the output is encoded and
-    # the reports are rendered).
+    # encoding and the transient support module (1e5 targets: ~300 MB gone
+    # before the output is encoded and the reports are rendered).
     sources = [pf.source for pf in task.files]
-    task = None
+    if spec.transient is None:
+        task = None
     out = []
     for source, m in zip(sources, result.modules):
         out.append((str(output_path(spec, m.path)), source.encode(m.text)))
-    out += support
+    if spec.transient is not None:
+        out += _support_files(spec, task)
     if spec.report:
         out.append((spec.report, Report("markdown", result, meta, progress)))
     if spec.json:

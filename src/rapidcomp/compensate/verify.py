@@ -158,9 +158,9 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
     declaration (FAST_DECL) built as the parser builds it, a CONST
     jointtarget, in the move's routine or else its module, of the literal
     meant. Returns use key -> its joints as the controller stores them
-    (the literal decoded, float32, as the resolver reads a MoveAbsJ's:
-    Converted), or
-    None where anything differs (the output is then parsed again)."""
+    (the literal decoded, float32, as the resolver reads a MoveAbsJ's), a
+    Converted, or None where anything differs (the output is then parsed
+    again)."""
     eng, build = engine(), NodeBuilder()
     by_file: dict = {}
     for key in converted:
