@@ -32,7 +32,7 @@ def _aside(reps) -> list[str]:
 
 def test_packed_columns_read_as_the_edits_they_are_made_of():
     rnd = random.Random(14)
-    packed = 0
+    with_aside = 0
     for _ in range(600):
         text = "".join(rnd.choice("ab,[]\n\r9 ") for _ in range(rnd.randint(0, 50)))
         pool = SHORT if rnd.random() < 0.6 else SHORT + [rnd.choice(OTHER)]
@@ -40,7 +40,7 @@ def test_packed_columns_read_as_the_edits_they_are_made_of():
         reps = [e.replacement for e in edits]
         cols = EditColumns.of(edits)
         assert cols._texts.is_packed and cols._texts.wide == _aside(reps)
-        packed += bool(cols._texts.wide)
+        with_aside += bool(cols._texts.wide)
         assert list(cols) == edits and all(type(e.replacement) is str for e in cols)
         assert cols.texts() == reps and cols.joined() == "".join(reps)
         assert cols.lengths().tolist() == [len(r) for r in reps]
@@ -64,7 +64,7 @@ def test_packed_columns_read_as_the_edits_they_are_made_of():
         ordered = sorted(edits, key=E.BY_SPAN)
         if all(a.end <= b.start for a, b in zip(ordered, ordered[1:])):
             assert D.unified_diff(text, cols, "a", "b") == D.unified_diff(text, edits, "a", "b")
-    assert 40 < packed < 300      # (columns with texts aside)
+    assert 40 < with_aside < 300
 
 
 def test_packed_and_unpacked_parts_join_in_order():
