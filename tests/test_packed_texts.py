@@ -101,6 +101,10 @@ def test_unpacked_when_asked():
     again = EditColumns(packed.starts, packed.ends, packed._texts.packed, packed.whys,
                         pack=False)
     assert again.texts() == ["7"] and list(again) == list(packed)
+    edits = [SpanEdit(0, 1, "7", "w"), SpanEdit(2, 2, "x" * (E.PACK_WIDTH + 1), "v")]
+    loose = EditColumns.of(edits, pack=False)
+    assert loose._texts.packed.dtype == object and list(loose) == edits
+    assert loose.joined() == "7" + "x" * (E.PACK_WIDTH + 1) and loose.lengths().tolist() == [1, 25]
 
 
 def test_a_cam_program_with_a_declaration_inserted_stays_packed():

@@ -66,11 +66,13 @@ class EditColumns(Sequence):
             a.flags.writeable = False
 
     @classmethod
-    def of(cls, edits) -> "EditColumns":
+    def of(cls, edits, pack: bool = True) -> "EditColumns":
+        """pack=False: columns read once and let go (packing them would be
+        work for nothing)."""
         edits = list(edits)
         return cls(np.fromiter((e.start for e in edits), np.int64, len(edits)),
                    np.fromiter((e.end for e in edits), np.int64, len(edits)),
-                   [e.replacement for e in edits], [e.why for e in edits])
+                   [e.replacement for e in edits], [e.why for e in edits], pack)
 
     def take(self, index) -> "EditColumns":
         return EditColumns(self.starts[index], self.ends[index], self._texts.take(index),

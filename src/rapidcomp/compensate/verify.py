@@ -140,7 +140,7 @@ def _shifts(es) -> tuple[EditColumns, np.ndarray]:
     output, k the number of edits ending at or before it (in the order
     BY_SPAN sorts them)."""
     if type(es) is not EditColumns:
-        es = EditColumns.of(es)
+        es = EditColumns.of(es, pack=False)
     grow = es.lengths() - (es.ends - es.starts)
     return es, np.concatenate(([0], np.cumsum(grow)))
 

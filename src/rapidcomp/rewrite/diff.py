@@ -48,7 +48,7 @@ def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list
     import numpy as np
     if not lines:
         return None
-    cols = edits if type(edits) is EditColumns else EditColumns.of(edits)
+    cols = edits if type(edits) is EditColumns else EditColumns.of(edits, pack=False)
     at, ends = cols.starts.tolist(), cols.ends.tolist()
     replaced = "".join([text[a:b] for a, b in zip(at, ends)]) + cols.joined()
     if len((replaced + ".").splitlines()) != 1:
