@@ -305,13 +305,11 @@ class Editor:
         self.actions: dict = {}                                # use key -> what was done
         self._said_texts: dict = {}                            # (_said)
         # (file, record offset) -> (record, new field texts) of every
-        # literal whose numeric fields are edited; structural: some edit
-        # is of anything else (a new declaration, a reference, MoveAbsJ).
+        # literal whose numeric fields are edited.
         self.fields: dict[tuple[int, int], tuple] = {}
         # The field edits of each of those literals, as lists: no index by
         # span per field (a CAM program has 7e5); a literal is written once.
         self.field_lists: list[tuple[int, list[SpanEdit]]] = []
-        self.structural = False
         # Moves turned into MoveAbsJ on a jointtarget of their own, inline
         # or newly declared: use key -> (the use, that literal, the new
         # declaration's name or None, the instruction's name as written);
@@ -332,7 +330,6 @@ class Editor:
         self._edit(fi, span, text, why)
 
     def _edit(self, fi: int, span, text: str, why: str) -> None:
-        self.structural = True
         key = (fi, span.start, span.end)
         old = self.edits.get(key)
         if old is not None and old.replacement != text:
@@ -405,7 +402,6 @@ class Editor:
     def declare(self, g: Group, type_name: str, name: str, dims: str, value: str,
                 converted: bool = False) -> None:
         """converted: the jointtarget of moves turned into MoveAbsJ."""
-        self.structural = True
         self.others = self.others or not converted
         fi, end, nl, indent, in_routine = self._anchor(g)
         scope = "" if in_routine or not g.local else "LOCAL "
