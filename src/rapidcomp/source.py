@@ -11,6 +11,8 @@ import bisect
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from .errors import InputError
 
 # Bytes that never occur in a RAPID text module. Encrypted or binary modules
@@ -58,6 +60,12 @@ class SourceText:
         """1-based (line, column) of a character offset."""
         line = bisect.bisect_right(self.line_starts, offset) - 1
         return line + 1, offset - self.line_starts[line] + 1
+
+    def lines(self, offsets) -> list[int]:
+        """The 1-based line of each offset (position()'s, for 1e5 offsets at
+        once: one search of all of them)."""
+        starts = np.fromiter(self.line_starts, np.int64, len(self.line_starts))
+        return (np.searchsorted(starts, np.asarray(offsets, np.int64), "right")).tolist()
 
     def line_text(self, line: int) -> str:
         start = self.line_starts[line - 1]

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+from ..construct import maker
 from ..rapid import ast as A
 from ..rapid.model import Module, ParsedFile, RoutineTable
 from ..rapid.motions import (BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS, DISPLACEMENT_OFF,
@@ -76,8 +77,8 @@ class State:
 
     def with_last(self, last: frozenset | None) -> "State":
         """The same flags after a move (dataclasses.replace costs ~5x more,
-        once per move)."""
-        return State(self.confj, self.confl, self.pdisp, self.eoffs, last)
+        once per move; made as the class makes it, construct.py)."""
+        return _new_state(self.confj, self.confl, self.pdisp, self.eoffs, last)
 
     def supervision(self, interpolation: str) -> frozenset:
         return self.confj if interpolation == "joint" else self.confl
@@ -87,6 +88,7 @@ class State:
         return ON in self.pdisp or ON in self.eoffs
 
 
+_new_state = maker(State)
 _ON, _OFF = frozenset((ON,)), frozenset((OFF,))
 START = State(_ON, _ON, _OFF, _OFF, frozenset((PROGRAM_START,)))
 UNKNOWN = State(BOTH, BOTH, BOTH, BOTH, None)
@@ -112,6 +114,9 @@ class Flow:
     # The state of a use the walk never reached: as a routine entered from
     # outside (its supervision and position unknown).
     entry: State = UNKNOWN
+
+
+_NO_NAMES = frozenset()
 
 
 class _TooLarge(Exception):
@@ -182,8 +187,9 @@ class _Walker:
                     self.table.add(m, r, rt)
                 for mo in m.motions:
                     self.motion_index[(fi, mo.span.start)] = mi
+                    # (A move in no loop, a CAM program's 1e5: no loop names.)
                     self.target_names[(fi, mi)] = [
-                        (t.role, loop_names(t.expr, mo.loops))
+                        (t.role, loop_names(t.expr, mo.loops) if mo.loops else _NO_NAMES)
                         for t in mo.targets if t.role != "search"]
                     mi += 1
 
@@ -424,11 +430,19 @@ class _Walker:
             self.visits += 1
             if self.visits > MAX_VISITS:
                 raise _TooLarge
-            fcalls = self.functions.get(id(s))
-            if fcalls is None:
-                fcalls = self.functions[id(s)] = _function_calls(s)
-            for name in fcalls:
-                st = self.function(name, s, st, frame)
+            if t is A.ProcCall and s.plain:
+                # A call of names and literals calls no function (a CAM
+                # program's 1e5 moves: not remembered one by one).
+                spec = motion_spec(s.name)
+                if spec is not None:
+                    st = self.motion(s, spec, st, env, frame.rt)
+                    continue
+            else:
+                fcalls = self.functions.get(id(s))
+                if fcalls is None:
+                    fcalls = self.functions[id(s)] = _function_calls(s)
+                for name in fcalls:
+                    st = self.function(name, s, st, frame)
             if t is A.ProcCall:
                 st = self.call(s, st, env, frame)
             elif t is A.LateCall:
@@ -554,7 +568,7 @@ class _Walker:
         mi = self.motion_index[(fi, s.span.start)]
         written = fi < self.n_written
         for role, names in self.target_names[(fi, mi)]:
-            envr = tuple(sorted((k, v) for k, v in env.items() if k in names))
+            envr = tuple(sorted((k, v) for k, v in env.items() if k in names)) if env else ()
             key = (fi, mi, role, envr)
             if written:
                 old = self.flow.before.get(key)

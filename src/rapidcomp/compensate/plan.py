@@ -47,9 +47,8 @@ class Plan:
         for fi, pf in enumerate(task.files):
             mi = 0
             for m in pf.modules:
-                for motion in m.motions:
-                    self.uses.extend(self.resolver.resolve(pf, m, motion, (fi, mi)))
-                    mi += 1
+                self.uses.extend(self.resolver.resolve_all(pf, m, m.motions, (fi, mi)))
+                mi += len(m.motions)
         self.resolver.poses()
         self.by_key = {u.key: u for u in self.uses}
         self.file_index = {id(pf): i for i, pf in enumerate(self.files)}

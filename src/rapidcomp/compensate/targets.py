@@ -28,6 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..construct import maker
 from ..errors import RapidcompError
 from ..kinematics.frames import (DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z,
                                  unit_quat_matrices, unit_wxyz)
@@ -117,6 +118,10 @@ class TargetUse:
     def p(self) -> np.ndarray | None:
         """base_M_flange translation, mm."""
         return None if self.flange is None else self.flange[1][self.row]
+
+
+# (A CAM program's 1e5 uses: made as their classes make them, construct.py.)
+_source, _use = maker(Source), maker(TargetUse)
 
 
 class Unresolved(NamedTuple):
@@ -790,6 +795,81 @@ class Resolver:
             # input error, or the nesting limit's RecursionError).
             self._checked_parts(self._pending)
             raise
+
+    def resolve_all(self, pf: ParsedFile, module: Module, motions, index: tuple[int, int]
+                    ) -> list[TargetUse]:
+        """resolve() of each motion of a module in turn, motion k's index
+        (file index, index[1] + k): the same uses. A plain move to a
+        robtarget (its one target a decoded literal or a declared name, no
+        enclosing loop, tool and work object resolved; a CAM program's 1e5
+        moves) is resolved without resolve()'s machinery for everything
+        else, its line among all the moves' lines found at once."""
+        fi, first = index
+        out: list[TargetUse] = []
+        plain = self._plain_moves()
+        lines = pf.source.lines([m.span.start for m in motions]) if plain else ()
+        try:
+            for k, motion in enumerate(motions):
+                u = self._plain_use(pf, module, motion, lines[k], (fi, first + k)) if plain \
+                    else None
+                if u is None:
+                    out.extend(self.resolve(pf, module, motion, (fi, first + k)))
+                else:
+                    out.append(u)
+        except Exception:
+            self._checked_parts(self._pending)      # an earlier use's error comes first
+            raise
+        return out
+
+    def _plain_moves(self) -> bool:
+        """Plain moves are resolved by _plain_use: not for the output's
+        values (verify.py: float32, records as written), not with a track
+        or a moved base (their base depends on the target)."""
+        return not (self.float32 or self.written or self.track or self.moved_by)
+
+    def _plain_use(self, pf, module, motion, line: int, index) -> TargetUse | None:
+        """resolve()'s one use of a plain move (see resolve_all), or None
+        when the move is not one (resolve() then says what it is): the same
+        source, checks, notes and use, made directly."""
+        targets = motion.targets
+        if len(targets) != 1 or motion.loops:
+            return None
+        t = targets[0]
+        spec = motion.spec
+        if t.role == "search" or spec.joint_space or not spec.moves_arm:
+            return None
+        value = t.value
+        self._notes = notes = []
+        if value is not None:
+            if type(value) is not RobTarget:
+                return None
+            src = _source(value, None, None, None, False, t.expr, t.expr, None, None, None,
+                          None)
+            label = "inline"
+        else:
+            expr = t.expr
+            if t.issue or type(expr) is not A.Ref or expr.selectors:
+                return None
+            d = self.lookup(expr.name, module, motion.routine)
+            if type(d) is not Declaration or type(d.value) is not RobTarget \
+                    or d.type != "robtarget" or self._written(d):
+                return None
+            key = id(d)
+            src = _source(d.value, d, self.home[key], None, False, expr, expr, None, None,
+                          None, self.home_module[key])
+            label = pf.source.text[expr.span.start:expr.span.end]
+        tool = self.tool(motion.tool, module, motion.routine)
+        if type(tool) is Unresolved:
+            return None
+        wobj = self.wobj(motion.wobj, module, motion.routine)
+        if type(wobj) is Unresolved:
+            return None
+        record = src.record
+        u = _use(motion, t.role, label, line, "robtarget", None, None, self._one(record.conf),
+                 None, None, src, tool, wobj, (), False, pf, module,
+                 self._one(record.ext, True), index + (t.role, ()), tuple(notes))
+        self._pending.append((u, src, pf, self.base, wobj[1], tool[1]))
+        return u
 
     def _resolve(self, pf, module, motion, index) -> list[TargetUse]:
         out = []

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import re
 import sys
+from functools import partial
 
 
+from ..construct import maker
 from . import ast as A
 from .ast import Span
 from .lalr import Tok
@@ -27,6 +29,12 @@ _FAST_ITEM = re.compile(
 
 
 _INF = float("inf")
+
+# The nodes of one-token statements and declarations, made as their classes
+# make them (construct.py; a CAM program's 1e5 moves have ~15 each).
+_span = partial(tuple.__new__, Span)
+_arg, _ref, _num, _call, _decl, _numagg = (maker(c) for c in (A.Arg, A.Ref, A.Num, A.ProcCall,
+                                                               A.DataDecl, A.NumAgg))
 
 # The arguments after a FAST_CALL's first, by their text: a CAM program
 # repeats ",v100,z1,tool1\WObj:=wobj1;" 1e5 times. Lexed once, relative
@@ -266,34 +274,34 @@ class NodeBuilder:
         head = _FAST_HEAD.match(text)
         # (Interned: "MoveL" 1e5 times in a CAM program is one string.)
         name = sys.intern(head.group(1))
-        args = []
         pos = head.end()
         if text[pos] == "[":
             # The aggregate ends at the statement's last ']' (nothing after
             # it has brackets).
             end = text.rindex("]") + 1
-            span = Span(base + pos, base + end)
-            args.append(A.Arg("pos", None, A.NumAgg(text[pos:end], span), span))
+            span = _span((base + pos, base + end))
+            args = [_arg("pos", None, _numagg(text[pos:end], span), span)]
             pos = end
         else:
             first = _FAST_ITEM.match(text, pos)      # a name
-            span = Span(base + pos, base + first.end())
-            args.append(A.Arg("pos", None, A.Ref(first.group(3), (), span), span))
-            pos = first.end()
+            end = first.end()
+            span = _span((base + pos, base + end))
+            args = [_arg("pos", None, _ref(first.group(3), (), span), span)]
+            pos = end
         at = base + pos
         for opt, val, word, s0, e0, s2, e2, is_num, num in _fast_tail(text[pos:]):
             if word is not None:
-                span = Span(at + s0, at + e0)
-                args.append(A.Arg("pos", None, A.Ref(word, (), span), span))
+                span = _span((at + s0, at + e0))
+                args.append(_arg("pos", None, _ref(word, (), span), span))
             elif val is None:
-                args.append(A.Arg("opt", opt, None, Span(at + s0, at + e0)))
+                args.append(_arg("opt", opt, None, _span((at + s0, at + e0))))
             else:
-                vspan = Span(at + s2, at + e2)
-                value = A.Num(num, val, vspan) if is_num else A.Ref(val, (), vspan)
-                args.append(A.Arg("optval", opt, value, Span(at + s0, at + e0)))
+                vspan = _span((at + s2, at + e2))
+                value = _num(num, val, vspan) if is_num else _ref(val, (), vspan)
+                args.append(_arg("optval", opt, value, _span((at + s0, at + e0))))
         # (Plain by construction: names, a numeric aggregate, \Opt, \Opt:=name
         # or number.)
-        return A.ProcCall(name, tuple(args), Span(base, base + len(text)), True)
+        return _call(name, tuple(args), _span((base, base + len(text))), True)
 
     def fast_decl(self, c):
         """A FAST_DECL token: one-line declaration with a numeric aggregate."""
@@ -303,12 +311,13 @@ class NodeBuilder:
         m = _FAST_DECL.match(text)
         scope = m.group(1).upper() if m.group(1) else None
         agg_end = text.rindex("]") + 1
-        init = A.NumAgg(text[m.end():agg_end], Span(base + m.end(), base + agg_end))
+        start = m.end()
+        init = _numagg(text[start:agg_end], _span((base + start, base + agg_end)))
         # (Storage and type interned: "CONST" and "robtarget" 5e4 times.)
         storage, type_name = sys.intern(m.group(2).upper()), sys.intern(m.group(3))
-        return A.DataDecl(scope, storage, type_name, m.group(4),
-                          Span(base + m.start(4), base + m.end(4)), (), init,
-                          Span(base, base + len(text)))
+        return _decl(scope, storage, type_name, m.group(4),
+                     _span((base + m.start(4), base + m.end(4))), (), init,
+                     _span((base, base + len(text))))
 
     def late_call(self, c):
         args = c[3] if len(c) == 5 else ()

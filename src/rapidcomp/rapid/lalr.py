@@ -21,6 +21,8 @@ import re
 from lark.lexer import PatternStr
 
 _IDENT = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+# A FAST_CALL's instruction name and the blanks after it.
+_FAST_NAME = re.compile(r"([A-Za-z][A-Za-z0-9_]*)[ \t]+")
 # Identifiers not inside a number (the E of 9E+09 is no word).
 _WORD = re.compile(r"(?<![\w.])[A-Za-z][A-Za-z0-9_]*")
 
@@ -58,6 +60,18 @@ class _Splice(list):
     """Children of an EBNF helper rule, to be spliced into the parent."""
 
 
+# The one-token statement and declaration, and what each becomes (the
+# builder's callback; parse's shortcut makes it so).
+_LISTED = {"FAST_CALL": lambda engine, tok: engine._build.fast_call([tok]),
+           "FAST_DECL": lambda engine, tok: engine._build.fast_decl([tok])}
+
+
+def _spans(node, tok) -> bool:
+    """A node built of the token alone."""
+    span = getattr(node, "span", None)
+    return span is not None and span.start == tok.start_pos and span.end == tok.end_pos
+
+
 def _as_splice(children):
     # The list grown in place by left recursion is returned as is (no copy).
     return children if type(children) is _Splice else _Splice(children)
@@ -71,6 +85,7 @@ def _single_child_only(name):
 
 class Engine:
     def __init__(self, lark, builder):
+        self._build = builder
         terms = lark.lexer_conf.terminals
         ignore = set(lark.lexer_conf.ignore)
         keywords: dict[str, str] = {}
@@ -94,6 +109,18 @@ class Engine:
         self._keywords = keywords
         self._reserved = frozenset(keywords)
         self._tails: dict[str, bool] = {}      # _keyword_in's verdicts on argument lists
+        # A run of FAST_CALL statements of one instruction and one argument
+        # list after the target (`MoveL <target>,v100,z1,tool1\\WObj:=wobj1;`
+        # on 1e5 lines of a CAM program): (name, arguments) -> the pattern
+        # of the next such statement (_call_run).
+        self._runs: dict[tuple[str, str], re.Pattern] = {}
+        self._ws = next(t.pattern.to_regexp() for t in terms if t.name == "WS")
+        self._numagg = next(t.pattern.to_regexp() for t in terms if t.name == "NUMAGG")
+        # The parser's shortcut for a statement (or declaration) that
+        # follows one of its kind in a list (parse): the top three states ->
+        # whether the table's actions there append the one before to the
+        # list below it and come back to the same states.
+        self._appends: dict[tuple, bool] = {}
         self._ignore = frozenset(ignore)
         self.terminal_names = frozenset(t.name for t in terms)
 
@@ -140,7 +167,11 @@ class Engine:
         return (len(plan), origin, None if simple else tuple(plan), fn, expand1)
 
     # ------------------------------------------------------------------ lexer
-    def tokens(self, text: str):
+    def tokens(self, text: str, runs: bool = False):
+        """The tokens of text. runs: a FAST_CALL statement followed by more
+        of the same instruction and argument list after the target (a CAM
+        program's 1e5 moves) is lexed with a pattern of that statement
+        (_call_run): the same tokens as one by one."""
         match = self._master.match
         keywords = self._keywords
         ignore = self._ignore
@@ -155,6 +186,13 @@ class Engine:
                 if self._keyword_in(m.group()):
                     m = self._master_plain.match(text, pos)
                     kind = m.lastgroup
+                elif runs:
+                    yield Tok(kind, m.group(), pos, m.end())
+                    pos = m.end()
+                    for tok in self._call_run(text, m.group(), pos):
+                        yield tok
+                        pos = tok.end_pos
+                    continue
             elif kind == "FAST_DECL":
                 # Only type and name must be identifiers: the last two words
                 # before := (the aggregate after it has no word; the E of
@@ -172,6 +210,41 @@ class Engine:
                 yield Tok(kind, value, pos, stop)
             pos = stop
         yield Tok("$END", "", end, end)
+
+    def _call_run(self, text: str, first: str, pos: int):
+        """The FAST_CALL tokens that follow the statement `first` right
+        after pos (only whitespace between), each the same instruction name
+        and the same text after its target. The pattern is FAST_CALL's with
+        those parts fixed (its target NUMAGG or a name, which must not be a
+        reserved word), so it matches where FAST_CALL matches: the master
+        pattern would find these very tokens (nothing before FAST_CALL in
+        it matches a call; the name and the arguments' words are the
+        first's, which _keyword_in accepted)."""
+        head = _FAST_NAME.match(first)
+        at = head.end()
+        if first[at] == "[":
+            after = first.rindex("]") + 1
+        else:
+            after = _IDENT.match(first, at).end()
+        key = (head.group(1), first[after:])
+        pattern = self._runs.get(key)
+        if pattern is None:
+            if len(self._runs) >= 4096:      # bounded: many programs in one process
+                self._runs.clear()
+            pattern = self._runs[key] = re.compile(
+                f"(?:{self._ws})?({re.escape(key[0])}[ \t]+(?:{self._numagg}|([A-Za-z][A-Za-z0-9_]*))"
+                f"{re.escape(key[1])})")
+        match = pattern.match
+        keywords = self._keywords
+        while True:
+            m = match(text, pos)
+            if m is None:
+                return
+            name = m.group(2)
+            if name is not None and name.upper() in keywords:
+                return
+            yield Tok("FAST_CALL", m.group(1), m.start(1), m.end())
+            pos = m.end()
 
     def _keyword_in(self, call: str) -> bool:
         """A FAST_CALL holds a reserved word (as a whole identifier, in any
@@ -233,11 +306,31 @@ class Engine:
     def parse(self, text: str):
         states = self._states
         end_state = self._end
+        appends = self._appends
         state_stack = [self._start]
         value_stack: list = []
         previous = None
-        for tok in self.tokens(text):
+        for tok in self.tokens(text, runs=True):
             ttype = tok.type
+            check = None
+            if (ttype in _LISTED and previous is not None and previous.type == ttype
+                    and len(state_stack) > 2):
+                # A statement (declaration) after one of its kind: where the
+                # table has been seen to reduce the one before into the list
+                # below it and shift this one into the same states, that is
+                # done at once (a CAM program's 1e5 moves: four reductions
+                # each). The actions depend on these three states only.
+                key = (state_stack[-3], state_stack[-2], state_stack[-1])
+                verdict = appends.get(key)
+                if verdict:
+                    value_stack[-2].append(_LISTED[ttype](self, value_stack[-1]))
+                    value_stack[-1] = tok
+                    previous = tok
+                    continue
+                if verdict is None:
+                    below = value_stack[-2]
+                    check = (key, len(state_stack), below,
+                             len(below) if type(below) is _Splice else -1)
             while True:
                 try:
                     is_shift, arg = states[state_stack[-1]][ttype]
@@ -278,5 +371,11 @@ class Engine:
                 value_stack.append(value)
                 if ttype == "$END" and state_stack[-1] == end_state:
                     return value_stack[-1]
+            if check is not None:
+                key, depth, below, n = check
+                appends[key] = (n >= 0 and len(state_stack) == depth
+                                and tuple(state_stack[-3:]) == key and value_stack[-2] is below
+                                and len(below) == n + 1 and value_stack[-1] is tok
+                                and _spans(below[-1], previous))
             previous = tok
         raise AssertionError("parser ended without accepting")  # pragma: no cover

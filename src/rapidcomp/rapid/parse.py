@@ -6,6 +6,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..collector import paused
+from ..construct import maker
 from ..errors import InputError
 from ..source import SourceText, read_source
 from . import ast as A
@@ -93,33 +94,47 @@ def _declaration(source: SourceText, decl: A.DataDecl, routine: str | None,
     return Declaration(decl, routine, type_, dims, value, issue)
 
 
+# (A CAM program's 1e5 moves: made as their classes make them, construct.py.)
+_new_motion, _new_target = maker(Motion), maker(TargetArg)
+_TARGET_ROLES = frozenset(("to", "cir", "search"))
+
+
 def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops) -> Motion:
-    positional = [a for a in call.args if a.kind in ("pos", "named")]
-    slots = dict(zip(spec.roles, (a.value for a in positional)))  # first of each role
+    roles = spec.roles
+    n_roles = len(roles)
+    slots = {}                      # role -> the value of its argument (dict(zip): the last)
     targets = []
-    for role, arg in zip(spec.roles, positional):
-        if role in ("to", "cir", "search"):
-            value = issue = None
-            if isinstance(arg.value, (A.Agg, A.NumAgg)) and role != "search":
-                kind = "jointtarget" if spec.joint_space else "robtarget"
-                try:
-                    value = decode(kind, arg.value, f"inline {kind}")
-                except DecodeIssue as exc:
-                    if exc.illegal:
-                        raise source.error(exc.span.start, f"{exc.reason} (the {kind} of "
-                                           f"{call.name})") from None
-                    issue = exc.reason
-            targets.append(TargetArg(role, arg.value, value, issue))
     wobj = None
     optional = []
+    k = 0
     for a in call.args:
-        if a.kind in ("optval", "cond") and a.name.lower() == "wobj":
+        kind = a.kind
+        if kind == "pos" or kind == "named":
+            if k < n_roles:
+                role = roles[k]
+                value = a.value
+                slots[role] = value
+                if role in _TARGET_ROLES:
+                    decoded = issue = None
+                    if role != "search" and isinstance(value, (A.Agg, A.NumAgg)):
+                        t = "jointtarget" if spec.joint_space else "robtarget"
+                        try:
+                            decoded = decode(t, value, f"inline {t}")
+                        except DecodeIssue as exc:
+                            if exc.illegal:
+                                raise source.error(exc.span.start, f"{exc.reason} (the {t} of "
+                                                   f"{call.name})") from None
+                            issue = exc.reason
+                    targets.append(_new_target(role, value, decoded, issue))
+            k += 1
+        elif (kind == "optval" or kind == "cond") and a.name.lower() == "wobj":
             wobj = a.value
-        elif a.kind not in ("pos", "named"):
+        else:
             optional.append(a)
-    return Motion(call.name, spec, call.span, routine, tuple(loops),
-                  call.args, tuple(targets), slots.get("speed"), slots.get("zone"),
-                  slots.get("tool"), wobj, tuple(optional))
+    get = slots.get
+    return _new_motion(call.name, spec, call.span, routine, tuple(loops), call.args,
+                       tuple(targets), get("speed"), get("zone"), get("tool"), wobj,
+                       tuple(optional))
 
 
 def _walk(source, stmts, routine: str, loops: list, out: list, cond: int = 0) -> None:
