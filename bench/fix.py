@@ -83,8 +83,9 @@ def cam_module(n: int, seed: int = 1, name: str = "CAM_Fix", main: bool = False)
     return "\n".join(lines)
 
 
-def one(n: int) -> dict:
-    """Run one size in this process; returns figures."""
+def one(n: int, main: bool = False) -> dict:
+    """Run one size in this process; returns figures. main: Path called
+    from main (every MoveL -> MoveAbsJ on a jointtarget of its own)."""
     from rapidcomp.compensate import report
     from rapidcomp.compensate.fix import fix
     from rapidcomp.compensate.load import load_solver
@@ -92,7 +93,7 @@ def one(n: int) -> dict:
     from rapidcomp.process import own
     from rapidcomp.rapid.grammar import engine
     from rapidcomp.rapid.parse import parse_text
-    text = cam_module(n)
+    text = cam_module(n, main=main)
     mb = len(text.encode()) / 1e6
     engine()
     solver = load_solver(str(PROFILE), None, False)
@@ -134,9 +135,10 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sizes", default="1000,10000,100000")
     ap.add_argument("--one", type=int, help=argparse.SUPPRESS)
+    ap.add_argument("--main", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.one:
-        print(json.dumps(one(args.one)))
+        print(json.dumps(one(args.one, args.main)))
         return
     stages = ["parse", "resolve", "solve", "print", "re-lex", "verify", "report"]
     print(f"{'targets':>8} {'MB':>6} " + " ".join(f"{s:>9}" for s in stages)

@@ -127,7 +127,8 @@ class Values:
         for g in gs:
             uses = g.uses
             if len(uses) == 1:
-                out.append(picks[row[uses[0].key]].kind == "closest")
+                # (One use: its row is the group's one row.)
+                out.append(picks[next(iter(g.rows.values()))].kind == "closest")
                 continue
             v = seen.get(id(g))
             if v is None:
@@ -144,6 +145,19 @@ class Values:
                  for k in g.elements if ("texts", id(g), k) not in self._values]
         for at in range(0, len(items), PREPARE_BLOCK):
             self._prepare(items[at:at + PREPARE_BLOCK])
+        # The jointtargets of moves turned into MoveAbsJ (a CAM program
+        # entered from main: 1e5), their joints formatted as one batch.
+        items = [(g, k) for g in gs if g.failure is None and g.mode == "absj" and not g.array
+                 for k in g.elements if ("absj", id(g), k) not in self._values]
+        for at in range(0, len(items), PREPARE_BLOCK):
+            block = items[at:at + PREPARE_BLOCK]
+            if any(g.slots for g, _ in block):
+                q = np.array([self.joints(g, k) for g, k in block], float).reshape(-1, 6)
+            else:
+                q = self.solved.deformed.q_deg[[g.rows[k] for g, k in block]]
+            lits = records.absj_literals(q, [self.source(g, k).record for g, k in block])
+            for (g, k), literal in zip(block, lits):
+                self._values[("absj", id(g), k)] = literal
 
     def _prepare(self, items: list) -> None:
         new = [(g, k) for g, k in items if (id(g), k) not in self._values]
@@ -195,7 +209,9 @@ class Values:
         for j, src in enumerate(srcs):
             if src.call is not None:
                 R[j], p[j] = base_pose(src, (R[j], p[j]))
-        written = np.array([src.record.conf for src in srcs], dtype=int).reshape(n, 4)
+        # (The records' confdata as their conf gives it: int() of each.)
+        written = np.array([src.record.values[7:11] for src in srcs],
+                           float).reshape(n, 4).astype(int)
         conf = np.array(s.conf_after[rows], dtype=int).reshape(n, 4)
         q = s.deformed.q_deg[rows]
         # A J1/J4/J6 within the quadrant tolerance of the written quadrant
@@ -231,9 +247,13 @@ class Values:
     def literal(self, g: Group, k, texts: list[str] | None = None) -> str:
         """The new literal of element k (`texts`: its field texts, when the
         caller has them already)."""
-        record = self.source(g, k).record
         if g.mode == "absj":
-            return records.jointtarget_literal(records.absj_texts(self.joints(g, k), record))
+            prepared = self._values.get(("absj", id(g), k))
+            if prepared is not None:
+                return prepared
+            return records.jointtarget_literal(records.absj_texts(self.joints(g, k),
+                                                                  self.source(g, k).record))
+        record = self.source(g, k).record
         if k in g.slots or (g.array and k not in g.rows):
             return records.robtarget_literal(list(record.texts))  # unreached: as written
         texts = texts if texts is not None else self.field_texts(g, k)

@@ -64,7 +64,7 @@ class Group:
         return self.home[1]
 
 
-def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved) -> str:
+def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int | None = None) -> str:
     """absj: the use becomes a MoveAbsJ; rob: a robtarget is written; joint:
     a jointtarget of a MoveAbsJ is written. auto converts MoveJ only (a
     MoveL keeps its straight line), absj MoveJ and MoveL. A move that
@@ -76,10 +76,13 @@ def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved) -> str:
         return "joint"
     m = u.motion
     name = m.spec.name.lower()
-    if (name in (ABSJ_FROM[mode]) and all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional)
+    # (row: the use's row in solved, where the caller has it. A CAM move has
+    # no optional argument but \WObj: no generator for those.)
+    if (name in (ABSJ_FROM[mode])
+            and (not m.optional or all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional))
             and not names_to_point(m)
             and not plan.may_be_displaced(u)
-            and solved.picks[solved.row[u.key]].caution is None
+            and solved.picks[solved.row[u.key] if row is None else row].caution is None
             and not (u.source.decl is not None and u.source.decl.storage == "PERS")):
         return "absj"
     return "rob"
@@ -88,7 +91,10 @@ def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved) -> str:
 def names_to_point(m) -> bool:
     """The move names its target parameter (`MoveL ToPoint:=p10,...`):
     MoveAbsJ's is ToJointPos, so it stays a robtarget move."""
-    return any(a.kind == "named" and a.name.lower() == "topoint" for a in m.args)
+    for a in m.args:     # (a loop: asked of every move of a CAM program)
+        if a.kind == "named" and a.name.lower() == "topoint":
+            return True
+    return False
 
 
 def _call_key(src: Source):
@@ -127,8 +133,8 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
         np.isnan(q_all).any(axis=1).tolist(), np.round(q_all, 3).tolist())]
     for u in loop_first:
         src = u.source
-        m = mode_of(u, mode, plan, solved)
         row = solved.row[u.key]
+        m = mode_of(u, mode, plan, solved, row)
         if src.decl is not None and file_index[id(src.home)] < plan.n_written:
             home = (file_index[id(src.home)], src.home_module)
         else:
@@ -152,8 +158,13 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
             out.append(g)
         g.uses.append(u)
         g.rows_seen.setdefault(src.element, row)
+    # Whether each row is solved, and needs a J4/J6 split at the wrist
+    # singularity (_elements, _wrist: as Python values at once).
+    ok = [p.failure is None and s for p, s in zip(solved.picks,
+                                                    solved.deformed.success.tolist())]
+    left = ((solved.deformed.warnings.astype(np.int64) & _LEFT) != 0).tolist()
     for g in out:
-        _elements(g, solved)
+        _elements(g, solved, ok, left)
         uses = g.uses
         g.local = (uses[0].module is g.home[1] if len(uses) == 1
                    else all(u.module is g.home[1] for u in uses))
@@ -165,17 +176,20 @@ def _same(solved: Solved, a: int, b: int) -> bool:
     return not (np.isnan(qa).any() or np.isnan(qb).any()) and np.linalg.norm(qa - qb) <= SAME_DEG
 
 
-def _elements(g: Group, solved: Solved) -> None:
+def _elements(g: Group, solved: Solved, ok: list, left: list) -> None:
+    """A group's elements and their rows, and its failure: ok[row]
+    (solved.ok), left[row] (the J4/J6 split at the wrist singularity)."""
     if len(g.uses) == 1:     # (most groups: one literal, one move)
         u = g.uses[0]
-        k, row = u.source.element, solved.row[u.key]
+        k = u.source.element
+        row = g.rows_seen[k]
         g.array = u.source.by_loop
-        if not solved.ok(row):
+        if not ok[row]:
             g.failure = (solved.reason(row), k)
         # (rows_seen is {k: row} already: one dict, not two, per group;
         # neither changes past the grouping. 1e5 groups: ~20 MB.)
         g.elements, g.rows = [k], g.rows_seen
-        _wrist(g, solved)
+        _wrist(g, solved, left)
         return
     g.array = any(u.source.by_loop for u in g.uses)
     seen: dict = {}
@@ -186,28 +200,27 @@ def _elements(g: Group, solved: Solved) -> None:
         if first is None:
             seen[k] = row
             continue
-        if g.failure is None and solved.ok(first) and solved.ok(row) and not _same(
-                solved, first, row):
+        if g.failure is None and ok[first] and ok[row] and not _same(solved, first, row):
             lines = sorted({x.line for x in g.uses if x.source.element == k})
             g.failure = (f"{element_label(g, k)} is reached on different configurations "
                          f"(lines {', '.join(map(str, lines))}); one array element cannot hold "
                          "both values", k)
     # Any use of the group that fails fails the group (its value is shared).
-    bad = next((u for u in g.uses if not solved.ok(solved.row[u.key])), None)
+    bad = next((u for u in g.uses if not ok[solved.row[u.key]]), None)
     if g.failure is None and bad is not None:
         g.failure = (solved.reason(solved.row[bad.key]), bad.source.element)
     g.elements = sorted(seen) if g.array else list(seen)
     g.rows = seen
-    _wrist(g, solved)
+    _wrist(g, solved, left)
 
 
-def _wrist(g: Group, solved: Solved) -> None:
+def _wrist(g: Group, solved: Solved, left: list) -> None:
     """A robtarget group fails where the compensation needs a J4/J6 split
-    at the wrist singularity."""
-    if g.failure is None:
+    at the wrist singularity (left[row])."""
+    if g.failure is None and g.mode == "rob":
         for k in g.elements:
             i = g.rows[k]
-            if g.mode == "rob" and int(solved.deformed.warnings[i]) & _LEFT:
+            if left[i]:
                 g.failure = (
                     f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
                     "compensation needs a J4/J6 split a robtarget cannot carry (the "

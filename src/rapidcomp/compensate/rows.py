@@ -7,6 +7,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ..construct import maker
 from ..kinematics.frames import DEG
 from ..kinematics.ik import WARN_TEXT, Warn, warning_texts_of
 from .place import ABSJ_FROM, ABSJ_OPTIONALS, Group, element_label, names_to_point
@@ -49,6 +50,8 @@ class UseRow:
 
 
 FIELDS = tuple(f.name for f in fields(UseRow))
+# (A CAM report's 1e5 rows, made as the class makes them: construct.py.)
+_new_row = maker(UseRow)
 
 
 def rounded_rows(a: np.ndarray) -> list[tuple[float, ...] | None]:
@@ -88,6 +91,7 @@ class _Columns:
         self.res_rad = solved.deformed.residual_rad.tolist()
         self.disp = solved.displacement_um_per_mm.tolist()
         self.warn_bits = solved.deformed.warnings.tolist()
+        self.success = solved.deformed.success.tolist()
 
 
 def displacement_warning(um_per_mm: float) -> str:
@@ -114,8 +118,8 @@ def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
         # by position (keywords cost ~2 us a row; a CAM report has 1e5).
         base = (u.file.source.display_path, u.line, u.motion.instruction, u.label)
         if u.reason is not None:
-            out.append(UseRow(*base, fail_label if u.blocked else UNTOUCHED, None, None, None,
-                              None, None, None, None, None, None, None, None, (), u.reason))
+            out.append(_new_row(*base, fail_label if u.blocked else UNTOUCHED, None, None, None,
+                                None, None, None, None, None, None, None, None, (), u.reason))
             continue
         out.append(_row(solved, cols, u, base, group_of, actions, verified, mode,
                         written_conf, ok_label, fail_label, tracked))
@@ -135,7 +139,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
     d_warnings = _warnings(solved, i, u, warning_texts_of(cols.warn_bits[i])) if has_q else ()
     g: Group | None = group_of.get(u.key) if group_of is not None else None
     why = None
-    if not solved.ok(i):
+    if not (has_q and cols.success[i]):      # (solved.ok(i))
         why = solved.reason(i)
     elif g is not None and g.failure is not None:
         reason, fk = g.failure
@@ -143,8 +147,8 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
             f"{element_label(g, fk)} of the same group: {reason}")
     if why is not None:
         why = _hint(why, u, tracked)
-        return UseRow(*base, fail_label, pick.rule, None, qn if has_q else None, None, None,
-                      error[0], error[1], None, None, conf_before, None, d_warnings, why)
+        return _new_row(*base, fail_label, pick.rule, None, qn if has_q else None, None, None,
+                        error[0], error[1], None, None, conf_before, None, d_warnings, why)
     warnings = d_warnings
     if g is not None:
         if g.mode == "absj" and u.motion.spec.name == "MoveL":
@@ -176,10 +180,10 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         res = verified[u.key]
     else:
         res = (cols.res_mm[i] * 1000, cols.res_rad[i] / DEG)
-    return UseRow(*base, ok_label, pick.rule,
-                  actions.get(u.key) if actions is not None else None,
-                  qn, cols.qc[i], cols.dq[i], error[0], error[1], res[0], res[1],
-                  conf_before, after, warnings, None)
+    return _new_row(*base, ok_label, pick.rule,
+                    actions.get(u.key) if actions is not None else None,
+                    qn, cols.qc[i], cols.dq[i], error[0], error[1], res[0], res[1],
+                    conf_before, after, warnings, None)
 
 
 def _conf_after(solved: Solved, i: int, u: TargetUse, written_conf):

@@ -30,7 +30,7 @@ from ..kinematics.frames import DEG
 from ..kinematics.ik import IKBatch, Solver, Status
 from .flow import OFF, ON, PROGRAM_START, State
 from .plan import Plan, line_ranges
-from .targets import TargetUse
+from .targets import TargetUse, flange_stack
 
 # Two solutions closer than this (deg, Euclidean) are the same solution.
 SAME_DEG = 1e-6
@@ -75,6 +75,10 @@ def _in_text_order(keys) -> list:
     if len(keys) < 2:
         return list(keys)
     return sorted(keys, key=lambda k: (0, k) if len(k) == 4 else (1, (0, 0, k[0], ())))
+
+
+# _quick's rule where supervision may be on or off, by ConfJ/ConfL.
+_SAME = {flag: f"confdata ({flag} on or off: the same solution)" for flag in ("ConfJ", "ConfL")}
 
 
 def _flag(u: TargetUse) -> str:
@@ -139,8 +143,7 @@ class _Chooser:
         self.uses = uses
         self.rows = rows
         rob = [i for i, u in enumerate(uses) if u.kind == "robtarget"]
-        R = np.array([uses[i].R for i in rob]).reshape(-1, 3, 3)
-        p = np.array([uses[i].p for i in rob]).reshape(-1, 3)
+        R, p = flange_stack([uses[i] for i in rob])
         conf = np.array([uses[i].conf for i in rob], dtype=int).reshape(-1, 4)
         self.by_conf, self.cands = (solver.nominal_and_candidates(R, p, conf) if rob
                                     else (None, None))
@@ -157,10 +160,16 @@ class _Chooser:
                 self.picks[i] = Pick(self.q[i], "as written (MoveAbsJ)", None, "joint")
                 self.sols[i] = [self.picks[i]]
                 self.chosen.add(i)
-        first = next((u for u in plan.order() if u.kind == "jointtarget" and u.reason is None),
-                     None)
+        order = plan.order()
+        first = next((u for u in order if u.kind == "jointtarget" and u.reason is None), None)
         self.first_joint = self.rows[first.key] if first is not None else None
-        self.order = [self.rows[u.key] for u in plan.order() if u.key in self.rows]
+        self.order = [self.rows[u.key] for u in order if u.key in self.rows]
+        # Each robtarget row's state before it, once (_speculate, _quick_data
+        # and run ask for it: a CAM program's 1e5 times each).
+        self.states: list = [None] * n
+        for i in self.order:
+            if uses[i].kind == "robtarget":
+                self.states[i] = plan.state(uses[i])
         scale = (solver.joint_map.scale if solver.joint_map is not None else np.zeros(6))
         self.scaled = [j for j in (0, 3, 5) if scale[j] != 0]
         self._speculate()
@@ -192,10 +201,10 @@ class _Chooser:
         need = []
         pred1 = [-1] * n
         for i in self.order:
-            u = self.uses[i]
-            if u.kind != "robtarget":
+            st = self.states[i]
+            if st is None:                   # (a MoveAbsJ)
                 continue
-            st = self.plan.state(u)
+            u = self.uses[i]
             if OFF not in st.supervision(u.motion.spec.interpolation) and u.role != "cir":
                 continue
             if st.last is not None and len(st.last) == 1:
@@ -236,6 +245,13 @@ class _Chooser:
         self.spec_l = self.spec.tolist()
         self.off_ok = (~np.isnan(self.off_spec).any(axis=1)).tolist()
         self.near_conf = [None] * n
+        # Which of _quick's two cases a row is, where it does not depend on
+        # the solution its predecessor took (0: neither); whether the batch's
+        # closest solution is the guess itself; whether a row's solution is
+        # its guess (_quick and _set keep it; None: not known yet).
+        self.quick = [0] * n
+        self.off_is_spec = (self.off_spec == self.spec).all(axis=1).tolist()
+        self.spec_hit: list = [None] * n
         if not self.rob_row:
             return
         rob = np.array(list(self.rob_row))
@@ -243,8 +259,23 @@ class _Chooser:
         sq = (d * d).sum(axis=1)
         near = np.where(sq <= (0.999 * SAME_DEG) ** 2, 1, np.where(sq > (1.001 * SAME_DEG) ** 2,
                                                                     0, -1))
-        for i, v, row in zip(rob.tolist(), near.tolist(), d):
-            self.near_conf[i] = bool(v) if v >= 0 else bool(np.linalg.norm(row) <= SAME_DEG)
+        for i, v in zip(rob.tolist(), near.tolist()):
+            self.near_conf[i] = bool(v)
+        for k in np.flatnonzero(near < 0).tolist():
+            self.near_conf[int(rob[k])] = bool(np.linalg.norm(d[k]) <= SAME_DEG)
+        ok = self.by_conf.success.tolist()
+        for i, k in self.rob_row.items():
+            st = self.states[i]
+            if (st is None or self.pred1_l[i] < 0 or not self.off_ok[i]
+                    or self.uses[i].role == "cir" or st.last is None or len(st.last) != 1):
+                continue
+            sup = st.supervision(self.uses[i].motion.spec.interpolation)
+            if OFF not in sup:
+                continue
+            if ON not in sup:
+                self.quick[i] = 1
+            elif ok[k]:
+                self.quick[i] = 2 if self.near_conf[i] else 3
 
     def _alternatives(self, need: np.ndarray) -> None:
         """Where supervision may be on or off, a move whose off solution is
@@ -410,30 +441,64 @@ class _Chooser:
     def _quick(self, i: int, st, sup, flag: str):
         """choose() where a CAM program spends 1e5 moves, without the
         general machinery, with its results (tested against it): one move
-        before, with one solution, whose closest solution here came from
-        the batch; supervision off, or on or off with the confdata's
-        solution that same one. None: not this case."""
-        last = st.last
-        if last is None or len(last) != 1 or OFF not in sup:
+        before, with one solution, the guess, whose closest solution here
+        came from the batch; supervision off (case 1), or on or off with
+        the confdata's solution that same one (case 2) or another (case 3;
+        _quick_data tells the cases from the row's state `st`). None: not
+        this case."""
+        how = self.quick[i]
+        if not how:
             return None
-        j = self.rows.get(next(iter(last)))
-        if j is None or self.pred1_l[i] != j or j not in self.chosen or len(self.sols[j]) != 1:
+        j = self.pred1_l[i]
+        sols = self.sols[j]
+        if j not in self.chosen or len(sols) != 1:
             return None
-        s = self.sols[j][0]
-        if s.q is None or s.q.tolist() != self.spec_l[j] or not self.off_ok[i]:
+        s = sols[0]
+        hit = self.spec_hit[j]
+        if hit is None:
+            hit = s.q is not None and s.q.tolist() == self.spec_l[j]
+        if not hit:
             return None
-        q = self.off_spec[i]
         line = self.uses[j].line
-        p = Pick(q, "", None, "closest", s.q, line, None if s.caution is None else (
-            f"follows line {line}, whose configuration is assumed: kept a robtarget move"))
-        if ON not in sup:
-            return [p], p._replace(rule=f"closest to line {line} ({flag}\\Off)")
-        on = self._by_conf(i, f"confdata ({flag} on or off: the same solution)")
-        if on.q is None or not self.near_conf[i]:
-            return None
-        if p.caution is not None:
-            on = on._replace(caution=p.caution)
-        return [on], on
+        caution = None if s.caution is None else (
+            f"follows line {line}, whose configuration is assumed: kept a robtarget move")
+        if how == 1:
+            q = self.off_spec[i]
+            self.spec_hit[i] = self.off_is_spec[i]
+            return ([Pick(q, "", None, "closest", s.q, line, caution)],
+                    Pick(q, f"closest to line {line} ({flag}\\Off)", None, "closest", s.q, line,
+                         caution))
+        # (The confdata's solution is the guess: _speculate guessed it.)
+        self.spec_hit[i] = True
+        q = self.by_conf.q_deg[self.rob_row[i]]
+        if how == 2:
+            on = Pick(q, _SAME[flag], None, "conf", None, None, caution)
+            return [on], on
+        # Case 3: supervision may be on or off, and off is another solution.
+        return self._on_or_off(Pick(q, _SAME[flag], None, "conf"),
+                               [Pick(self.off_spec[i], "", None, "closest", s.q, line, caution)],
+                               flag)
+
+    def _on_or_off(self, on: Pick, off: list[Pick], flag: str) -> tuple[list[Pick], Pick]:
+        """choose() where supervision may be on or off and the confdata
+        names a solution (on): with the solutions supervision off gives."""
+        sols = _distinct([on] + off)
+        if len(sols) == 1:
+            return sols, on._replace(caution=sols[0].caution)
+        if self._turns_only(sols):
+            return sols, on._replace(caution=(
+                f"{flag} may be on or off here; the solutions it may take differ by whole "
+                "turns only: kept a robtarget move so the controller keeps each run's turn"))
+        other = next((p.q for p in off if np.linalg.norm(p.q - on.q) > SAME_DEG), None)
+        other = "" if other is None else " (J" + ", J".join(
+            f"{j + 1} {other[j]:.1f}" for j in range(6)) + ")"
+        return sols, on._replace(
+            rule=f"confdata ({flag} may be on or off here)",
+            caution=(f"{flag} may be on or off here (not known statically): compensated on "
+                     "the solution of the programmed confdata and kept a robtarget move; if "
+                     f"{flag} is off when it runs, the controller takes the solution closest "
+                     f"to the previous position{other}, for which this correction is not "
+                     "made"))
 
     def choose(self, i: int, st: State | None = None) -> tuple[list[Pick], Pick]:
         """(the solutions a use may take, the one compensated); st: the
@@ -461,25 +526,9 @@ class _Chooser:
             if not off:
                 return [], _fail(off_fail)
             return self._one(off, f"closest to {{where}} ({flag}\\Off)", flag)
-        on = self._by_conf(i, f"confdata ({flag} on or off: the same solution)")
+        on = self._by_conf(i, _SAME[flag])
         if on.q is not None:
-            sols = _distinct([on] + off)
-            if len(sols) == 1:
-                return sols, on._replace(caution=sols[0].caution)
-            if self._turns_only(sols):
-                return sols, on._replace(caution=(
-                    f"{flag} may be on or off here; the solutions it may take differ by whole "
-                    "turns only: kept a robtarget move so the controller keeps each run's turn"))
-            other = next((p.q for p in off if np.linalg.norm(p.q - on.q) > SAME_DEG), None)
-            other = "" if other is None else " (J" + ", J".join(
-                f"{j + 1} {other[j]:.1f}" for j in range(6)) + ")"
-            return sols, on._replace(
-                rule=f"confdata ({flag} may be on or off here)",
-                caution=(f"{flag} may be on or off here (not known statically): compensated on "
-                         "the solution of the programmed confdata and kept a robtarget move; if "
-                         f"{flag} is off when it runs, the controller takes the solution closest "
-                         f"to the previous position{other}, for which this correction is not "
-                         "made"))
+            return self._on_or_off(on, off, flag)
         if off:
             sols, rep = self._one(off, f"closest to {{where}} ({flag}\\Off)", flag)
             if rep.q is None:
@@ -492,19 +541,31 @@ class _Chooser:
 
     def run(self) -> None:
         pending = []
-        succ: dict[int, list[int]] = {}
+        edges = []                    # (predecessor, row) in the order met
+        rows, chosen = self.rows, self.chosen
         for i in self.order:
-            u = self.uses[i]
-            if u.kind != "robtarget":
+            st = self.states[i]
+            if st is None:            # (a MoveAbsJ)
                 continue
-            st = self.plan.state(u)
-            preds = _in_text_order(st.last or ())
-            pred_rows = [self.rows[k] for k in preds if k in self.rows]
-            for j in pred_rows:
-                succ.setdefault(j, []).append(i)
-            if any(j not in self.chosen for j in pred_rows):
-                pending.append(i)
+            last = st.last
+            if last is not None and len(last) == 1:
+                # (One move before: a CAM program's 1e5.)
+                j = rows.get(next(iter(last)))
+                if j is not None:
+                    edges.append((j, i))
+                    if j not in chosen:
+                        pending.append(i)
+            elif last:
+                pred_rows = [rows[k] for k in _in_text_order(last) if k in rows]
+                edges.extend((j, i) for j in pred_rows)
+                if any(j not in chosen for j in pred_rows):
+                    pending.append(i)
             self._set(i, st)
+        # Who follows whom, where a move is chosen again (below).
+        succ: dict[int, list[int]] = {}
+        if pending:
+            for j, i in edges:
+                succ.setdefault(j, []).append(i)
         # Loops: a move whose predecessor comes later in the flow (the last
         # move of a loop body before its first) is chosen again once that
         # one is known, and a change propagates.
@@ -523,6 +584,7 @@ class _Chooser:
                     self.unsettled.add(i)
                     self.q[i] = np.nan
                     self.sols[i] = []
+                    self.spec_hit[i] = None
                     self.picks[i] = _fail("the closest solution does not settle around the "
                                           "loop this move is in")
                     # Those after it now start from an unknown position.
@@ -533,6 +595,7 @@ class _Chooser:
     def _set(self, i: int, st: State | None = None) -> None:
         if i in self.unsettled:
             return
+        self.spec_hit[i] = None              # (_quick says it where it knows)
         sols, pick = self.choose(i, st)
         if len(sols) > 8:
             sols, pick = [], _fail("reached on more than 8 configurations")
@@ -560,11 +623,9 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
     R = np.empty((n, 3, 3))
     p = np.empty((n, 3))
     Rj, pj, seed = solver.seed_from_joints(np.nan_to_num(q_nom))
-    for i, u in enumerate(uses):
-        if u.kind == "robtarget":
-            R[i], p[i] = u.R, u.p
-        else:
-            R[i], p[i] = Rj[i], pj[i]
+    rob = [i for i, u in enumerate(uses) if u.kind == "robtarget"]
+    R[:], p[:] = Rj, pj
+    R[rob], p[rob] = flange_stack([uses[i] for i in rob])
     # Joint limits of the chosen joints (MoveAbsJ targets) are failures too.
     status = seed.status.copy()
     bad = (status != Status.OK).tolist()

@@ -153,6 +153,14 @@ def stacked_poses(poses: list) -> tuple[np.ndarray, np.ndarray]:
     """(R (n, 3, 3), p (n, 3)) of poses (R, p), most of them one object (a
     CAM program's tool, work object and base): each distinct pose converted
     once, then copied into place (C order, as the products expect)."""
+    if poses and all(pose is poses[0] for pose in poses):
+        # (One pose, as a CAM program's tool, work object and base are: its
+        # rows copied, no index per pose.)
+        r, v = poses[0]
+        R = np.asarray(r, float).reshape(3, 3)
+        p = np.asarray(v, float).reshape(3)
+        return (np.broadcast_to(R, (len(poses), 3, 3)).copy(),
+                np.broadcast_to(p, (len(poses), 3)).copy())
     index: dict[int, int] = {}
     distinct = []
     at = []
@@ -165,6 +173,20 @@ def stacked_poses(poses: list) -> tuple[np.ndarray, np.ndarray]:
     R = np.array([np.asarray(r, float).reshape(3, 3) for r, _ in distinct]).reshape(-1, 3, 3)
     p = np.array([np.asarray(v, float).reshape(3) for _, v in distinct]).reshape(-1, 3)
     return R[at], p[at]
+
+
+def flange_stack(uses: list) -> tuple[np.ndarray, np.ndarray]:
+    """(R (n, 3, 3), p (n, 3)): the flange poses of resolved robtarget uses,
+    as np.array of their R and p makes them (a CAM program's 1e5 rows of
+    one batch taken at once)."""
+    if not uses:
+        return np.zeros((0, 3, 3)), np.zeros((0, 3))
+    batch = uses[0].flange
+    if all(u.flange is batch for u in uses):
+        rows = [u.row for u in uses]
+        return batch[0][rows], batch[1][rows]
+    return (np.array([u.R for u in uses]).reshape(-1, 3, 3),
+            np.array([u.p for u in uses]).reshape(-1, 3))
 
 
 def flange_poses(base, wobj, target, tool):

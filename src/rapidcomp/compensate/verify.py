@@ -14,6 +14,7 @@ against the intended pose is what the report shows as "after".
 from __future__ import annotations
 
 import bisect
+import re
 from array import array
 from typing import NamedTuple
 
@@ -193,9 +194,8 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                     return None
                 if name is None:
                     # (An aggregate of numbers as the lexer reads them, as
-                    # parsing the statement would.)
-                    if [t.type for t in eng.tokens(literal)] != ["NUMAGG", "$END"]:
-                        return None
+                    # parsing the statement would: below, for the block.)
+                    pass
                 else:
                     k = names.get(name.lower())
                     if k is None:
@@ -208,6 +208,14 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
             # where the output holds it: decoded as the parser decodes them.
             lits = [it[1] for it in items]
             rows_of = _joint_rows(lits)
+            # An inline one must lex as one aggregate of numbers (NUMAGG): so
+            # does a plain jointtarget of decimal numbers (_plain_numaggs);
+            # else each is lexed.
+            inline = [it[1] for it in items if it[2] is None]
+            if inline and not (rows_of is not None and _plain_numaggs(inline)):
+                for literal in inline:
+                    if [t.type for t in eng.tokens(literal)] != ["NUMAGG", "$END"]:
+                        return None
             if rows_of is None:
                 for n, literal in enumerate(lits, first):
                     try:
@@ -273,6 +281,51 @@ def _joint_rows(lits: list[str]) -> np.ndarray | None:
     return values.reshape(n, 12)[:, :6]
 
 
+# The characters of an aggregate of decimal numbers without whitespace.
+_NUMAGG_CHARS = str.maketrans("", "", "0123456789.eE+-,[]")
+
+
+def _plain_numaggs(lits: list[str]) -> bool:
+    """Each literal, a jointtarget written in its plain frame whose fields
+    float() reads (_joint_rows said so), is written with decimal characters
+    only: then each field is a number as the lexer's NUMAGG reads it
+    (values.decimal_chars), and the literal lexes as one NUMAGG."""
+    return not ",".join(lits).translate(_NUMAGG_CHARS)
+
+
+# One new declaration as the editor writes it (Editor.declare): FAST_DECL
+# with its aggregate taken up to the ';' (a plain jointtarget of decimal
+# numbers there, checked at once, is the NUMAGG FAST_DECL reads).
+_PLAIN_DECL = re.compile(r"[ \t\f\r\n\ufeff]*(?:(?i:LOCAL|TASK)[ \t]+)?((?i:CONST|PERS|VAR))[ \t]+"
+                         r"([A-Za-z][A-Za-z0-9_]*)[ \t]+([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*"
+                         r"(\[[^;]*\])[ \t]*;")
+
+
+def _plain_declared(eng, pieces: list[str]) -> list | None:
+    """What _declared's lexing reads in each inserted text, when every one
+    is one-line declarations written plainly (_PLAIN_DECL, their words no
+    reserved ones, their aggregates plain jointtargets of decimal numbers):
+    per text, (storage, type, name, start and end of its aggregate in the
+    text) of each declaration. None: the texts are lexed one by one."""
+    out = []
+    aggs = []
+    reserved = eng.reserved
+    for piece in pieces:
+        found = []
+        pos = 0
+        while pos < len(piece):
+            m = _PLAIN_DECL.match(piece, pos)
+            if m is None or m.group(2).upper() in reserved or m.group(3).upper() in reserved:
+                return None
+            found.append((m.group(1).upper(), m.group(2), m.group(3), m.start(4), m.end(4)))
+            aggs.append(m.group(4))
+            pos = m.end()
+        out.append(found)
+    if aggs and not (_joint_rows(aggs) is not None and _plain_numaggs(aggs)):
+        return None
+    return out
+
+
 def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
               pf: ParsedFile) -> tuple[dict, array, array] | None:
     """The new declarations of a file read again where the output holds
@@ -295,6 +348,7 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     starts = [a for a, _ in routines]
     src = pf.source.text
     ends = sorted(d.node.span.end for m in pf.modules for d in m.declarations)
+    places = []
     for k in inserts:
         at = int(es.starts[k])
         scope = _scope(pf, at, routines, starts)
@@ -305,21 +359,30 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
         if "\n" in rest or "\r" in rest or rest[:1] not in ("", "!"):
             return None
         a = at + int(shift[k])
-        piece = text[a:a + len(es.text(k))]
-        for tok in eng.tokens(piece):
-            if tok.type == "$END":
-                break
-            if tok.type != "FAST_DECL":
-                return None
-            node = build.fast_decl([tok])
-            if not (node.storage == "CONST" and node.type_name.lower() == "jointtarget"
-                    and not node.dims and type(node.init) is A.NumAgg):
+        places.append((scope, a, text[a:a + len(es.text(k))]))
+    plain = _plain_declared(eng, [piece for _, _, piece in places])
+    for n, (scope, a, piece) in enumerate(places):
+        if plain is not None:
+            decls = plain[n]
+        else:
+            decls = []
+            for tok in eng.tokens(piece):
+                if tok.type == "$END":
+                    break
+                if tok.type != "FAST_DECL":
+                    return None
+                node = build.fast_decl([tok])
+                if node.dims or type(node.init) is not A.NumAgg:
+                    return None
+                decls.append((node.storage, node.type_name, node.name,
+                              node.init.span.start, node.init.span.end))
+        for storage, type_name, name, x, y in decls:
+            if not (storage == "CONST" and type_name.lower() == "jointtarget"):
                 return None
             # (A later one of the same name wins, as a dict's last value.)
-            out[node.name.lower()] = len(scopes) // 2
+            out[name.lower()] = len(scopes) // 2
             scopes.extend(scope)
-            init = node.init.span
-            aggs.extend((a + init.start, a + init.end))
+            aggs.extend((a + x, a + y))
     return out, scopes, aggs
 
 

@@ -34,6 +34,16 @@ def unit_wxyz(w: float, x: float, y: float, z: float) -> tuple[float, float, flo
     return w / n, x / n, y / n, z / n
 
 
+def row_dots(a) -> np.ndarray:
+    """a[i].dot(a[i]) of each row of a (n, k), bit for bit: numpy computes
+    one row's dot product by BLAS (with its own order and fused
+    multiply-adds), and a stack of (1, k) @ (k, 1) products by the same
+    call per row (tested against the rows one by one), without a Python
+    step per row."""
+    a = np.ascontiguousarray(a, dtype=float)
+    return np.matmul(a[:, None, :], a[:, :, None])[:, 0, 0]
+
+
 def quat_wxyz_to_matrix(q) -> np.ndarray:
     """Rotation matrix of a (possibly unnormalised) RAPID quaternion w,x,y,z."""
     q = np.asarray(q, dtype=float)

@@ -108,6 +108,8 @@ class Engine:
             if t.name not in ("FAST_CALL", "FAST_DECL")))
         self._keywords = keywords
         self._reserved = frozenset(keywords)
+        # Reserved words, upper case (a name that is one is no identifier).
+        self.reserved = self._reserved
         self._tails: dict[str, bool] = {}      # _keyword_in's verdicts on argument lists
         # A run of FAST_CALL statements of one instruction and one argument
         # list after the target (`MoveL <target>,v100,z1,tool1\\WObj:=wobj1;`

@@ -14,6 +14,8 @@ import re
 
 import numpy as np
 
+from ..kinematics.frames import row_dots
+
 JOINT_DECIMALS = 6
 MM_DECIMALS = 6
 QUAT_DECIMALS = 9
@@ -69,12 +71,12 @@ def quaternion(q_wxyz, like=None) -> tuple[str, str, str, str]:
 
 
 def quaternions(q_wxyz, like=None) -> list[tuple[str, str, str, str]]:
-    """quaternion() of many (n, 4) at once. Norms row by row, as one
-    quaternion's is (a batch reduction may differ in the last bit, and a
-    9th decimal on a rounding boundary with it); signs from one batch of
-    dot products, row by row where one is near 0."""
+    """quaternion() of many (n, 4) at once. Norms as one quaternion's is
+    (row_dots: a batch reduction may differ in the last bit, and a 9th
+    decimal on a rounding boundary with it); signs from one batch of dot
+    products, row by row where one is near 0."""
     q = np.asarray(q_wxyz, float)
-    q = q / np.sqrt([row.dot(row) for row in q])[:, None]
+    q = q / np.sqrt(row_dots(q))[:, None]
     ref = np.broadcast_to(np.asarray(like, float) if like is not None
                           else np.array([1.0, 0, 0, 0]), q.shape)
     # The sign from one batch of dot products; where one is near 0 (the

@@ -8,14 +8,13 @@ external axes exactly as written in the source.
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
 
 from ..edits import EditColumns, SpanEdit, apply_edits, span_edit
-from ..kinematics.frames import (matrix_to_quat_wxyz, rotation_log, unit_quat_matrices,
-                                 unit_wxyz)
+from ..kinematics.frames import (matrix_to_quat_wxyz, rotation_log, row_dots,
+                                 unit_quat_matrices, unit_wxyz)
 from ..rapid.values import JointTarget, RobTarget, frame_fields, plain_bounds
 from . import numbers
 
@@ -30,7 +29,7 @@ def _rotation_angles(q_old, R_new) -> np.ndarray:
     by pair formulas)."""
     unit = [unit_wxyz(*q) for q in np.asarray(q_old, float).tolist()]
     rel = np.matmul(np.swapaxes(unit_quat_matrices(unit), -1, -2), R_new)
-    return np.array([math.sqrt(v.dot(v)) for v in rotation_log(rel)])
+    return np.sqrt(row_dots(rotation_log(rel)))
 
 
 def robtarget_texts(record: RobTarget, R: np.ndarray, p: np.ndarray,
@@ -238,6 +237,20 @@ def robtarget_literal(texts: list[str]) -> str:
 
 def jointtarget_literal(texts: list[str]) -> str:
     return f"[[{','.join(texts[0:6])}],[{','.join(texts[6:12])}]]"
+
+
+def absj_literals(q_deg: np.ndarray, sources: list[RobTarget]) -> list[str]:
+    """jointtarget_literal(absj_texts(q, source)) of each row of q_deg (n,
+    6) and its source: the joints formatted as one batch (fmt_many's texts
+    are each number's alone); the external axes of a literal written
+    plainly (plain_bounds) are the text inside its last brackets."""
+    joints = numbers.fmt_many(np.asarray(q_deg, float).ravel().tolist(), numbers.JOINT_DECIMALS)
+    joints = map(",".join, zip(*[iter(joints)] * 6))
+    if _plain_bounds(sources) is not None:
+        ext = [lit[lit.rindex("[") + 1:-2] for lit in (src.lexed for src in sources)]
+    else:
+        ext = [",".join(src.texts[11:17]) for src in sources]
+    return [f"[[{j}],[{e}]]" for j, e in zip(joints, ext)]
 
 
 def absj_texts(q_deg, source: RobTarget) -> list[str]:
