@@ -1,0 +1,485 @@
+"""The CAM-scale paths of parsing, planning, choosing, printing and
+checking (issue #14) give what the general ones give.
+
+Each shortcut is compared with the way it replaces, on every fixture and
+on CAM-like modules whose runs of moves are broken in every way a real
+program breaks them (cam_variants.py): the lexer's runs with lexing one
+token at a time, the parser's appends with the table's reductions, the
+resolver's plain moves with resolve(), usage() with a walk of every node,
+the flow's plain calls with calls that are not, frozen nodes made by
+construct.maker with their classes' own constructors; and `fix` as a
+whole with every shortcut that can be switched off switched off.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import random
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cam_variants import VARIANTS, jointtarget, robtarget, targets
+from rapidcomp.compensate import fix as F
+from rapidcomp.compensate import report
+from rapidcomp.compensate import solve as S
+from rapidcomp.compensate import targets as T
+from rapidcomp.compensate import verify as V
+from rapidcomp.compensate.load import load_solver
+from rapidcomp.compensate.plan import Plan, Task
+from rapidcomp.construct import maker
+from rapidcomp.rapid import ast as A
+from rapidcomp.rapid import refs
+from rapidcomp.rapid.grammar import engine
+from rapidcomp.rapid.model import Motion
+from rapidcomp.rapid.parse import parse_file, parse_text
+from rapidcomp.source import SourceText
+
+ROOT = Path(__file__).resolve().parents[1]
+PROFILE = ROOT / "fixtures" / "warm.csv"
+FIXTURES = (sorted((ROOT / "fixtures").glob("*.mod")) + sorted((ROOT / "fixtures" / "rapid").iterdir())
+            + sorted((ROOT / "fixtures" / "tasks").rglob("*.mod"))
+            + sorted((ROOT / "fixtures" / "tasks").rglob("*.sys")))
+
+
+def _texts() -> list[tuple[str, str]]:
+    out = [(p.name, p.read_bytes().decode("utf-8", "replace")) for p in FIXTURES]
+    out += [(f"{name}_{seed}", make(seed)) for name, make in VARIANTS.items() for seed in (1, 2)]
+    return out
+
+
+TEXTS = _texts()
+
+
+@pytest.fixture(scope="module")
+def solver():
+    return load_solver(str(PROFILE), None, False, ("J5=-120:120",))
+
+
+# ---------------------------------------------------------------- construct
+
+def test_maker_makes_what_the_class_makes():
+    """maker(cls)(*values) is cls(*values): equal, of the class, every field
+    set; for slotted classes and for one with a __dict__ (NumAgg keeps its
+    cached items there)."""
+    span = A.Span(3, 9)
+    cases = [(A.Arg, ("pos", None, A.Ref("p1", (), span), span)),
+             (A.Ref, ("p1", (), span)), (A.NumAgg, ("[1,2]", span)),
+             (A.ProcCall, ("MoveL", (), span, True)),
+             (Motion, ("MoveL", None, span, "Path", (), (), (), None, None, None, None, ()))]
+    for cls, values in cases:
+        made = maker(cls)(*values)
+        assert type(made) is cls and made == cls(*values)
+        assert [getattr(made, f.name) for f in dataclasses.fields(cls)] == list(values)
+    agg = maker(A.NumAgg)("[1,2]", span)
+    assert [n.value for n in agg.items] == [1.0, 2.0]       # its cached view still works
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        maker(A.Ref)("p", (), span).name = "q"
+
+
+def test_maker_refuses_what_it_cannot_make_alike():
+    @dataclasses.dataclass
+    class Open:
+        a: int
+
+    @dataclasses.dataclass(frozen=True)
+    class Checked:
+        a: int
+
+        def __post_init__(self):
+            raise ValueError
+
+    for cls in (Open, Checked, int):
+        with pytest.raises(TypeError):
+            maker(cls)
+
+
+# ---------------------------------------------------------------- lexer, parser
+
+def _tokens(text: str, runs: bool) -> list[tuple]:
+    return [(t.type, t.value, t.start_pos, t.end_pos) for t in engine().tokens(text, runs)]
+
+
+@pytest.mark.parametrize("name,text", TEXTS, ids=[n for n, _ in TEXTS])
+def test_runs_lex_as_one_token_at_a_time(name, text):
+    try:
+        one = _tokens(text, False)
+    except Exception as exc:          # (an invalid fixture fails alike)
+        with pytest.raises(type(exc)):
+            _tokens(text, True)
+        return
+    assert _tokens(text, True) == one
+
+
+def test_runs_stop_where_a_statement_is_not_the_same_call():
+    """A run ends at a reserved word as target, another argument list or
+    name, anything that is not an aggregate of numbers, a comment; each of
+    those is lexed as one by one lexes it."""
+    base = "MoveL p1,v100,z1,tool0;\n"
+    others = ["MoveL IF,v100,z1,tool0;", "MoveL p2,v100,z1,tool1;", "MoveJ p2,v100,z1,tool0;",
+              "MoveL [[1,2,3],[1,0,0,0]],v100,z1,tool0;", "MoveL [[1,2,x],[1,0,0,0]],v100,z1,tool0;",
+              "MoveL [[1, 2,3] ,[1,0,0,0]],v100,z1,tool0;", "! MoveL p2,v100,z1,tool0;",
+              "MoveL p2 ,v100,z1,tool0;", "MoveL\tp2,v100,z1,tool0;", "MoveL p2,v100,z1,tool0 ;",
+              "movel p2,v100,z1,tool0;", "MoveL p_2,v100,z1,tool0;\r\n", "MoveL 0x1F,v100,z1,tool0;",
+              "MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E+09,9e9,1.,.5,+1,-2]],v100,z1,tool0;"]
+    rnd = random.Random(3)
+    for _ in range(300):
+        lines = [base] + [rnd.choice([base] + others) + "\n" for _ in range(rnd.randint(1, 8))]
+        text = "".join(lines)
+        assert _tokens(text, True) == _tokens(text, False), text
+
+
+def _parse_one_by_one(monkeypatch, text: str):
+    class Never(dict):
+        def get(self, key, default=None):
+            return False
+    eng = engine()
+    monkeypatch.setattr(eng, "_appends", Never())
+    monkeypatch.setattr(eng, "tokens", lambda text, runs=False, _t=eng.tokens: _t(text, False))
+    try:
+        return _tree(eng.parse(text))
+    finally:
+        monkeypatch.undo()
+
+
+def _tree(parsed):
+    """(header text, module nodes): tokens compare by identity."""
+    header, nodes = parsed
+    return (None if header is None else header.value), nodes
+
+
+@pytest.mark.parametrize("name,text", TEXTS, ids=[n for n, _ in TEXTS])
+def test_appends_build_the_tree_the_reductions_build(name, text, monkeypatch):
+    """A statement after one of its kind appended at once (lalr parse's
+    shortcut, with the lexer's runs) gives the very tree the table's
+    reductions give token by token."""
+    try:
+        slow = _parse_one_by_one(monkeypatch, text)
+    except Exception as exc:
+        with pytest.raises(type(exc)):
+            engine().parse(text)
+        return
+    assert _tree(engine().parse(text)) == slow
+
+
+def test_source_lines_are_positions_lines():
+    text = "a\nbb\r\n\nccc\rd\n" * 50
+    src = SourceText.from_text(text)
+    offsets = list(range(len(text)))
+    assert src.lines(offsets) == [src.position(k)[0] for k in offsets]
+    assert src.lines([]) == []
+
+
+# ---------------------------------------------------------------- plan
+
+def _fields(u) -> list:
+    """Every field of a use; nodes, files and modules by identity."""
+    out = []
+    for f in dataclasses.fields(u):
+        v = getattr(u, f.name)
+        if f.name in ("motion", "file", "module"):
+            v = id(v)
+        elif f.name == "source" and v is not None:
+            v = [id(x) if isinstance(x, (A.Ref, A.NumAgg, A.Agg, A.Call)) or g.name in (
+                "record", "decl", "home", "home_module") else
+                 (x.tolist() if isinstance(x, np.ndarray) else x)
+                 for g in dataclasses.fields(v) for x in [getattr(v, g.name)]]
+        elif f.name == "flange":
+            v = None if v is None else (u.R.tolist(), u.p.tolist())
+        elif f.name == "tool" or f.name == "wobj":
+            v = None if v is None else (v[0], np.asarray(v[1][0]).tolist(),
+                                        np.asarray(v[1][1]).tolist())
+        out.append(v)
+    return out
+
+
+def _tasks():
+    tasks = [Task(n, (parse_text(t, n),)) for n, t in TEXTS if n.startswith(tuple(VARIANTS))]
+    tasks += [Task(p.name, (parse_file(p, p.name),)) for p in FIXTURES if "tasks" not in p.parts
+              and p.suffix in (".mod", ".sys")]
+    from rapidcomp.compensate.load import load_task
+    from rapidcomp.rapid.task import tasks_of
+    for folder in ("cell", "glue/Glue.pgf", "backup_irbt"):
+        source = tasks_of(str(ROOT / "fixtures" / "tasks" / folder))[0]
+        tasks.append(load_task(source, ()))
+    return tasks
+
+
+@pytest.mark.parametrize("track", [(), ((0, np.array([1.0, 0, 0])),)])
+def test_plain_moves_resolve_as_resolve_does(track, monkeypatch):
+    """Resolver.resolve_all's plain moves are the uses resolve() gives, field
+    for field, and their flange poses bit for bit (with a track: resolve()'s
+    own way, as before)."""
+    taken = []
+    real = T.Resolver._plain_use
+
+    def spy(self, *args):
+        u = real(self, *args)
+        taken.append(u is not None)
+        return u
+    for task in _tasks():
+        monkeypatch.setattr(T.Resolver, "_plain_use", spy)
+        fast = Plan(task, track)
+        monkeypatch.setattr(T.Resolver, "_plain_moves", lambda self: False)
+        slow = Plan(task, track)
+        monkeypatch.undo()
+        assert [_fields(u) for u in fast.uses] == [_fields(u) for u in slow.uses], task.name
+        assert fast.notes() == slow.notes()
+    assert (sum(taken) > 300) == (not track)
+
+
+def test_an_earlier_moves_error_comes_first_with_plain_moves():
+    """An input error met while resolving a plain move (its tool's
+    quaternion of norm 0) is raised after the error of a use before it (a
+    position 200 m away, checked with the batch), as resolve() one by one
+    raises them."""
+    from rapidcomp.errors import InputError
+    far = "[[200000,0,0],[1,0,0,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    near = robtarget(targets(1, 1)[0])
+    text = "\n".join([
+        "MODULE M",
+        "  PERS tooldata tBad:=[TRUE,[[0,0,150],[0,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];",
+        "  PROC P()", f"    MoveL {far},v100,z1,tool0;", f"    MoveL {near},v100,z1,tBad;",
+        "  ENDPROC", "ENDMODULE", ""])
+    pf = parse_text(text, "m.mod")
+    with pytest.raises(InputError) as got:
+        Plan(Task("m.mod", (pf,)))
+    assert "m.mod:4:" in str(got.value) and "beyond" in str(got.value), str(got.value)
+    # Alone, the second move's error is its own.
+    pf = parse_text(text.replace(far, near), "m.mod")
+    with pytest.raises(InputError) as got:
+        Plan(Task("m.mod", (pf,)))
+    assert "norm 0" in str(got.value), str(got.value)
+
+
+def _usage_by_nodes(module):
+    """usage() as a walk of every node (refs.nodes), the way it was written."""
+    from rapidcomp.rapid.motions import motion_spec
+    found: dict = {}
+    writes: dict = {}
+    assigns: dict = {}
+    calls = []
+    for node in refs.nodes(module.items):
+        t = type(node)
+        if t is A.Ref:
+            found.setdefault(node.name.lower(), []).append(node)
+        elif t is A.Assign:
+            writes.setdefault(node.target.name.lower(), []).append(node.span)
+            if not node.target.selectors:
+                assigns.setdefault(node.target.name.lower(), []).append(node)
+        elif t is A.ProcCall:
+            spec = motion_spec(node.name)
+            if spec is not None:
+                if "search" in spec.roles:
+                    positional = [a for a in node.args if a.kind in ("pos", "named")]
+                    for role, arg in zip(spec.roles, positional):
+                        if role == "search" and isinstance(arg.value, A.Ref):
+                            writes.setdefault(arg.value.name.lower(), []).append(arg.span)
+                continue
+            calls.append(node)
+        elif t is A.LateCall or t is A.Call:
+            calls.append(node)
+    return found, writes, calls, assigns
+
+
+def test_usage_is_the_walk_of_every_node():
+    for task in _tasks():
+        for pf in task.files:
+            for m in pf.modules:
+                got = refs.usage(m.node)
+                found, writes, calls, assigns = _usage_by_nodes(m.node)
+                assert {k: [id(r) for r in v] for k, v in got.refs.items()} == \
+                    {k: [id(r) for r in v] for k, v in found.items()}
+                assert got.writes == writes and [id(c) for c in got.calls] == [id(c) for c in calls]
+                assert {k: [id(a) for a in v] for k, v in got.assigns.items()} == \
+                    {k: [id(a) for a in v] for k, v in assigns.items()}
+
+
+def _not_plain(node):
+    """The same tree with every call marked not plain (the flow walks those
+    without its shortcut)."""
+    if type(node) is tuple:
+        return tuple(_not_plain(x) for x in node)
+    if type(node) is A.ProcCall:
+        return dataclasses.replace(node, plain=False)
+    if dataclasses.is_dataclass(node) and not isinstance(node, type) and type(node) is not A.NumAgg:
+        changes = {f.name: _not_plain(getattr(node, f.name)) for f in dataclasses.fields(node)
+                   if type(getattr(node, f.name)) is tuple or dataclasses.is_dataclass(
+                       getattr(node, f.name))}
+        return dataclasses.replace(node, **changes)
+    return node
+
+
+def test_the_flow_of_plain_calls_is_that_of_any_call():
+    """The flow walks a plain move without its function-call memo; the
+    states, order and notes are those of the same program walked without."""
+    def rebuilt(pf):
+        return dataclasses.replace(pf, modules=tuple(
+            dataclasses.replace(m, node=_not_plain(m.node)) for m in pf.modules))
+    for task in _tasks():
+        fast = Plan(task).flow
+        slow = Plan(dataclasses.replace(task, files=tuple(map(rebuilt, task.files)),
+                                        context=tuple(map(rebuilt, task.context)))).flow
+        assert fast.order == slow.order and fast.notes == slow.notes
+        assert fast.before == slow.before and fast.entry == slow.entry
+
+
+def _cam(n: int, seed: int, confl: str) -> str:
+    """bench/fix.py's CAM module, under ConfL as given ('' = not known)."""
+    import sys
+    sys.path.insert(0, str(ROOT / "bench"))
+    from fix import cam_module
+    return cam_module(n, seed).replace("  PROC Path()\n", f"  PROC Path()\n{confl}")
+
+
+def _pick(p):
+    return (p.rule, p.failure, p.kind, p.caution, p.line,
+            None if p.q is None else p.q.tolist(), None if p.prev is None else p.prev.tolist())
+
+
+def test_the_choices_quick_cases_are_the_general_rules(solver, monkeypatch):
+    """Each of _quick's three cases gives the solutions (all of them, not
+    only the one compensated) the general rules give, and each is taken."""
+    tasks = [Task("cam", (parse_text(_cam(n, seed, confl), "cam.mod"),))
+             for n, seed, confl in ((2000, 1, ""), (300, 2, "    ConfL\\Off;\n"),
+                                    (300, 3, "    ConfL\\On;\n"))]
+    tasks += _tasks()
+    cases = []
+    real = S._Chooser._quick
+
+    def spy(self, i, *args):
+        out = real(self, i, *args)
+        if out is not None:
+            cases.append(self.quick[i])
+        return out
+    for task in tasks:
+        plan = Plan(task)
+        uses = [u for u in plan.uses if u.reason is None]
+        rows = {u.key: i for i, u in enumerate(uses)}
+        monkeypatch.setattr(S._Chooser, "_quick", spy)
+        fast = S._Chooser(plan, solver, uses, rows)
+        fast.run()
+        monkeypatch.setattr(S._Chooser, "_quick", lambda self, *args: None)
+        slow = S._Chooser(plan, solver, uses, rows)
+        slow.run()
+        monkeypatch.undo()
+        assert [[_pick(p) for p in sols] for sols in fast.sols] == \
+            [[_pick(p) for p in sols] for sols in slow.sols], task.name
+        assert [_pick(p) for p in fast.picks] == [_pick(p) for p in slow.picks]
+        assert np.array_equal(fast.q, slow.q, equal_nan=True)
+    assert min(cases.count(k) for k in (1, 2, 3)) > 30, [cases.count(k) for k in (1, 2, 3)]
+
+
+# ---------------------------------------------------------------- numbers
+
+def test_row_dots_are_each_rows_dot():
+    from rapidcomp.kinematics.frames import row_dots
+    rng = np.random.default_rng(4)
+    for k in (3, 4, 6):
+        a = rng.normal(size=(5000, k)) * rng.choice([1e-9, 1e-3, 1.0, 1e4], size=(5000, 1))
+        want = np.array([row.dot(row) for row in a])
+        assert np.array_equal(row_dots(a), want)
+        assert np.array_equal(row_dots(np.asfortranarray(a)), want)
+        assert np.array_equal(row_dots(a[::2]), want[::2])
+    assert row_dots(np.zeros((0, 4))).shape == (0,)
+
+
+def test_absj_literals_are_those_of_one():
+    from rapidcomp.rewrite import records
+    from rapidcomp.rapid.values import decode
+    ts = targets(60, 7)
+    recs = [decode("robtarget", A.NumAgg(robtarget(t, k % 3), A.Span(0, 0))) for k, t in
+            enumerate(ts)]
+    q = np.array([t[3] for t in ts]) + np.random.default_rng(1).normal(size=(60, 6)) * 1e-3
+    q[0] = [-0.0, 0, 1e-7, -1e-7, 180, -180]
+    for group in (recs, [r for r in recs if type(r.lexed) is str and " " not in r.lexed]):
+        qs = q[:len(group)]
+        assert records.absj_literals(qs, group) == [
+            records.jointtarget_literal(records.absj_texts(row, r)) for row, r in zip(qs, group)]
+
+
+def test_one_pose_stacked_is_each_pose_stacked():
+    R = np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]])
+    pose = (R, np.array([1.5, -2, 3]))
+    same = T.stacked_poses([pose] * 5)
+    equal = T.stacked_poses([(R.copy(), pose[1].copy()) for _ in range(5)])
+    for a, b in zip(same, equal):
+        assert np.array_equal(a, b) and a.flags.c_contiguous and a.flags.writeable
+
+
+# ---------------------------------------------------------------- relex_absj
+
+def test_plain_numaggs_are_what_the_lexer_reads_as_one_aggregate():
+    """_plain_numaggs (after _joint_rows) says a literal is one NUMAGG token
+    only where the lexer reads it so."""
+    eng = engine()
+    rnd = random.Random(8)
+    good = ["1", "-2.5", "+3", ".5", "5.", "1e5", "9E+09", "1e-5", "+.5e-3", "0", "-0"]
+    bad = ["1e", "e5", "1.2.3", "--1", "0x1F", "1_0", " 1", "", "nan", "inf", "1 ", "+", "."]
+    fast_seen = slow_seen = 0
+    for _ in range(4000):
+        fields = [rnd.choice(bad if rnd.random() < 0.02 else good) for _ in range(12)]
+        lit = "[[" + ",".join(fields[:6]) + "],[" + ",".join(fields[6:]) + "]]"
+        fast = V._joint_rows([lit]) is not None and V._plain_numaggs([lit])
+        try:
+            lexed = [t.type for t in eng.tokens(lit)] == ["NUMAGG", "$END"]
+        except Exception:
+            lexed = False
+        assert not fast or lexed, lit                       # never says so wrongly
+        assert fast or not all(f in good for f in fields), lit    # and knows every plain one
+        fast_seen += fast
+        slow_seen += not fast
+    assert fast_seen > 1000 and slow_seen > 500
+
+
+def test_plain_declarations_read_as_the_lexer_reads_them():
+    """_plain_declared reads the editor's new declarations as lexing them
+    does, and gives up (None) on anything else."""
+    eng = engine()
+    t = targets(3, 2)
+    good = [f"\n  CONST jointtarget jt_p{i}:={jointtarget(x)};" for i, x in enumerate(t)]
+    got = V._plain_declared(eng, ["".join(good), good[0] + "\r\n\tLOCAL CONST jointtarget a := "
+                                  + jointtarget(t[1]) + " ;"])
+    assert [[(s, ty, n) for s, ty, n, _, _ in piece] for piece in got] == [
+        [("CONST", "jointtarget", f"jt_p{i}") for i in range(3)],
+        [("CONST", "jointtarget", "jt_p0"), ("CONST", "jointtarget", "a")]]
+    piece = "".join(good)
+    x, y = got[0][1][3:]
+    assert piece[x:y] == jointtarget(t[1])
+    for bad in [good[0] + " ! note", "\n  CONST jointtarget IF:=" + jointtarget(t[0]) + ";",
+                "\n  CONST jointtarget a:=[[1,2,3,4,5,6],[1,2,3,4,5,x]];",
+                "\n  CONST jointtarget a:=[[1,2,3,4,5,6] ,[1,2,3,4,5,6]];", "\n  MoveL p1,v1,z1,t;"]:
+        assert V._plain_declared(eng, [bad]) is None, bad
+
+
+# ---------------------------------------------------------------- the whole fix
+
+def _slow(monkeypatch):
+    """Every shortcut that can be switched off, off."""
+    class Never(dict):
+        def get(self, key, default=None):
+            return False
+    eng = engine()
+    monkeypatch.setattr(eng, "_appends", Never())
+    monkeypatch.setattr(eng, "tokens", lambda text, runs=False, _t=eng.tokens: _t(text, False))
+    monkeypatch.setattr(T.Resolver, "_plain_moves", lambda self: False)
+    monkeypatch.setattr(S._Chooser, "_quick", lambda self, *args: None)
+    monkeypatch.setattr(V, "_plain_declared", lambda eng, pieces: None)
+    monkeypatch.setattr(V, "_plain_numaggs", lambda lits: False)
+
+
+@pytest.mark.parametrize("mode", ["auto", "absj", "robtarget"])
+@pytest.mark.parametrize("name", sorted(VARIANTS))
+def test_fix_gives_what_the_general_paths_give(name, mode, solver, monkeypatch):
+    text = VARIANTS[name](3)
+    fast = F.fix(Task(name, (parse_text(text, name + ".mod"),)), solver, mode)
+    _slow(monkeypatch)
+    slow = F.fix(Task(name, (parse_text(text, name + ".mod"),)), solver, mode)
+    monkeypatch.undo()
+    assert [m.text for m in fast.modules] == [m.text for m in slow.modules]
+    assert fast.rows == slow.rows and fast.notes == slow.notes
+    meta = {"mode": mode}
+    assert report.markdown(fast, meta) == report.markdown(slow, meta)
+    assert report.as_json(fast, meta) == report.as_json(slow, meta)
+    assert fast.summary()["compensated"] > 40
