@@ -321,8 +321,11 @@ def _plain_declared(eng, pieces: list[str]) -> list | None:
             aggs.append(m.group(4))
             pos = m.end()
         out.append(found)
-    if aggs and not (_joint_rows(aggs) is not None and _plain_numaggs(aggs)):
-        return None
+    # (A block at a time: their field texts are not all alive at once.)
+    for at in range(0, len(aggs), RELEX_BLOCK):
+        block = aggs[at:at + RELEX_BLOCK]
+        if not (_joint_rows(block) is not None and _plain_numaggs(block)):
+            return None
     return out
 
 
