@@ -17,6 +17,7 @@ from ..kinematics.conf import quadrant_miss
 from ..kinematics.frames import matrix_to_quat_wxyz
 from ..errors import InternalError
 from ..rapid import ast as A
+from ..rapid.ast import Span
 from ..rapid.values import RobTarget
 from ..rewrite import numbers, records
 from ..rewrite.names import NameAllocator
@@ -339,6 +340,7 @@ class Editor:
         self.converted: dict = {}
         self.others = False
         self._per_module: dict = {}
+        self._renamed: dict = {}             # instruction -> (MoveAbsJ as it, why) (_to_absj)
 
     def text(self, fi: int) -> str:
         return self.plan.files[fi].source.text
@@ -697,8 +699,15 @@ class Editor:
         instruction name as written."""
         m = u.motion
         fi = u.key[0]
-        called = _style("MoveAbsJ", m.instruction)
-        self._edit(fi, m.name_span, called, self._said(f"{m.instruction} -> MoveAbsJ"))
+        # (Its name and why once per instruction as written: a CAM program
+        # turns 1e5 MoveL into MoveAbsJ.)
+        named = self._renamed.get(m.instruction)
+        if named is None:
+            named = self._renamed[m.instruction] = (
+                _style("MoveAbsJ", m.instruction), self._said(f"{m.instruction} -> MoveAbsJ"))
+        called, why = named
+        start = m.span.start
+        self._edit(fi, Span(start, start + len(m.instruction)), called, why)
         self._edit(fi, u.source.expr.span, target_text, f"{u.label} -> {target_text[:40]}")
         return called
 

@@ -417,7 +417,10 @@ class _Walker:
         return exit_state, inside
 
     def walk(self, stmts, st: State | None, env: dict, frame: _Frame) -> State | None:
-        for s in stmts:
+        i, n = 0, len(stmts)
+        while i < n:
+            s = stmts[i]
+            i += 1
             t = type(s)
             if st is None:
                 if t is A.Simple and s.kind == "LABEL":
@@ -436,6 +439,8 @@ class _Walker:
                 spec = motion_spec(s.name)
                 if spec is not None:
                     st = self.motion(s, spec, st, env, frame.rt)
+                    if not env and frame.floor is None and i < n:
+                        i, st = self._moves(stmts, i, st, frame.rt)
                     continue
             else:
                 fcalls = self.functions.get(id(s))
@@ -560,6 +565,42 @@ class _Walker:
         if name in BUILTIN_INSTRUCTIONS:
             return st
         return self.unknown_call(s.name, s, frame)
+
+    def _moves(self, stmts, i: int, st: State, rt: _Routine) -> tuple[int, State]:
+        """walk() of the plain moves from stmts[i] on (a CAM program's run of
+        1e5, outside any loop): what walk() and motion() do for each, with
+        what they look up once. Their state differs only in the move before
+        (`last`), so each is absorbed into the frame as the first was; a
+        search or a move of external axes ends the run. Returns where the
+        run ends and the state after it."""
+        fi = rt.fi
+        written = fi < self.n_written
+        index, names = self.motion_index, self.target_names
+        before, order = self.flow.before, self.flow.order
+        n = len(stmts)
+        while i < n:
+            s = stmts[i]
+            if type(s) is not A.ProcCall or not s.plain:
+                break
+            spec = motion_spec(s.name)
+            if spec is None or spec.interpolation == "external" or "search" in spec.roles:
+                break
+            self.visits += 1
+            if self.visits > MAX_VISITS:
+                raise _TooLarge
+            mi = index[(fi, s.span.start)]
+            for role, _ in names[(fi, mi)]:
+                key = (fi, mi, role, ())
+                if written:
+                    old = before.get(key)
+                    if old is None:
+                        order.append(key)
+                        before[key] = st
+                    else:
+                        before[key] = old.join(st)
+                st = st.with_last(frozenset((key,)) if written else None)
+            i += 1
+        return i, st
 
     def motion(self, s: A.ProcCall, spec, st: State, env: dict, rt: _Routine) -> State:
         if spec.interpolation == "external":
