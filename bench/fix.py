@@ -2,7 +2,10 @@
 
     python bench/fix.py [--sizes 1000,10000,100000]
 
-Each size runs in a fresh process (so peak memory is per size) and prints
+Each size runs in a fresh process (so peak memory is per size), in two
+shapes of the same module (Path called by nothing: every MoveL kept, its
+robtarget's numbers rewritten; Path called from main: every MoveL turned
+into MoveAbsJ on a jointtarget of its own), and prints
 seconds and MB/s per stage: parse, resolve, solve, print (edits + splice),
 re-lex (the edited literals, and the moves turned into MoveAbsJ on
 jointtargets of their own, read again where the output holds them; the
@@ -135,26 +138,32 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sizes", default="1000,10000,100000")
     ap.add_argument("--one", type=int, help=argparse.SUPPRESS)
-    ap.add_argument("--main", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--main", action="store_true", help=argparse.SUPPRESS)   # (with --one)
     args = ap.parse_args()
     if args.one:
         print(json.dumps(one(args.one, args.main)))
         return
     stages = ["parse", "resolve", "solve", "print", "re-lex", "verify", "report"]
-    print(f"{'targets':>8} {'MB':>6} " + " ".join(f"{s:>9}" for s in stages)
-          + f" {'total s':>8} {'MB/s':>6} {'targets/s':>10} {'peak MB':>8}")
-    for n in (int(s) for s in args.sizes.split(",")):
-        out = subprocess.run([sys.executable, __file__, "--one", str(n)], check=True,
-                             capture_output=True, text=True).stdout
-        r = json.loads(out)
-        assert r["failed"] == 0 and r["compensated"] == n, r
-        # The output is read again where it was edited, or (edits of other
-        # kinds) parsed again: one column.
-        r["stages"]["re-lex"] = r["stages"].get("re-lex", 0) + r["stages"].get("re-parse", 0)
-        print(f"{n:>8} {r['MB']:>6.2f} "
-              + " ".join(f"{r['stages'].get(s, 0):>8.2f}s" for s in stages)
-              + f" {r['total_s']:>8.2f} {r['MB'] / r['total_s']:>6.2f} "
-              f"{n / r['total_s']:>10.0f} {r['peak_MB']:>8.0f}")
+    for main, shape in ((False, "Path called by nothing: supervision not known, each MoveL "
+                                "kept with a compensated robtarget"),
+                        (True, "Path called from main: each MoveL -> MoveAbsJ on a "
+                               "jointtarget of its own")):
+        print(shape)
+        print(f"{'targets':>8} {'MB':>6} " + " ".join(f"{s:>9}" for s in stages)
+              + f" {'total s':>8} {'MB/s':>6} {'targets/s':>10} {'peak MB':>8}")
+        for n in (int(s) for s in args.sizes.split(",")):
+            out = subprocess.run([sys.executable, __file__, "--one", str(n)]
+                                 + (["--main"] if main else []), check=True,
+                                 capture_output=True, text=True).stdout
+            r = json.loads(out)
+            assert r["failed"] == 0 and r["compensated"] == n, r
+            # The output is read again where it was edited, or (edits of
+            # other kinds) parsed again: one column.
+            r["stages"]["re-lex"] = r["stages"].get("re-lex", 0) + r["stages"].get("re-parse", 0)
+            print(f"{n:>8} {r['MB']:>6.2f} "
+                  + " ".join(f"{r['stages'].get(s, 0):>8.2f}s" for s in stages)
+                  + f" {r['total_s']:>8.2f} {r['MB'] / r['total_s']:>6.2f} "
+                  f"{n / r['total_s']:>10.0f} {r['peak_MB']:>8.0f}")
     # The largest size through the command line, as a user runs it.
     n = max(int(s) for s in args.sizes.split(","))
     with tempfile.TemporaryDirectory() as tmp:

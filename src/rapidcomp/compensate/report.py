@@ -37,7 +37,18 @@ def _joints(q, fmt: str = ".4f") -> str:
 
 
 def _conf(c) -> str:
-    return "-" if c is None else "[" + ",".join(map(str, c)) + "]"
+    if c is None:
+        return "-"
+    # (A CAM report's 2e5 confdata cells hold a few values: each written once.)
+    text = _CONF_TEXTS.get(c)
+    if text is None:
+        if len(_CONF_TEXTS) >= 4096:
+            _CONF_TEXTS.clear()
+        text = _CONF_TEXTS[c] = "[" + ",".join(map(str, c)) + "]"
+    return text
+
+
+_CONF_TEXTS: dict[tuple, str] = {}
 
 
 def summary_lines(result: FixResult) -> list[str]:

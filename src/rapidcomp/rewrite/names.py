@@ -31,7 +31,9 @@ class NameAllocator:
         if self._taken is None:
             self._taken = set()
             for text in self._texts:
-                self._taken.update(map(str.lower, _WORD.findall(text)))
+                # (Each distinct word lower-cased once: a CAM module has 1e6
+                # words, 5e4 of them distinct.)
+                self._taken.update(map(str.lower, set(_WORD.findall(text))))
         return self._taken
 
     def new(self, stem: str) -> str:
