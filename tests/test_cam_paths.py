@@ -130,15 +130,20 @@ def test_runs_stop_where_a_statement_is_not_the_same_call():
         assert _tokens(text, True) == _tokens(text, False), text
 
 
-def _parse_one_by_one(monkeypatch, text: str):
+def _token_by_token(monkeypatch) -> None:
+    """The parser without its appends and the lexer without its runs."""
     class Never(dict):
         def get(self, key, default=None):
             return False
     eng = engine()
     monkeypatch.setattr(eng, "_appends", Never())
     monkeypatch.setattr(eng, "tokens", lambda text, runs=False, _t=eng.tokens: _t(text, False))
+
+
+def _parse_one_by_one(monkeypatch, text: str):
+    _token_by_token(monkeypatch)
     try:
-        return _tree(eng.parse(text))
+        return _tree(engine().parse(text))
     finally:
         monkeypatch.undo()
 
@@ -457,12 +462,7 @@ def test_plain_declarations_read_as_the_lexer_reads_them():
 
 def _slow(monkeypatch):
     """Every shortcut that can be switched off, off."""
-    class Never(dict):
-        def get(self, key, default=None):
-            return False
-    eng = engine()
-    monkeypatch.setattr(eng, "_appends", Never())
-    monkeypatch.setattr(eng, "tokens", lambda text, runs=False, _t=eng.tokens: _t(text, False))
+    _token_by_token(monkeypatch)
     monkeypatch.setattr(T.Resolver, "_plain_moves", lambda self: False)
     monkeypatch.setattr(S._Chooser, "_quick", lambda self, *args: None)
     monkeypatch.setattr(V, "_plain_declared", lambda eng, pieces: None)

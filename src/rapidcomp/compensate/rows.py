@@ -136,7 +136,8 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
     # confdata is a robtarget's: a MoveAbsJ has none. (A record's conf is
     # a tuple of ints already.)
     conf_before = u.conf
-    d_warnings = _warnings(solved, i, u, warning_texts_of(cols.warn_bits[i])) if has_q else ()
+    bits = cols.warn_bits[i]
+    d_warnings = _warnings(solved, i, u, warning_texts_of(bits)) if has_q and bits else ()
     g: Group | None = group_of.get(u.key) if group_of is not None else None
     why = None
     if not (has_q and cols.success[i]):      # (solved.ok(i))
