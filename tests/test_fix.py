@@ -114,16 +114,20 @@ def test_only_numbers_and_instructions_change():
 
 def test_unified_diff_matches_difflib():
     """The linear-time diff equals difflib's for line-local edits and
-    inserted lines (the edits fix makes)."""
+    inserted lines (the edits fix makes), also where a comment holds a
+    character str.splitlines ends a line at (a form feed, NEL, a line
+    separator: found by review)."""
     rng = random.Random(7)
     for _ in range(500):
         n = rng.randint(1, 40)
-        lines = [f"    MoveL p{i}, v100, {'z' * rng.randint(0, 5)}, tool0;" for i in range(n)]
+        lines = [f"    MoveL p{i}, v100, {'z' * rng.randint(0, 5)}, tool0;"
+                 + rng.choice([""] * 6 + [" ! \x0c", " ! c\x85", " !\u2028", " ! \x1c"])
+                 for i in range(n)]
         sep = rng.choice(["\n", "\r\n"])
         text = sep.join(lines) + (sep if rng.random() < 0.8 else "")
-        starts = [0]
-        for line in text.splitlines(keepends=True):
-            starts.append(starts[-1] + len(line))
+        starts = [0]           # (of the lines as written, which a comment may split)
+        for line in lines:
+            starts.append(starts[-1] + len(line) + len(sep))
         edits = []
         for k in sorted(rng.sample(range(n), rng.randint(1, min(n, 8)))):
             s, length = starts[k], len(lines[k])
@@ -135,7 +139,7 @@ def test_unified_diff_matches_difflib():
             else:
                 # Several edits on one line (the numbers of a literal), one
                 # of them maybe writing what was there.
-                cuts = sorted(rng.sample(range(10, length), 4))
+                cuts = sorted(rng.sample(range(10, length - 6), 4))
                 for a, b in ((cuts[0], cuts[1]), (cuts[2], cuts[3])):
                     edits.append(SpanEdit(s + a, s + b, rng.choice(["9", text[s + a:s + b]])))
                 if rng.random() < 0.5:
@@ -358,3 +362,39 @@ def test_a_kept_hexadecimal_field_is_verified_by_parsing_the_output(tmp_path):
         assert r.exit_code == 0, r.output
         text = out.read_text()
         assert kept[name] in text and decl[name][-60:] not in text
+
+
+LOOP_MODES = """MODULE A60
+  PERS tooldata tSp:=[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];
+  CONST robtarget arr{3}:=[[[503.758,351.759,678.631],[0.852930,-0.401623,0.332113,-0.030167],[0,-1,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],[[565.609,262.245,695.010],[0.665331,-0.057324,0.302898,0.679927],[0,-1,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],[[423.478,-388.744,940.242],[0.793380,0.316255,0.204394,-0.478282],[-1,0,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]];
+  CONST jointtarget jh:=[[-6.4065,44.5494,-5.2697,49.2436,-69.5322,7.1197],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  PROC R1P(robtarget prm)
+    MoveAbsJ jh,v100,fine,tSp;
+    FOR i FROM 1 TO 3 DO
+      MoveL arr{i},v100,fine,tSp;
+      MoveL p6,v100,fine,tSp;
+    ENDFOR
+  ENDPROC
+ENDMODULE
+"""
+
+
+@pytest.mark.parametrize("mode", ["absj", "auto", "robtarget"])
+def test_a_loops_move_that_must_stay_a_robtarget_move_stays_one_in_every_iteration(mode):
+    """A move in a FOR loop is one statement for all iterations: where one
+    iteration must stay a robtarget move (after p6, which no module
+    declares, the position is not known: its configuration is assumed),
+    the iteration that could become MoveAbsJ stays one too, and says why.
+    Before (found by review): the two wanted to rewrite the same target,
+    and fix stopped with 'conflicting edits' (exit 2)."""
+    from rapidcomp.compensate.load import load_solver
+    solver = load_solver(str(FIXTURES / "warm.csv"), None, False)
+    result = fix(Task("a.mod", (parse_text(LOOP_MODES, "a.mod"),)), solver, mode)
+    rows = [r for r in result.rows if r.target.startswith("arr")]
+    assert [r.status for r in rows] == ["compensated"] * 3
+    assert "      MoveL arr{i},v100,fine,tSp;" in result.modules[0].text
+    kept = [r for r in rows if any(w.startswith("kept as MoveL: in another iteration")
+                                   for w in r.warnings)]
+    assert [r.target for r in kept] == (["arr{i} [i=1]"] if mode == "absj" else [])
+    assert all(r.action == "robtarget arr rewritten in place" for r in rows)
+    parse_text(result.modules[0].text, "out.mod")

@@ -54,6 +54,9 @@ class Group:
     local: bool = True               # a new declaration is LOCAL to its module
     slots: dict = field(default_factory=dict)     # unreached element -> (joints, what)
     rows_seen: dict = field(default_factory=dict)  # element -> first solved row (grouping)
+    # Uses kept robtarget moves because other iterations of their statement
+    # must stay ones (_one_statement).
+    kept: frozenset = frozenset()
 
     @property
     def decl(self) -> Declaration | None:
@@ -131,10 +134,11 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
     q_all = solved.nominal.q_deg
     q_keys = [None if bad else tuple(q) for bad, q in zip(
         np.isnan(q_all).any(axis=1).tolist(), np.round(q_all, 3).tolist())]
-    for u in loop_first:
+    rows = [solved.row[u.key] for u in loop_first]
+    modes = [mode_of(u, mode, plan, solved, row) for u, row in zip(loop_first, rows)]
+    kept = _one_statement(loop_first, modes)
+    for u, row, m in zip(loop_first, rows, modes):
         src = u.source
-        row = solved.row[u.key]
-        m = mode_of(u, mode, plan, solved, row)
         if src.decl is not None and file_index[id(src.home)] < plan.n_written:
             home = (file_index[id(src.home)], src.home_module)
         else:
@@ -158,6 +162,8 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
             out.append(g)
         g.uses.append(u)
         g.rows_seen.setdefault(src.element, row)
+        if u.key in kept:
+            g.kept = g.kept | {u.key}
     # Whether each row is solved, and needs a J4/J6 split at the wrist
     # singularity (_elements, _wrist: as Python values at once).
     ok = [p.failure is None and s for p, s in zip(solved.picks,
@@ -169,6 +175,26 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
         g.local = (uses[0].module is g.home[1] if len(uses) == 1
                    else all(u.module is g.home[1] for u in uses))
     return out
+
+
+def _one_statement(uses: list[TargetUse], modes: list[str]) -> frozenset:
+    """A move in a FOR loop is one statement for every iteration: it
+    becomes MoveAbsJ only where every iteration may (modes[i] of uses[i]
+    "absj"); where one must stay a robtarget move (its configuration or
+    displacement not known, ...), all stay one (modes set to "rob"). The
+    keys of the uses so kept."""
+    by_move: dict = {}
+    for n, u in enumerate(uses):
+        if u.env:                 # (only a loop's variable makes a move several uses)
+            by_move.setdefault(u.key[:3], []).append(n)
+    kept = set()
+    for ns in by_move.values():
+        if len({modes[n] for n in ns}) > 1 and any(modes[n] == "rob" for n in ns):
+            for n in ns:
+                if modes[n] == "absj":
+                    modes[n] = "rob"
+                    kept.add(uses[n].key)
+    return frozenset(kept)
 
 
 def _same(solved: Solved, a: int, b: int) -> bool:

@@ -161,6 +161,10 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
             if extra:
                 warnings = warnings + (f"kept as {u.motion.instruction}: {extra} has no "
                                        "MoveAbsJ equivalent",)
+        if u.key in g.kept:
+            warnings = warnings + (f"kept as {u.motion.instruction}: in another iteration of its "
+                                   "loop this statement must stay a robtarget move, and one "
+                                   "statement cannot be both",)
         if g.placement == "new" and g.decl is not None and g.decl.storage == "PERS":
             warnings = warnings + (f"{g.decl.name} is PERS: this move now reads a CONST "
                                    "copy, which changes to it at run time (ModPos, another "

@@ -835,7 +835,8 @@ class Resolver:
                 u = self._plain_use(pf, module, motion, lines[k], (fi, first + k)) if plain \
                     else None
                 if u is None:
-                    out.extend(self.resolve(pf, module, motion, (fi, first + k)))
+                    # (resolve()'s own way, its errors checked below once.)
+                    out.extend(self._resolve(pf, module, motion, (fi, first + k)))
                 else:
                     out.append(u)
         except Exception:

@@ -35,11 +35,12 @@ def unit_wxyz(w: float, x: float, y: float, z: float) -> tuple[float, float, flo
 
 
 def row_dots(a) -> np.ndarray:
-    """a[i].dot(a[i]) of each row of a (n, k), bit for bit: numpy computes
-    one row's dot product by BLAS (with its own order and fused
-    multiply-adds), and a stack of (1, k) @ (k, 1) products by the same
-    call per row (tested against the rows one by one), without a Python
-    step per row."""
+    """row.dot(row) of each row of a (n, k) made C-contiguous (as the rows
+    of the arrays the callers built are), bit for bit: numpy computes one
+    contiguous row's dot product by BLAS (with its own order and fused
+    multiply-adds; a strided row may sum otherwise), and a stack of
+    (1, k) @ (k, 1) products by the same call per row (tested against the
+    rows one by one), without a Python step per row."""
     a = np.ascontiguousarray(a, dtype=float)
     return np.matmul(a[:, None, :], a[:, :, None])[:, 0, 0]
 

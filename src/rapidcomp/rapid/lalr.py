@@ -333,6 +333,7 @@ class Engine:
                     below = value_stack[-2]
                     check = (key, len(state_stack), below,
                              len(below) if type(below) is _Splice else -1)
+                    lowest = len(state_stack)
             while True:
                 try:
                     is_shift, arg = states[state_stack[-1]][ttype]
@@ -347,6 +348,8 @@ class Engine:
                     children = value_stack[-size:]
                     del state_stack[-size:]
                     del value_stack[-size:]
+                    if check is not None and len(state_stack) < lowest:
+                        lowest = len(state_stack)
                 else:
                     children = []
                 if plan is not None:
@@ -374,8 +377,11 @@ class Engine:
                 if ttype == "$END" and state_stack[-1] == end_state:
                     return value_stack[-1]
             if check is not None:
+                # (The reductions read no state below the three of the key:
+                # the stack never went lower than the key's first; then the
+                # same three states always lead to the same actions.)
                 key, depth, below, n = check
-                appends[key] = (n >= 0 and len(state_stack) == depth
+                appends[key] = (n >= 0 and len(state_stack) == depth and lowest >= depth - 2
                                 and tuple(state_stack[-3:]) == key and value_stack[-2] is below
                                 and len(below) == n + 1 and value_stack[-1] is tok
                                 and _spans(below[-1], previous))

@@ -19,6 +19,13 @@ def _line_starts(text: str, lines: list[str] | None = None) -> list[int]:
     return [0] + np.cumsum(np.fromiter(map(len, lines), np.int64, len(lines))).tolist()
 
 
+def _content(line: str) -> str:
+    """A line of splitlines(keepends=True) without its line break: any of
+    those str.splitlines knows (a form feed or NEL ends a line there too,
+    as for difflib)."""
+    return line.splitlines()[0]
+
+
 def _range(start: int, length: int) -> str:
     if length == 1:
         return str(start + 1)
@@ -42,7 +49,7 @@ def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
         changed = _changed_blocks(text, lines, edits, new_text)
     if not changed:
         return []
-    return _hunks(lines, changed, old_name, new_name, context)
+    return _hunks(text.splitlines(), changed, old_name, new_name, context)
 
 
 def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list | None:
@@ -72,7 +79,7 @@ def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list
     changed: list[list] = []
     for i in touched:
         new = new_lines[i]
-        if lines[i].rstrip("\r\n") == new:
+        if _content(lines[i]) == new:
             continue
         if changed and changed[-1][1] == i:   # adjacent: one change, as difflib sees it
             changed[-1][1] = i + 1
@@ -118,7 +125,7 @@ def _changed_blocks(text: str, lines: list[str], edits, new_text: str) -> list:
     # line a declaration is inserted after) are context, as difflib has it.
     changed: list[list] = []  # [first old line, end old line (exclusive), new lines]
     for a, b, x, y in zip(block_a.tolist(), block_b.tolist(), lo_new, hi_new):
-        old_lines = [s.rstrip("\r\n") for s in lines[a:b + 1]]
+        old_lines = [_content(s) for s in lines[a:b + 1]]
         new_lines = new_text[x:y].splitlines()
         lo, hi_old, hi_new = 0, len(old_lines), len(new_lines)
         while lo < hi_old and lo < hi_new and old_lines[lo] == new_lines[lo]:
@@ -136,10 +143,11 @@ def _changed_blocks(text: str, lines: list[str], edits, new_text: str) -> list:
     return changed
 
 
-def _hunks(lines: list[str], changed: list, old_name: str, new_name: str,
+def _hunks(plain: list[str], changed: list, old_name: str, new_name: str,
            context: int) -> list[str]:
+    """plain: the old text's lines without their line breaks."""
     out = [f"--- {old_name}", f"+++ {new_name}"]
-    n = len(lines)
+    n = len(plain)
     delta = 0  # new line index minus old line index before the current hunk
     i = 0
     while i < len(changed):
@@ -154,15 +162,15 @@ def _hunks(lines: list[str], changed: list, old_name: str, new_name: str,
         d = delta
         for a, b, new_lines in changed[i:j + 1]:
             for k in range(pos, a):
-                body.append(" " + lines[k].rstrip("\r\n"))
+                body.append(" " + plain[k])
                 new_len += 1
-            body.extend("-" + lines[k].rstrip("\r\n") for k in range(a, b))
+            body.extend("-" + plain[k] for k in range(a, b))
             body.extend("+" + s for s in new_lines)
             new_len += len(new_lines)
             d += len(new_lines) - (b - a)
             pos = b
         for k in range(pos, end):
-            body.append(" " + lines[k].rstrip("\r\n"))
+            body.append(" " + plain[k])
             new_len += 1
         out.append(f"@@ -{_range(first, end - first)} +{_range(first + delta, new_len)} @@")
         out.extend(body)
