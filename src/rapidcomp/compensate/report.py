@@ -39,7 +39,8 @@ def _joints(q, fmt: str = ".4f") -> str:
 def _conf(c) -> str:
     if c is None:
         return "-"
-    # (A CAM report's 2e5 confdata cells hold a few values: each written once.)
+    # (A CAM report's 2e5 confdata cells hold a few values: each written once.
+    # A row's confdata are ints: equal tuples, equal texts.)
     text = _CONF_TEXTS.get(c)
     if text is None:
         if len(_CONF_TEXTS) >= 4096:
