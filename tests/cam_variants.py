@@ -144,4 +144,14 @@ def not_called(seed: int) -> str:
     return "\n".join(lines)
 
 
+def bench_module(n: int, seed: int, confl: str) -> str:
+    """bench/fix.py's CAM module (random reachable targets with their
+    confdata), under ConfL as given ('' = not known: entered from outside)."""
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+    from fix import cam_module
+    return cam_module(n, seed).replace("  PROC Path()\n", f"  PROC Path()\n{confl}")
+
+
 VARIANTS = {"broken_runs": broken_runs, "other_shapes": other_shapes, "not_called": not_called}

@@ -5,8 +5,7 @@ Each shortcut is compared with the way it replaces, on every fixture and
 on CAM-like modules whose runs of moves are broken in every way a real
 program breaks them (cam_variants.py): the lexer's runs with lexing one
 token at a time, the parser's appends with the table's reductions, the
-resolver's plain moves with resolve(), usage() with a walk of every node,
-the flow's plain calls with calls that are not, frozen nodes made by
+resolver's plain moves with resolve(), the flow's plain calls with calls that are not, frozen nodes made by
 construct.maker with their classes' own constructors; and `fix` as a
 whole with every shortcut that can be switched off switched off.
 """
@@ -20,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cam_variants import VARIANTS, jointtarget, robtarget, targets
+from cam_variants import VARIANTS, bench_module, jointtarget, robtarget, targets
 from rapidcomp.compensate import fix as F
 from rapidcomp.compensate import report
 from rapidcomp.compensate import solve as S
@@ -30,7 +29,6 @@ from rapidcomp.compensate.load import load_solver
 from rapidcomp.compensate.plan import Plan, Task
 from rapidcomp.construct import maker
 from rapidcomp.rapid import ast as A
-from rapidcomp.rapid import refs
 from rapidcomp.rapid.grammar import engine
 from rapidcomp.rapid.model import Motion
 from rapidcomp.rapid.parse import parse_file, parse_text
@@ -258,49 +256,6 @@ def test_an_earlier_moves_error_comes_first_with_plain_moves():
     assert "norm 0" in str(got.value), str(got.value)
 
 
-def _usage_by_nodes(module):
-    """usage() as a walk of every node (refs.nodes), the way it was written."""
-    from rapidcomp.rapid.motions import motion_spec
-    found: dict = {}
-    writes: dict = {}
-    assigns: dict = {}
-    calls = []
-    for node in refs.nodes(module.items):
-        t = type(node)
-        if t is A.Ref:
-            found.setdefault(node.name.lower(), []).append(node)
-        elif t is A.Assign:
-            writes.setdefault(node.target.name.lower(), []).append(node.span)
-            if not node.target.selectors:
-                assigns.setdefault(node.target.name.lower(), []).append(node)
-        elif t is A.ProcCall:
-            spec = motion_spec(node.name)
-            if spec is not None:
-                if "search" in spec.roles:
-                    positional = [a for a in node.args if a.kind in ("pos", "named")]
-                    for role, arg in zip(spec.roles, positional):
-                        if role == "search" and isinstance(arg.value, A.Ref):
-                            writes.setdefault(arg.value.name.lower(), []).append(arg.span)
-                continue
-            calls.append(node)
-        elif t is A.LateCall or t is A.Call:
-            calls.append(node)
-    return found, writes, calls, assigns
-
-
-def test_usage_is_the_walk_of_every_node():
-    for task in _tasks():
-        for pf in task.files:
-            for m in pf.modules:
-                got = refs.usage(m.node)
-                found, writes, calls, assigns = _usage_by_nodes(m.node)
-                assert {k: [id(r) for r in v] for k, v in got.refs.items()} == \
-                    {k: [id(r) for r in v] for k, v in found.items()}
-                assert got.writes == writes and [id(c) for c in got.calls] == [id(c) for c in calls]
-                assert {k: [id(a) for a in v] for k, v in got.assigns.items()} == \
-                    {k: [id(a) for a in v] for k, v in assigns.items()}
-
-
 def _not_plain(node):
     """The same tree with every call marked not plain (the flow walks those
     without its shortcut)."""
@@ -330,14 +285,6 @@ def test_the_flow_of_plain_calls_is_that_of_any_call():
         assert fast.before == slow.before and fast.entry == slow.entry
 
 
-def _cam(n: int, seed: int, confl: str) -> str:
-    """bench/fix.py's CAM module, under ConfL as given ('' = not known)."""
-    import sys
-    sys.path.insert(0, str(ROOT / "bench"))
-    from fix import cam_module
-    return cam_module(n, seed).replace("  PROC Path()\n", f"  PROC Path()\n{confl}")
-
-
 def _pick(p):
     return (p.rule, p.failure, p.kind, p.caution, p.line,
             None if p.q is None else p.q.tolist(), None if p.prev is None else p.prev.tolist())
@@ -346,7 +293,7 @@ def _pick(p):
 def test_the_choices_quick_cases_are_the_general_rules(solver, monkeypatch):
     """Each of _quick's three cases gives the solutions (all of them, not
     only the one compensated) the general rules give, and each is taken."""
-    tasks = [Task("cam", (parse_text(_cam(n, seed, confl), "cam.mod"),))
+    tasks = [Task("cam", (parse_text(bench_module(n, seed, confl), "cam.mod"),))
              for n, seed, confl in ((2000, 1, ""), (300, 2, "    ConfL\\Off;\n"),
                                     (300, 3, "    ConfL\\On;\n"))]
     tasks += _tasks()

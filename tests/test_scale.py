@@ -14,6 +14,8 @@ import numpy as np
 
 import pytest
 
+from cam_variants import bench_module
+
 from rapidcomp.compensate import fix as F
 from rapidcomp.compensate import report
 from rapidcomp.compensate.load import load_solver, load_task
@@ -342,14 +344,9 @@ def test_ik_threads_keep_the_callers_errstate_and_use_both_cores(monkeypatch):
         solver.candidates(R, p)      # (and no warning either: -W error in CI)
 
 
-def _cam(n: int, seed: int, confl: str) -> str:
-    """A CAM-like module: random reachable targets with their confdata,
-    under ConfL as given ('' = not known: entered from outside)."""
-    import sys
-    sys.path.insert(0, str(ROOT / "bench"))
-    from fix import cam_module
-    text = cam_module(n, seed)
-    return text.replace("  PROC Path()\n", f"  PROC Path()\n{confl}")
+# A CAM-like module: random reachable targets with their confdata, under
+# ConfL as given ('' = not known: entered from outside).
+_cam = bench_module
 
 
 @pytest.mark.parametrize("confl", ["", "    ConfL\\Off;\n", "    ConfL\\On;\n"])

@@ -17,7 +17,6 @@ from ..kinematics.conf import quadrant_miss
 from ..kinematics.frames import matrix_to_quat_wxyz
 from ..errors import InternalError
 from ..rapid import ast as A
-from ..rapid.ast import Span
 from ..rapid.values import RobTarget
 from ..rewrite import numbers, records
 from ..rewrite.names import NameAllocator
@@ -706,8 +705,7 @@ class Editor:
             named = self._renamed[m.instruction] = (
                 _style("MoveAbsJ", m.instruction), self._said(f"{m.instruction} -> MoveAbsJ"))
         called, why = named
-        start = m.span.start
-        self._edit(fi, Span(start, start + len(m.instruction)), called, why)
+        self._edit(fi, m.name_span, called, why)
         self._edit(fi, u.source.expr.span, target_text, f"{u.label} -> {target_text[:40]}")
         return called
 

@@ -67,7 +67,7 @@ class Group:
         return self.home[1]
 
 
-def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int | None = None) -> str:
+def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int) -> str:
     """absj: the use becomes a MoveAbsJ; rob: a robtarget is written; joint:
     a jointtarget of a MoveAbsJ is written. auto converts MoveJ only (a
     MoveL keeps its straight line), absj MoveJ and MoveL. A move that
@@ -79,13 +79,13 @@ def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int | None
         return "joint"
     m = u.motion
     name = m.spec.name.lower()
-    # (row: the use's row in solved, where the caller has it. A CAM move has
-    # no optional argument but \WObj: no generator for those.)
+    # (row: the use's row in solved. A CAM move has no optional argument but
+    # \WObj: no generator for those.)
     if (name in (ABSJ_FROM[mode])
             and (not m.optional or all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional))
             and not names_to_point(m)
             and not plan.may_be_displaced(u)
-            and solved.picks[solved.row[u.key] if row is None else row].caution is None
+            and solved.picks[row].caution is None
             and not (u.source.decl is not None and u.source.decl.storage == "PERS")):
         return "absj"
     return "rob"
@@ -166,8 +166,7 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
             g.kept = g.kept | {u.key}
     # Whether each row is solved, and needs a J4/J6 split at the wrist
     # singularity (_elements, _wrist: as Python values at once).
-    ok = [p.failure is None and s for p, s in zip(solved.picks,
-                                                    solved.deformed.success.tolist())]
+    ok = solved.oks()
     left = ((solved.deformed.warnings.astype(np.int64) & _LEFT) != 0).tolist()
     for g in out:
         _elements(g, solved, ok, left)

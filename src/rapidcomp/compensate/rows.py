@@ -91,7 +91,7 @@ class _Columns:
         self.res_rad = solved.deformed.residual_rad.tolist()
         self.disp = solved.displacement_um_per_mm.tolist()
         self.warn_bits = solved.deformed.warnings.tolist()
-        self.success = solved.deformed.success.tolist()
+        self.ok = solved.oks()
 
 
 def displacement_warning(um_per_mm: float) -> str:
@@ -140,7 +140,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
     d_warnings = _warnings(solved, i, u, warning_texts_of(bits)) if has_q and bits else ()
     g: Group | None = group_of.get(u.key) if group_of is not None else None
     why = None
-    if not (has_q and cols.success[i]):      # (solved.ok(i))
+    if not cols.ok[i]:
         why = solved.reason(i)
     elif g is not None and g.failure is not None:
         reason, fk = g.failure

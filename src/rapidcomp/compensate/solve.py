@@ -61,6 +61,11 @@ class Solved:
     def ok(self, i: int) -> bool:
         return self.picks[i].failure is None and bool(self.deformed.success[i])
 
+    def oks(self) -> list[bool]:
+        """ok(i) of every row, as a list (1e5 rows asked at once)."""
+        return [p.failure is None and s for p, s in zip(self.picks,
+                                                        self.deformed.success.tolist())]
+
     def reason(self, i: int) -> str | None:
         if self.picks[i].failure is not None:
             return self.picks[i].failure
@@ -620,11 +625,11 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
     # The chooser's candidates, guesses and solutions (1e5 targets: ~100
     # MB) go before the deformed robot's batches are made.
     chooser = None
-    R = np.empty((n, 3, 3))
-    p = np.empty((n, 3))
-    Rj, pj, seed = solver.seed_from_joints(np.nan_to_num(q_nom))
+    # The intended flange poses: a robtarget's as resolved, a MoveAbsJ's the
+    # nominal FK of its joints.
+    # (seed_from_joints's own arrays, written into.)
+    R, p, seed = solver.seed_from_joints(np.nan_to_num(q_nom))
     rob = [i for i, u in enumerate(uses) if u.kind == "robtarget"]
-    R[:], p[:] = Rj, pj
     R[rob], p[rob] = flange_stack([uses[i] for i in rob])
     # Joint limits of the chosen joints (MoveAbsJ targets) are failures too.
     status = seed.status.copy()

@@ -26,7 +26,7 @@ from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
 from ..rapid import ast as A
 from ..rapid.ast import Span
-from ..rapid.build import NodeBuilder
+from ..rapid.build import DECL_HEAD, NodeBuilder
 from ..rapid.grammar import engine
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
@@ -192,11 +192,8 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                 if (called.lower() != "moveabsj"
                         or text[at:to] != head + (name or literal) + src[expr.end:b]):
                     return None
-                if name is None:
-                    # (An aggregate of numbers as the lexer reads them, as
-                    # parsing the statement would: below, for the block.)
-                    pass
-                else:
+                # (An inline literal is checked below, with its block.)
+                if name is not None:
                     k = names.get(name.lower())
                     if k is None:
                         return None
@@ -293,12 +290,12 @@ def _plain_numaggs(lits: list[str]) -> bool:
     return not ",".join(lits).translate(_NUMAGG_CHARS)
 
 
-# One new declaration as the editor writes it (Editor.declare): FAST_DECL
-# with its aggregate taken up to the ';' (a plain jointtarget of decimal
-# numbers there, checked at once, is the NUMAGG FAST_DECL reads).
-_PLAIN_DECL = re.compile(r"[ \t\f\r\n\ufeff]*(?:(?i:LOCAL|TASK)[ \t]+)?((?i:CONST|PERS|VAR))[ \t]+"
-                         r"([A-Za-z][A-Za-z0-9_]*)[ \t]+([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*"
-                         r"(\[[^;]*\])[ \t]*;")
+# One new declaration as the editor writes it (Editor.declare): the head
+# the builder reads of a FAST_DECL (scope, storage, type, name), then its
+# aggregate taken up to the ';' (a plain jointtarget of decimal numbers
+# there, checked at once, is the NUMAGG FAST_DECL reads).
+_PLAIN_DECL = re.compile(r"[ \t\f\r\n\ufeff]*(?:" + DECL_HEAD.pattern + r")(\[[^;]*\])[ \t]*;",
+                         re.IGNORECASE)
 
 
 def _plain_declared(eng, pieces: list[str]) -> list | None:
@@ -315,10 +312,10 @@ def _plain_declared(eng, pieces: list[str]) -> list | None:
         pos = 0
         while pos < len(piece):
             m = _PLAIN_DECL.match(piece, pos)
-            if m is None or m.group(2).upper() in reserved or m.group(3).upper() in reserved:
+            if m is None or m.group(3).upper() in reserved or m.group(4).upper() in reserved:
                 return None
-            found.append((m.group(1).upper(), m.group(2), m.group(3), m.start(4), m.end(4)))
-            aggs.append(m.group(4))
+            found.append((m.group(2).upper(), m.group(3), m.group(4), m.start(5), m.end(5)))
+            aggs.append(m.group(5))
             pos = m.end()
         out.append(found)
     # (A block at a time: their field texts are not all alive at once.)

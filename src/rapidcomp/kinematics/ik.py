@@ -173,17 +173,9 @@ class IKBatch:
 
 @functools.lru_cache(maxsize=None)
 def warning_texts_of(bits: int) -> tuple[str, ...]:
-    """The texts of a warnings bit set (IKBatch.warnings holds them); once
-    per set (a CAM report asks 1e5 times, of a few sets)."""
-    texts = _WARN_TEXTS.get(bits)
-    if texts is None:
-        warn = Warn(bits)
-        texts = _WARN_TEXTS[bits] = tuple(text for flag, text in WARN_TEXT.items()
-                                          if flag in warn)
-    return texts
-
-
-_WARN_TEXTS: dict[int, tuple[str, ...]] = {}
+    """The texts of a warnings bit set (IKBatch.warnings holds them)."""
+    warn = Warn(bits)
+    return tuple(text for flag, text in WARN_TEXT.items() if flag in warn)
 
 
 def _turns(theta_deg: np.ndarray, cf: np.ndarray, tol: float):

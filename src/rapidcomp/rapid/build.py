@@ -21,7 +21,9 @@ from .refs import plain_args
 
 
 _FAST_HEAD = re.compile(r"([A-Za-z][A-Za-z0-9_]*)[ \t]+")
-_FAST_DECL = re.compile(r"(?:(LOCAL|TASK)[ \t]+)?(CONST|PERS|VAR)[ \t]+([A-Za-z][A-Za-z0-9_]*)"
+# A FAST_DECL up to its value: scope, storage, type, name (verify reads the
+# editor's new declarations with it too).
+DECL_HEAD = re.compile(r"(?:(LOCAL|TASK)[ \t]+)?(CONST|PERS|VAR)[ \t]+([A-Za-z][A-Za-z0-9_]*)"
                         r"[ \t]+([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*", re.IGNORECASE)
 _FAST_ITEM = re.compile(
     r"\\([A-Za-z][A-Za-z0-9_]*)(?::=([A-Za-z][A-Za-z0-9_]*|\d+(?:\.\d*)?))?"
@@ -308,7 +310,7 @@ class NodeBuilder:
         tok = c[0]
         text = tok.value
         base = tok.start_pos
-        m = _FAST_DECL.match(text)
+        m = DECL_HEAD.match(text)
         scope = m.group(1).upper() if m.group(1) else None
         agg_end = text.rindex("]") + 1
         start = m.end()

@@ -107,9 +107,8 @@ class Engine:
             f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in regular
             if t.name not in ("FAST_CALL", "FAST_DECL")))
         self._keywords = keywords
-        self._reserved = frozenset(keywords)
         # Reserved words, upper case (a name that is one is no identifier).
-        self.reserved = self._reserved
+        self.reserved = frozenset(keywords)
         self._tails: dict[str, bool] = {}      # _keyword_in's verdicts on argument lists
         # A run of FAST_CALL statements of one instruction and one argument
         # list after the target (`MoveL <target>,v100,z1,tool1\\WObj:=wobj1;`
@@ -267,8 +266,8 @@ class Engine:
         if hit is None:
             if len(tails) >= 4096:
                 tails.clear()
-            hit = tails[tail] = not self._reserved.isdisjoint(_WORD.findall(tail.upper()))
-        return hit or not self._reserved.isdisjoint(_WORD.findall(head.upper()))
+            hit = tails[tail] = not self.reserved.isdisjoint(_WORD.findall(tail.upper()))
+        return hit or not self.reserved.isdisjoint(_WORD.findall(head.upper()))
 
     # ------------------------------------------------------------------ parser
     def _viable(self, state_stack: list) -> frozenset[str]:

@@ -89,50 +89,28 @@ def usage(module: A.ModuleNode) -> Usage:
     writes: dict[str, list[A.Span]] = {}
     assigns: dict[str, list[A.Assign]] = {}
     calls = []
-
-    def call(node) -> None:
-        spec = motion_spec(node.name)
-        if spec is None:
-            calls.append(node)
-        elif "search" in spec.roles:
-            positional = [a for a in node.args if a.kind in ("pos", "named")]
-            for role, arg in zip(spec.roles, positional):
-                if role == "search" and isinstance(arg.value, A.Ref):
-                    writes.setdefault(arg.value.name.lower(), []).append(arg.span)
-
-    # The nodes in the order nodes() gives them, with a CAM move's
-    # references taken where its call is met (1e5 moves: no generator step
-    # and type test per argument and value).
-    stack: list = [module.items]
-    while stack:
-        node = stack.pop()
+    for node in nodes(module.items):
         t = type(node)
-        if t is tuple or t is list:
-            stack.extend(node)
-        elif t is A.Ref:
+        if t is A.Ref:
             refs.setdefault(node.name.lower(), []).append(node)
-            if node.selectors:
-                stack.append(node.selectors)
-        elif t is A.Arg:
-            stack.append(node.value)
-        elif t is A.ProcCall and node.plain:
-            call(node)
-            for arg in reversed(node.args):
-                v = arg.value
-                if type(v) is A.Ref:
-                    refs.setdefault(v.name.lower(), []).append(v)
-        elif not (t is A.NumAgg or node is None or t in (str, int, float, bool)):
-            if t is A.Assign:
-                writes.setdefault(node.target.name.lower(), []).append(node.span)
-                if not node.target.selectors:
-                    assigns.setdefault(node.target.name.lower(), []).append(node)
-            elif t is A.ProcCall:
-                call(node)
-            elif t is A.LateCall or t is A.Call:
-                calls.append(node)
-            if hasattr(t, "__dataclass_fields__"):
-                for name in _field_names(t):
-                    stack.append(getattr(node, name))
+        elif t is A.Arg:      # (the next commonest: its value comes as a node of its own)
+            continue
+        elif t is A.Assign:
+            writes.setdefault(node.target.name.lower(), []).append(node.span)
+            if not node.target.selectors:
+                assigns.setdefault(node.target.name.lower(), []).append(node)
+        elif t is A.ProcCall:
+            spec = motion_spec(node.name)
+            if spec is not None:
+                if "search" in spec.roles:
+                    positional = [a for a in node.args if a.kind in ("pos", "named")]
+                    for role, arg in zip(spec.roles, positional):
+                        if role == "search" and isinstance(arg.value, A.Ref):
+                            writes.setdefault(arg.value.name.lower(), []).append(arg.span)
+                continue
+            calls.append(node)
+        elif t is A.LateCall or t is A.Call:
+            calls.append(node)
     return Usage(refs, writes, tuple(calls), assigns)
 
 

@@ -11,11 +11,9 @@ from __future__ import annotations
 from ..edits import EditColumns, SpanEdit, apply_edits, sorted_columns
 
 
-def _line_starts(text: str, lines: list[str] | None = None) -> list[int]:
-    """Where each line starts, and the text's end (lines: its lines, when
-    the caller has them)."""
+def _line_starts(lines: list[str]) -> list[int]:
+    """Where each line (splitlines(keepends=True)) starts, and the text's end."""
     import numpy as np
-    lines = text.splitlines(keepends=True) if lines is None else lines
     return [0] + np.cumsum(np.fromiter(map(len, lines), np.int64, len(lines))).tolist()
 
 
@@ -72,7 +70,7 @@ def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list
     new_lines = new_text.splitlines()
     if len(new_lines) != len(lines):
         return None
-    starts = np.array(_line_starts(text, lines))
+    starts = np.array(_line_starts(lines))
     at = np.array(at, np.int64)
     touched = np.unique(np.minimum(np.searchsorted(starts, at, side="right") - 1,
                                    len(lines) - 1)).tolist()
@@ -99,7 +97,7 @@ def _changed_blocks(text: str, lines: list[str], edits, new_text: str) -> list:
     cols = sorted_columns(cols)
     if not len(cols):
         return []
-    starts = np.array(_line_starts(text, lines))
+    starts = np.array(_line_starts(lines))
     at, ends = cols.starts, cols.ends
     # The last offset an edit touches: an edit that removes a line end joins
     # the next line to its block.
