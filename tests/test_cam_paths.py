@@ -32,6 +32,7 @@ from rapidcomp.rapid import ast as A
 from rapidcomp.rapid.grammar import engine
 from rapidcomp.rapid.model import Motion
 from rapidcomp.rapid.parse import parse_file, parse_text
+from rapidcomp.rapid.values import decode
 from rapidcomp.source import SourceText
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -391,7 +392,7 @@ def test_plain_declarations_read_as_the_lexer_reads_them():
     eng = engine()
     t = targets(3, 2)
     good = [f"\n  CONST jointtarget jt_p{i}:={jointtarget(x)};" for i, x in enumerate(t)]
-    got = V._plain_declared(eng, ["".join(good), good[0] + "\r\n\tLOCAL CONST jointtarget a := "
+    got, joints = V._plain_declared(eng, ["".join(good), good[0] + "\r\n\tLOCAL CONST jointtarget a := "
                                   + jointtarget(t[1]) + " ;"])
     assert [[(s, ty, n) for s, ty, n, _, _ in piece] for piece in got] == [
         [("CONST", "jointtarget", f"jt_p{i}") for i in range(3)],
@@ -399,6 +400,10 @@ def test_plain_declarations_read_as_the_lexer_reads_them():
     piece = "".join(good)
     x, y = got[0][1][3:]
     assert piece[x:y] == jointtarget(t[1])
+    # The joints of each declaration, in order: as decoding each reads them.
+    want = [t[0], t[1], t[2], t[0], t[1]]
+    assert joints.tolist() == [list(decode("jointtarget", A.NumAgg(jointtarget(x), A.Span(
+        0, len(jointtarget(x))))).joints) for x in want]
     for bad in [good[0] + " ! note", "\n  CONST jointtarget IF:=" + jointtarget(t[0]) + ";",
                 "\n  CONST jointtarget a:=[[1,2,3,4,5,6],[1,2,3,4,5,x]];",
                 "\n  CONST jointtarget a:=[[1,2,3,4,5,6] ,[1,2,3,4,5,6]];", "\n  MoveL p1,v1,z1,t;"]:

@@ -284,6 +284,9 @@ def test_fix_by_block_is_fix_by_literal(mode, solver, monkeypatch):
     fast = F.fix(task, solver, mode)
     real_block = records.robtarget_block
     monkeypatch.setattr(records, "robtarget_block", lambda *args: None)
+    # (Other edits are columns from COLUMNS_FROM of them on: not here.)
+    from rapidcomp.compensate import edit as E
+    monkeypatch.setattr(E, "COLUMNS_FROM", 10 ** 9)
     slow = F.fix(task, solver, mode)
     assert type(fast.modules[0].edits) is EditColumns
     assert type(slow.modules[0].edits) is tuple
@@ -311,3 +314,32 @@ def test_fix_by_block_is_fix_by_literal(mode, solver, monkeypatch):
         small = F.fix(task, solver, mode)
         assert served == [True] and type(small.modules[0].edits) is EditColumns
         assert small.rows == fast.rows and small.modules == fast.modules
+
+
+@pytest.mark.parametrize("main", [False, True])
+def test_other_edits_as_columns_give_what_lists_give(main, solver, monkeypatch):
+    """A file's edits other than a batch's literal fields (moves turned
+    into MoveAbsJ, new declarations) are kept as EditColumns from
+    COLUMNS_FROM of them on: the splice, the verification, the diff and
+    the reports are what the list of SpanEdits gives."""
+    import sys
+    sys.path.insert(0, str(ROOT / "bench"))
+    from fix import cam_module
+    from rapidcomp.compensate import edit as E
+    task = Task("cam.mod", (parse_text(cam_module(300, 5, main=main), "cam.mod"),))
+    monkeypatch.setattr(E, "COLUMNS_FROM", 1)
+    cols = F.fix(task, solver, "absj")
+    monkeypatch.setattr(E, "COLUMNS_FROM", 10 ** 9)
+    lists = F.fix(task, solver, "absj")
+    assert type(cols.modules[0].edits) is EditColumns
+    assert type(lists.modules[0].edits) is (EditColumns if not main else tuple)
+    assert cols.failed == 0 and len(cols.rows) == 300
+    assert [m.text for m in cols.modules] == [m.text for m in lists.modules]
+    assert [m.diff for m in cols.modules] == [m.diff for m in lists.modules]
+    assert cols.edits == lists.edits and len(cols.edits) >= 300
+    assert cols.rows == lists.rows
+    meta = {"mode": "absj"}
+    assert report.markdown(cols, meta) == report.markdown(lists, meta)
+    assert report.as_json(cols, meta) == report.as_json(lists, meta)
+    # The MoveAbsJ are there, on jointtargets of their own.
+    assert (cols.modules[0].text.count("MoveAbsJ ") == 300) == main

@@ -55,3 +55,42 @@ def test_a_block_with_a_hex_number_reads_back_like_one_block(monkeypatch, where)
     again = parse_text(blocks.modules[0].text, "cam.mod").modules[0]
     inline = [t.value for m in again.motions for t in m.targets if t.value is not None]
     assert len(inline) == 30 and all(abs(v.values[-1] - 9e9) < 1 for v in inline)
+
+
+def _literal(rng, tail):
+    nums = [f"{v:.3f}" for v in rng.uniform(-900, 900, 3)] + [
+        f"{v:.6f}" for v in rng.uniform(-1, 1, 4)]
+    return f"[[{','.join(nums[:3])}],[{','.join(nums[3:])}{tail}"
+
+
+@pytest.mark.parametrize("odd", [None, "hex", "word", "space", "short"])
+def test_plain_values_reads_what_the_field_by_field_reading_reads(odd):
+    """_plain_values converts each distinct confdata/external-axes text
+    once: the same array, and the same verdicts (None: not plain, False:
+    a field not a decimal number), as splitting every literal into its 17
+    field texts and converting each (_flat_texts, _decimals)."""
+    import numpy as np
+    rng = np.random.default_rng(7)
+    tails = ["],[0,-1,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]",
+             "],[-1,0,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]",
+             "],[0,0,0,0],[1.5,-2,3E+02,9E+09,9E+09,.5]]"]
+    lits = [_literal(rng, tails[k]) for k in rng.integers(0, 3, 200)]
+    if odd == "hex":
+        lits[57] = lits[57].replace("9E+09]]", "0x218711A00]]")
+    elif odd == "word":
+        lits[3] = lits[3].replace("[[", "[[e", 1)
+    elif odd == "space":
+        lits[120] = lits[120].replace("[[", "[ [")
+    elif odd == "short":
+        lits[9] = lits[9].replace(",9E+09]]", "]]")
+    flat = V._flat_texts(lits)
+    want = None if flat is None else V._decimals(flat)
+    got = V._plain_values(lits)
+    if flat is None:
+        assert got is None
+    elif want is None:
+        assert got is False
+    else:
+        assert got.shape == (200, 17)
+        assert got.tobytes() == want.tobytes()
+    assert (odd is None) == (got is not None and got is not False)

@@ -26,6 +26,8 @@ from .solve import Solved
 from .targets import Source, base_pose, stacked_poses, wobj_targets
 
 
+# A file's edits from this many on are kept as EditColumns (file_edits).
+COLUMNS_FROM = 4096
 # Robtarget values prepared at once (a CAM program's 1e5 in blocks: each
 # value and text is its own, whatever the block).
 PREPARE_BLOCK = 8192
@@ -729,7 +731,11 @@ class Editor:
             out.setdefault(fi, []).append(SpanEdit(pos, pos, "".join(nl + indent + d
                                                                      for d in decls),
                                                    "new declarations"))
+        # Many edits of other kinds (a CAM program turned into MoveAbsJ:
+        # 2.5e5) are columns too, made once: the splice, the verification
+        # and the diff read them as such (each made its own of a list).
         return {fi: (sorted_columns(columns_of(es)) if fi in runs
+                     else sorted_columns(EditColumns.of(es)) if len(es) >= COLUMNS_FROM
                      else sorted(es, key=BY_SPAN)) for fi, es in out.items()}
 
 

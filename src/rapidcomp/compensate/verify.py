@@ -111,10 +111,17 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     values = np.empty((len(wants), 17))
     decimal = True
     for at in range(0, len(wants), RELEX_BLOCK):
-        flat = _flat_texts(wants[at:at + RELEX_BLOCK])
-        if flat is None:
-            return None
-        block = _decimals(flat) if decimal else None
+        part = wants[at:at + RELEX_BLOCK]
+        if all(type(w) is str for w in part):
+            block = _plain_values(part)
+            if block is None:
+                return None
+            block = block if decimal and block is not False else None
+        else:
+            flat = _flat_texts(part)
+            if flat is None:
+                return None
+            block = _decimals(flat) if decimal else None
         if block is None:
             decimal = False
         else:
@@ -174,7 +181,7 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
         declared = _declared(eng, build, es, shift, text, plan.files[fi])
         if declared is None:
             return None
-        names, scopes, aggs = declared
+        names, scopes, aggs, declared_joints = declared
         # (Each move's joints a row of one array, not a tuple of floats; the
         # moves' offsets a block at a time, not 1e5 pairs of ints at once.)
         records = np.empty((len(file_keys), 6))
@@ -184,8 +191,12 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
             spans = np.array([it[0].motion.span for it in items], np.int64).reshape(-1, 2)
             # (Where each statement's ends lie in the output.)
             moved = spans + shift[np.searchsorted(es.ends, spans, "right")]
+            # Each move's row of declared_joints, where its literal is a
+            # declaration's read already (the same text: the same joints).
+            ks = []
             for n, ((u, literal, name, called), (a, b), (at, to)) in enumerate(zip(
                     items, spans.tolist(), moved.tolist()), first):
+                ks.append(-1)
                 m = u.motion
                 expr = u.source.expr.span
                 head = called + src[m.name_span.end:expr.start]
@@ -201,9 +212,16 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                     if not (scopes[2 * k] <= a and b <= scopes[2 * k + 1]
                             and y - x == len(literal) and text.startswith(literal, x)):
                         return None
-            # The block's literals, each the text of an aggregate of numbers
-            # where the output holds it: decoded as the parser decodes them.
-            lits = [it[1] for it in items]
+                    if declared_joints is not None:
+                        ks[-1] = k
+            # The block's other literals, each the text of an aggregate of
+            # numbers where the output holds it: decoded as the parser decodes
+            # them.
+            known = [n for n, k in enumerate(ks) if k >= 0]
+            if known:
+                records[[first + n for n in known]] = declared_joints[[ks[n] for n in known]]
+            own = [n for n, k in enumerate(ks) if k < 0]
+            lits = [items[n][1] for n in own]
             rows_of = _joint_rows(lits)
             # An inline one must lex as one aggregate of numbers (NUMAGG): so
             # does a plain jointtarget of decimal numbers (_plain_numaggs);
@@ -214,14 +232,14 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                     if [t.type for t in eng.tokens(literal)] != ["NUMAGG", "$END"]:
                         return None
             if rows_of is None:
-                for n, literal in enumerate(lits, first):
+                for n, literal in zip(own, lits):
                     try:
-                        records[n] = decode("jointtarget",
-                                            A.NumAgg(literal, Span(0, len(literal)))).joints
+                        records[first + n] = decode(
+                            "jointtarget", A.NumAgg(literal, Span(0, len(literal)))).joints
                     except DecodeIssue:
                         return None
             else:
-                records[first:first + len(lits)] = rows_of
+                records[[first + n for n in own]] = rows_of
         # (As the resolver reads a jointtarget: float32, then floats.)
         joints = records.astype(np.float32).astype(float)
         if not (np.abs(joints) <= MAX_JOINT_DEG).all():
@@ -253,29 +271,49 @@ def _joint_rows(lits: list[str]) -> np.ndarray | None:
     when every one is written in its plain frame (no whitespace) with
     numbers float() reads within a num's range: the decoder's first way,
     the same floats (a CAM program's 1e5 MoveAbsJ at once). Else None: the
-    literals are decoded one by one."""
+    literals are decoded one by one. Each literal is its joints' part up to
+    the first '],[' and its external axes' part after it (the frame's
+    parts, where its fields hold no bracket or comma); the external axes
+    repeat from target to target, and each distinct text of them is read
+    once."""
     n = len(lits)
     if not n:
         return None
-    joined = ",".join(lits)
-    fields = frame_fields(joined)
-    # The literals joined are the frames joined, and each literal is as long
-    # as its own frame: each is the frame with its 12 fields.
-    if (len(fields) != 12 * n
-            or joined != ",".join([JOINTTARGET_FRAME] * n) % tuple(fields)
+    parts = [lit.partition("],[") for lit in lits]
+    heads = ",".join([part[0] for part in parts])
+    fields = frame_fields(heads)
+    # The heads joined are the heads' frames joined, and each head is as
+    # long as its own frame: each is the frame with its 6 fields.
+    if (len(fields) != 6 * n
+            or heads != ",".join([_JOINTS_FRAME] * n) % tuple(fields)
             or not np.array_equal(
-                np.fromiter(map(len, fields), np.int64, 12 * n).reshape(n, 12).sum(axis=1)
-                + len(JOINTTARGET_FRAME % (("",) * 12)),
-                np.fromiter(map(len, lits), np.int64, n))):
+                np.fromiter(map(len, fields), np.int64, 6 * n).reshape(n, 6).sum(axis=1)
+                + len(_JOINTS_FRAME % (("",) * 6)),
+                np.fromiter((len(part[0]) for part in parts), np.int64, n))):
         return None
+    tails: dict = {}
+    for part in parts:
+        tails.setdefault(part[2], None)
+    for tail in tails:
+        axes = frame_fields(tail)
+        if len(axes) != 6 or tail != _AXES_FRAME % tuple(axes):
+            return None
+        tails[tail] = axes
     try:
-        values = np.fromiter(map(float, fields), float, 12 * n)
+        values = np.fromiter(map(float, fields), float, 6 * n)
+        axes = np.fromiter(map(float, [a for axes in tails.values() for a in axes]), float,
+                           6 * len(tails))
     except ValueError:
         return None
     # (No NaN, no infinity: those the decoder reads another way.)
-    if not (np.abs(values) <= NUM_MAX).all():
+    if not ((np.abs(values) <= NUM_MAX).all() and (np.abs(axes) <= NUM_MAX).all()):
         return None
-    return values.reshape(n, 12)[:, :6]
+    return values.reshape(n, 6)
+
+
+# JOINTTARGET_FRAME up to its first "],[" and after it.
+_JOINTS_FRAME, _AXES_FRAME = JOINTTARGET_FRAME.split("],[")
+assert _JOINTS_FRAME + "],[" + _AXES_FRAME == JOINTTARGET_FRAME
 
 
 # The characters of an aggregate of decimal numbers without whitespace.
@@ -298,12 +336,14 @@ _PLAIN_DECL = re.compile(r"[ \t\f\r\n\ufeff]*(?:" + DECL_HEAD.pattern + r")(\[[^
                          re.IGNORECASE)
 
 
-def _plain_declared(eng, pieces: list[str]) -> list | None:
+def _plain_declared(eng, pieces: list[str]) -> tuple[list, np.ndarray] | None:
     """What _declared's lexing reads in each inserted text, when every one
     is one-line declarations written plainly (_PLAIN_DECL, their words no
     reserved ones, their aggregates plain jointtargets of decimal numbers):
     per text, (storage, type, name, start and end of its aggregate in the
-    text) of each declaration. None: the texts are lexed one by one."""
+    text) of each declaration; and the joints of every declaration, in
+    that order, as _joint_rows reads them. None: the texts are lexed one
+    by one."""
     out = []
     aggs = []
     reserved = eng.reserved
@@ -319,20 +359,25 @@ def _plain_declared(eng, pieces: list[str]) -> list | None:
             pos = m.end()
         out.append(found)
     # (A block at a time: their field texts are not all alive at once.)
+    joints = np.empty((len(aggs), 6))
     for at in range(0, len(aggs), RELEX_BLOCK):
         block = aggs[at:at + RELEX_BLOCK]
-        if not (_joint_rows(block) is not None and _plain_numaggs(block)):
+        rows = _joint_rows(block)
+        if not (rows is not None and _plain_numaggs(block)):
             return None
-    return out
+        joints[at:at + len(block)] = rows
+    return out, joints
 
 
 def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
-              pf: ParsedFile) -> tuple[dict, array, array] | None:
+              pf: ParsedFile) -> tuple[dict, array, array, np.ndarray | None] | None:
     """The new declarations of a file read again where the output holds
     them: (lower-case name -> k; the (start, end) in the input of its scope
     (its routine's, else its module's) at [2k, 2k + 1]; the (start, end) of
     its value, an aggregate of numbers, in the output, likewise: offsets
-    in arrays, not a node and a tuple each). None where an inserted text
+    in arrays, not a node and a tuple each; where every one is written
+    plainly (_plain_declared), the joints of each at row k, else None).
+    None where an inserted text
     is not CONST jointtarget declarations each a one-line statement, or is
     not where a declaration may follow: right after a declaration, or at
     the end of a line that ends with one (and a comment), as the editor
@@ -342,7 +387,7 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     scopes, aggs = array("q"), array("q")
     inserts = np.flatnonzero(es.starts == es.ends).tolist()
     if not inserts:
-        return out, scopes, aggs
+        return out, scopes, aggs, None
     routines = sorted((r.node.span.start, r.node.span.end)
                       for m in pf.modules for r in m.routines)
     starts = [a for a, _ in routines]
@@ -361,6 +406,9 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
         a = at + int(shift[k])
         places.append((scope, a, text[a:a + len(es.text(k))]))
     plain = _plain_declared(eng, [piece for _, _, piece in places])
+    joints = None
+    if plain is not None:
+        plain, joints = plain
     for n, (scope, a, piece) in enumerate(places):
         if plain is not None:
             decls = plain[n]
@@ -383,7 +431,7 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
             out[name.lower()] = len(scopes) // 2
             scopes.extend(scope)
             aggs.extend((a + x, a + y))
-    return out, scopes, aggs
+    return out, scopes, aggs, joints
 
 
 def _scope(pf: ParsedFile, at: int, routines: list, starts: list) -> tuple[int, int] | None:
@@ -422,6 +470,35 @@ def _flat_texts(wants: list) -> list[str] | None:
             n += 17
         else:
             out.extend(w)
+    return out
+
+
+def _plain_values(lits: list[str]):
+    """_decimals(_flat_texts(lits)) of literals given whole: None where
+    _flat_texts gives None (a literal not written plainly), False where
+    _decimals does (a field not a decimal number). Each literal's text
+    from the ']' after its quaternion on (confdata and external axes,
+    ten fields) is converted once per distinct text: a CAM program's 1e5
+    literals have a few (the same texts, the same float() of each)."""
+    bounds = plain_bounds(lits)
+    if bounds is None:
+        return None
+    cut = bounds[3][:, 6].tolist()          # where each literal's q4 ends
+    heads = frame_fields(",".join([lit[:c] for lit, c in zip(lits, cut)]))
+    index: dict = {}
+    rows = [index.setdefault(lit[c:], len(index)) for lit, c in zip(lits, cut)]
+    # ("],[c1,c2,c3,c4],[e1,...,e6]]": an empty text, then the ten fields.)
+    tails = [t for tail in index for t in frame_fields(tail)[1:]]
+    if not (decimal_chars(heads) and decimal_chars(tails)):
+        return False
+    try:
+        head = np.fromiter(map(float, heads), float, len(heads))
+        tail = np.fromiter(map(float, tails), float, len(tails))
+    except ValueError:
+        return False
+    out = np.empty((len(lits), 17))
+    out[:, :7] = head.reshape(-1, 7)
+    out[:, 7:] = tail.reshape(-1, 10)[rows]
     return out
 
 
