@@ -324,6 +324,59 @@ def test_the_choices_quick_cases_are_the_general_rules(solver, monkeypatch):
     assert min(cases.count(k) for k in (1, 2, 3)) > 30, [cases.count(k) for k in (1, 2, 3)]
 
 
+def test_the_choices_comparisons_are_numpys():
+    """_same/_apart give np.linalg.norm(a - b) <= / > SAME_DEG, and
+    _turns_only what its numpy form gives, on random joints, whole turns
+    apart, pairs at the bound's edge, NaN and infinity; _has_nan is
+    np.isnan(q).any()."""
+    rng = np.random.default_rng(11)
+    same = S.SAME_DEG
+
+    def numpy_turns_only(a, b, scaled):
+        d = b - a
+        if np.any(np.abs(d[[1, 2, 4]]) > same):
+            return False
+        turns = d[[0, 3, 5]] / 360.0
+        with np.errstate(invalid="ignore"):
+            if np.any(np.abs(turns - np.round(turns)) > same):
+                return False
+        return not any(abs(d[j]) > same for j in scaled)
+    pairs = []
+    for _ in range(3000):
+        a = rng.uniform(-180, 180, 6)
+        kind = rng.integers(0, 5)
+        if kind == 0:
+            b = rng.uniform(-180, 180, 6)
+        elif kind == 1:                      # at the bound, either side by an ulp or so
+            u = rng.normal(size=6)
+            b = a + u / np.linalg.norm(u) * same * (1 + rng.integers(-3, 4) * 1e-16)
+        elif kind == 2:                      # whole turns of J1/J4/J6, a little off
+            b = a.copy()
+            b[[0, 3, 5]] += 360.0 * rng.integers(-2, 3, 3) + rng.normal(0, same, 3)
+        elif kind == 3:
+            b = a + rng.normal(0, same, 6)
+        else:
+            b = a.copy()
+            b[rng.integers(0, 6)] = rng.choice([np.nan, np.inf, -np.inf])
+        pairs.append((a, b))
+    seen = set()
+    for a, b in pairs:
+        with np.errstate(invalid="ignore"):
+            norm = np.linalg.norm(a - b)
+        assert S._same(a, b) == bool(norm <= same)
+        assert S._apart(a, b) == bool(norm > same)
+        assert S._has_nan(b) == bool(np.isnan(b).any())
+        seen.add((bool(norm <= same), bool(norm > same)))
+        for scaled in ([], [0, 3]):
+            chooser = S._Chooser.__new__(S._Chooser)
+            chooser.scaled = scaled
+            picks = [S.Pick(a, "", None), S.Pick(b, "", None)]
+            with np.errstate(invalid="ignore"):
+                want = numpy_turns_only(a, b, scaled)
+            assert chooser._turns_only(picks) == want
+    assert seen == {(True, False), (False, True), (False, False)}
+
+
 # ---------------------------------------------------------------- numbers
 
 def test_row_dots_are_each_rows_dot():

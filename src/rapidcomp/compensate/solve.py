@@ -20,6 +20,7 @@ controller reaches the moves, because each may depend on the one before.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -116,12 +117,45 @@ def _fail(why: str) -> Pick:
     return Pick(None, None, why)
 
 
+# The squares of SAME_DEG 0.1 % below and above: a sum of squares beyond
+# these decides as np.linalg.norm would (their rounding differs by ~1e-15).
+_SAME_SQ_LO, _SAME_SQ_HI = (0.999 * SAME_DEG) ** 2, (1.001 * SAME_DEG) ** 2
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    """np.linalg.norm(a - b) <= SAME_DEG, its verdict (asked of 1e4 pairs
+    of joints in a CAM program): by the differences' sum of squares in
+    Python where that is 0.1 % away from the bound, else (and for NaN) by
+    the norm itself."""
+    sq = sum([x * x for x in (a - b).tolist()])
+    if sq <= _SAME_SQ_LO:
+        return True
+    if sq > _SAME_SQ_HI:
+        return False
+    return bool(np.linalg.norm(a - b) <= SAME_DEG)
+
+
+def _apart(a: np.ndarray, b: np.ndarray) -> bool:
+    """np.linalg.norm(a - b) > SAME_DEG, its verdict (NaN: False), as
+    _same decides."""
+    sq = sum([x * x for x in (a - b).tolist()])
+    if sq > _SAME_SQ_HI:
+        return True
+    if sq <= _SAME_SQ_LO:
+        return False
+    return bool(np.linalg.norm(a - b) > SAME_DEG)
+
+
+def _has_nan(q: np.ndarray) -> bool:
+    return any(x != x for x in q.tolist())
+
+
 def _distinct(picks: list[Pick]) -> list[Pick]:
     """One pick per solution; a solution reached by an assumption keeps
     its caution whichever way it came first."""
     out: list[Pick] = []
     for p in picks:
-        k = next((n for n, o in enumerate(out) if np.linalg.norm(p.q - o.q) <= SAME_DEG), None)
+        k = next((n for n, o in enumerate(out) if _same(p.q, o.q)), None)
         if k is None:
             out.append(p)
         elif out[k].caution is None and p.caution is not None:
@@ -330,14 +364,18 @@ class _Chooser:
 
     def _closest_to(self, i: int, prev: np.ndarray, line: int | None, rule: str,
                     j: int = -1) -> Pick:
-        if j >= 0 and self.pred1[i] == j and np.array_equal(prev, self.spec[j]):
+        # (Equal joints as np.array_equal sees them: the same length, each
+        # == its own; as lists of floats, each made anew, so a NaN is
+        # never equal.)
+        at = np.asarray(prev, float).tolist()
+        if j >= 0 and self.pred1_l[i] == j and at == self.spec_l[j]:
             q = self.off_spec[i]      # computed in the batch from these very joints
         else:
-            q = next((q for pv, q in self.more.get(i, ()) if np.array_equal(prev, pv)), None)
+            q = next((q for pv, q in self.more.get(i, ()) if pv.tolist() == at), None)
             if q is None:
                 k = self.rob_row[i]
                 q = self.solver.closest(self.cands[k][None], prev[None])[0]
-        if np.isnan(q).any():
+        if _has_nan(q):
             return _fail("nominal: no solution within the joint limits")
         return Pick(q, rule, None, "closest", prev, line)
 
@@ -409,14 +447,18 @@ class _Chooser:
     def _turns_only(self, sols: list[Pick]) -> bool:
         """Solutions on one configuration, J1/J4/J6 differing by whole turns
         only (the same correction, unless the profile scales those joints)."""
-        a = sols[0].q
+        # (In Python floats: the same differences, quotients and roundings
+        # as numpy's, elementwise; a NaN or infinity fails no test, as a
+        # comparison with numpy's NaN does not.)
+        a = sols[0].q.tolist()
         for s in sols[1:]:
-            d = s.q - a
-            if np.any(np.abs(d[[1, 2, 4]]) > SAME_DEG):
+            d = [x - y for x, y in zip(s.q.tolist(), a)]
+            if abs(d[1]) > SAME_DEG or abs(d[2]) > SAME_DEG or abs(d[4]) > SAME_DEG:
                 return False
-            turns = d[[0, 3, 5]] / 360.0
-            if np.any(np.abs(turns - np.round(turns)) > SAME_DEG):
-                return False
+            for j in (0, 3, 5):
+                turns = d[j] / 360.0
+                if math.isfinite(turns) and abs(turns - round(turns)) > SAME_DEG:
+                    return False
             if any(abs(d[j]) > SAME_DEG for j in self.scaled):
                 return False
         return True
@@ -494,9 +536,9 @@ class _Chooser:
             return sols, on._replace(caution=(
                 f"{flag} may be on or off here; the solutions it may take differ by whole "
                 "turns only: kept a robtarget move so the controller keeps each run's turn"))
-        other = next((p.q for p in off if np.linalg.norm(p.q - on.q) > SAME_DEG), None)
+        other = next((p.q for p in off if _apart(p.q, on.q)), None)
         other = "" if other is None else " (J" + ", J".join(
-            f"{j + 1} {other[j]:.1f}" for j in range(6)) + ")"
+            f"{j + 1} {x:.1f}" for j, x in enumerate(other.tolist())) + ")"
         return sols, on._replace(
             rule=f"confdata ({flag} may be on or off here)",
             caution=(f"{flag} may be on or off here (not known statically): compensated on "
