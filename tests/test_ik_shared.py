@@ -43,3 +43,21 @@ def test_nominal_and_candidates_are_the_two_computed_apart():
     # Both kinds of row are there: solved, and refused for reach or confdata.
     assert both.success.sum() > n // 2 and (~both.success).sum() > 2000
     assert np.isnan(cands).any() and not np.isnan(cands).all()
+
+
+def test_nominal_pose_and_wrist_is_the_chain_s_on_both_threads():
+    """Solver.nominal_pose_and_wrist (threaded by blocks of CHUNK rows) is
+    the nominal chain's FK and joint 5's frame origin, bit for bit, and
+    that origin is the wrist centre the confdata reads (an independent
+    value: the flange pulled back along its z axis by the wrist offset of
+    the IRB 140, 65 mm)."""
+    robot = irb140()
+    solver = Solver(robot)
+    rng = np.random.default_rng(5)
+    q = rng.uniform(np.asarray(robot.lower_deg), np.asarray(robot.upper_deg),
+                    (2 * ik.CHUNK + 77, 6)) * DEG
+    R, p, wrist = solver.nominal_pose_and_wrist(q)
+    (R1, p1), (_, ps) = solver.nominal_chain.fk_and_frames(q)
+    assert R.tobytes() == R1.tobytes() and p.tobytes() == p1.tobytes()
+    assert wrist.tobytes() == np.ascontiguousarray(ps[:, 4]).tobytes()
+    assert np.allclose(wrist, p - 65.0 * R[:, :, 2], atol=1e-9)

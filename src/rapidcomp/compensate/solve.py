@@ -688,9 +688,9 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
     deformed = solver.solve_deformed(R, p, seed, tcp)
     err_p, err_r = solver.deformed_pose_error(np.nan_to_num(q_nom) * DEG, R, p, tcp)
     qc = np.nan_to_num(deformed.q_deg) * DEG
-    (Rn, pn), (_, frames) = solver.nominal_chain.fk_and_frames(qc)
-    conf_after = confdata(qc, frames[:, 4], solver.geometry.phi)
-    frames = None
+    Rn, pn, wrist = solver.nominal_pose_and_wrist(qc)
+    conf_after = confdata(qc, wrist, solver.geometry.phi)
+    wrist = None
     disp = np.full(n, np.nan)
     moved = [i for i, u in enumerate(uses) if u.kind == "robtarget" and plan.may_be_displaced(u)
              and picks[i].failure is None and deformed.success[i]]

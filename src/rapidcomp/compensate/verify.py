@@ -23,7 +23,7 @@ import numpy as np
 from ..edits import EditColumns
 from ..errors import InternalError, RapidcompError
 from ..kinematics.frames import DEG
-from ..kinematics.ik import Solver
+from ..kinematics.ik import CHUNK, Solver
 from ..rapid import ast as A
 from ..rapid.ast import Span
 from ..rapid.build import DECL_HEAD, NodeBuilder
@@ -40,8 +40,9 @@ from .targets import MAX_JOINT_DEG, Resolver, Written
 # Literals decoded at once by relex (their field texts alive together).
 RELEX_BLOCK = 8192
 # Uses whose written values are checked at once (their arrays alive
-# together).
-VERIFY_BLOCK = 8192
+# together): two of the IK's chunks, so that its two threads share each
+# block (one chunk ran on one core).
+VERIFY_BLOCK = 2 * CHUNK
 
 # Acceptance of a written value, after float32 rounding.
 VERIFY_UM = 1.0

@@ -376,6 +376,14 @@ class Solver:
         return IKBatch(q_out, status, detail, djoint, conf_out, res_mm, res_rad,
                        np.zeros(N, dtype=int), warnings), br
 
+    @_chunked
+    def nominal_pose_and_wrist(self, q: np.ndarray):
+        """Nominal FK of joints q (N, 6) rad, R (N, 3, 3) and p (N, 3) mm,
+        and the wrist centre (the origin of joint 5's frame, mm), which
+        the confdata of those joints needs."""
+        (R, p), (_, ps) = self.nominal_chain.fk_and_frames(q)
+        return R, p, np.ascontiguousarray(ps[:, 4])
+
     # ------------------------------------------------------------ deformed
     @_chunked
     def deformed_pose_error(self, q_cmd: np.ndarray, R: np.ndarray, p: np.ndarray,
