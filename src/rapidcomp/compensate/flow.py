@@ -71,6 +71,12 @@ class State:
     def join(self, other: "State | None") -> "State":
         if other is None or other is self:
             return self
+        # (An equal state joins to itself: main's second cycle meets each of
+        # a CAM program's 1e5 moves in the state the first left there.)
+        if (self.last == other.last and self.confl == other.confl
+                and self.confj == other.confj and self.pdisp == other.pdisp
+                and self.eoffs == other.eoffs):
+            return self
         last = None if self.last is None or other.last is None else self.last | other.last
         return State(self.confj | other.confj, self.confl | other.confl,
                      self.pdisp | other.pdisp, self.eoffs | other.eoffs, last)
