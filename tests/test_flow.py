@@ -565,3 +565,24 @@ ENDMODULE""")
     rows = rows_of(t, "auto")
     assert rows[4].status == "not compensated" and "J4/J6 split" in rows[4].reason
     assert rows[5].status == "compensated" and rows[5].action.startswith("MoveJ -> MoveAbsJ")
+
+
+def test_join_of_states_is_their_flags_and_last_moves_united():
+    """State.join unites each flag set and the moves that may have run
+    last (None: unknown wins); an equal state joins to the state itself."""
+    import itertools
+    from rapidcomp.compensate.flow import BOTH, OFF, ON, State
+    flags = [frozenset((ON,)), frozenset((OFF,)), BOTH]
+    lasts = [None, frozenset(), frozenset({(0, 1, "target", ())}),
+             frozenset({(0, 1, "target", ()), (0, 2, "target", ())})]
+    states = [State(a, b, c, d, e) for a, b, c, d, e in itertools.product(
+        flags, flags[:2], flags[1:], flags[1:2], lasts)]
+    for a, b in itertools.product(states, repeat=2):
+        got = a.join(b)
+        last = None if a.last is None or b.last is None else a.last | b.last
+        assert got == State(a.confj | b.confj, a.confl | b.confl, a.pdisp | b.pdisp,
+                            a.eoffs | b.eoffs, last)
+        # An equal state, made anew: the state itself.
+        twin = State(*(None if v is None else frozenset(v) for v in
+                       (b.confj, b.confl, b.pdisp, b.eoffs, b.last)))
+        assert b.join(twin) is b
