@@ -733,9 +733,11 @@ class Editor:
                                                    "new declarations"))
         # Many edits of other kinds (a CAM program turned into MoveAbsJ:
         # 2.5e5) are columns too, made once: the splice, the verification
-        # and the diff read them as such (each made its own of a list).
+        # and the diff read them as such (each made its own of a list). Their
+        # texts stay str (packing them cost more than it saved: the peak is
+        # elsewhere).
         return {fi: (sorted_columns(columns_of(es)) if fi in runs
-                     else sorted_columns(EditColumns.of(es)) if len(es) >= COLUMNS_FROM
+                     else sorted_columns(EditColumns.of(es, pack=False)) if len(es) >= COLUMNS_FROM
                      else sorted(es, key=BY_SPAN)) for fi, es in out.items()}
 
 
