@@ -284,7 +284,10 @@ _NOT_DECIMAL = str.maketrans("", "", "0123456789.eE+-,")
 # next one: ',' inside a group, '],[' between groups; and the separators
 # of one literal and the ',' that joins it to the next, in order.
 _GAPS = np.array([1, 1, 3, 1, 1, 1, 3, 1, 1, 1, 3, 1, 1, 1, 1, 1])
-_SEPARATORS = np.frombuffer(b",[]", np.uint8)
+# Which bytes are separators, by byte value (a lookup: np.isin sorted 1.7e7
+# bytes of a CAM program's literals).
+_IS_SEPARATOR = np.zeros(256, bool)
+_IS_SEPARATOR[np.frombuffer(b",[]", np.uint8)] = True
 _FRAME_SEPARATORS = np.frombuffer(b"[[,,],[,,,],[,,,],[,,,,,]],", np.uint8)
 
 
@@ -302,7 +305,7 @@ def plain_bounds(lits: list[str]):
         return None
     n = len(lits)
     chars = np.frombuffer(joined.encode("ascii"), np.uint8)
-    sep = np.isin(chars, _SEPARATORS)
+    sep = _IS_SEPARATOR[chars]
     # The separators are the frame's, in the frame's order: with the gaps
     # below, every literal is the frame with 17 fields in it.
     if not np.array_equal(chars[sep], np.tile(_FRAME_SEPARATORS, n)[:-1]):
