@@ -377,6 +377,37 @@ def test_the_choices_comparisons_are_numpys():
     assert seen == {(True, False), (False, True), (False, False)}
 
 
+def test_the_choices_comparisons_ask_the_norm_near_the_bound(monkeypatch):
+    """Within 0.1 % of SAME_DEG (and for NaN) _same and _apart take
+    np.linalg.norm's verdict, whatever the sum of squares says; farther
+    away they decide by the sum of squares without asking it. (A stand-in
+    norm that says otherwise than the numbers shows who decided.)"""
+    same = S.SAME_DEG
+    asked = []
+
+    def norm(x, *args, **kw):
+        asked.append(1)
+        return norm.says
+    monkeypatch.setattr(S.np.linalg, "norm", norm)
+    a = np.zeros(6)
+    unit = np.array([1.0, 2.0, -2.0, 0.5, 0.0, 1.0])
+    unit /= np.sqrt((unit * unit).sum())
+    for scale, says, want_same in ((0.9995, 1.01, False), (1.0005, 0.5, True),
+                                   (0.99, 1.5, True), (1.01, 0.5, False),
+                                   (np.nan, np.nan, None)):
+        asked.clear()
+        norm.says = says * same
+        b = unit * scale * same
+        near = not abs(scale - 1.0) > 0.001     # (NaN: near, the norm decides)
+        if near:
+            assert S._same(a, b) == bool(says * same <= same)
+            assert S._apart(a, b) == bool(says * same > same)
+            assert len(asked) == 2
+        else:
+            assert S._same(a, b) == want_same and S._apart(a, b) == (not want_same)
+            assert not asked
+
+
 # ---------------------------------------------------------------- numbers
 
 def test_row_dots_are_each_rows_dot():

@@ -45,12 +45,13 @@ def test_nominal_and_candidates_are_the_two_computed_apart():
     assert np.isnan(cands).any() and not np.isnan(cands).all()
 
 
-def test_nominal_pose_and_wrist_is_the_chain_s_on_both_threads():
+def test_nominal_pose_and_wrist_is_the_chain_s_on_both_threads(monkeypatch):
     """Solver.nominal_pose_and_wrist (threaded by blocks of CHUNK rows) is
     the nominal chain's FK and joint 5's frame origin, bit for bit, and
     that origin is the wrist centre the confdata reads (an independent
     value: the flange pulled back along its z axis by the wrist offset of
     the IRB 140, 65 mm)."""
+    monkeypatch.setattr(ik, "_threads", lambda: 2)    # (two, whatever the machine has)
     robot = irb140()
     solver = Solver(robot)
     rng = np.random.default_rng(5)

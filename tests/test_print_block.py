@@ -316,30 +316,38 @@ def test_fix_by_block_is_fix_by_literal(mode, solver, monkeypatch):
         assert small.rows == fast.rows and small.modules == fast.modules
 
 
-@pytest.mark.parametrize("main", [False, True])
-def test_other_edits_as_columns_give_what_lists_give(main, solver, monkeypatch):
+@pytest.mark.parametrize("case", ["moveabsj", "unplain"])
+def test_other_edits_as_columns_give_what_lists_give(case, solver, monkeypatch):
     """A file's edits other than a batch's literal fields (moves turned
-    into MoveAbsJ, new declarations) are kept as EditColumns from
-    COLUMNS_FROM of them on: the splice, the verification, the diff and
-    the reports are what the list of SpanEdits gives."""
+    into MoveAbsJ and new declarations; or literals the batch refuses, here
+    each with a hexadecimal external axis, edited field by field) are kept
+    as EditColumns from COLUMNS_FROM of them on: the splice, the
+    verification, the diff and the reports are what the list of SpanEdits
+    gives."""
     import sys
     sys.path.insert(0, str(ROOT / "bench"))
     from fix import cam_module
     from rapidcomp.compensate import edit as E
-    task = Task("cam.mod", (parse_text(cam_module(300, 5, main=main), "cam.mod"),))
+    if case == "moveabsj":
+        text, mode = cam_module(300, 5, main=True), "absj"
+    else:
+        text, mode = cam_module(300, 5).replace("9E+09]]", "0x218711A00]]"), "robtarget"
+    task = Task("cam.mod", (parse_text(text, "cam.mod"),))
     monkeypatch.setattr(E, "COLUMNS_FROM", 1)
-    cols = F.fix(task, solver, "absj")
+    cols = F.fix(task, solver, mode)
     monkeypatch.setattr(E, "COLUMNS_FROM", 10 ** 9)
-    lists = F.fix(task, solver, "absj")
+    lists = F.fix(task, solver, mode)
+    # (No batch wrote these edits: lists, unless COLUMNS_FROM says columns.)
     assert type(cols.modules[0].edits) is EditColumns
-    assert type(lists.modules[0].edits) is (EditColumns if not main else tuple)
+    assert type(lists.modules[0].edits) is tuple
     assert cols.failed == 0 and len(cols.rows) == 300
     assert [m.text for m in cols.modules] == [m.text for m in lists.modules]
     assert [m.diff for m in cols.modules] == [m.diff for m in lists.modules]
     assert cols.edits == lists.edits and len(cols.edits) >= 300
     assert cols.rows == lists.rows
-    meta = {"mode": "absj"}
+    meta = {"mode": mode}
     assert report.markdown(cols, meta) == report.markdown(lists, meta)
     assert report.as_json(cols, meta) == report.as_json(lists, meta)
-    # The MoveAbsJ are there, on jointtargets of their own.
-    assert (cols.modules[0].text.count("MoveAbsJ ") == 300) == main
+    out = cols.modules[0].text
+    assert out.count("MoveAbsJ ") == (300 if case == "moveabsj" else 0)
+    assert out.count("0x218711A00]]") == (0 if case == "moveabsj" else 300)
