@@ -16,15 +16,14 @@ from functools import partial
 from ..construct import maker
 from . import ast as A
 from .ast import Span
-from .lalr import Tok
+from .lalr import FAST_NAME, Tok
 from .refs import plain_args
 
 
-_FAST_HEAD = re.compile(r"([A-Za-z][A-Za-z0-9_]*)[ \t]+")
 # A FAST_DECL up to its value: scope, storage, type, name (verify reads the
 # editor's new declarations with it too).
 DECL_HEAD = re.compile(r"(?:(LOCAL|TASK)[ \t]+)?(CONST|PERS|VAR)[ \t]+([A-Za-z][A-Za-z0-9_]*)"
-                        r"[ \t]+([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*", re.IGNORECASE)
+                       r"[ \t]+([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*", re.IGNORECASE)
 _FAST_ITEM = re.compile(
     r"\\([A-Za-z][A-Za-z0-9_]*)(?::=([A-Za-z][A-Za-z0-9_]*|\d+(?:\.\d*)?))?"
     r"|([A-Za-z][A-Za-z0-9_]*)")
@@ -273,7 +272,7 @@ class NodeBuilder:
         tok = c[0]
         text = tok.value
         base = tok.start_pos
-        head = _FAST_HEAD.match(text)
+        head = FAST_NAME.match(text)
         # (Interned: "MoveL" 1e5 times in a CAM program is one string.)
         name = sys.intern(head.group(1))
         pos = head.end()

@@ -21,8 +21,9 @@ import re
 from lark.lexer import PatternStr
 
 _IDENT = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
-# A FAST_CALL's instruction name and the blanks after it.
-_FAST_NAME = re.compile(r"([A-Za-z][A-Za-z0-9_]*)[ \t]+")
+# A FAST_CALL's instruction name and the blanks after it (the builder
+# splits the statement there too).
+FAST_NAME = re.compile(r"([A-Za-z][A-Za-z0-9_]*)[ \t]+")
 # Identifiers not inside a number (the E of 9E+09 is no word).
 _WORD = re.compile(r"(?<![\w.])[A-Za-z][A-Za-z0-9_]*")
 
@@ -221,7 +222,7 @@ class Engine:
         pattern would find these very tokens (nothing before FAST_CALL in
         it matches a call; the name and the arguments' words are the
         first's, which _keyword_in accepted)."""
-        head = _FAST_NAME.match(first)
+        head = FAST_NAME.match(first)
         at = head.end()
         if first[at] == "[":
             after = first.rindex("]") + 1
