@@ -325,7 +325,7 @@ def test_the_choices_quick_cases_are_the_general_rules(solver, monkeypatch):
 
 
 def test_the_choices_comparisons_are_numpys():
-    """_same/_apart give np.linalg.norm(a - b) <= / > SAME_DEG, and
+    """same_joints/_apart give np.linalg.norm(a - b) <= / > SAME_DEG, and
     _turns_only what its numpy form gives, on random joints, whole turns
     apart, pairs at the bound's edge, NaN and infinity; _has_nan is
     np.isnan(q).any()."""
@@ -363,7 +363,7 @@ def test_the_choices_comparisons_are_numpys():
     for a, b in pairs:
         with np.errstate(invalid="ignore"):
             norm = np.linalg.norm(a - b)
-        assert S._same(a, b) == bool(norm <= same)
+        assert S.same_joints(a, b) == bool(norm <= same)
         assert S._apart(a, b) == bool(norm > same)
         assert S._has_nan(b) == bool(np.isnan(b).any())
         seen.add((bool(norm <= same), bool(norm > same)))
@@ -378,7 +378,7 @@ def test_the_choices_comparisons_are_numpys():
 
 
 def test_the_choices_comparisons_ask_the_norm_near_the_bound(monkeypatch):
-    """Within 0.1 % of SAME_DEG (and for NaN) _same and _apart take
+    """Within 0.1 % of SAME_DEG (and for NaN) same_joints and _apart take
     np.linalg.norm's verdict, whatever the sum of squares says; farther
     away they decide by the sum of squares without asking it. (A stand-in
     norm that says otherwise than the numbers shows who decided.)"""
@@ -400,11 +400,11 @@ def test_the_choices_comparisons_ask_the_norm_near_the_bound(monkeypatch):
         b = unit * scale * same
         near = not abs(scale - 1.0) > 0.001     # (NaN: near, the norm decides)
         if near:
-            assert S._same(a, b) == bool(says * same <= same)
+            assert S.same_joints(a, b) == bool(says * same <= same)
             assert S._apart(a, b) == bool(says * same > same)
             assert len(asked) == 2
         else:
-            assert S._same(a, b) == want_same and S._apart(a, b) == (not want_same)
+            assert S.same_joints(a, b) == want_same and S._apart(a, b) == (not want_same)
             assert not asked
 
 

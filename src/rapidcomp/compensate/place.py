@@ -24,7 +24,7 @@ from ..errors import InputError
 from ..kinematics.ik import Solver, Warn
 from ..rapid.model import Declaration, Module
 from .plan import Plan
-from .solve import SAME_DEG, Solved, solve_slots
+from .solve import Solved, same_joints, solve_slots
 from .targets import Source, TargetUse, flange_pose
 
 MODES = ("auto", "absj", "robtarget")
@@ -197,8 +197,8 @@ def _one_statement(uses: list[TargetUse], modes: list[str]) -> frozenset:
 
 
 def _same(solved: Solved, a: int, b: int) -> bool:
-    qa, qb = solved.nominal.q_deg[a], solved.nominal.q_deg[b]
-    return not (np.isnan(qa).any() or np.isnan(qb).any()) and np.linalg.norm(qa - qb) <= SAME_DEG
+    """Rows a and b have the same nominal solution."""
+    return same_joints(solved.nominal.q_deg[a], solved.nominal.q_deg[b])
 
 
 def _elements(g: Group, solved: Solved, ok: list, left: list) -> None:

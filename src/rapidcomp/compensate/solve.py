@@ -122,9 +122,10 @@ def _fail(why: str) -> Pick:
 _SAME_SQ_LO, _SAME_SQ_HI = (0.999 * SAME_DEG) ** 2, (1.001 * SAME_DEG) ** 2
 
 
-def _same(a: np.ndarray, b: np.ndarray) -> bool:
-    """np.linalg.norm(a - b) <= SAME_DEG, its verdict (asked of 1e4 pairs
-    of joints in a CAM program): by the differences' sum of squares in
+def same_joints(a: np.ndarray, b: np.ndarray) -> bool:
+    """Two solutions are the same one: np.linalg.norm(a - b) <= SAME_DEG,
+    its verdict (asked of 1e4 pairs of joints in a CAM program; NaN:
+    False): by the differences' sum of squares in
     Python where that is 0.1 % away from the bound, else (and for NaN) by
     the norm itself."""
     sq = sum([x * x for x in (a - b).tolist()])
@@ -137,7 +138,7 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
 
 def _apart(a: np.ndarray, b: np.ndarray) -> bool:
     """np.linalg.norm(a - b) > SAME_DEG, its verdict (NaN: False), as
-    _same decides."""
+    same_joints decides."""
     sq = sum([x * x for x in (a - b).tolist()])
     if sq > _SAME_SQ_HI:
         return True
@@ -155,7 +156,7 @@ def _distinct(picks: list[Pick]) -> list[Pick]:
     its caution whichever way it came first."""
     out: list[Pick] = []
     for p in picks:
-        k = next((n for n, o in enumerate(out) if _same(p.q, o.q)), None)
+        k = next((n for n, o in enumerate(out) if same_joints(p.q, o.q)), None)
         if k is None:
             out.append(p)
         elif out[k].caution is None and p.caution is not None:
@@ -296,8 +297,7 @@ class _Chooser:
         rob = np.array(list(self.rob_row))
         d = self.off_spec[rob] - self.by_conf.q_deg
         sq = (d * d).sum(axis=1)
-        near = np.where(sq <= (0.999 * SAME_DEG) ** 2, 1, np.where(sq > (1.001 * SAME_DEG) ** 2,
-                                                                    0, -1))
+        near = np.where(sq <= _SAME_SQ_LO, 1, np.where(sq > _SAME_SQ_HI, 0, -1))
         for i, v in zip(rob.tolist(), near.tolist()):
             self.near_conf[i] = bool(v)
         for k in np.flatnonzero(near < 0).tolist():
@@ -485,14 +485,14 @@ class _Chooser:
                            "the robot is, and that depends on which move ran before it (lines "
                            f"{where})")
 
-    def _quick(self, i: int, st, sup, flag: str):
+    def _quick(self, i: int, flag: str):
         """choose() where a CAM program spends 1e5 moves, without the
         general machinery, with its results (tested against it): one move
         before, with one solution, the guess, whose closest solution here
         came from the batch; supervision off (case 1), or on or off with
         the confdata's solution that same one (case 2) or another (case 3;
-        _quick_data tells the cases from the row's state `st`). None: not
-        this case."""
+        _quick_data tells the cases from the row's state). None: not this
+        case."""
         how = self.quick[i]
         if not how:
             return None
@@ -562,7 +562,7 @@ class _Chooser:
                 return [], _fail(why)
             return self._one(sols, "circle point: closest to {where}", flag)
         sup = st.supervision(u.motion.spec.interpolation)
-        quick = self._quick(i, st, sup, flag)
+        quick = self._quick(i, flag)
         if quick is not None:
             return quick
         if OFF not in sup:
