@@ -581,8 +581,7 @@ class _Walker:
         run ends and the state after it."""
         fi = rt.fi
         written = fi < self.n_written
-        index, names = self.motion_index, self.target_names
-        before, order = self.flow.before, self.flow.order
+        index, names, reach = self.motion_index, self.target_names, self._reach
         n = len(stmts)
         while i < n:
             s = stmts[i]
@@ -596,17 +595,23 @@ class _Walker:
                 raise _TooLarge
             mi = index[(fi, s.span.start)]
             for role, _ in names[(fi, mi)]:
-                key = (fi, mi, role, ())
-                if written:
-                    old = before.get(key)
-                    if old is None:
-                        order.append(key)
-                        before[key] = st
-                    else:
-                        before[key] = old.join(st)
-                st = st.with_last(frozenset((key,)) if written else None)
+                st = reach((fi, mi, role, ()), st, written)
             i += 1
         return i, st
+
+    def _reach(self, key: tuple, st: State, written: bool) -> State:
+        """The use `key` reached in state st (joined with the states it was
+        reached in before, where its file is written); the state after it."""
+        if not written:
+            return st.with_last(None)
+        before = self.flow.before
+        old = before.get(key)
+        if old is None:
+            self.flow.order.append(key)
+            before[key] = st
+        else:
+            before[key] = old.join(st)
+        return st.with_last(frozenset((key,)))
 
     def motion(self, s: A.ProcCall, spec, st: State, env: dict, rt: _Routine) -> State:
         if spec.interpolation == "external":
@@ -616,15 +621,7 @@ class _Walker:
         written = fi < self.n_written
         for role, names in self.target_names[(fi, mi)]:
             envr = tuple(sorted((k, v) for k, v in env.items() if k in names)) if env else ()
-            key = (fi, mi, role, envr)
-            if written:
-                old = self.flow.before.get(key)
-                if old is None:
-                    self.flow.order.append(key)
-                    self.flow.before[key] = st
-                else:
-                    self.flow.before[key] = old.join(st)
-            st = st.with_last(frozenset((key,)) if written else None)
+            st = self._reach((fi, mi, role, envr), st, written)
         if "search" in spec.roles:
             # A search stops where the sensor triggers: position unknown.
             st = st.with_last(None)
