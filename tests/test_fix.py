@@ -12,7 +12,7 @@ from click.testing import CliRunner
 from rapidcomp.cli import main
 from rapidcomp.compensate.fix import fix
 from rapidcomp.compensate.plan import Task
-from rapidcomp.edits import SpanEdit, apply_edits
+from rapidcomp.edits import EditColumns, SpanEdit, apply_edits
 from rapidcomp.kinematics.ik import Solver
 from rapidcomp.kinematics.robot import irb140, override_limits
 from rapidcomp.rapid.parse import parse_file, parse_text
@@ -192,12 +192,13 @@ def test_diff_of_edits_within_lines_is_the_blocks_diff():
             new = apply_edits(text, edits)
         except OverlappingEdits:
             continue
-        got = D._changed_in_lines(text, kept, edits, new)
+        cols = EditColumns.of(edits)
+        got = D._changed_in_lines(text, kept, cols, new)
         if got is None:
             general += 1
             continue
         fast += 1
-        assert got == D._changed_blocks(text, kept, edits, new)
+        assert got == D._changed_blocks(text, kept, cols, new)
     assert fast > 1000 and general > 100
     # The review's case: text inserted between a CR and an LF splits a
     # line, text removed between a CR and an LF joins two; the line count
@@ -206,7 +207,7 @@ def test_diff_of_edits_within_lines_is_the_blocks_diff():
     new = apply_edits(text, edits)
     kept = text.splitlines(keepends=True)
     assert len(new.splitlines()) == len(kept)
-    assert D._changed_in_lines(text, kept, edits, new) is None
+    assert D._changed_in_lines(text, kept, EditColumns.of(edits), new) is None
 
 
 def test_new_names_avoid_every_identifier_case_insensitively():

@@ -50,7 +50,8 @@ def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
     return _hunks(text.splitlines(), changed, old_name, new_name, context)
 
 
-def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list | None:
+def _changed_in_lines(text: str, lines: list[str], cols: EditColumns,
+                      new_text: str) -> list | None:
     """The changes, when no edit touches a line break or follows a CR
     (fix's edits of numbers; None otherwise): line i of the output is line
     i of the input with its edits, and the lines an edit touches are
@@ -58,7 +59,6 @@ def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list
     import numpy as np
     if not lines:
         return None
-    cols = edits if type(edits) is EditColumns else EditColumns.of(edits, pack=False)
     at, ends = cols.starts.tolist(), cols.ends.tolist()
     replaced = "".join([text[a:b] for a, b in zip(at, ends)]) + cols.joined()
     if len((replaced + ".").splitlines()) != 1:
@@ -87,13 +87,12 @@ def _changed_in_lines(text: str, lines: list[str], edits, new_text: str) -> list
     return changed
 
 
-def _changed_blocks(text: str, lines: list[str], edits, new_text: str) -> list:
+def _changed_blocks(text: str, lines: list[str], cols: EditColumns, new_text: str) -> list:
     """[first old line, end old line (exclusive), new lines] of each change.
     The lines each edit touches, and the blocks of edits that touch the
     same lines, are found for all edits at once (a CAM program turned into
     MoveAbsJ has 2.5e5 edits); each block's lines are then compared."""
     import numpy as np
-    cols = edits if type(edits) is EditColumns else EditColumns.of(edits, pack=False)
     cols = sorted_columns(cols)
     if not len(cols):
         return []
