@@ -8,7 +8,7 @@ import pinocchio as pin
 import pytest
 
 from rapidcomp.kinematics.chain import Chain
-from rapidcomp.kinematics.frames import DEG, rot_y
+from rapidcomp.kinematics.frames import DEG, rot_y, stack_times
 from rapidcomp.kinematics.ik import IKOptions, Solver, Status, solve_deformed_pinocchio
 from rapidcomp.kinematics.profile import deform, parse_profile, read_profile
 from rapidcomp.kinematics.robot import irb140
@@ -115,6 +115,24 @@ def test_batch_fk_matches_pinocchio():
             Jp = pin.computeFrameJacobian(robot.model, data, q[i] * DEG, robot.flange_frame,
                                           pin.LOCAL_WORLD_ALIGNED)
             assert np.max(np.abs(J[i] - Jp)) < 1e-9
+
+
+def test_stack_times_is_the_stacked_product_bit_for_bit():
+    """The chain's products of a stack by one matrix or vector: the same
+    doubles numpy's stacked product gives, at every stack size the IK's
+    chunks and Newton's shrinking active sets take, for a strided stack
+    copied contiguous, and for a transposed matrix."""
+    rng = np.random.default_rng(11)
+    for n in (1, 2, 3, 5, 17, 64, 1000, 8191, 8192):
+        A = rng.normal(size=(n, 3, 3)) * 10.0 ** rng.uniform(-3, 3, (n, 1, 1))
+        S = rng.normal(size=(n, 6, 3, 3))[:, 4]
+        for M in (rng.normal(size=(3, 3)), rng.normal(size=3) * 300, rng.normal(size=(3, 3)).T):
+            assert np.array_equal(stack_times(A, M), A @ M)
+            assert np.array_equal(stack_times(np.ascontiguousarray(S), M), S @ M)
+            assert np.array_equal(stack_times(S, M), S @ M)
+    # Four axes: a stack of stacks.
+    B = rng.normal(size=(7, 6, 3, 3))
+    assert np.array_equal(stack_times(B, M), B @ M)
 
 
 def test_ik_of_fk_recovers_q_on_all_8_branches():
@@ -282,6 +300,14 @@ def test_a_urdf_with_negative_axes_is_the_same_robot(tmp_path):
     R, p = Chain.from_robot(robot).fk(q * sign * DEG)
     R0, p0 = Chain.from_robot(ROBOT).fk(q * DEG)
     assert np.max(np.abs(p - p0)) < 1e-9 and np.max(np.abs(R - R0)) < 1e-12
+    # The Jacobian of a chain with an axis other than x/y/z (its world axes
+    # summed, not taken as a column), against Pinocchio's.
+    _, _, J = Chain.from_robot(robot).fk_jacobian(q * sign * DEG)
+    data = robot.model.createData()
+    for i in range(0, len(q), 7):
+        Jp = pin.computeFrameJacobian(robot.model, data, q[i] * sign * DEG, robot.flange_frame,
+                                      pin.LOCAL_WORLD_ALIGNED)
+        assert np.max(np.abs(J[i] - Jp)) < 1e-9
 
 
 def test_urdf_errors():

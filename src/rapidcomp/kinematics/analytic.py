@@ -21,7 +21,7 @@ import numpy as np
 
 from .chain import Chain
 from .conf import cfx_bits, wrap_pi
-from .frames import rot_y, rot_z
+from .frames import rot_y, rot_z, stack_times
 
 _EXPECTED_AXES = np.array([[0, 0, 1], [0, 1, 0], [0, 1, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0]], float)
 
@@ -83,8 +83,8 @@ class Branches:
 
 
 def wrist_centre(geom: ArmGeometry, R: np.ndarray, p: np.ndarray) -> np.ndarray:
-    R6 = R @ geom.flange_rot.T
-    return p - R6 @ geom.flange_trans
+    R6 = stack_times(R, geom.flange_rot.T)
+    return p - stack_times(R6, geom.flange_trans)
 
 
 def solve_branches(geom: ArmGeometry, R: np.ndarray, p: np.ndarray,
@@ -93,8 +93,8 @@ def solve_branches(geom: ArmGeometry, R: np.ndarray, p: np.ndarray,
     R = np.asarray(R, float).reshape(-1, 3, 3)
     p = np.asarray(p, float).reshape(-1, 3)
     N = len(p)
-    R6 = R @ geom.flange_rot.T
-    W = p - R6 @ geom.flange_trans
+    R6 = stack_times(R, geom.flange_rot.T)
+    W = p - stack_times(R6, geom.flange_trans)
     la, lb = np.hypot(*geom.A), np.hypot(*geom.B)
     rho = np.hypot(W[:, 0], W[:, 1])
     base_q1 = np.arctan2(W[:, 1], W[:, 0])

@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .frames import rot_axis, rotation_log
+from .frames import rot_axis, rotation_log, stack_times
 from .robot import RobotModel
 
 _AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0),
@@ -81,9 +81,9 @@ class Chain:
         Rs = np.empty((N, n, 3, 3))
         ps = np.empty((N, n, 3))
         for i in range(n):
-            p = p + R @ self.trans[i]
+            p = p + stack_times(R, self.trans[i])
             if not self._identity[i]:
-                R = R @ self.rot[i]
+                R = stack_times(R, self.rot[i])
             R = _rotate_columns(R, self._axis_index[i], self.axes[i], q[:, i])
             Rs[:, i] = R
             ps[:, i] = p
@@ -109,19 +109,29 @@ class Chain:
     def fk_and_frames(self, q: np.ndarray):
         """(fk(q), joint_frames(q)), the frames computed once."""
         Rs, ps = self.joint_frames(q)
-        R = Rs[:, -1]
-        return (R @ self.flange_rot, ps[:, -1] + R @ self.flange_trans), (Rs, ps)
+        R = np.ascontiguousarray(Rs[:, -1])
+        return ((stack_times(R, self.flange_rot), ps[:, -1] + stack_times(R, self.flange_trans)),
+                (Rs, ps))
 
     def fk_jacobian(self, q: np.ndarray):
         """Flange pose and the geometric Jacobian (N, 6, n), rows (v; w), at
         the flange origin, expressed in base axes (LOCAL_WORLD_ALIGNED)."""
         Rs, ps = self.joint_frames(q)
-        R = Rs[:, -1]
-        pe = ps[:, -1] + R @ self.flange_trans
-        z = np.einsum("nkij,kj->nki", Rs, self.axes)   # world axes (N, n, 3)
+        R = np.ascontiguousarray(Rs[:, -1])
+        pe = ps[:, -1] + stack_times(R, self.flange_trans)
+        z = self._world_axes(Rs)                           # (N, n, 3)
         v = np.cross(z, pe[:, None, :] - ps)
         J = np.concatenate([v, z], axis=2).transpose(0, 2, 1)
-        return R @ self.flange_rot, pe, J
+        return stack_times(R, self.flange_rot), pe, J
+
+    def _world_axes(self, Rs: np.ndarray) -> np.ndarray:
+        """Each joint's axis in base axes (N, n, 3): for joints about x, y
+        or z the column of its frame's rotation (what Rs @ axis sums, with
+        the other two terms 0), taken instead of summed."""
+        if -1 in self._axis_index:
+            return np.einsum("nkij,kj->nki", Rs, self.axes)
+        n = Rs.shape[1]
+        return Rs[:, np.arange(n), :, list(self._axis_index)].transpose(1, 0, 2)
 
     def pose_error(self, q: np.ndarray, R: np.ndarray, p: np.ndarray):
         """Distance (mm) and rotation angle (rad) from the flange at q

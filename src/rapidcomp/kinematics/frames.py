@@ -45,6 +45,18 @@ def row_dots(a) -> np.ndarray:
     return np.matmul(a[:, None, :], a[:, :, None])[:, 0, 0]
 
 
+def stack_times(A: np.ndarray, M: np.ndarray) -> np.ndarray:
+    """A @ M for a stack of 3x3 matrices A (..., 3, 3) and one matrix
+    (3, k) or vector (3,) M, bit for bit: numpy multiplies a stack matrix
+    by matrix, one BLAS call each (~30 ns, 8192 in a chunk of the IK); the
+    rows of a C-contiguous stack are one (n, 3) matrix, and one call on it
+    computes each row as the call per matrix does (tested against A @ M)."""
+    A = np.asarray(A)
+    if A.ndim < 3 or not A.flags.c_contiguous or A.dtype != np.float64:
+        return A @ M
+    return (A.reshape(-1, 3) @ M).reshape(A.shape[:-1] + np.shape(M)[1:])
+
+
 def quat_wxyz_to_matrix(q) -> np.ndarray:
     """Rotation matrix of a (possibly unnormalised) RAPID quaternion w,x,y,z."""
     q = np.asarray(q, dtype=float)
