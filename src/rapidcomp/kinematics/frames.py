@@ -52,7 +52,8 @@ def stack_times(A: np.ndarray, M: np.ndarray) -> np.ndarray:
     rows of a C-contiguous stack are one (n, 3) matrix, and one call on it
     computes each row as the call per matrix does (tested against A @ M)."""
     A = np.asarray(A)
-    if A.ndim < 3 or not A.flags.c_contiguous or A.dtype != np.float64:
+    if (A.ndim < 3 or A.shape[-2:] != (3, 3) or not A.flags.c_contiguous
+            or A.dtype != np.float64):
         return A @ M
     return (A.reshape(-1, 3) @ M).reshape(A.shape[:-1] + np.shape(M)[1:])
 
