@@ -291,6 +291,22 @@ def _array(xs, item) -> str:
     return "[\n        " + _ITEMS.join(map(item, xs)) + "\n      ]"
 
 
+def _reals(xs) -> str:
+    """_array(xs, _number) for a row's joints: a tuple of finite floats
+    (1e5 rows, 3 of them each) as one join of float's repr (the encoder's
+    text of a float, of a float subclass too). Anything else (an int or a
+    bool raises TypeError in float's repr; a NaN or an infinity is the only
+    repr with an n) goes value by value."""
+    if type(xs) is tuple and xs:
+        try:
+            text = _ITEMS.join(map(float.__repr__, xs))
+        except TypeError:
+            return _array(xs, _number)
+        if "n" not in text:
+            return "[\n        " + text + "\n      ]"
+    return _array(xs, _number)
+
+
 def json_target(r: UseRow) -> str:
     """r as the JSON report's list holds it: the encoder's text of
     r.as_dict(), each line after the first indented by 4 more."""
@@ -298,8 +314,8 @@ def json_target(r: UseRow) -> str:
         return _TARGET % (
             _text(r.file), _number(r.line), _text(r.instruction), _text(r.target),
             _text(r.status), _text(r.rule), _text(r.action),
-            _array(r.nominal_deg, _number), _array(r.compensated_deg, _number),
-            _array(r.delta_deg, _number), _number(r.error_um), _number(r.error_deg),
+            _reals(r.nominal_deg), _reals(r.compensated_deg),
+            _reals(r.delta_deg), _number(r.error_um), _number(r.error_deg),
             _number(r.residual_um), _number(r.residual_deg), _array(r.conf_before, _number),
             _array(r.conf_after, _number), _array(r.warnings, _text), _text(r.reason))
     except _Other:
