@@ -261,7 +261,11 @@ def run_all(specs: list[JobSpec], workers: int = 2) -> list[JobOutcome]:
 
 def _run_rendered(spec: JobSpec) -> JobOutcome:
     """run() in a worker process: its reports rendered there, in parallel
-    with the other worker's, and returned as bytes."""
+    with the other worker's, and returned as bytes. (The workers keep both
+    cores busy: a module's literals are decoded in the worker itself, not
+    by a process of its own, rapid/predecode.py.)"""
+    from ..rapid import predecode
+    predecode.enabled = False
     out = run(spec)
     return replace(out, files=tuple((path, data.render() if isinstance(data, Report) else data)
                                     for path, data in out.files))

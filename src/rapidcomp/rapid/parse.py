@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 from dataclasses import replace
 from pathlib import Path
 
@@ -10,6 +12,7 @@ from ..construct import maker
 from ..errors import InputError
 from ..source import SourceText, read_source
 from . import ast as A
+from . import predecode
 from .build import NumberOutOfRange
 from .grammar import compiled, engine
 from .lalr import LexFailure, ParseFailure
@@ -30,17 +33,30 @@ def parse_source(source: SourceText) -> ParsedFile:
     # Parsing allocates millions of small acyclic objects (~30% of the time
     # otherwise goes to the cyclic collector).
     with paused():
+        # A large text's literals are decoded by a second process meanwhile
+        # (predecode.py; None: here).
+        ahead = predecode.start(source.text)
+        began = time.monotonic()
         try:
-            header, nodes = engine().parse(source.text)
-        except LexFailure as exc:
-            ch = source.text[exc.pos]
-            raise source.error(exc.pos, f"unexpected character {ch!r}: not part of RAPID") from None
-        except ParseFailure as exc:
-            raise _syntax_error(source, exc) from None
-        except NumberOutOfRange as exc:
-            raise source.error(exc.pos, f"number {exc.text} is out of range (a num holds "
-                               "+-3.4E38, a dnum +-1.8E308)") from None
-        modules = tuple(_build_module(source, node) for node in nodes)
+            try:
+                header, nodes = engine().parse(source.text)
+            except LexFailure as exc:
+                ch = source.text[exc.pos]
+                raise source.error(exc.pos,
+                                   f"unexpected character {ch!r}: not part of RAPID") from None
+            except ParseFailure as exc:
+                raise _syntax_error(source, exc) from None
+            except NumberOutOfRange as exc:
+                raise source.error(exc.pos, f"number {exc.text} is out of range (a num holds "
+                                   "+-3.4E38, a dnum +-1.8E308)") from None
+            # (The child's work is a fraction of the parse's: it is waited
+            # for as long as the parse took, and a second more, at most.)
+            known = (ahead.result(time.monotonic() - began + 1.0) if ahead is not None
+                     else None)
+        finally:
+            if ahead is not None:
+                ahead.close()
+        modules = tuple(_build_module(source, node, known) for node in nodes)
     return ParsedFile(source, header.value if header else None, modules)
 
 
@@ -70,7 +86,7 @@ def _dims(dims, consts) -> tuple[int | None, ...]:
 
 
 def _declaration(source: SourceText, decl: A.DataDecl, routine: str | None,
-                 consts) -> Declaration:
+                 consts, known=None) -> Declaration:
     type_ = decl.type_name.lower()
     dims = _dims(decl.dims, consts)
     value = None
@@ -83,9 +99,9 @@ def _declaration(source: SourceText, decl: A.DataDecl, routine: str | None,
         else:
             try:
                 if dims:
-                    value = decode_array(type_, decl.init, dims, decl.name)
+                    value = decode_array(type_, decl.init, dims, decl.name, known)
                 else:
-                    value = decode(type_, decl.init, decl.name)
+                    value = decode(type_, decl.init, decl.name, known)
             except DecodeIssue as exc:
                 if exc.illegal:
                     raise source.error(exc.span.start, f"{exc.reason} (a {type_} value)") \
@@ -99,7 +115,8 @@ _new_motion, _new_target = maker(Motion), maker(TargetArg)
 _TARGET_ROLES = frozenset(("to", "cir", "search"))
 
 
-def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops) -> Motion:
+def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops,
+            known=None) -> Motion:
     roles = spec.roles
     n_roles = len(roles)
     slots = {}                      # role -> the value of its argument (dict(zip): the last)
@@ -119,7 +136,7 @@ def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops) -> 
                     if role != "search" and isinstance(value, (A.Agg, A.NumAgg)):
                         t = "jointtarget" if spec.joint_space else "robtarget"
                         try:
-                            decoded = decode(t, value, f"inline {t}")
+                            decoded = decode(t, value, f"inline {t}", known)
                         except DecodeIssue as exc:
                             if exc.illegal:
                                 raise source.error(exc.span.start, f"{exc.reason} (the {t} of "
@@ -137,39 +154,41 @@ def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops) -> 
                        tuple(optional))
 
 
-def _walk(source, stmts, routine: str, loops: list, out: list, cond: int = 0) -> None:
+def _walk(source, stmts, routine: str, loops: list, out: list, cond: int = 0,
+          known=None) -> None:
     """Motions in statement order. cond: how many of the enclosing loops
     hold a condition (IF, TEST, WHILE) around the statements: a move
-    behind one may not run for every value of their variables."""
+    behind one may not run for every value of their variables. known:
+    values decoded ahead (predecode.py)."""
     for s in stmts:
         t = type(s)
         if t is A.ProcCall:
             spec = motion_spec(s.name)
             if spec is not None:
                 guarded = [replace(lp, guarded=k < cond) for k, lp in enumerate(loops)]
-                out.append(_motion(source, s, spec, routine, guarded))
+                out.append(_motion(source, s, spec, routine, guarded, known))
         elif t is A.For:
             loops.append(Loop(s.var, s.start, s.stop, s.step, s.span))
-            _walk(source, s.body, routine, loops, out, cond)
+            _walk(source, s.body, routine, loops, out, cond, known)
             loops.pop()
         elif t is A.While:
             loops.append(Loop(None, None, None, None, s.span))
-            _walk(source, s.body, routine, loops, out, len(loops))
+            _walk(source, s.body, routine, loops, out, len(loops), known)
             loops.pop()
         elif t is A.If:
             for _, body in s.branches:
-                _walk(source, body, routine, loops, out, len(loops))
-            _walk(source, s.orelse, routine, loops, out, len(loops))
+                _walk(source, body, routine, loops, out, len(loops), known)
+            _walk(source, s.orelse, routine, loops, out, len(loops), known)
         elif t is A.CompactIf:
-            _walk(source, (s.stmt,), routine, loops, out, len(loops))
+            _walk(source, (s.stmt,), routine, loops, out, len(loops), known)
         elif t is A.Test:
             for _, body in s.cases:
-                _walk(source, body, routine, loops, out, len(loops))
+                _walk(source, body, routine, loops, out, len(loops), known)
             if s.default:
-                _walk(source, s.default, routine, loops, out, len(loops))
+                _walk(source, s.default, routine, loops, out, len(loops), known)
 
 
-def _build_module(source: SourceText, node: A.ModuleNode) -> Module:
+def _build_module(source: SourceText, node: A.ModuleNode, known=None) -> Module:
     consts = _const_ints(node)
     decls = []
     routines = []
@@ -178,14 +197,14 @@ def _build_module(source: SourceText, node: A.ModuleNode) -> Module:
     aliases = []
     for item in node.items:
         if isinstance(item, A.DataDecl):
-            decls.append(_declaration(source, item, None, consts))
+            decls.append(_declaration(source, item, None, consts, known))
         elif isinstance(item, A.Routine):
             routines.append(RoutineInfo(item))
             for d in item.decls:
-                decls.append(_declaration(source, d, item.name, consts))
-            _walk(source, item.body, item.name, [], motions)
+                decls.append(_declaration(source, d, item.name, consts, known))
+            _walk(source, item.body, item.name, [], motions, known=known)
             for h in item.handlers:
-                _walk(source, h.body, item.name, [], motions)
+                _walk(source, h.body, item.name, [], motions, known=known)
         elif isinstance(item, A.RecordDecl):
             records.append(item)
         elif isinstance(item, A.AliasDecl):

@@ -359,46 +359,82 @@ TAIL_FLOATS_MAX = 4096
 _HEAD = {RobTarget: (7, True), JointTarget: (6, False)}
 
 
+def head_size(cls) -> int:
+    """How many fields of a plain literal come before its shared tail."""
+    return _HEAD[cls][0]
+
+
+def tail_text(cls, text: str) -> str:
+    """A plain literal's text from the ']' that ends its head's fields on:
+    the frame's tail with the shared fields in it (_floats)."""
+    second = _HEAD[cls][1]
+    cut = text.index("]")
+    if second:
+        cut = text.index("]", cut + 1)
+    return text[cut:]
+
+
+def share_tail(tail: str, floats: tuple[float, ...]) -> tuple[float, ...]:
+    """The floats kept for a tail text: those kept already, else `floats`
+    (kept from now on)."""
+    shared = _TAIL_FLOATS.get(tail)
+    if shared is None:
+        if len(_TAIL_FLOATS) >= TAIL_FLOATS_MAX:
+            _TAIL_FLOATS.clear()
+        shared = _TAIL_FLOATS[tail] = floats
+    return shared
+
+
 def _floats(cls, fields: list[str], text: str) -> tuple[float, ...]:
     """float() of each field of a literal written in its plain frame:
     `text` is the frame with `fields` in it, so the text from the ']' that
     ends the head's fields on is the frame's tail with the other fields in
     it (equal tails, equal field texts, equal floats). ValueError as
     float's."""
-    head, second = _HEAD[cls]
-    cut = text.index("]")
-    if second:
-        cut = text.index("]", cut + 1)
-    tail = text[cut:]
+    head = _HEAD[cls][0]
+    tail = tail_text(cls, text)
     shared = _TAIL_FLOATS.get(tail)
     if shared is None:
-        shared = tuple(map(float, fields[head:]))
-        if len(_TAIL_FLOATS) >= TAIL_FLOATS_MAX:
-            _TAIL_FLOATS.clear()
-        _TAIL_FLOATS[tail] = shared
+        shared = share_tail(tail, tuple(map(float, fields[head:])))
     return tuple(map(float, fields[:head])) + shared
 
 
-def _compact(t: str, expr, where: str) -> Record:
+def plain_values(cls, fields: list[str], text: str) -> tuple[float, ...] | None:
+    """The values of a literal `text` of class cls (RobTarget,
+    JointTarget) written in its plain frame, `fields` its frame_fields:
+    None where it is not (the count or the frame differs, a field is no
+    number, or one is beyond what a num holds: the general decoding says
+    which)."""
+    # (A NumAgg's numbers are NUMBER_RE's, the lexer's NUMAGG matched
+    # them, with whitespace around them that float() drops, but for
+    # \x1c-\x1f: those go the regex's way.)
+    if len(fields) != _COUNT[cls] or text != _PLAIN[cls] % tuple(fields):
+        return None
+    try:
+        values = _floats(cls, fields, text)
+    except ValueError:
+        return None
+    return values if max(map(abs, values)) <= NUM_MAX else None
+
+
+def _compact(t: str, expr, where: str, known=None) -> Record:
     """An all-numeric record, by its shape's frame when the value is a
     NumAgg: its numbers are what lies between its brackets and commas,
     and it has the shape when they, put back in the frame, give its text
     (whitespace around a number stays with it; float() drops it). A CAM
-    program has 1e5: a third of the regex's time. Else by one regex match."""
+    program has 1e5: a third of the regex's time. Else by one regex match.
+    known: plain_values of the literals of the text, computed ahead
+    (predecode.py)."""
     cls = _COMPACT[t]
     if isinstance(expr, A.NumAgg):
         text = expr.text
-        fields = frame_fields(text)
-        # (A NumAgg's numbers are NUMBER_RE's, the lexer's NUMAGG matched
-        # them, with whitespace around them that float() drops, but for
-        # \x1c-\x1f: those go the regex's way.)
-        if len(fields) == _COUNT[cls] and text == _PLAIN[cls] % tuple(fields):
-            try:
-                values = _floats(cls, fields, text)
-            except ValueError:
-                values = None
-            if values is not None and max(map(abs, values)) <= NUM_MAX:
+        if known is not None:
+            values = known.values(cls, expr.span)
+            if values is not None:
                 return cls(values, text, expr.span)
+        values = plain_values(cls, frame_fields(text), text)
+        if values is not None:
+            return cls(values, text, expr.span)
         m = _FAST[t].fullmatch(expr.text)
         if m is not None:
             texts = m.groups()
@@ -439,12 +475,13 @@ def relex(record: Record, text: str, want) -> Record | None:
     return type(record)(values, text, record.span)
 
 
-def decode(type_name: str, expr, where: str | None = None) -> Record:
-    """Decode a literal value of a supported type. Raises DecodeIssue."""
+def decode(type_name: str, expr, where: str | None = None, known=None) -> Record:
+    """Decode a literal value of a supported type. Raises DecodeIssue.
+    known: see _compact."""
     t = type_name.lower()
     where = where or t
     if t in _COMPACT:
-        return _compact(t, expr, where)
+        return _compact(t, expr, where, known)
     if t == "pose":
         v = _walk(SHAPES[t], expr, where)
         return Pose(v[0], v[1], expr.span)
@@ -466,10 +503,10 @@ def _load(v, span: Span) -> LoadData:
     return LoadData(v[0], v[1], v[2], (v[3], v[4], v[5]), span)
 
 
-def decode_array(type_name: str, expr, dims: tuple[int, ...], where: str):
+def decode_array(type_name: str, expr, dims: tuple[int, ...], where: str, known=None):
     """Decode an array initializer into a flat row-major tuple of records."""
     if not dims:
-        return (decode(type_name, expr, where),)
+        return (decode(type_name, expr, where, known),)
     items = _items(expr)
     if items is None:
         raise DecodeIssue(f"{where} is not a literal array aggregate", expr.span,
@@ -479,5 +516,5 @@ def decode_array(type_name: str, expr, dims: tuple[int, ...], where: str):
                           True)
     out: list = []
     for i, item in enumerate(items):
-        out.extend(decode_array(type_name, item, dims[1:], f"{where}{{{i + 1}}}"))
+        out.extend(decode_array(type_name, item, dims[1:], f"{where}{{{i + 1}}}", known))
     return tuple(out)

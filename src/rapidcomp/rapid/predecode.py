@@ -1,0 +1,194 @@
+"""The numbers of a large module's literals, decoded by a second process
+while this one parses the module (issue #14: both cores for one big
+module).
+
+A CAM program's module holds 1e5 robtarget literals; float() of their 1.7e6
+numbers is a fifth of its parse. They depend on the text alone, so a child
+forked before the parse reads every plain literal it finds (values.
+plain_values, the very function the parse would run on the same text) and
+hands back the values, keyed by each literal's span, while the parent runs
+the grammar; the parent's decoding then takes them where a NumAgg has that
+span and that class, and decodes any other itself. The values are the same
+either way: only where the work is done differs. The child is a helper: if
+it fails, is killed or is not there (not Linux, a small text, the process
+pool's workers, which already use both cores), everything is decoded here.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import re
+import select
+import sys
+import time
+
+import numpy as np
+
+from .values import (JointTarget, RobTarget, frame_fields, head_size, plain_values,
+                     share_tail, tail_text)
+
+# Texts from this size on (characters) are decoded ahead: a fork costs a few
+# ms (1e4 targets, 1.7 MB: the parse 0.26 -> 0.25 s; 1e5: 2.68 -> 2.38 s).
+PREDECODE_FROM = 1 << 20
+# Off in the process pool's workers (job.py): two modules already keep
+# both cores busy there.
+enabled = True
+# A plain literal: two or more bracketed groups of anything but brackets
+# (the numbers), in brackets, on one line. The parse's NumAgg spans of the
+# literals a CAM program writes are these matches; any other text found
+# (in a comment, a string) is looked up by no NumAgg.
+_LITERAL = re.compile(r"\[\[[^\[\]\n;]*\](?:,\[[^\[\]\n;]*\])+\]")
+_BY_COUNT = {17: RobTarget, 12: JointTarget}
+_KINDS = (RobTarget, JointTarget)
+
+
+def start(text: str) -> "Ahead | None":
+    """A child decoding text's literals, or None (see the module's text)."""
+    if not enabled or len(text) < PREDECODE_FROM or not sys.platform.startswith("linux"):
+        return None
+    try:
+        read, write = os.pipe()
+    except OSError:
+        return None
+    try:
+        pid = os.fork()
+    except OSError:
+        os.close(read)
+        os.close(write)
+        return None
+    if pid == 0:                                   # the child
+        code = 1
+        try:
+            os.close(read)
+            data = pickle.dumps(_decode_all(text), protocol=pickle.HIGHEST_PROTOCOL)
+            view = memoryview(data)
+            while view:
+                view = view[os.write(write, view):]
+            code = 0
+        except BaseException:                      # (even Ctrl-C: silently, the parent decides)
+            pass
+        finally:
+            os._exit(code)
+    os.close(write)
+    return Ahead(pid, read)
+
+
+def _decode_all(text: str) -> tuple:
+    """(starts, ends, kinds, heads per kind, tail ids, tails) of every plain
+    literal found: its span, its class (an index into _KINDS), the values
+    before its shared tail, which tail; each distinct tail's text and
+    values."""
+    starts, ends, kinds, tail_ids = [], [], [], []
+    heads: tuple[list, list] = ([], [])
+    tails: dict[str, int] = {}
+    tail_values: list = []
+    for m in _LITERAL.finditer(text):
+        lit = m.group()
+        fields = frame_fields(lit)
+        cls = _BY_COUNT.get(len(fields))
+        if cls is None:
+            continue
+        values = plain_values(cls, fields, lit)
+        if values is None:
+            continue
+        kind = _KINDS.index(cls)
+        head = head_size(cls)
+        tail = (kind, tail_text(cls, lit))
+        t = tails.get(tail)
+        if t is None:
+            t = tails[tail] = len(tail_values)
+            tail_values.append(values[head:])
+        starts.append(m.start())
+        ends.append(m.end())
+        kinds.append(kind)
+        heads[kind].extend(values[:head])
+        tail_ids.append(t)
+    return (np.array(starts, np.int64), np.array(ends, np.int64), np.array(kinds, np.int8),
+            tuple(np.array(h, float) for h in heads), np.array(tail_ids, np.int64),
+            [(k, tt, v) for ((k, tt), v) in zip(tails, tail_values)])
+
+
+class Ahead:
+    """The child at work: result() its values (None if it failed), close()
+    it either way (no process is left behind)."""
+
+    def __init__(self, pid: int, fd: int):
+        self.pid = pid
+        self.fd = fd
+        self.status: int | None = None        # the child's exit code, once reaped
+
+    def result(self, patience: float) -> "Known | None":
+        """The child's values; None when it failed or has not finished
+        within `patience` seconds (its work is a fraction of the parse's:
+        a child that takes longer is stopped, not waited for)."""
+        chunks = []
+        deadline = time.monotonic() + patience
+        try:
+            poll = select.poll()
+            poll.register(self.fd, select.POLLIN)
+            while True:
+                left = deadline - time.monotonic()
+                if left <= 0 or not poll.poll(left * 1000):
+                    return None
+                chunk = os.read(self.fd, 1 << 20)
+                if not chunk:
+                    break
+                chunks.append(chunk)
+        except OSError:
+            return None
+        finally:
+            self.close()
+        if self.status != 0:
+            return None
+        try:
+            return Known(pickle.loads(b"".join(chunks)))
+        except Exception:          # (a child that died half-way: decoded here instead)
+            return None
+
+    def close(self) -> None:
+        """Reap the child: when its result is not wanted (the parse failed),
+        stopped first."""
+        if self.fd >= 0:
+            os.close(self.fd)
+            self.fd = -1
+        if self.status is None:
+            try:
+                _, st = os.waitpid(self.pid, os.WNOHANG)
+                if _ == 0:
+                    os.kill(self.pid, 9)
+                    _, st = os.waitpid(self.pid, 0)
+                self.status = os.waitstatus_to_exitcode(st)
+            except ChildProcessError:
+                self.status = -1
+
+
+class Known:
+    """The child's values: values(cls, span) is plain_values of the
+    literal at span when the child decoded one of class cls exactly
+    there, else None."""
+
+    def __init__(self, payload: tuple):
+        starts, ends, kinds, heads, tail_ids, tails = payload
+        self._at = dict(zip(starts.tolist(), range(len(starts))))
+        self._ends = ends.tolist()
+        self._kinds = kinds.tolist()
+        self._tail_ids = tail_ids.tolist()
+        # Each literal's head as a list (its row in its kind's heads).
+        rows: list = [None] * len(starts)
+        for kind, cls in enumerate(_KINDS):
+            at = np.flatnonzero(kinds == kind).tolist()
+            flat = heads[kind].reshape(len(at), head_size(cls)).tolist() if at else []
+            for i, row in zip(at, flat):
+                rows[i] = row
+        self._rows = rows
+        # The tails shared as the parse shares them (values._TAIL_FLOATS).
+        self._tails = [share_tail(text, tuple(v)) for _, text, v in tails]
+        self.hits = 0
+
+    def values(self, cls, span) -> tuple[float, ...] | None:
+        i = self._at.get(span.start)
+        if i is None or self._ends[i] != span.end or _KINDS[self._kinds[i]] is not cls:
+            return None
+        self.hits += 1
+        return tuple(self._rows[i]) + self._tails[self._tail_ids[i]]

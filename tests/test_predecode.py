@@ -1,0 +1,143 @@
+"""A large module's literals decoded by a second process while the parse
+runs (rapid/predecode.py, issue #14): the parsed model is the one the parse
+makes alone, the child does the work wherever a literal is plain, and no
+child is ever left behind, whatever happens to it. Oracle: the same parse
+with the child off."""
+
+import os
+import time
+
+import pytest
+
+from rapidcomp.errors import InputError
+from rapidcomp.rapid import predecode as PD
+from rapidcomp.rapid.parse import parse_source, parse_text
+from rapidcomp.source import read_source
+
+import cam_variants
+from conftest import FIXTURES
+
+SOURCES = sorted(p for p in FIXTURES.rglob("*")
+                 if p.suffix.lower() in (".mod", ".sys", ".modx") and "invalid" not in p.parts)
+
+
+@pytest.fixture
+def children(monkeypatch):
+    """Every parse forks its child (any size); the children started and
+    what each handed back, in order."""
+    monkeypatch.setattr(PD, "PREDECODE_FROM", 0)
+    monkeypatch.setattr(PD, "enabled", True)
+    out = []
+    start, result = PD.start, PD.Ahead.result
+
+    def spy_start(text):
+        ahead = start(text)
+        out.append([ahead, None])
+        return ahead
+
+    def spy_result(self, patience):
+        known = result(self, patience)
+        out[-1][1] = known
+        return known
+
+    monkeypatch.setattr(PD, "start", spy_start)
+    monkeypatch.setattr(PD.Ahead, "result", spy_result)
+    return out
+
+
+def _alone(parse, monkeypatch):
+    with monkeypatch.context() as m:
+        m.setattr(PD, "enabled", False)
+        return parse()
+
+
+def _reaped(ahead) -> bool:
+    try:
+        os.waitpid(ahead.pid, os.WNOHANG)
+    except ChildProcessError:
+        return True
+    return False
+
+
+def test_the_model_is_the_one_the_parse_makes_alone(children, monkeypatch):
+    texts = [(p.name, read_source(p, p.name)) for p in SOURCES]
+    for seed in (1, 2):
+        for name, text in (("broken_runs", cam_variants.broken_runs(seed)),
+                           ("other_shapes", cam_variants.other_shapes(seed)),
+                           ("bench", cam_variants.bench_module(400, seed, "    ConfL\\Off;\n"))):
+            texts.append((name, parse_text(text, name).source))
+    for name, source in texts:
+        alone = _alone(lambda: parse_source(source), monkeypatch)
+        got = parse_source(source)
+        assert got == alone, name
+        ahead, known = children[-1]
+        assert ahead is not None and ahead.status == 0 and known is not None, name
+        assert _reaped(ahead)
+    # The child did the work: every literal of a CAM module was its.
+    name, source = texts[-1]
+    pf = parse_source(source)
+    literals = sum(d.value is not None for d in pf.module.declarations
+                   if d.type in ("robtarget", "jointtarget"))
+    literals += sum(t.value is not None for m in pf.module.motions for t in m.targets)
+    assert literals == 400 and children[-1][1].hits == literals
+
+
+@pytest.mark.parametrize("trouble", ["raises", "exits early", "hangs"])
+def test_a_child_in_trouble_changes_nothing_but_the_time(trouble, children, monkeypatch):
+    def raises(text):
+        raise RuntimeError("the child's own failure")
+
+    def exits_early(text):
+        os._exit(0)
+
+    def hangs(text):
+        time.sleep(60)
+
+    how = {"raises": raises, "exits early": exits_early, "hangs": hangs}[trouble]
+    monkeypatch.setattr(PD, "_decode_all", how)
+    text = cam_variants.bench_module(300, 3, "")
+    alone = _alone(lambda: parse_text(text, "cam.mod"), monkeypatch)
+    t = time.perf_counter()
+    assert parse_text(text, "cam.mod") == alone
+    # (A hanging child is stopped a second after the parse, not waited for.)
+    assert time.perf_counter() - t < 20
+    ahead, known = children[-1]
+    assert known is None and _reaped(ahead)
+    assert ahead.status == {"raises": 1, "exits early": 0, "hangs": -9}[trouble]
+
+
+def test_a_syntax_error_stops_the_child(children):
+    text = cam_variants.bench_module(300, 4, "").replace("ENDPROC", "ENDPROC PROC", 1)
+    with pytest.raises(InputError):
+        parse_text(text, "bad.mod")
+    ahead, known = children[-1]
+    assert known is None and ahead.status is not None and _reaped(ahead)
+
+
+def test_small_texts_are_decoded_in_process_and_so_is_all_without_a_child(monkeypatch):
+    forks = []
+    monkeypatch.setattr(os, "fork", lambda: forks.append(1) or (_ for _ in ()).throw(OSError))
+    text = cam_variants.bench_module(50, 5, "")
+    assert len(text) < PD.PREDECODE_FROM and PD.start(text) is None
+    monkeypatch.setattr(PD, "PREDECODE_FROM", 0)
+    monkeypatch.setattr(PD, "enabled", False)
+    assert PD.start(text) is None
+    # (A fork that fails: decoded here.)
+    monkeypatch.setattr(PD, "enabled", True)
+    assert PD.start(text) is None and forks == [1]
+
+
+@pytest.mark.parametrize("decl", [
+    "CONST robtarget r:=[[1,2,3,4,5,6],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];",
+    "CONST jointtarget j:=[[1,2,3],[1,0,0,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];"])
+def test_a_literal_of_the_other_shape_is_the_same_error(decl, children, monkeypatch):
+    """The child reads a 12-number literal as a jointtarget and a 17-number
+    one as a robtarget: declared as the other, the literal is still the
+    error it is."""
+    text = f"MODULE M\n  {decl}\n  PROC p()\n    WaitTime 1;\n  ENDPROC\nENDMODULE\n"
+    with pytest.raises(InputError) as alone:
+        _alone(lambda: parse_text(text, "m.mod"), monkeypatch)
+    with pytest.raises(InputError) as got:
+        parse_text(text, "m.mod")
+    assert str(got.value) == str(alone.value) and "components" in str(got.value)
+    assert children[-1][1] is not None and children[-1][1].hits == 0
