@@ -12,6 +12,7 @@ import pytest
 from rapidcomp.errors import InputError
 from rapidcomp.rapid import predecode as PD
 from rapidcomp.rapid.parse import parse_source, parse_text
+from rapidcomp.rewrite.names import words
 from rapidcomp.source import read_source
 
 import cam_variants
@@ -70,6 +71,8 @@ def test_the_model_is_the_one_the_parse_makes_alone(children, monkeypatch):
         alone = _alone(lambda: parse_source(source), monkeypatch)
         got = parse_source(source)
         assert got == alone, name
+        # The words new names must not take, found by the child too.
+        assert alone.words is None and got.words == words(source.text), name
         ahead, known = children[-1]
         assert ahead is not None and ahead.status == 0 and known is not None, name
         assert _reaped(ahead)

@@ -319,7 +319,8 @@ class Editor:
         # Transient compensation (transient.py): every target becomes
         # rcTcJ(<cold>, <cold>_dq), the correction applied at run time.
         self.transient = transient
-        self.names = NameAllocator([pf.source.text for pf in plan.files])
+        self.names = NameAllocator([pf.source.text for pf in plan.files],
+                                   [pf.words for pf in plan.files])
         self.edits: dict[tuple[int, int, int], SpanEdit] = {}   # (file, start, end)
         self.inserts: dict[tuple[int, int], list[str]] = {}    # (file, offset) -> decls
         self.insert_nl: dict[tuple[int, int], str] = {}

@@ -6,7 +6,7 @@ spans through the SourceText, so the model never goes stale against it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ..source import SourceText
 from . import ast as A
@@ -120,6 +120,9 @@ class ParsedFile:
     source: SourceText
     header: str | None
     modules: tuple[Module, ...]
+    # Every word of the text, lower case (rewrite/names.words), where the
+    # parse found them already (a large module's: rapid/predecode.py).
+    words: frozenset[str] | None = field(default=None, compare=False, repr=False)
 
     @property
     def module(self) -> Module:

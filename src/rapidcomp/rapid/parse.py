@@ -57,7 +57,8 @@ def parse_source(source: SourceText) -> ParsedFile:
             if ahead is not None:
                 ahead.close()
         modules = tuple(_build_module(source, node, known) for node in nodes)
-    return ParsedFile(source, header.value if header else None, modules)
+    return ParsedFile(source, header.value if header else None, modules,
+                      known.words if known is not None else None)
 
 
 # ---------------------------------------------------------------- model building

@@ -8,8 +8,9 @@ forked before the parse reads every plain literal it finds (values.
 plain_values, the very function the parse would run on the same text) and
 hands back the values, keyed by each literal's span, while the parent runs
 the grammar; the parent's decoding then takes them where a NumAgg has that
-span and that class, and decodes any other itself. The values are the same
-either way: only where the work is done differs. The child is a helper: if
+span and that class, and decodes any other itself. The child also collects
+the text's words, which new names must not take (rewrite/names.py). The
+results are the same either way: only where the work is done differs. The child is a helper: if
 it fails, is killed or is not there (not Linux, a small text, the process
 pool's workers, which already use both cores), everything is decoded here.
 """
@@ -25,6 +26,7 @@ import time
 
 import numpy as np
 
+from ..rewrite.names import words
 from .values import (JointTarget, RobTarget, frame_fields, head_size, plain_values,
                      share_tail, tail_text)
 
@@ -78,7 +80,8 @@ def _decode_all(text: str) -> tuple:
     """(starts, ends, kinds, heads per kind, tail ids, tails) of every plain
     literal found: its span, its class (an index into _KINDS), the values
     before its shared tail, which tail; each distinct tail's text and
-    values."""
+    values; and the text's words (a module whose moves become MoveAbsJ
+    gets 1e5 new names, none of them a word of the text)."""
     starts, ends, kinds, tail_ids = [], [], [], []
     heads: tuple[list, list] = ([], [])
     tails: dict[str, int] = {}
@@ -106,7 +109,7 @@ def _decode_all(text: str) -> tuple:
         tail_ids.append(t)
     return (np.array(starts, np.int64), np.array(ends, np.int64), np.array(kinds, np.int8),
             tuple(np.array(h, float) for h in heads), np.array(tail_ids, np.int64),
-            [(k, tt, v) for ((k, tt), v) in zip(tails, tail_values)])
+            [(k, tt, v) for ((k, tt), v) in zip(tails, tail_values)], words(text))
 
 
 class Ahead:
@@ -166,10 +169,11 @@ class Ahead:
 class Known:
     """The child's values: values(cls, span) is plain_values of the
     literal at span when the child decoded one of class cls exactly
-    there, else None."""
+    there, else None; words: the text's words (rewrite/names.words), which
+    new names must not take."""
 
     def __init__(self, payload: tuple):
-        starts, ends, kinds, heads, tail_ids, tails = payload
+        starts, ends, kinds, heads, tail_ids, tails, self.words = payload
         self._at = dict(zip(starts.tolist(), range(len(starts))))
         self._ends = ends.tolist()
         self._kinds = kinds.tolist()

@@ -14,9 +14,20 @@ MAX_LEN = 32
 _WORD = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 
 
+def words(text: str) -> frozenset[str]:
+    """Every word of a text, lower case."""
+    # (Each distinct word lower-cased once: a CAM module has 1e6 words, 5e4
+    # of them distinct.)
+    return frozenset(map(str.lower, set(_WORD.findall(text))))
+
+
 class NameAllocator:
-    def __init__(self, texts: list[str]):
+    def __init__(self, texts: list[str], known: list | None = None):
+        """known: for each text, its words() when they are known already
+        (a large module's, found while it was parsed: rapid/predecode.py),
+        else None."""
         self._texts = texts
+        self._known = known or [None] * len(texts)
         self._taken: set[str] | None = None
         # Per stem, the first suffix not known to be taken: names are only
         # ever added, so the search resumes there (1e5 names of one stem
@@ -30,10 +41,8 @@ class NameAllocator:
         millions of words are not read for nothing)."""
         if self._taken is None:
             self._taken = set()
-            for text in self._texts:
-                # (Each distinct word lower-cased once: a CAM module has 1e6
-                # words, 5e4 of them distinct.)
-                self._taken.update(map(str.lower, set(_WORD.findall(text))))
+            for text, known in zip(self._texts, self._known):
+                self._taken.update(known if known is not None else words(text))
         return self._taken
 
     def new(self, stem: str) -> str:
