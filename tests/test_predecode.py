@@ -5,7 +5,11 @@ child is ever left behind, whatever happens to it. Oracle: the same parse
 with the child off."""
 
 import os
+import signal
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -31,10 +35,11 @@ def children(monkeypatch):
     out = []
     start, result = PD.start, PD.Ahead.result
 
-    def spy_start(text):
-        ahead = start(text)
-        out.append([ahead, None])
-        return ahead
+    def spy_start(text, children):
+        try:
+            start(text, children)
+        finally:
+            out.append([children[-1] if children else None, None])
 
     def spy_result(self, patience):
         known = result(self, patience)
@@ -121,13 +126,21 @@ def test_small_texts_are_decoded_in_process_and_so_is_all_without_a_child(monkey
     forks = []
     monkeypatch.setattr(os, "fork", lambda: forks.append(1) or (_ for _ in ()).throw(OSError))
     text = cam_variants.bench_module(50, 5, "")
-    assert len(text) < PD.PREDECODE_FROM and PD.start(text) is None
+    kids: list = []
+    assert len(text) < PD.PREDECODE_FROM
+    PD.start(text, kids)
     monkeypatch.setattr(PD, "PREDECODE_FROM", 0)
     monkeypatch.setattr(PD, "enabled", False)
-    assert PD.start(text) is None
-    # (A fork that fails: decoded here.)
+    PD.start(text, kids)
+    # (One core: nothing to gain.)
     monkeypatch.setattr(PD, "enabled", True)
-    assert PD.start(text) is None and forks == [1]
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0})
+    PD.start(text, kids)
+    assert kids == [] and forks == []
+    # (A fork that fails: decoded here.)
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1})
+    PD.start(text, kids)
+    assert kids == [] and forks == [1]
 
 
 @pytest.mark.parametrize("decl", [
@@ -144,3 +157,77 @@ def test_a_literal_of_the_other_shape_is_the_same_error(decl, children, monkeypa
         parse_text(text, "m.mod")
     assert str(got.value) == str(alone.value) and "components" in str(got.value)
     assert children[-1][1] is not None and children[-1][1].hits == 0
+
+
+def test_a_ctrl_c_as_the_child_starts_leaves_nothing_behind(children, monkeypatch):
+    """A Ctrl-C held back during the fork arrives as the signals are let
+    through again: the child is already the caller's to stop."""
+    real = PD.signal.pthread_sigmask
+
+    def let_through(how, mask):
+        old = real(how, mask)
+        if how == PD.signal.SIG_SETMASK:
+            raise KeyboardInterrupt
+        return old
+
+    monkeypatch.setattr(PD.signal, "pthread_sigmask", let_through)
+    with pytest.raises(KeyboardInterrupt):
+        parse_text(cam_variants.bench_module(300, 6, ""), "cam.mod")
+    ahead, known = children[-1]
+    assert ahead is not None and ahead.fd == -1 and ahead.status is not None and _reaped(ahead)
+
+
+def test_the_result_counts_where_sigchld_is_ignored(children, monkeypatch):
+    """Success is the result arriving whole, not an exit status (a process
+    that ignores SIGCHLD never sees its children's)."""
+    old = signal.signal(signal.SIGCHLD, signal.SIG_IGN)
+    try:
+        pf = parse_text(cam_variants.bench_module(300, 7, ""), "cam.mod")
+    finally:
+        signal.signal(signal.SIGCHLD, old)
+    ahead, known = children[-1]
+    assert ahead.status == -1 and known is not None and known.hits == 300
+    assert pf.words is not None
+
+
+def test_literals_in_comments_are_left_to_the_parse():
+    text = ('  ! MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v1,z1,t;\n'
+            '  TPWrite "a!b"; MoveL [[4,5,6],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v1,'
+            'z1,t;\n  TPWrite "a""!"; ! [[7,8,9],[1,0,0,0],[0,0,0,0],[9,9,9,9,9,9]]\n')
+    starts = PD._decode_all(text)[0].tolist()
+    assert starts == [text.index("[[4")]
+
+
+def test_the_child_dies_with_its_parent(tmp_path):
+    """A parent killed (a job runner's timeout) takes its child with it:
+    nothing keeps running, nor holds the runner's pipes open."""
+    script = tmp_path / "parent.py"
+    script.write_text(f"""
+import sys, time
+sys.path[:0] = {[str(Path(__file__).parent)]!r}
+import cam_variants
+from rapidcomp.rapid import predecode as PD
+from rapidcomp.rapid.parse import parse_text
+PD.PREDECODE_FROM = 0
+PD._decode_all = lambda text: time.sleep(60)
+init = PD.Ahead.__init__
+def tell(self, pid, fd):
+    init(self, pid, fd)
+    print(pid, flush=True)
+    time.sleep(60)
+PD.Ahead.__init__ = tell
+parse_text(cam_variants.bench_module(50, 8, ""), "cam.mod")
+""")
+    proc = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    pid = int(proc.stdout.readline())
+    os.kill(pid, 0)                       # (running)
+    proc.kill()
+    proc.communicate(timeout=10)          # (returns: no child holds the pipes)
+    for _ in range(100):
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return
+        time.sleep(0.05)
+    raise AssertionError("the child outlived its parent")

@@ -34,10 +34,11 @@ def parse_source(source: SourceText) -> ParsedFile:
     # otherwise goes to the cyclic collector).
     with paused():
         # A large text's literals are decoded by a second process meanwhile
-        # (predecode.py; None: here).
-        ahead = predecode.start(source.text)
+        # (predecode.py; a small one's here, in _build_module).
+        children: list = []
         began = time.monotonic()
         try:
+            predecode.start(source.text, children)
             try:
                 header, nodes = engine().parse(source.text)
             except LexFailure as exc:
@@ -51,11 +52,11 @@ def parse_source(source: SourceText) -> ParsedFile:
                                    "+-3.4E38, a dnum +-1.8E308)") from None
             # (The child's work is a fraction of the parse's: it is waited
             # for as long as the parse took, and a second more, at most.)
-            known = (ahead.result(time.monotonic() - began + 1.0) if ahead is not None
+            known = (children[0].result(time.monotonic() - began + 1.0) if children
                      else None)
         finally:
-            if ahead is not None:
-                ahead.close()
+            for child in children:
+                child.close()
         modules = tuple(_build_module(source, node, known) for node in nodes)
     return ParsedFile(source, header.value if header else None, modules,
                       known.words if known is not None else None)

@@ -10,9 +10,14 @@ hands back the values, keyed by each literal's span, while the parent runs
 the grammar; the parent's decoding then takes them where a NumAgg has that
 span and that class, and decodes any other itself. The child also collects
 the text's words, which new names must not take (rewrite/names.py). The
-results are the same either way: only where the work is done differs. The child is a helper: if
-it fails, is killed or is not there (not Linux, a small text, the process
-pool's workers, which already use both cores), everything is decoded here.
+results are the same either way: only where the work is done differs.
+
+The child is a helper. If it fails, dies, is slow or is not there (not
+Linux, one core, a small text, the process pool's workers, which already
+use both cores), everything is decoded here. It is silent (no signal
+handler, no terminal), dies with its parent, sends its result whole or not
+at all, and is always reaped: a Ctrl-C is held back from the pipe to the
+caller's list of children, and the caller closes what that list holds.
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ import os
 import pickle
 import re
 import select
+import signal
 import sys
 import time
 
@@ -31,49 +37,87 @@ from .values import (JointTarget, RobTarget, frame_fields, head_size, plain_valu
                      share_tail, tail_text)
 
 # Texts from this size on (characters) are decoded ahead: a fork costs a few
-# ms (1e4 targets, 1.7 MB: the parse 0.26 -> 0.25 s; 1e5: 2.68 -> 2.38 s).
+# ms (1e4 targets, 1.7 MB: the parse 0.26 -> 0.25 s; 1e5: 2.64 -> 2.35 s).
 PREDECODE_FROM = 1 << 20
 # Off in the process pool's workers (job.py): two modules already keep
 # both cores busy there.
 enabled = True
-# A plain literal: two or more bracketed groups of anything but brackets
-# (the numbers), in brackets, on one line. The parse's NumAgg spans of the
-# literals a CAM program writes are these matches; any other text found
-# (in a comment, a string) is looked up by no NumAgg.
-_LITERAL = re.compile(r"\[\[[^\[\]\n;]*\](?:,\[[^\[\]\n;]*\])+\]")
+# A plain literal (group 1): two or more bracketed groups of anything but
+# brackets (the numbers), in brackets, on one line. Strings and comments
+# are matched whole and passed over: a commented-out program would cost the
+# child more than its parse. The parse's NumAgg spans of the literals a
+# CAM program writes are these matches; any other text found is looked up
+# by no NumAgg.
+_SCAN = re.compile(r'"[^"\n\r]*"|![^\n\r]*'
+                   r"|(\[\[[^\[\]\n\r;]*\](?:,\[[^\[\]\n\r;]*\])+\])")
 _BY_COUNT = {17: RobTarget, 12: JointTarget}
 _KINDS = (RobTarget, JointTarget)
 
 
-def start(text: str) -> "Ahead | None":
-    """A child decoding text's literals, or None (see the module's text)."""
-    if not enabled or len(text) < PREDECODE_FROM or not sys.platform.startswith("linux"):
-        return None
+def start(text: str, children: list) -> None:
+    """Fork a child decoding text's literals and append it (an Ahead) to
+    `children`, or do nothing (see the module's text). The child is in the
+    list before a Ctrl-C can interrupt this process again: whatever
+    happens, the caller's `finally` closes what the list holds."""
+    if (not enabled or len(text) < PREDECODE_FROM or not sys.platform.startswith("linux")
+            or len(os.sched_getaffinity(0)) < 2):       # (one core: nothing to gain)
+        return
+    parent = os.getpid()
+    # (Ctrl-C held back from the pipe to the list, and during the fork's
+    # own hooks, which run in both processes.)
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
     try:
-        read, write = os.pipe()
-    except OSError:
-        return None
-    try:
-        pid = os.fork()
-    except OSError:
-        os.close(read)
-        os.close(write)
-        return None
-    if pid == 0:                                   # the child
-        code = 1
         try:
+            read, write = os.pipe()
+        except OSError:
+            return
+        try:
+            pid = os.fork()
+        except OSError:
             os.close(read)
-            data = pickle.dumps(_decode_all(text), protocol=pickle.HIGHEST_PROTOCOL)
-            view = memoryview(data)
+            os.close(write)
+            return
+        if pid == 0:
+            _child(text, parent, read, write, held)        # (never returns)
+        os.close(write)
+        children.append(Ahead(pid, read))
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
+_HELD = {signal.SIGINT, signal.SIGTERM}
+_PR_SET_PDEATHSIG = 1
+
+
+def _child(text: str, parent: int, read: int, write: int, held) -> None:
+    """The child's life: silent, gone with its parent, and its result
+    sent whole (an 8-byte length, then the pickle) or not at all."""
+    code = 1
+    try:
+        # Its signals are the default ones (a Ctrl-C ends it without a
+        # word; its parent decides), it dies with its parent, and it holds
+        # none of the caller's terminal or pipes open.
+        for sig in _HELD:
+            signal.signal(sig, signal.SIG_DFL)
+        import ctypes
+        ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+        if os.getppid() != parent:
+            os._exit(1)
+        null = os.open(os.devnull, os.O_RDWR)
+        for fd in (0, 1, 2):
+            os.dup2(null, fd)
+        os.close(read)
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+        data = pickle.dumps(_decode_all(text), protocol=pickle.HIGHEST_PROTOCOL)
+        for part in (len(data).to_bytes(8, "little"), data):
+            view = memoryview(part)
             while view:
                 view = view[os.write(write, view):]
-            code = 0
-        except BaseException:                      # (even Ctrl-C: silently, the parent decides)
-            pass
-        finally:
-            os._exit(code)
-    os.close(write)
-    return Ahead(pid, read)
+        code = 0
+    except BaseException:
+        pass
+    finally:
+        os._exit(code)
 
 
 def _decode_all(text: str) -> tuple:
@@ -86,8 +130,10 @@ def _decode_all(text: str) -> tuple:
     heads: tuple[list, list] = ([], [])
     tails: dict[str, int] = {}
     tail_values: list = []
-    for m in _LITERAL.finditer(text):
-        lit = m.group()
+    for m in _SCAN.finditer(text):
+        lit = m.group(1)
+        if lit is None:                  # (a string or a comment)
+            continue
         fields = frame_fields(lit)
         cls = _BY_COUNT.get(len(fields))
         if cls is None:
@@ -102,8 +148,8 @@ def _decode_all(text: str) -> tuple:
         if t is None:
             t = tails[tail] = len(tail_values)
             tail_values.append(values[head:])
-        starts.append(m.start())
-        ends.append(m.end())
+        starts.append(m.start(1))
+        ends.append(m.end(1))
         kinds.append(kind)
         heads[kind].extend(values[:head])
         tail_ids.append(t)
@@ -124,9 +170,12 @@ class Ahead:
     def result(self, patience: float) -> "Known | None":
         """The child's values; None when it failed or has not finished
         within `patience` seconds (its work is a fraction of the parse's:
-        a child that takes longer is stopped, not waited for)."""
-        chunks = []
+        a child that takes longer is stopped, not waited for). Whether it
+        succeeded is told by its result arriving whole, not by its exit
+        status (which a process ignoring SIGCHLD never sees)."""
+        data = bytearray()
         deadline = time.monotonic() + patience
+        whole = False
         try:
             poll = select.poll()
             poll.register(self.fd, select.POLLIN)
@@ -137,32 +186,33 @@ class Ahead:
                 chunk = os.read(self.fd, 1 << 20)
                 if not chunk:
                     break
-                chunks.append(chunk)
+                data += chunk
+            whole = len(data) >= 8 and int.from_bytes(data[:8], "little") == len(data) - 8
         except OSError:
             return None
         finally:
-            self.close()
-        if self.status != 0:
+            self.close(finished=whole)
+        if not whole:
             return None
         try:
-            return Known(pickle.loads(b"".join(chunks)))
-        except Exception:          # (a child that died half-way: decoded here instead)
+            return Known(pickle.loads(memoryview(data)[8:]))
+        except Exception:          # (not what a child sends: decoded here instead)
             return None
 
-    def close(self) -> None:
-        """Reap the child: when its result is not wanted (the parse failed),
-        stopped first."""
-        if self.fd >= 0:
-            os.close(self.fd)
-            self.fd = -1
+    def close(self, finished: bool = False) -> None:
+        """Reap the child: one that sent its result whole is ending by
+        itself; any other is stopped first."""
+        fd, self.fd = self.fd, -1
+        if fd >= 0:
+            os.close(fd)
         if self.status is None:
             try:
-                _, st = os.waitpid(self.pid, os.WNOHANG)
-                if _ == 0:
-                    os.kill(self.pid, 9)
-                    _, st = os.waitpid(self.pid, 0)
+                done, st = os.waitpid(self.pid, 0 if finished else os.WNOHANG)
+                if done == 0:
+                    os.kill(self.pid, signal.SIGKILL)
+                    done, st = os.waitpid(self.pid, 0)
                 self.status = os.waitstatus_to_exitcode(st)
-            except ChildProcessError:
+            except ChildProcessError:      # (reaped already: SIGCHLD ignored)
                 self.status = -1
 
 
