@@ -231,3 +231,31 @@ parse_text(cam_variants.bench_module(50, 8, ""), "cam.mod")
             return
         time.sleep(0.05)
     raise AssertionError("the child outlived its parent")
+
+
+def test_the_cores_are_those_of_the_cpu_quota_too(tmp_path, monkeypatch):
+    """A container's CPU quota (docker --cpus 1) counts like a CPU mask:
+    one core, no child."""
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1, 2, 3})
+    v2, v1 = tmp_path / "cpu.max", tmp_path / "v1" / "cpu.cfs_quota_us"
+    v1.parent.mkdir()
+    monkeypatch.setattr(PD, "_QUOTAS", ((str(v2), "max"), (str(v1), "-1")))
+    assert PD.cores() == 4                        # (no file: no quota)
+    v2.write_text("max 100000\n")
+    assert PD.cores() == 4
+    v2.write_text("150000 100000\n")
+    assert PD.cores() == 1.5
+    v2.unlink()
+    v1.write_text("100000\n")
+    (v1.parent / "cpu.cfs_period_us").write_text("100000\n")
+    assert PD.cores() == 1
+    v1.write_text("-1\n")
+    assert PD.cores() == 4
+    v1.write_text("?\n")                         # (unreadable: the mask alone)
+    assert PD.cores() == 4
+    v1.write_text("100000\n")
+    monkeypatch.setattr(PD, "PREDECODE_FROM", 0)
+    monkeypatch.setattr(PD, "enabled", True)
+    kids: list = []
+    PD.start(cam_variants.bench_module(50, 9, ""), kids)
+    assert kids == []

@@ -13,7 +13,7 @@ the text's words, which new names must not take (rewrite/names.py). The
 results are the same either way: only where the work is done differs.
 
 The child is a helper. If it fails, dies, is slow or is not there (not
-Linux, one core, a small text, the process pool's workers, which already
+Linux, one core or a CPU quota of one, a small text, the process pool's workers, which already
 use both cores), everything is decoded here. It is silent (no signal
 handler, no terminal), dies with its parent, sends its result whole or not
 at all, and is always reaped: a Ctrl-C is held back from the pipe to the
@@ -60,7 +60,7 @@ def start(text: str, children: list) -> None:
     list before a Ctrl-C can interrupt this process again: whatever
     happens, the caller's `finally` closes what the list holds."""
     if (not enabled or len(text) < PREDECODE_FROM or not sys.platform.startswith("linux")
-            or len(os.sched_getaffinity(0)) < 2):       # (one core: nothing to gain)
+            or cores() < 2):                            # (one core: nothing to gain)
         return
     parent = os.getpid()
     # (Ctrl-C held back from the pipe to the list, and during the fork's
@@ -83,6 +83,29 @@ def start(text: str, children: list) -> None:
         children.append(Ahead(pid, read))
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
+# A control group's CPU quota: (file, its "no quota" word), v2 then v1.
+_QUOTAS = (("/sys/fs/cgroup/cpu.max", "max"), ("/sys/fs/cgroup/cpu/cpu.cfs_quota_us", "-1"))
+
+
+def cores() -> float:
+    """The CPUs this process may use: those it may run on, bounded by its
+    control group's CPU quota (a container's --cpus; cgroup v2, else v1)."""
+    n = float(len(os.sched_getaffinity(0)))
+    for path, unlimited in _QUOTAS:
+        try:
+            with open(path) as f:
+                quota = f.read().split()
+            if len(quota) < 2:           # (v1: the period is a file of its own)
+                with open(os.path.join(os.path.dirname(path), "cpu.cfs_period_us")) as f:
+                    quota.append(f.read().strip())
+            if quota[0] != unlimited:
+                n = min(n, int(quota[0]) / int(quota[1]))
+            break
+        except (OSError, ValueError, IndexError, ZeroDivisionError):
+            continue
+    return n
 
 
 _HELD = {signal.SIGINT, signal.SIGTERM}
