@@ -116,13 +116,11 @@ class Chain:
     def fk_jacobian(self, q: np.ndarray):
         """Flange pose and the geometric Jacobian (N, 6, n), rows (v; w), at
         the flange origin, expressed in base axes (LOCAL_WORLD_ALIGNED)."""
-        Rs, ps = self.joint_frames(q)
-        R = np.ascontiguousarray(Rs[:, -1])
-        pe = ps[:, -1] + stack_times(R, self.flange_trans)
+        (Rf, pe), (Rs, ps) = self.fk_and_frames(q)
         z = self._world_axes(Rs)                           # (N, n, 3)
         v = np.cross(z, pe[:, None, :] - ps)
         J = np.concatenate([v, z], axis=2).transpose(0, 2, 1)
-        return stack_times(R, self.flange_rot), pe, J
+        return Rf, pe, J
 
     def _world_axes(self, Rs: np.ndarray) -> np.ndarray:
         """Each joint's axis in base axes (N, n, 3): for joints about x, y

@@ -48,7 +48,7 @@ def row_dots(a) -> np.ndarray:
 def stack_times(A: np.ndarray, M: np.ndarray) -> np.ndarray:
     """A @ M for a stack of 3x3 matrices A (..., 3, 3) and one matrix
     (3, k) or vector (3,) M, bit for bit: numpy multiplies a stack matrix
-    by matrix, one BLAS call each (~30 ns, 8192 in a chunk of the IK); the
+    by matrix, one BLAS call each (~30 ns; 8192 in a chunk of the IK); the
     rows of a C-contiguous stack are one (n, 3) matrix, and one call on it
     computes each row as the call per matrix does (tested against A @ M)."""
     A = np.asarray(A)

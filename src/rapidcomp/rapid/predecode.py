@@ -144,10 +144,10 @@ def _child(text: str, parent: int, read: int, write: int, held) -> None:
 
 
 def _decode_all(text: str) -> tuple:
-    """(starts, ends, kinds, heads per kind, tail ids, tails) of every plain
-    literal found: its span, its class (an index into _KINDS), the values
-    before its shared tail, which tail; each distinct tail's text and
-    values; and the text's words (a module whose moves become MoveAbsJ
+    """(starts, ends, kinds, heads per kind, tail ids, tails, words): of
+    every plain literal found its span, its class (an index into _KINDS),
+    the values before its shared tail, which tail; each distinct tail's
+    text and values; and the text's words (a module whose moves become MoveAbsJ
     gets 1e5 new names, none of them a word of the text)."""
     starts, ends, kinds, tail_ids = [], [], [], []
     heads: tuple[list, list] = ([], [])
@@ -166,7 +166,9 @@ def _decode_all(text: str) -> tuple:
             continue
         kind = _KINDS.index(cls)
         head = head_size(cls)
-        tail = (kind, tail_text(cls, lit))
+        # (A robtarget's tail has two groups, a jointtarget's one: a tail
+        # text is one kind's.)
+        tail = tail_text(cls, lit)
         t = tails.get(tail)
         if t is None:
             t = tails[tail] = len(tail_values)
@@ -178,7 +180,7 @@ def _decode_all(text: str) -> tuple:
         tail_ids.append(t)
     return (np.array(starts, np.int64), np.array(ends, np.int64), np.array(kinds, np.int8),
             tuple(np.array(h, float) for h in heads), np.array(tail_ids, np.int64),
-            [(k, tt, v) for ((k, tt), v) in zip(tails, tail_values)], words(text))
+            list(zip(tails, tail_values)), words(text))
 
 
 class Ahead:
@@ -260,7 +262,7 @@ class Known:
                 rows[i] = row
         self._rows = rows
         # The tails shared as the parse shares them (values._TAIL_FLOATS).
-        self._tails = [share_tail(text, tuple(v)) for _, text, v in tails]
+        self._tails = [share_tail(text, tuple(v)) for text, v in tails]
         self.hits = 0
 
     def values(self, cls, span) -> tuple[float, ...] | None:
