@@ -129,6 +129,32 @@ def test_runs_stop_where_a_statement_is_not_the_same_call():
         assert _tokens(text, True) == _tokens(text, False), text
 
 
+def test_declaration_runs_stop_where_a_declaration_is_not_the_same_kind():
+    """A run of one-line declarations ends at a reserved word as name,
+    another storage, type, letter case or blank before the name, a value
+    that is not an aggregate of numbers, a comment, a statement; each of
+    those is lexed as one by one lexes it (and so is a run that goes on
+    after them)."""
+    base = "CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+    lit = "[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+    others = [f"CONST robtarget IF:={lit};", f"CONST robtarget ENDPROC:={lit};",
+              f"PERS robtarget p2:={lit};", f"CONST jointtarget j2:={lit};",
+              f"const robtarget p2:={lit};", f"CONST robtarget  p2:={lit};",
+              f"CONST\trobtarget p2:={lit};", f"CONST robtarget p2 := {lit} ;",
+              f"LOCAL CONST robtarget p2:={lit};", "CONST robtarget p2:=[[1,2,x],[1,0,0,0]];",
+              "CONST robtarget p2:=[[1, 2,3] ,[1,0,0,0]];", f"! CONST robtarget p2:={lit};",
+              f"CONST robtarget p2:={lit};\r\n", f"CONST robtarget p_2:={lit}; ! note",
+              "CONST robtarget p2:=[[1,2,3],\n  [1,0,0,0]];", "CONST num n:=1;",
+              f"CONST robtarget p2:={lit}; CONST robtarget p3:={lit};",
+              "MoveL p1,v100,z1,tool0;", f"CONST robtarget robtarget:={lit};"]
+    rnd = random.Random(5)
+    for _ in range(300):
+        lines = [base] + [rnd.choice([base] * 3 + others) + "\n"
+                          for _ in range(rnd.randint(1, 8))]
+        text = "".join(lines)
+        assert _tokens(text, True) == _tokens(text, False), text
+
+
 def _token_by_token(monkeypatch) -> None:
     """The parser without its appends and the lexer without its runs."""
     class Never(dict):
