@@ -293,7 +293,12 @@ def test_cli_refuses_to_overwrite_the_input(tmp_path):
     assert prog.read_bytes() == (FIXTURES / "paper_front.mod").read_bytes()
 
 
-def test_cli_several_modules_into_a_directory(tmp_path):
+@pytest.mark.parametrize("cpus", [1, 2])
+def test_cli_several_modules_into_a_directory(tmp_path, monkeypatch, cpus):
+    """Several modules: a pool of two workers, or where the process may use
+    one CPU only, one after the other; the same files either way."""
+    from rapidcomp.compensate import job
+    monkeypatch.setattr(job, "side_by_side", lambda: cpus)
     out = tmp_path / "out"
     r = _run(["fix", str(FIXTURES / "paper_front.mod"),
               str(FIXTURES / "rapid" / "cam_confoff.mod"), "--profile", WARM, "-o", str(out),

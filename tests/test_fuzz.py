@@ -259,7 +259,12 @@ def test_unwritable_output_is_a_clean_error(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file.txt"]
 
 
-def test_several_programs_report_every_bad_one(tmp_path):
+@pytest.mark.parametrize("cpus", [1, 2])
+def test_several_programs_report_every_bad_one(tmp_path, monkeypatch, cpus):
+    """Every bad program is named, in a pool of two workers and, where the
+    process may use one CPU only, one after the other."""
+    from rapidcomp.compensate import job
+    monkeypatch.setattr(job, "side_by_side", lambda: cpus)
     a = tmp_path / "a.mod"
     b = tmp_path / "b.mod"
     a.write_text("MODULE a\n  PROC p()\n    MoveL [[1,2],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,"

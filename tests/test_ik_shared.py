@@ -51,7 +51,7 @@ def test_nominal_pose_and_wrist_is_the_chain_s_on_both_threads(monkeypatch):
     that origin is the wrist centre the confdata reads (an independent
     value: the flange pulled back along its z axis by the wrist offset of
     the IRB 140, 65 mm)."""
-    monkeypatch.setattr(ik, "_threads", lambda: 2)    # (two, whatever the machine has)
+    monkeypatch.setattr(ik, "side_by_side", lambda: 2)    # (two, whatever the machine has)
     robot = irb140()
     solver = Solver(robot)
     rng = np.random.default_rng(5)

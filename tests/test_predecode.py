@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from rapidcomp import cpus
 from rapidcomp.errors import InputError
 from rapidcomp.rapid import predecode as PD
 from rapidcomp.rapid.parse import parse_source, parse_text
@@ -239,7 +240,7 @@ def test_the_cores_are_those_of_the_cpu_quota_too(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1, 2, 3})
     v2, v1 = tmp_path / "cpu.max", tmp_path / "v1" / "cpu.cfs_quota_us"
     v1.parent.mkdir()
-    monkeypatch.setattr(PD, "_QUOTAS", ((str(v2), "max"), (str(v1), "-1")))
+    monkeypatch.setattr(cpus, "_QUOTAS", ((str(v2), "max"), (str(v1), "-1")))
     assert PD.cores() == 4                        # (no file: no quota)
     v2.write_text("max 100000\n")
     assert PD.cores() == 4

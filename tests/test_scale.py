@@ -297,10 +297,10 @@ def test_ik_in_blocks_gives_the_one_batch_results(monkeypatch):
     pools = []
     real_pool = ik.ThreadPoolExecutor
     monkeypatch.setattr(ik, "ThreadPoolExecutor", lambda n: pools.append(n) or real_pool(n))
-    monkeypatch.setattr(ik, "_threads", lambda: 2)
+    monkeypatch.setattr(ik, "side_by_side", lambda: 2)
     blocks = run()
     assert pools and set(pools) == {2}
-    monkeypatch.setattr(ik, "_threads", lambda: 1)
+    monkeypatch.setattr(ik, "side_by_side", lambda: 1)
     single = run()
 
     def flat(x):
@@ -322,17 +322,12 @@ def test_ik_threads_keep_the_callers_errstate_and_use_both_cores(monkeypatch):
     """Blocks on worker threads run in the caller's context: numpy's
     errstate there holds in every block (an overflow raises as it does in
     one block). Two threads where the process may use two cores."""
-    import os
-
     import numpy as np
+    from rapidcomp.cpus import cores
     from rapidcomp.kinematics import ik
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:
-        cores = os.cpu_count() or 1
-    assert ik._threads() == min(2, cores)
+    assert ik.side_by_side() == (2 if cores() >= 2 else 1)
     monkeypatch.setattr(ik, "CHUNK", 64)
-    monkeypatch.setattr(ik, "_threads", lambda: 2)
+    monkeypatch.setattr(ik, "side_by_side", lambda: 2)
     solver = load_solver(str(PROFILE), None, False)
     R = np.broadcast_to(np.eye(3), (300, 3, 3)).copy()
     p = np.tile([500.0, 0.0, 600.0], (300, 1))

@@ -3,7 +3,8 @@ outputs in memory. Files are written by the caller, all at once
 (atomic.py), and only when every job succeeded: bad input anywhere means no
 output anywhere.
 
-Several tasks run in a process pool of two workers (the machine's cores).
+Several tasks run in a process pool of two workers where the process may use
+two CPUs (cpus.py), else one after the other.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from pathlib import Path
 
 from ..atomic import utf8
 from ..collector import paused
+from ..cpus import side_by_side
 from ..errors import Errors, InputError, RapidcompError
 from ..progress import Progress
 from ..rapid.task import TaskSource
@@ -233,13 +235,25 @@ def _support_files(spec: JobSpec, task) -> list[tuple[str, bytes]]:
     return out
 
 
-def run_all(specs: list[JobSpec], workers: int = 2) -> list[JobOutcome]:
-    """Run jobs (in parallel when there are several); after all ended, the
-    bad inputs of every job are raised together."""
-    if len(specs) == 1 or workers <= 1:
-        return [run(s) for s in specs]
+def run_all(specs: list[JobSpec], workers: int | None = None) -> list[JobOutcome]:
+    """Run jobs (in parallel when there are several, on `workers`
+    processes, default two where this process may use two CPUs); after all
+    ended, the bad inputs of every job are raised together."""
+    if workers is None:
+        workers = side_by_side()
+    if len(specs) == 1:
+        return [run(specs[0])]
     errors: list[RapidcompError] = []
     outcomes = []
+    if workers <= 1:
+        for spec in specs:
+            try:
+                outcomes.append(run(spec))
+            except RapidcompError as exc:
+                errors.append(exc)
+        if errors:
+            raise errors[0] if len(errors) == 1 else Errors(errors)
+        return outcomes
     try:
         with ProcessPoolExecutor(max_workers=min(workers, len(specs))) as pool:
             futures = [pool.submit(_run_rendered, s) for s in specs]

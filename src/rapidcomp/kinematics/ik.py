@@ -14,13 +14,13 @@ from __future__ import annotations
 import contextvars
 import dataclasses
 import functools
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from enum import IntEnum, IntFlag
 
 import numpy as np
 
+from ..cpus import side_by_side
 from .analytic import ArmGeometry, solve_branches
 from .chain import Chain
 from .conf import confdata, quadrant_miss, wrap_pi
@@ -218,14 +218,6 @@ def _join(parts: list):
     return np.concatenate(parts)
 
 
-def _threads() -> int:
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:          # (not Linux)
-        cores = os.cpu_count() or 1
-    return max(1, min(2, cores))
-
-
 def _chunked(method):
     """method(self, rows, ...) over blocks of CHUNK rows: every array
     argument (and IKBatch) split along its first axis, results joined in
@@ -243,7 +235,7 @@ def _chunked(method):
         def block(i):
             return method(self, *(_rows(a, slice(i, i + CHUNK)) for a in args),
                           **{k: _rows(v, slice(i, i + CHUNK)) for k, v in kw.items()})
-        threads = _threads()
+        threads = side_by_side()
         if threads == 1:
             return _join([block(i) for i in range(0, n, CHUNK)])
         with ThreadPoolExecutor(threads) as pool:

@@ -32,6 +32,7 @@ import time
 
 import numpy as np
 
+from ..cpus import cores
 from ..rewrite.names import words
 from .values import (JointTarget, RobTarget, frame_fields, head_size, plain_values,
                      share_tail, tail_text)
@@ -83,29 +84,6 @@ def start(text: str, children: list) -> None:
         children.append(Ahead(pid, read))
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
-
-
-# A control group's CPU quota: (file, its "no quota" word), v2 then v1.
-_QUOTAS = (("/sys/fs/cgroup/cpu.max", "max"), ("/sys/fs/cgroup/cpu/cpu.cfs_quota_us", "-1"))
-
-
-def cores() -> float:
-    """The CPUs this process may use: those it may run on, bounded by its
-    control group's CPU quota (a container's --cpus; cgroup v2, else v1)."""
-    n = float(len(os.sched_getaffinity(0)))
-    for path, unlimited in _QUOTAS:
-        try:
-            with open(path) as f:
-                quota = f.read().split()
-            if len(quota) < 2:           # (v1: the period is a file of its own)
-                with open(os.path.join(os.path.dirname(path), "cpu.cfs_period_us")) as f:
-                    quota.append(f.read().strip())
-            if quota[0] != unlimited:
-                n = min(n, int(quota[0]) / int(quota[1]))
-            break
-        except (OSError, ValueError, IndexError, ZeroDivisionError):
-            continue
-    return n
 
 
 _HELD = {signal.SIGINT, signal.SIGTERM}
