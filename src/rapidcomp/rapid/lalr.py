@@ -113,12 +113,10 @@ class Engine:
         self._tails: dict[str, bool] = {}      # _keyword_in's verdicts on argument lists
         # A run of FAST_CALL statements of one instruction and one argument
         # list after the target (`MoveL <target>,v100,z1,tool1\\WObj:=wobj1;`
-        # on 1e5 lines of a CAM program): (name, arguments) -> the pattern
-        # of the next such statement (_call_run).
-        self._runs: dict[tuple[str, str], re.Pattern] = {}
-        # Likewise a run of FAST_DECL declarations with the same text
-        # before the name: that text -> the pattern of the next (_decl_run).
-        self._decl_runs: dict[str, re.Pattern] = {}
+        # on 1e5 lines of a CAM program), or of FAST_DECL declarations with
+        # the same text before the name: (kind, that part) -> the pattern
+        # of the next one (_run).
+        self._runs: dict[tuple, re.Pattern] = {}
         self._ws = next(t.pattern.to_regexp() for t in terms if t.name == "WS")
         numagg = next(t.pattern.to_regexp() for t in terms if t.name == "NUMAGG")
         # The runs' NUMAGG: first tried without its optional whitespace
@@ -248,24 +246,9 @@ class Engine:
         else:
             after = _IDENT.match(first, at).end()
         key = (head.group(1), first[after:])
-        pattern = self._runs.get(key)
-        if pattern is None:
-            if len(self._runs) >= 4096:      # bounded: many programs in one process
-                self._runs.clear()
-            pattern = self._runs[key] = re.compile(
-                f"(?:{self._ws})?({re.escape(key[0])}[ \t]+(?:{self._numagg}|([A-Za-z][A-Za-z0-9_]*))"
-                f"{re.escape(key[1])})")
-        match = pattern.match
-        keywords = self._keywords
-        while True:
-            m = match(text, pos)
-            if m is None:
-                return
-            name = m.group(2)
-            if name is not None and name.upper() in keywords:
-                return
-            yield Tok("FAST_CALL", m.group(1), m.start(1), m.end())
-            pos = m.end()
+        return self._run("FAST_CALL", key, lambda: (
+            f"{re.escape(key[0])}[ \t]+(?:{self._numagg}|([A-Za-z][A-Za-z0-9_]*))"
+            f"{re.escape(key[1])}"), text, pos)
 
     def _decl_run(self, text: str, first: str, pos: int):
         """The FAST_DECL tokens that follow the declaration `first` right
@@ -279,20 +262,30 @@ class Engine:
         its second word)."""
         name = list(_WORD.finditer(first, 0, first.index(":=")))[-1]
         key = first[:name.start()]
-        pattern = self._decl_runs.get(key)
+        return self._run("FAST_DECL", key, lambda: (
+            f"{re.escape(key)}([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*{self._numagg}[ \t]*;"),
+            text, pos)
+
+    def _run(self, kind: str, key, regex, text: str, pos: int):
+        """Tokens of `kind` one after the other from pos (only whitespace
+        between), each matched by the pattern regex() gives (its group 1
+        the token, group 2 a name that must not be a reserved word, or
+        None), compiled once per (kind, key)."""
+        pattern = self._runs.get((kind, key))
         if pattern is None:
-            if len(self._decl_runs) >= 4096:     # bounded: many programs in one process
-                self._decl_runs.clear()
-            pattern = self._decl_runs[key] = re.compile(
-                f"(?:{self._ws})?({re.escape(key)}([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*"
-                f"{self._numagg}[ \t]*;)")
+            if len(self._runs) >= 4096:      # bounded: many programs in one process
+                self._runs.clear()
+            pattern = self._runs[kind, key] = re.compile(f"(?:{self._ws})?({regex()})")
         match = pattern.match
         keywords = self._keywords
         while True:
             m = match(text, pos)
-            if m is None or m.group(2).upper() in keywords:
+            if m is None:
                 return
-            yield Tok("FAST_DECL", m.group(1), m.start(1), m.end())
+            name = m.group(2)
+            if name is not None and name.upper() in keywords:
+                return
+            yield Tok(kind, m.group(1), m.start(1), m.end())
             pos = m.end()
 
     def _keyword_in(self, call: str) -> bool:
