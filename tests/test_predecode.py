@@ -241,19 +241,19 @@ def test_the_cores_are_those_of_the_cpu_quota_too(tmp_path, monkeypatch):
     v2, v1 = tmp_path / "cpu.max", tmp_path / "v1" / "cpu.cfs_quota_us"
     v1.parent.mkdir()
     monkeypatch.setattr(cpus, "_QUOTAS", ((str(v2), "max"), (str(v1), "-1")))
-    assert PD.cores() == 4                        # (no file: no quota)
+    assert cpus.cores() == 4                      # (no file: no quota)
     v2.write_text("max 100000\n")
-    assert PD.cores() == 4
+    assert cpus.cores() == 4
     v2.write_text("150000 100000\n")
-    assert PD.cores() == 1.5
+    assert cpus.cores() == 1.5
     v2.unlink()
     v1.write_text("100000\n")
     (v1.parent / "cpu.cfs_period_us").write_text("100000\n")
-    assert PD.cores() == 1
+    assert cpus.cores() == 1
     v1.write_text("-1\n")
-    assert PD.cores() == 4
+    assert cpus.cores() == 4
     v1.write_text("?\n")                         # (unreadable: the mask alone)
-    assert PD.cores() == 4
+    assert cpus.cores() == 4
     v1.write_text("100000\n")
     monkeypatch.setattr(PD, "PREDECODE_FROM", 0)
     monkeypatch.setattr(PD, "enabled", True)

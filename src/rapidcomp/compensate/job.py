@@ -251,23 +251,21 @@ def run_all(specs: list[JobSpec], workers: int | None = None) -> list[JobOutcome
                 outcomes.append(run(spec))
             except RapidcompError as exc:
                 errors.append(exc)
-        if errors:
-            raise errors[0] if len(errors) == 1 else Errors(errors)
-        return outcomes
-    try:
-        with ProcessPoolExecutor(max_workers=min(workers, len(specs))) as pool:
-            futures = [pool.submit(_run_rendered, s) for s in specs]
-            for spec, f in zip(specs, futures):
-                try:
-                    outcomes.append(f.result())
-                except RapidcompError as exc:
-                    errors.append(exc)
-                except BrokenProcessPool:
-                    errors.append(RapidcompError(
-                        f"{spec.source.input}: the worker process compensating it died (out of "
-                        "memory?); nothing written"))
-    except BrokenProcessPool:  # raised again when the pool shuts down
-        pass
+    else:
+        try:
+            with ProcessPoolExecutor(max_workers=min(workers, len(specs))) as pool:
+                futures = [pool.submit(_run_rendered, s) for s in specs]
+                for spec, f in zip(specs, futures):
+                    try:
+                        outcomes.append(f.result())
+                    except RapidcompError as exc:
+                        errors.append(exc)
+                    except BrokenProcessPool:
+                        errors.append(RapidcompError(
+                            f"{spec.source.input}: the worker process compensating it died "
+                            "(out of memory?); nothing written"))
+        except BrokenProcessPool:  # raised again when the pool shuts down
+            pass
     if errors:
         raise errors[0] if len(errors) == 1 else Errors(errors)
     return outcomes

@@ -194,17 +194,13 @@ class Engine:
             if m is None:
                 raise LexFailure(pos)
             kind = m.lastgroup
+            run = None
             if kind == "FAST_CALL":
                 if self._keyword_in(m.group()):
                     m = self._master_plain.match(text, pos)
                     kind = m.lastgroup
-                elif runs:
-                    yield Tok(kind, m.group(), pos, m.end())
-                    pos = m.end()
-                    for tok in self._call_run(text, m.group(), pos):
-                        yield tok
-                        pos = tok.end_pos
-                    continue
+                else:
+                    run = self._call_run
             elif kind == "FAST_DECL":
                 # Only type and name must be identifiers: the last two words
                 # before := (the aggregate after it has no word; the E of
@@ -214,13 +210,16 @@ class Engine:
                        for w in _WORD.findall(decl, 0, decl.index(":="))[-2:]):
                     m = self._master_plain.match(text, pos)
                     kind = m.lastgroup
-                elif runs:
-                    yield Tok(kind, decl, pos, m.end())
-                    pos = m.end()
-                    for tok in self._decl_run(text, decl, pos):
-                        yield tok
-                        pos = tok.end_pos
-                    continue
+                else:
+                    run = self._decl_run
+            if run is not None and runs:
+                first = m.group()
+                yield Tok(kind, first, pos, m.end())
+                pos = m.end()
+                for tok in run(text, first, pos):
+                    yield tok
+                    pos = tok.end_pos
+                continue
             stop = m.end()
             if kind not in ignore:
                 value = m.group()

@@ -32,7 +32,7 @@ import time
 
 import numpy as np
 
-from ..cpus import cores
+from ..cpus import side_by_side
 from ..rewrite.names import words
 from .values import (JointTarget, RobTarget, frame_fields, head_size, plain_values,
                      share_tail, tail_text)
@@ -61,7 +61,7 @@ def start(text: str, children: list) -> None:
     list before a Ctrl-C can interrupt this process again: whatever
     happens, the caller's `finally` closes what the list holds."""
     if (not enabled or len(text) < PREDECODE_FROM or not sys.platform.startswith("linux")
-            or cores() < 2):                            # (one core: nothing to gain)
+            or side_by_side() < 2):                     # (one core: nothing to gain)
         return
     parent = os.getpid()
     # (Ctrl-C held back from the pipe to the list, and during the fork's
