@@ -91,6 +91,10 @@ class EditColumns(Sequence):
                    Texts.concat([c._texts for c in parts]),
                    np.concatenate([c.whys for c in parts]))
 
+    def texts_column(self) -> "Texts":
+        """The replacements as their column (EditColumns takes it back)."""
+        return self._texts
+
     def texts(self, i: int = 0, j: int | None = None) -> list[str]:
         """The replacements of edits [i, j), as str."""
         return self._texts.list(i, j)

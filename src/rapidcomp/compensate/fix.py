@@ -19,15 +19,16 @@ than assumed, or for PERS targets (place.mode_of).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
+from .. import side
 from ..collector import paused
 from ..edits import EditColumns, SpanEdit, apply_edits
 from ..errors import InternalError
 from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
 from ..process import release
-from ..rewrite.diff import unified_diff
+from ..rewrite.diff import columns_diff, handed_off, unified_diff
 from . import place as P
 from .edit import Editor, Values
 from .plan import Plan, Task, line_ranges
@@ -57,6 +58,10 @@ class FixResult:
     modules: tuple[ModuleOutput, ...]
     rows: tuple[UseRow, ...]
     notes: tuple[str, ...]
+    # Each row's number cells as the Markdown report writes them
+    # (report.number_cells), made beside the job (side.py); None: made
+    # when the report is written.
+    cells: tuple[str | None, ...] | None = field(default=None, compare=False, repr=False)
 
     @property
     def failed(self) -> int:
@@ -99,6 +104,13 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     clock("resolve")
     solved = solve(plan, solver, start)
     clock("solve")
+    # The report's number cells of every target, made beside the job while
+    # it goes on (side.py; without a helper the report makes them).
+    cells = None
+    if side.helps():
+        from .report import number_cells         # (report.py imports this module)
+        cells = side.run(number_cells, solved.nominal.q_deg, solved.deformed.q_deg,
+                         solved.err_p, solved.err_r)
     gs = P.groups(plan, solved, mode)
     # Past the groups nothing reads the flow (printing and verifying the
     # values read the plan's uses and resolver; the rows its uses and
@@ -162,6 +174,15 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
                          u.source.element)
     else:
         raise InternalError("the written values do not settle (verification keeps failing)")
+    # The diff of the largest module edited, made beside the job while the
+    # rows are made (side.py); the others' here.
+    diffs = {}
+    if side.helps() and file_edits:
+        fi = max(file_edits, key=lambda fi: len(texts[fi]))
+        pf = task.files[fi]
+        name = pf.source.display_path
+        diffs[fi] = side.run(columns_diff, pf.source.text, handed_off(file_edits[fi]), name,
+                             output_names.get(name, name))
     group_of = {u.key: g for g in gs for u in g.uses}
     # What each stage made per target is not needed past it (1e5 targets:
     # hundreds of MB): the edited literals as written, the output parsed
@@ -174,8 +195,13 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # (What malloc holds free handed back before the rows' 1e5 tuples are
     # made: in the command's own process, process.py.)
     release()
+    at: list | None = [] if cells is not None else None
     rows = use_rows(plan, solved, group_of=group_of, actions=actions, verified=verified,
-                    mode=mode, written_conf=written_conf)
+                    mode=mode, written_conf=written_conf, at=at)
+    if cells is not None:
+        made = cells.get()
+        cells = tuple(None if i is None else made[i] for i in at)
+        made = at = None
     notes = plan_notes + _notes(rows, gs)
     if transient is not None:
         notes += _transient_notes(transient[0], state_errors if any(
@@ -189,12 +215,13 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     for fi, pf in enumerate(task.files):
         es = file_edits.get(fi, [])
         name = pf.source.display_path
-        diff = unified_diff(pf.source.text, es, name, output_names.get(name, name),
-                            new_text=texts.get(fi))
+        diff = (diffs[fi].get() if fi in diffs else
+                unified_diff(pf.source.text, es, name, output_names.get(name, name),
+                             new_text=texts.get(fi)))
         modules.append(ModuleOutput(name, texts.get(fi, pf.source.text),
                                     es if type(es) is EditColumns else tuple(es), tuple(diff)))
     clock("report")
-    return FixResult(mode, task.name, tuple(modules), tuple(rows), tuple(notes))
+    return FixResult(mode, task.name, tuple(modules), tuple(rows), tuple(notes), cells)
 
 
 def _verify_states(plan, solved, keys, texts, parsed, solvers) -> tuple[dict, dict]:

@@ -17,6 +17,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from .. import side
 from ..atomic import utf8
 from ..collector import paused
 from ..cpus import side_by_side
@@ -128,10 +129,29 @@ def run(spec: JobSpec) -> JobOutcome:
 
 
 def _run(spec: JobSpec) -> JobOutcome:
-    from .targets import parse_track
     allow_deep_nesting()
     src = spec.source
     progress = Progress(src.name, spec.progress)
+    # A big task's job hands work to a second process (side.py), forked
+    # here while this one is small; it is reaped when the result is made.
+    with side.helping(_size(src)):
+        return _run_helped(spec, src, progress)
+
+
+def _size(src: TaskSource) -> int:
+    """Bytes of the task's modules (0 for one that cannot be read: the
+    parse says why)."""
+    total = 0
+    for rel in src.modules:
+        try:
+            total += (src.root / rel).stat().st_size
+        except (OSError, ValueError):
+            pass
+    return total
+
+
+def _run_helped(spec: JobSpec, src: TaskSource, progress: Progress) -> JobOutcome:
+    from .targets import parse_track
     progress.stage("parsing")
     task = load_task(src, spec.with_modules)
     solver = load_solver(spec.profile, spec.robot, spec.force, spec.limits)
@@ -277,7 +297,7 @@ def _run_rendered(spec: JobSpec) -> JobOutcome:
     cores busy: a module's literals are decoded in the worker itself, not
     by a process of its own, rapid/predecode.py.)"""
     from ..rapid import predecode
-    predecode.enabled = False
+    predecode.enabled = side.enabled = False
     out = run(spec)
     return replace(out, files=tuple((path, data.render() if isinstance(data, Report) else data)
                                     for path, data in out.files))

@@ -103,12 +103,13 @@ def displacement_warning(um_per_mm: float) -> str:
 def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
              actions: dict | None = None, verified: dict | None = None, mode: str | None = None,
              written_conf: dict | None = None,
-             statuses=(COMPENSATED, NOT_COMPENSATED)) -> list[UseRow]:
+             statuses=(COMPENSATED, NOT_COMPENSATED), at: list | None = None) -> list[UseRow]:
     """Rows in text order. Without group_of/verified (check): per use, the
     solve's own residual and the confdata of the compensated joints; with
     them (fix, in `mode`): the written values' residual and confdata
     (written_conf: use key -> the confdata written, None where no robtarget
-    is written)."""
+    is written). `at`, when given, receives each row's row of `solved`
+    (None for a use not solved)."""
     ok_label, fail_label = statuses
     tracked = {k for k, _ in plan.track}
     cols = _Columns(solved)
@@ -120,7 +121,11 @@ def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
         if u.reason is not None:
             out.append(_new_row(*base, fail_label if u.blocked else UNTOUCHED, None, None, None,
                                 None, None, None, None, None, None, None, None, (), u.reason))
+            if at is not None:
+                at.append(None)
             continue
+        if at is not None:
+            at.append(solved.row[u.key])
         out.append(_row(solved, cols, u, base, group_of, actions, verified, mode,
                         written_conf, ok_label, fail_label, tracked))
     return out

@@ -50,6 +50,26 @@ def unified_diff(text: str, edits: list[SpanEdit], old_name: str, new_name: str,
     return _hunks(text.splitlines(), changed, old_name, new_name, context)
 
 
+def handed_off(edits) -> tuple:
+    """What unified_diff reads of `edits`, to hand to another process
+    (side.py): EditColumns as their spans and texts (not their whys, 7e5
+    of them in a CAM program); a list as it is. columns_diff takes it."""
+    if type(edits) is EditColumns:
+        return (edits.starts, edits.ends, edits.texts_column())
+    return (edits,)
+
+
+def columns_diff(text: str, edits: tuple, old_name: str, new_name: str) -> list[str]:
+    """unified_diff(text, the edits handed_off gave, old_name, new_name)."""
+    if len(edits) == 3:
+        import numpy as np
+        starts, ends, texts = edits
+        edits = EditColumns(starts, ends, texts, np.full(len(starts), None, object), pack=False)
+    else:
+        edits = edits[0]
+    return unified_diff(text, edits, old_name, new_name)
+
+
 def _changed_in_lines(text: str, lines: list[str], cols: EditColumns,
                       new_text: str) -> list | None:
     """The changes, when no edit touches a line break or follows a CR

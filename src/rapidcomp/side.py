@@ -1,0 +1,292 @@
+"""A second process for work a big job hands off while it goes on (issue
+#14: both cores for one big module).
+
+Past the parse a job is one chain of stages on one core. Some of its work
+is a function of numbers and texts alone and is needed only later: the
+report's number cells of every target (known once the joints are solved,
+written once the report is), the diff of a module (known once its output is
+printed, written with the report). run(fn, *args) hands such a call to the
+helper and returns at once; get() then gives what fn(*args) returns, made
+by the helper, or here when there is no helper or it failed. The result is
+the same either way: the same function on the same (pickled) values; only
+where the work is done differs.
+
+The helper is forked where the job starts, before the parse: the process
+is small then, and its later writes to its own memory copy few pages a
+fork shares (forked later, a 900 MB process paid more in copied pages than
+the helper saved). It exists only inside helping(), the command's own job
+(not in a library call, not in the process pool's workers, which keep both
+cores busy already, not on one CPU, not for a small task). It is silent,
+dies with its parent, and is always reaped when helping() ends; one call is
+in its hands at a time (a call waits for the one before to be taken).
+"""
+
+from __future__ import annotations
+
+import fcntl
+import os
+import pickle
+import select
+import signal
+import sys
+import time
+from contextlib import contextmanager
+
+from .cpus import side_by_side
+
+# Tasks from this size on (bytes of their modules) get a helper: below it
+# what the stages hand off costs less than a fork (1e4 targets, 1.7 MB:
+# ~30 ms to hand off).
+HELP_FROM = 1 << 20
+# Off in the process pool's workers (job.py).
+enabled = True
+# How long a call may take in the helper, beyond what it would take here
+# (its inputs are moved once each way): a helper that takes longer is
+# stopped and the call made here.
+PATIENCE_S = 30.0
+_BUFFER = 1 << 20
+_F_SETPIPE_SZ = 1031          # (fcntl.F_SETPIPE_SZ, Linux; Python 3.10+ names it)
+
+_helper: "Helper | None" = None
+_HELD = {signal.SIGINT, signal.SIGTERM}
+_PR_SET_PDEATHSIG = 1
+
+
+@contextmanager
+def helping(size: int):
+    """A helper for the calls run() makes inside, when `size` (bytes of
+    input) is worth one and the process may use two CPUs; reaped on leaving,
+    whatever happens."""
+    global _helper
+    if (_helper is not None or not enabled or size < HELP_FROM
+            or not sys.platform.startswith("linux") or side_by_side() < 2):
+        yield
+        return
+    started: list = []
+    try:
+        _start(started)
+        _helper = started[0] if started else None
+        yield
+    finally:
+        _helper = None
+        for h in started:
+            h.close()
+
+
+def helps() -> bool:
+    """Whether there is a helper to hand calls to (else run() makes them
+    here, when their result is asked for)."""
+    return _helper is not None and _helper.alive
+
+
+def run(fn, *args) -> "Pending":
+    """fn(*args), made by the helper if there is one (fn: a module-level
+    function; args and result: picklable)."""
+    h = _helper
+    if h is not None and h.alive:
+        return h.call(fn, args)
+    return Pending(None, fn, args)
+
+
+class Pending:
+    """A call handed off: get() its result."""
+
+    def __init__(self, helper: "Helper | None", fn, args):
+        self.helper = helper
+        self.fn = fn
+        self.args = args
+        self._done = False
+        self._value = None
+
+    def get(self):
+        if not self._done:
+            got = self.helper.take(self) if self.helper is not None else None
+            # (Made here when the helper failed: the same function.)
+            self._value = got[0] if got is not None else self.fn(*self.args)
+            self._done = True
+            self.helper = self.args = None
+        return self._value
+
+
+def _start(started: list) -> None:
+    """Fork the helper and append it to `started` before a Ctrl-C can
+    interrupt this process again (the caller reaps what the list holds)."""
+    parent = os.getpid()
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
+    try:
+        fds = []
+        try:
+            for _ in range(2):
+                fds += os.pipe()
+        except OSError:
+            for fd in fds:
+                os.close(fd)
+            return
+        calls_r, calls_w, results_r, results_w = fds
+        for fd in (calls_w, results_w):
+            try:          # (fewer switches between the two: ~0.1 s per 60 MB -> ~0.06)
+                fcntl.fcntl(fd, _F_SETPIPE_SZ, 1 << 20)
+            except OSError:
+                pass
+        try:
+            pid = os.fork()
+        except OSError:
+            for fd in fds:
+                os.close(fd)
+            return
+        if pid == 0:
+            os.close(calls_w)
+            os.close(results_r)
+            _serve(parent, calls_r, results_w, held)      # (never returns)
+        os.close(calls_r)
+        os.close(results_w)
+        started.append(Helper(pid, calls_w, results_r))
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
+def _serve(parent: int, calls: int, results: int, held) -> None:
+    """The helper's life: each call read (a pickle), made, its result sent
+    whole ((value,), or None when the call raised); it ends when its parent
+    closes the calls' pipe or dies."""
+    code = 1
+    try:
+        for sig in _HELD:
+            signal.signal(sig, signal.SIG_DFL)
+        import ctypes
+        ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+        if os.getppid() != parent:
+            os._exit(1)
+        null = os.open(os.devnull, os.O_RDWR)
+        for fd in (0, 1, 2):
+            os.dup2(null, fd)
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+        source = os.fdopen(calls, "rb", buffering=_BUFFER)
+        while True:
+            try:
+                fn, args = pickle.load(source)
+            except EOFError:
+                break
+            try:
+                out = pickle.dumps((fn(*args),), protocol=pickle.HIGHEST_PROTOCOL)
+            except Exception:
+                out = pickle.dumps(None)
+            fn = args = None
+            _write_whole(results, out)
+            out = None
+        code = 0
+    except BaseException:
+        pass
+    finally:
+        os._exit(code)
+
+
+def _write_whole(fd: int, data: bytes) -> None:
+    """An 8-byte length, then the data."""
+    for part in (len(data).to_bytes(8, "little"), data):
+        view = memoryview(part)
+        while view:
+            view = view[os.write(fd, view):]
+
+
+def _read_whole(fd: int, deadline: float) -> bytearray | None:
+    """One message of _write_whole, or None (the other end closed, or the
+    deadline passed)."""
+    head = _read_exactly(fd, 8, deadline)
+    if head is None:
+        return None
+    return _read_exactly(fd, int.from_bytes(head, "little"), deadline)
+
+
+def _read_exactly(fd: int, n: int, deadline: float) -> bytearray | None:
+    buf = bytearray(n)
+    view = memoryview(buf)
+    got = 0
+    poll = select.poll()
+    poll.register(fd, select.POLLIN)
+    while got < n:
+        left = deadline - time.monotonic()
+        if left <= 0 or not poll.poll(left * 1000):
+            return None
+        k = os.readv(fd, [view[got:]])
+        if k == 0:
+            return None
+        got += k
+    return buf
+
+
+class Helper:
+    """The helper at work: call() hands it a call, take() its result,
+    close() reaps it."""
+
+    def __init__(self, pid: int, calls: int, results: int):
+        self.pid = pid
+        # (Calls are pickled into the pipe as they are made: no copy of a
+        # call's 30 MB alive as bytes.)
+        self.calls = os.fdopen(calls, "wb", buffering=_BUFFER)
+        self.results = results
+        self.alive = True
+        self._waiting: Pending | None = None     # the call in its hands
+        self.status: int | None = None
+
+    def call(self, fn, args) -> Pending:
+        if self._waiting is not None:
+            self._waiting.get()                    # (one call at a time)
+        pending = Pending(self, fn, args)
+        if not self.alive:
+            pending.helper = None
+            return pending
+        try:
+            pickle.dump((fn, args), self.calls, protocol=pickle.HIGHEST_PROTOCOL)
+            self.calls.flush()
+        except Exception:             # (not picklable, or the helper is gone)
+            self._fail()
+            pending.helper = None
+            return pending
+        self._waiting = pending
+        return pending
+
+    def take(self, pending: Pending):
+        """(value,) of the call, or None (made here then)."""
+        if pending is not self._waiting:
+            return None
+        self._waiting = None
+        try:
+            data = _read_whole(self.results, time.monotonic() + PATIENCE_S)
+            got = pickle.loads(data) if data is not None else None
+        except Exception:
+            got = None
+        if got is None:
+            self._fail()
+        return got
+
+    def _fail(self) -> None:
+        """Nothing more is handed to a helper that failed once."""
+        self.alive = False
+        self.close()
+
+    def close(self) -> None:
+        calls, self.calls = self.calls, None
+        if calls is not None:
+            try:
+                calls.close()
+            except OSError:           # (what the buffer held could not go: the helper is gone)
+                pass
+        results, self.results = self.results, -1
+        if results >= 0:
+            os.close(results)
+        self.alive = False
+        if self.status is None:
+            try:
+                # (Its calls' pipe closed: it ends by itself at once, unless
+                # it is inside a call or stuck: then it is stopped.)
+                done, st = os.waitpid(self.pid, os.WNOHANG)
+                if done == 0:
+                    time.sleep(0.001)
+                    done, st = os.waitpid(self.pid, os.WNOHANG)
+                if done == 0:
+                    os.kill(self.pid, signal.SIGKILL)
+                    done, st = os.waitpid(self.pid, 0)
+                self.status = os.waitstatus_to_exitcode(st)
+            except ChildProcessError:
+                self.status = -1

@@ -1,0 +1,206 @@
+"""Work a big job hands to a second process (side.py, issue #14): a call
+gives what the function gives here, made by the helper when there is one
+and here otherwise (no helper, or one that failed, died or is too slow);
+the helper is always reaped. And fix with a helper writes what it writes
+alone: the golden cases (outputs reviewed by eye) and CAM modules, with
+the helper doing the work (counted)."""
+
+import os
+import signal
+import time
+
+import pytest
+
+from rapidcomp import side
+from rapidcomp.compensate import report
+from rapidcomp.compensate.fix import fix
+from rapidcomp.compensate.load import load_solver
+from rapidcomp.compensate.plan import Task
+from rapidcomp.rapid.parse import parse_text
+
+import cam_variants
+from conftest import FIXTURES
+from regen_golden import FIX_CASES, GOLDEN, TASK_CASES, fix_golden, task_golden
+
+
+def pid_and(x):
+    return os.getpid(), x
+
+
+def fails_away(parent):
+    if os.getpid() != parent:
+        raise RuntimeError("only in the helper")
+    return "here"
+
+
+def slow_away(parent):
+    if os.getpid() != parent:
+        time.sleep(30)
+    return os.getpid()
+
+
+@pytest.fixture
+def helped(monkeypatch):
+    """helping() forks for any size, as where two CPUs may be used."""
+    monkeypatch.setattr(side, "HELP_FROM", 0)
+    monkeypatch.setattr(side, "enabled", True)
+    monkeypatch.setattr(side, "side_by_side", lambda: 2)
+
+
+def _reaped(pid: int) -> bool:
+    try:
+        os.waitpid(pid, os.WNOHANG)
+    except ChildProcessError:
+        return True
+    return False
+
+
+def test_a_call_is_made_by_the_helper_and_gives_what_the_function_gives(helped):
+    me = os.getpid()
+    with side.helping(1):
+        assert side.helps()
+        helper = side._helper
+        first = side.run(pid_and, [1.5, "x", None])
+        second = side.run(pid_and, {"a": (1, 2)})          # (the first taken before)
+        assert first.get() == (helper.pid, [1.5, "x", None])
+        assert second.get() == (helper.pid, {"a": (1, 2)})
+        assert helper.pid != me
+    assert not side.helps()
+    assert _reaped(helper.pid)
+
+
+@pytest.mark.parametrize("why", ["disabled", "one CPU", "small"])
+def test_without_a_helper_a_call_is_made_here(why, helped, monkeypatch):
+    size = 1
+    if why == "disabled":
+        monkeypatch.setattr(side, "enabled", False)
+    elif why == "one CPU":
+        monkeypatch.setattr(side, "side_by_side", lambda: 1)
+    else:
+        monkeypatch.setattr(side, "HELP_FROM", 10)
+    with side.helping(size):
+        assert not side.helps()
+        assert side.run(pid_and, 3).get() == (os.getpid(), 3)
+    assert side.run(pid_and, 4).get() == (os.getpid(), 4)        # (outside: here)
+
+
+@pytest.mark.parametrize("trouble", ["killed", "raises", "unpicklable", "too slow"])
+def test_a_helper_in_trouble_changes_where_the_call_is_made_only(trouble, helped,
+                                                                   monkeypatch):
+    me = os.getpid()
+    with side.helping(1):
+        helper = side._helper
+        if trouble == "killed":
+            call = side.run(pid_and, 1)
+            os.kill(helper.pid, signal.SIGKILL)
+            time.sleep(0.05)
+            # (Killed before or after it answered: its answer or this one.)
+            assert call.get() in ((helper.pid, 1), (me, 1))
+            later = side.run(pid_and, 2)
+            assert later.get() in ((helper.pid, 2), (me, 2))
+            assert side.run(pid_and, 3).get() == (me, 3)   # (nothing more handed to it)
+        elif trouble == "raises":
+            assert side.run(fails_away, me).get() == "here"
+            assert not side.helps()
+        elif trouble == "unpicklable":
+            assert side.run(pid_and, lambda: 1).get()[0] == me
+        else:
+            monkeypatch.setattr(side, "PATIENCE_S", 0.3)
+            t = time.monotonic()
+            assert side.run(slow_away, me).get() == me
+            assert time.monotonic() - t < 5
+            assert not side.helps()
+    assert _reaped(helper.pid)
+
+
+def test_leaving_with_a_call_in_the_helpers_hands_reaps_it(helped):
+    with pytest.raises(KeyError):
+        with side.helping(1):
+            helper = side._helper
+            side.run(slow_away, os.getpid())
+            raise KeyError("the job failed")
+    assert _reaped(helper.pid)
+
+
+def _spy(monkeypatch) -> list:
+    """The results the helper sent back."""
+    made = []
+    take = side.Helper.take
+
+    def spy(self, pending):
+        got = take(self, pending)
+        made.append(pending.fn.__name__ if got is not None else None)
+        return got
+
+    monkeypatch.setattr(side.Helper, "take", spy)
+    return made
+
+
+def test_the_golden_cases_are_written_as_reviewed_with_a_helper(helped, monkeypatch):
+    made = _spy(monkeypatch)
+    for case in sorted(FIX_CASES):
+        folder = GOLDEN / "fix" / case
+        with side.helping(1):
+            after, rep = fix_golden(case)
+        assert after == (folder / "after.mod").read_bytes(), case
+        assert rep == (folder / "report.md").read_text(encoding="utf-8"), case
+    for case in sorted(TASK_CASES):
+        folder = GOLDEN / "fix" / case
+        with side.helping(1):
+            after, rep = task_golden(case)
+        for rel, data in after.items():
+            assert data == (folder / "after" / rel).read_bytes(), (case, rel)
+        assert rep == (folder / "report.md").read_text(encoding="utf-8"), case
+    # The helper made the number cells of every case and the diffs of the
+    # cases that change something (none made here instead).
+    assert None not in made
+    assert made.count("number_cells") == len(FIX_CASES) + len(TASK_CASES)
+    assert made.count("columns_diff") >= len(FIX_CASES) + len(TASK_CASES) - 1
+
+
+@pytest.mark.parametrize("mode", ["absj", "robtarget", "auto"])
+def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, monkeypatch):
+    made = _spy(monkeypatch)
+    solver = load_solver(str(FIXTURES / "warm.csv"), None, False)
+    for text in (cam_variants.bench_module(300, 3, ""),
+                 cam_variants.bench_module(300, 4, "    ConfL\\Off;\n"),
+                 cam_variants.not_called(5), cam_variants.broken_runs(6)):
+        def run():
+            result = fix(Task("cam.mod", (parse_text(text, "cam.mod"),)), solver, mode,
+                         output_names={"cam.mod": "out.mod"})
+            return (result.modules, result.rows, report.markdown(result, {"mode": mode}),
+                    report.as_json(result, {"mode": mode}))
+        with monkeypatch.context() as m:
+            m.setattr(side, "enabled", False)
+            with side.helping(1):
+                alone = run()
+        with side.helping(1):
+            got = run()
+        assert got == alone
+    assert made and None not in made
+    assert "columns_diff" in made
+
+
+def test_number_cells_are_the_cells_of_each_row():
+    """The cells made ahead (report.number_cells, from the solved numbers)
+    are those a row writes of its own numbers (report._row), on every
+    solved row of CAM modules: the function the helper runs, run here."""
+    from rapidcomp.compensate.plan import Plan
+    from rapidcomp.compensate.rows import use_rows
+    from rapidcomp.compensate.solve import solve
+    solver = load_solver(str(FIXTURES / "warm.csv"), None, False)
+    checked = 0
+    for text in (cam_variants.bench_module(200, 7, ""), cam_variants.broken_runs(8)):
+        plan = Plan(Task("cam.mod", (parse_text(text, "cam.mod"),)))
+        solved = solve(plan, solver)
+        at: list = []
+        rows = use_rows(plan, solved, at=at)
+        cells = report.number_cells(solved.nominal.q_deg, solved.deformed.q_deg, solved.err_p,
+                                    solved.err_r)
+        assert len(at) == len(rows)
+        for r, i in zip(rows, at):
+            if i is None or not report._full(r):
+                continue
+            assert report._row_with(r, cells[i]) == report._row(r)
+            checked += 1
+    assert checked > 200
