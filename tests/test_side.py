@@ -160,6 +160,12 @@ def test_the_golden_cases_are_written_as_reviewed_with_a_helper(helped, monkeypa
 
 @pytest.mark.parametrize("mode", ["absj", "robtarget", "auto"])
 def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, monkeypatch):
+    """In blocks of a few literals (a CAM program's 1e5 in blocks of 8192):
+    every other block's texts and decoding made by the helper."""
+    from rapidcomp.compensate import edit as E
+    from rapidcomp.compensate import verify as V
+    monkeypatch.setattr(E, "PREPARE_BLOCK", 37)
+    monkeypatch.setattr(V, "RELEX_BLOCK", 41)
     made = _spy(monkeypatch)
     solver = load_solver(str(FIXTURES / "warm.csv"), None, False)
     for text in (cam_variants.bench_module(300, 3, ""),
@@ -179,6 +185,8 @@ def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, 
         assert got == alone
     assert made and None not in made
     assert "columns_diff" in made
+    if mode != "absj":
+        assert made.count("plain_block") >= 5 and made.count("_plain_values") >= 5
 
 
 def test_number_cells_are_the_cells_of_each_row():

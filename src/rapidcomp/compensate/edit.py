@@ -12,6 +12,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .. import side
 from ..edits import BY_SPAN, EditColumns, EditRun, SpanEdit, columns_of, sorted_columns
 from ..kinematics.conf import quadrant_miss
 from ..kinematics.frames import matrix_to_quat_wxyz
@@ -145,8 +146,14 @@ class Values:
         numbers and texts are alive for one block, not for all."""
         items = [(g, k) for g in gs if g.failure is None and g.mode == "rob"
                  for k in g.elements if ("texts", id(g), k) not in self._values]
+        # Every other block's texts made by the job's helper (side.py) while
+        # this process prepares the next block: taken once all are handed.
+        handed: list | None = [] if side.helps() else None
         for at in range(0, len(items), PREPARE_BLOCK):
-            self._prepare(items[at:at + PREPARE_BLOCK])
+            self._prepare(items[at:at + PREPARE_BLOCK],
+                          handed if (at // PREPARE_BLOCK) % 2 else None)
+        for block in handed or ():
+            self._store(*block[:-1], block[-1].get())
         # The jointtargets of moves turned into MoveAbsJ (a CAM program
         # entered from main: 1e5), their joints formatted as one batch.
         items = [(g, k) for g in gs if g.failure is None and g.mode == "absj" and not g.array
@@ -161,7 +168,10 @@ class Values:
             for (g, k), literal in zip(block, lits):
                 self._values[("absj", id(g), k)] = literal
 
-    def _prepare(self, items: list) -> None:
+    def _prepare(self, items: list, handed: list | None = None) -> None:
+        """The values and texts of `items`; with `handed`, the texts'
+        making is handed to the helper where it can be (plain literals),
+        and the block appended to `handed`, for _store."""
         new = [(g, k) for g, k in items if (id(g), k) not in self._values]
         if new:
             values = self._robtarget_values(new)
@@ -177,7 +187,17 @@ class Values:
         # (The edits made here, with their why: as field_edits makes them.)
         recs = [self.source(g, k).record for g, k in items]
         whys = [_why(g, k) for g, k in items]
-        block = records.robtarget_block(recs, R, p, conf, whys)
+        read = records.plain_inputs(recs) if handed is not None else None
+        if read is not None:
+            handed.append((items, recs, R, p, conf, whys,
+                           side.run(records.plain_block, *read, R, p, conf, whys)))
+            return
+        self._store(items, recs, R, p, conf, whys,
+                    records.robtarget_block(recs, R, p, conf, whys))
+
+    def _store(self, items, recs, R, p, conf, whys, block) -> None:
+        """Each item's new literal text and edits (block: the batch's
+        records.plain_block, None where a literal is not plain)."""
         if block is not None:
             # Plain literals: each one's new text and its edits in the batch's
             # columns.

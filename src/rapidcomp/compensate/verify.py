@@ -20,6 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import side
 from ..edits import EditColumns
 from ..errors import InternalError, RapidcompError
 from ..kinematics.frames import DEG
@@ -111,10 +112,19 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     # not to a list of blocks then concatenated.)
     values = np.empty((len(wants), 17))
     decimal = True
+    # Every other block of literals written whole is decoded by the job's
+    # helper (side.py), handed to it before this process decodes the one
+    # before it.
+    helped = side.helps()
+    handed: dict = {}
     for at in range(0, len(wants), RELEX_BLOCK):
         part = wants[at:at + RELEX_BLOCK]
-        if all(type(w) is str for w in part):
-            block = _plain_values(part)
+        after = wants[at + RELEX_BLOCK:at + 2 * RELEX_BLOCK]
+        if (helped and (at // RELEX_BLOCK) % 2 == 0 and after
+                and all(type(w) is str for w in after)):
+            handed[at + RELEX_BLOCK] = side.run(_plain_values, after)
+        if at in handed or all(type(w) is str for w in part):
+            block = handed.pop(at).get() if at in handed else _plain_values(part)
             if block is None:
                 return None
             block = block if decimal and block is not False else None

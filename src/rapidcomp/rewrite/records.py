@@ -172,12 +172,31 @@ def robtarget_block(recs: list[RobTarget], R: np.ndarray, p: np.ndarray, conf: n
     EditColumns, each literal's new text as one string made by splicing
     them into the literals (no list of 17 field texts per literal: the
     verification compares and decodes the literal as written)."""
-    bounds = _plain_bounds(recs)
-    if bounds is None or not recs:
+    read = plain_inputs(recs)
+    return None if read is None else plain_block(*read, R, p, conf, whys)
+
+
+def plain_inputs(recs: list[RobTarget]) -> tuple | None:
+    """What robtarget_block reads of the records (their literals' texts,
+    values (n, 17) and offsets in their module), when every one is a
+    compact literal (its text kept, not lexed field by field), else None."""
+    lits = [r.lexed for r in recs]
+    if not recs or not all(type(t) is str for t in lits):
+        return None
+    return (lits, np.array([r.values for r in recs], float).reshape(len(recs), 17),
+            np.array([r.span.start for r in recs], np.int64))
+
+
+def plain_block(lits: list[str], values: np.ndarray, offsets: np.ndarray, R: np.ndarray,
+                p: np.ndarray, conf: np.ndarray, whys: list[str]) -> Printed | None:
+    """robtarget_block of the records plain_inputs read (None: a literal
+    is not written plainly); a function of numbers and texts, which a CAM
+    program's job hands to its helper for every other block (side.py)."""
+    bounds = plain_bounds(lits)
+    if bounds is None:
         return None
     joined, off, starts, ends = bounds
-    n = len(recs)
-    values = np.array([r.values for r in recs], float).reshape(n, 17)
+    n = len(lits)
     p = np.asarray(p, float)
     turned, quats, mm = _new_numbers(np.ascontiguousarray(values[:, 3:7]), R, p)
     f, new = _touched(values, p, np.asarray(conf), turned, quats, mm)
@@ -191,7 +210,7 @@ def robtarget_block(recs: list[RobTarget], R: np.ndarray, p: np.ndarray, conf: n
                                               len(new)))
     rows, a, b, new, size = rows[changed], a[changed], b[changed], new[changed], size[changed]
     why = np.array(whys, dtype=object)[rows]
-    shift = np.array([r.span.start for r in recs], np.int64)[rows] - off[rows]
+    shift = offsets[rows] - off[rows]
     edits = EditColumns(a + shift, b + shift, new, why)
     spliced = apply_edits(joined, EditColumns(a, b, new, why, pack=False))
     grow = size - (b - a)
