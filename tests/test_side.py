@@ -170,6 +170,7 @@ def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, 
     solver = load_solver(str(FIXTURES / "warm.csv"), None, False)
     for text in (cam_variants.bench_module(300, 3, ""),
                  cam_variants.bench_module(300, 4, "    ConfL\\Off;\n"),
+                 cam_variants.bench_module(300, 5, "    ConfL\\On;\n"),
                  cam_variants.not_called(5), cam_variants.broken_runs(6)):
         def run():
             result = fix(Task("cam.mod", (parse_text(text, "cam.mod"),)), solver, mode,
@@ -186,7 +187,9 @@ def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, 
     assert made and None not in made
     assert "columns_diff" in made
     if mode != "absj":
-        assert made.count("plain_block") >= 5 and made.count("_plain_values") >= 5
+        assert made.count("plain_block") >= 5 and made.count("_wanted_values") >= 5
+    else:
+        assert made.count("absj_literals_of") >= 3 and made.count("_joint_rows") >= 3
 
 
 def test_number_cells_are_the_cells_of_each_row():

@@ -30,6 +30,7 @@ import select
 import signal
 import sys
 import time
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 
 from .cpus import side_by_side
@@ -86,6 +87,20 @@ def run(fn, *args) -> "Pending":
     if h is not None and h.alive:
         return h.call(fn, args)
     return Pending(None, fn, args)
+
+
+def alternate(fn, parts: Iterable[tuple]) -> Iterator:
+    """fn(*part) of each of `parts` (argument tuples), in order. With a
+    helper, of each two parts the second is handed to it before this
+    process makes the first (parts read one ahead: the inputs of two are
+    alive at a time)."""
+    it = iter(parts)
+    for first in it:
+        second = next(it, None) if helps() else None
+        handed = run(fn, *second) if second is not None else None
+        yield fn(*first)
+        if handed is not None:
+            yield handed.get()
 
 
 class Pending:

@@ -158,15 +158,20 @@ class Values:
         # entered from main: 1e5), their joints formatted as one batch.
         items = [(g, k) for g in gs if g.failure is None and g.mode == "absj" and not g.array
                  for k in g.elements if ("absj", id(g), k) not in self._values]
-        for at in range(0, len(items), PREPARE_BLOCK):
-            block = items[at:at + PREPARE_BLOCK]
-            if any(g.slots for g, _ in block):
-                q = np.array([self.joints(g, k) for g, k in block], float).reshape(-1, 6)
-            else:
-                q = self.solved.deformed.q_deg[[g.rows[k] for g, k in block]]
-            lits = records.absj_literals(q, [self.source(g, k).record for g, k in block])
+        blocks = [items[at:at + PREPARE_BLOCK] for at in range(0, len(items), PREPARE_BLOCK)]
+        # (Every other block's made by the job's helper: side.py.)
+        for block, lits in zip(blocks, side.alternate(records.absj_literals_of,
+                                                      map(self._absj_inputs, blocks))):
             for (g, k), literal in zip(block, lits):
                 self._values[("absj", id(g), k)] = literal
+
+    def _absj_inputs(self, block: list) -> tuple:
+        """(joints, external axes' texts) of a block's MoveAbsJ literals."""
+        if any(g.slots for g, _ in block):
+            q = np.array([self.joints(g, k) for g, k in block], float).reshape(-1, 6)
+        else:
+            q = self.solved.deformed.q_deg[[g.rows[k] for g, k in block]]
+        return q, records.absj_axes([self.source(g, k).record for g, k in block])
 
     def _prepare(self, items: list, handed: list | None = None) -> None:
         """The values and texts of `items`; with `handed`, the texts'

@@ -112,30 +112,15 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     # not to a list of blocks then concatenated.)
     values = np.empty((len(wants), 17))
     decimal = True
-    # Every other block of literals written whole is decoded by the job's
-    # helper (side.py), handed to it before this process decodes the one
-    # before it.
-    helped = side.helps()
-    handed: dict = {}
-    for at in range(0, len(wants), RELEX_BLOCK):
-        part = wants[at:at + RELEX_BLOCK]
-        after = wants[at + RELEX_BLOCK:at + 2 * RELEX_BLOCK]
-        if (helped and (at // RELEX_BLOCK) % 2 == 0 and after
-                and all(type(w) is str for w in after)):
-            handed[at + RELEX_BLOCK] = side.run(_plain_values, after)
-        if at in handed or all(type(w) is str for w in part):
-            block = handed.pop(at).get() if at in handed else _plain_values(part)
-            if block is None:
-                return None
-            block = block if decimal and block is not False else None
-        else:
-            flat = _flat_texts(part)
-            if flat is None:
-                return None
-            block = _decimals(flat) if decimal else None
+    ats = range(0, len(wants), RELEX_BLOCK)
+    # (Every other block decoded by the job's helper: side.py.)
+    for at, block in zip(ats, side.alternate(_wanted_values, ((wants[at:at + RELEX_BLOCK],)
+                                                              for at in ats))):
         if block is None:
+            return None
+        if block is False:
             decimal = False
-        else:
+        elif decimal:
             values[at:at + RELEX_BLOCK] = block
     if not decimal:
         # A kept field written otherwise than as a decimal number (0x1F in
@@ -196,6 +181,7 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
         # (Each move's joints a row of one array, not a tuple of floats; the
         # moves' offsets a block at a time, not 1e5 pairs of ints at once.)
         records = np.empty((len(file_keys), 6))
+        blocks = []
         for first in range(0, len(file_keys), RELEX_BLOCK):
             block = file_keys[first:first + RELEX_BLOCK]
             items = [converted[key] for key in block]
@@ -225,15 +211,16 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                         return None
                     if declared_joints is not None:
                         ks[-1] = k
-            # The block's other literals, each the text of an aggregate of
-            # numbers where the output holds it: decoded as the parser decodes
-            # them.
             known = [n for n, k in enumerate(ks) if k >= 0]
             if known:
                 records[[first + n for n in known]] = declared_joints[[ks[n] for n in known]]
             own = [n for n, k in enumerate(ks) if k < 0]
-            lits = [items[n][1] for n in own]
-            rows_of = _joint_rows(lits)
+            blocks.append((first, items, own, [items[n][1] for n in own]))
+        # Each block's other literals, each the text of an aggregate of
+        # numbers where the output holds it: decoded as the parser decodes
+        # them (every other block by the job's helper, side.py).
+        for (first, items, own, lits), rows_of in zip(blocks, side.alternate(
+                _joint_rows, ((lits,) for _, _, _, lits in blocks))):
             # An inline one must lex as one aggregate of numbers (NUMAGG): so
             # does a plain jointtarget of decimal numbers (_plain_numaggs);
             # else each is lexed.
@@ -369,11 +356,13 @@ def _plain_declared(eng, pieces: list[str]) -> tuple[list, np.ndarray] | None:
             aggs.append(m.group(5))
             pos = m.end()
         out.append(found)
-    # (A block at a time: their field texts are not all alive at once.)
+    # (A block at a time: their field texts are not all alive at once;
+    # every other block's read by the job's helper, side.py.)
     joints = np.empty((len(aggs), 6))
-    for at in range(0, len(aggs), RELEX_BLOCK):
+    ats = range(0, len(aggs), RELEX_BLOCK)
+    for at, rows in zip(ats, side.alternate(_joint_rows, ((aggs[at:at + RELEX_BLOCK],)
+                                                          for at in ats))):
         block = aggs[at:at + RELEX_BLOCK]
-        rows = _joint_rows(block)
         if not (rows is not None and _plain_numaggs(block)):
             return None
         joints[at:at + len(block)] = rows
@@ -484,6 +473,20 @@ def _flat_texts(wants: list) -> list[str] | None:
         else:
             out.extend(w)
     return out
+
+
+def _wanted_values(wants: list):
+    """The numbers of a block of wanted robtargets (literals given whole,
+    or field texts) as rows (n, 17): None where one is not written
+    plainly (_flat_texts), False where a field is not a decimal number
+    (_decimals)."""
+    if all(type(w) is str for w in wants):
+        return _plain_values(wants)
+    flat = _flat_texts(wants)
+    if flat is None:
+        return None
+    block = _decimals(flat)
+    return False if block is None else block
 
 
 def _plain_values(lits: list[str]):

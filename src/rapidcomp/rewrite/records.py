@@ -263,13 +263,24 @@ def absj_literals(q_deg: np.ndarray, sources: list[RobTarget]) -> list[str]:
     6) and its source: the joints formatted as one batch (fmt_many's texts
     are each number's alone); the external axes of a literal written
     plainly (plain_bounds) are the text inside its last brackets."""
+    return absj_literals_of(q_deg, absj_axes(sources))
+
+
+def absj_axes(sources: list[RobTarget]) -> list[str]:
+    """The external axes' text of each jointtarget that replaces a
+    robtarget (absj_literals)."""
+    if _plain_bounds(sources) is not None:
+        return [lit[lit.rindex("[") + 1:-2] for lit in (src.lexed for src in sources)]
+    return [",".join(src.texts[11:17]) for src in sources]
+
+
+def absj_literals_of(q_deg: np.ndarray, axes: list[str]) -> list[str]:
+    """absj_literals of joints and external axes' texts (absj_axes): a
+    function of numbers and texts, which a CAM program's job hands to its
+    helper for every other block (side.py)."""
     joints = numbers.fmt_many(np.asarray(q_deg, float).ravel().tolist(), numbers.JOINT_DECIMALS)
     joints = map(",".join, zip(*[iter(joints)] * 6))
-    if _plain_bounds(sources) is not None:
-        ext = [lit[lit.rindex("[") + 1:-2] for lit in (src.lexed for src in sources)]
-    else:
-        ext = [",".join(src.texts[11:17]) for src in sources]
-    return [f"[[{j}],[{e}]]" for j, e in zip(joints, ext)]
+    return [f"[[{j}],[{e}]]" for j, e in zip(joints, axes)]
 
 
 def absj_texts(q_deg, source: RobTarget) -> list[str]:
