@@ -17,13 +17,15 @@ fork shares (forked later, a 900 MB process paid more in copied pages than
 the helper saved). It exists only inside helping(), the command's own job
 (not in a library call, not in the process pool's workers, which keep both
 cores busy already, not on one CPU, not for a small task). It is silent,
-dies with its parent, and is always reaped when helping() ends; one call is
-in its hands at a time (a call waits for the one before to be taken).
+dies with its parent, and is always reaped when helping() ends. It makes
+the calls in the order given and keeps each result until it is fetched
+(get()): a result waiting for its turn is in its memory, not this one's.
 """
 
 from __future__ import annotations
 
 import fcntl
+import io
 import os
 import pickle
 import select
@@ -108,6 +110,7 @@ class Pending:
 
     def __init__(self, helper: "Helper | None", fn, args):
         self.helper = helper
+        self.number = 0                 # (its number in the helper's calls)
         self.fn = fn
         self.args = args
         self._done = False
@@ -161,9 +164,12 @@ def _start(started: list) -> None:
 
 
 def _serve(parent: int, calls: int, results: int, held) -> None:
-    """The helper's life: each call read (a pickle), made, its result sent
-    whole ((value,), or None when the call raised); it ends when its parent
-    closes the calls' pipe or dies."""
+    """The helper's life: each call read (a pickle: its number, function
+    and arguments) and made, its result ((value,), or None when the call
+    raised) kept until the parent fetches it (a pickle: the number) and
+    then sent as a pickle; it ends when its parent closes the calls' pipe
+    or dies. It writes only what is fetched, which its parent reads at
+    once: neither waits on the other's pipe while the other waits on its."""
     code = 1
     try:
         for sig in _HELD:
@@ -177,18 +183,27 @@ def _serve(parent: int, calls: int, results: int, held) -> None:
             os.dup2(null, fd)
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
         source = os.fdopen(calls, "rb", buffering=_BUFFER)
+        sink = os.fdopen(results, "wb", buffering=_BUFFER)
+        made: dict = {}
         while True:
             try:
-                fn, args = pickle.load(source)
+                asked = pickle.load(source)
             except EOFError:
                 break
+            if len(asked) == 3:              # (a call: made, kept until fetched)
+                n, fn, args = asked
+                asked = None
+                try:
+                    made[n] = (fn(*args),)
+                except Exception:
+                    made[n] = None
+                fn = args = None
+                continue
             try:
-                out = pickle.dumps((fn(*args),), protocol=pickle.HIGHEST_PROTOCOL)
-            except Exception:
-                out = pickle.dumps(None)
-            fn = args = None
-            _write_whole(results, out)
-            out = None
+                pickle.dump(made.pop(asked[0], None), sink, protocol=pickle.HIGHEST_PROTOCOL)
+            except Exception:                  # (not picklable: made by the parent)
+                os._exit(1)
+            sink.flush()
         code = 0
     except BaseException:
         pass
@@ -196,38 +211,30 @@ def _serve(parent: int, calls: int, results: int, held) -> None:
         os._exit(code)
 
 
-def _write_whole(fd: int, data: bytes) -> None:
-    """An 8-byte length, then the data."""
-    for part in (len(data).to_bytes(8, "little"), data):
-        view = memoryview(part)
-        while view:
-            view = view[os.write(fd, view):]
+class _Timed(io.RawIOBase):
+    """The results' pipe, read with a deadline (TimeoutError past it): a
+    result is read as it is unpickled, not whole first (the diff of a CAM
+    program is 30 MB, at the process's peak)."""
 
+    def __init__(self, fd: int):
+        self.fd = fd
+        self.deadline = 0.0
+        self._poll = select.poll()
+        self._poll.register(fd, select.POLLIN)
 
-def _read_whole(fd: int, deadline: float) -> bytearray | None:
-    """One message of _write_whole, or None (the other end closed, or the
-    deadline passed)."""
-    head = _read_exactly(fd, 8, deadline)
-    if head is None:
-        return None
-    return _read_exactly(fd, int.from_bytes(head, "little"), deadline)
+    def readable(self) -> bool:
+        return True
 
+    def close(self) -> None:
+        if not self.closed:
+            os.close(self.fd)
+        super().close()
 
-def _read_exactly(fd: int, n: int, deadline: float) -> bytearray | None:
-    buf = bytearray(n)
-    view = memoryview(buf)
-    got = 0
-    poll = select.poll()
-    poll.register(fd, select.POLLIN)
-    while got < n:
-        left = deadline - time.monotonic()
-        if left <= 0 or not poll.poll(left * 1000):
-            return None
-        k = os.readv(fd, [view[got:]])
-        if k == 0:
-            return None
-        got += k
-    return buf
+    def readinto(self, buffer) -> int:
+        left = self.deadline - time.monotonic()
+        if left <= 0 or not self._poll.poll(left * 1000):
+            raise TimeoutError
+        return os.readv(self.fd, [buffer])
 
 
 class Helper:
@@ -239,37 +246,40 @@ class Helper:
         # (Calls are pickled into the pipe as they are made: no copy of a
         # call's 30 MB alive as bytes.)
         self.calls = os.fdopen(calls, "wb", buffering=_BUFFER)
-        self.results = results
+        self._timed = _Timed(results)
+        self.results = io.BufferedReader(self._timed, _BUFFER)
         self.alive = True
-        self._waiting: Pending | None = None     # the call in its hands
+        self._calls = 0
         self.status: int | None = None
 
     def call(self, fn, args) -> Pending:
-        if self._waiting is not None:
-            self._waiting.get()                    # (one call at a time)
         pending = Pending(self, fn, args)
         if not self.alive:
             pending.helper = None
             return pending
+        self._calls += 1
+        pending.number = self._calls
         try:
-            pickle.dump((fn, args), self.calls, protocol=pickle.HIGHEST_PROTOCOL)
+            # (A call the pipe holds returns at once; a larger one when the
+            # helper, done with the calls before it, has read it.)
+            pickle.dump((pending.number, fn, args), self.calls,
+                        protocol=pickle.HIGHEST_PROTOCOL)
             self.calls.flush()
         except Exception:             # (not picklable, or the helper is gone)
             self._fail()
             pending.helper = None
-            return pending
-        self._waiting = pending
         return pending
 
     def take(self, pending: Pending):
-        """(value,) of the call, or None (made here then)."""
-        if pending is not self._waiting:
+        """(value,) of the call, fetched, or None (made here then)."""
+        if not self.alive:
             return None
-        self._waiting = None
         try:
-            data = _read_whole(self.results, time.monotonic() + PATIENCE_S)
-            got = pickle.loads(data) if data is not None else None
-        except Exception:
+            pickle.dump((pending.number,), self.calls, protocol=pickle.HIGHEST_PROTOCOL)
+            self.calls.flush()
+            self._timed.deadline = time.monotonic() + PATIENCE_S
+            got = pickle.load(self.results)
+        except Exception:     # (the helper died, is too slow, or sent a broken result)
             got = None
         if got is None:
             self._fail()
@@ -287,9 +297,9 @@ class Helper:
                 calls.close()
             except OSError:           # (what the buffer held could not go: the helper is gone)
                 pass
-        results, self.results = self.results, -1
-        if results >= 0:
-            os.close(results)
+        results, self.results = self.results, None
+        if results is not None:
+            results.close()
         self.alive = False
         if self.status is None:
             try:
