@@ -215,3 +215,38 @@ def test_number_cells_are_the_cells_of_each_row():
             assert report._row_with(r, cells[i]) == report._row(r)
             checked += 1
     assert checked > 200
+
+
+def test_a_child_forked_meanwhile_holds_none_of_the_helpers_pipes(helped, monkeypatch,
+                                                                   tmp_path):
+    """The parse's child (rapid/predecode.py), forked while the helper
+    works, closes the helper's pipes: else the helper would not see its
+    parent close them, and would be stopped rather than end."""
+    from rapidcomp.rapid import predecode as PD
+    monkeypatch.setattr(PD, "PREDECODE_FROM", 0)
+    monkeypatch.setattr(PD, "enabled", True)
+    monkeypatch.setattr(PD, "side_by_side", lambda: 2)
+    settled = tmp_path / "settled"
+
+    def decode_all(text):               # (in the child, once it is set up)
+        settled.touch()
+        time.sleep(30)
+    monkeypatch.setattr(PD, "_decode_all", decode_all)
+    with side.helping(1):
+        h = side._helper
+        pipes = {os.readlink(f"/proc/self/fd/{s.fileno()}") for s in (h.calls, h.results)}
+        children: list = []
+        PD.start("MODULE m\nENDMODULE\n", children)
+        (child,) = children
+        try:
+            deadline = time.monotonic() + 10
+            while not settled.exists():
+                assert time.monotonic() < deadline
+                time.sleep(0.01)
+            held = {os.readlink(f"/proc/{child.pid}/fd/{n}")
+                    for n in os.listdir(f"/proc/{child.pid}/fd")}
+            assert len(pipes) == 2 and not pipes & held
+        finally:
+            child.close()
+        helper = h
+    assert helper.status == 0         # (it ended by itself: its calls' pipe closed)

@@ -51,7 +51,8 @@ _BUFFER = 1 << 20
 _F_SETPIPE_SZ = 1031          # (fcntl.F_SETPIPE_SZ, Linux; Python 3.10+ names it)
 
 _helper: "Helper | None" = None
-_HELD = {signal.SIGINT, signal.SIGTERM}
+# The signals held back while a child is forked.
+HELD = {signal.SIGINT, signal.SIGTERM}
 _PR_SET_PDEATHSIG = 1
 
 
@@ -130,7 +131,7 @@ def _start(started: list) -> None:
     """Fork the helper and append it to `started` before a Ctrl-C can
     interrupt this process again (the caller reaps what the list holds)."""
     parent = os.getpid()
-    held = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, HELD)
     try:
         fds = []
         try:
@@ -163,6 +164,26 @@ def _start(started: list) -> None:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
+def settle_child(parent: int, held) -> None:
+    """What a child rapidcomp forks (the helper, rapid/predecode.py's)
+    does first: the default signals (a Ctrl-C ends it without a word; its
+    parent decides), dying with its parent, holding none of the caller's
+    terminal open nor a helper's pipes (a helper ends when its parent
+    closes them); then the signals its parent held back while it forked."""
+    for sig in HELD:
+        signal.signal(sig, signal.SIG_DFL)
+    import ctypes
+    ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    if os.getppid() != parent:
+        os._exit(1)
+    if _helper is not None:
+        _helper.drop_pipes()
+    null = os.open(os.devnull, os.O_RDWR)
+    for fd in (0, 1, 2):
+        os.dup2(null, fd)
+    signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
 def _serve(parent: int, calls: int, results: int, held) -> None:
     """The helper's life: each call read (a pickle: its number, function
     and arguments) and made, its result ((value,), or None when the call
@@ -172,16 +193,7 @@ def _serve(parent: int, calls: int, results: int, held) -> None:
     once: neither waits on the other's pipe while the other waits on its."""
     code = 1
     try:
-        for sig in _HELD:
-            signal.signal(sig, signal.SIG_DFL)
-        import ctypes
-        ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
-        if os.getppid() != parent:
-            os._exit(1)
-        null = os.open(os.devnull, os.O_RDWR)
-        for fd in (0, 1, 2):
-            os.dup2(null, fd)
-        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+        settle_child(parent, held)
         source = os.fdopen(calls, "rb", buffering=_BUFFER)
         sink = os.fdopen(results, "wb", buffering=_BUFFER)
         made: dict = {}
@@ -224,6 +236,9 @@ class _Timed(io.RawIOBase):
 
     def readable(self) -> bool:
         return True
+
+    def fileno(self) -> int:
+        return self.fd
 
     def close(self) -> None:
         if not self.closed:
@@ -284,6 +299,13 @@ class Helper:
         if got is None:
             self._fail()
         return got
+
+    def drop_pipes(self) -> None:
+        """In a child forked meanwhile: the pipes' descriptors closed, their
+        buffers left as they are (the child never writes them)."""
+        for stream in (self.calls, self.results):
+            if stream is not None:
+                os.close(stream.fileno())
 
     def _fail(self) -> None:
         """Nothing more is handed to a helper that failed once."""

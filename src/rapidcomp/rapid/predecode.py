@@ -33,6 +33,7 @@ import time
 import numpy as np
 
 from ..cpus import side_by_side
+from ..side import HELD, settle_child
 from ..rewrite.names import words
 from .values import (JointTarget, RobTarget, frame_fields, head_size, plain_values,
                      share_tail, tail_text)
@@ -66,7 +67,7 @@ def start(text: str, children: list) -> None:
     parent = os.getpid()
     # (Ctrl-C held back from the pipe to the list, and during the fork's
     # own hooks, which run in both processes.)
-    held = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, HELD)
     try:
         try:
             read, write = os.pipe()
@@ -86,29 +87,13 @@ def start(text: str, children: list) -> None:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
-_HELD = {signal.SIGINT, signal.SIGTERM}
-_PR_SET_PDEATHSIG = 1
-
-
 def _child(text: str, parent: int, read: int, write: int, held) -> None:
     """The child's life: silent, gone with its parent, and its result
     sent whole (an 8-byte length, then the pickle) or not at all."""
     code = 1
     try:
-        # Its signals are the default ones (a Ctrl-C ends it without a
-        # word; its parent decides), it dies with its parent, and it holds
-        # none of the caller's terminal or pipes open.
-        for sig in _HELD:
-            signal.signal(sig, signal.SIG_DFL)
-        import ctypes
-        ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
-        if os.getppid() != parent:
-            os._exit(1)
-        null = os.open(os.devnull, os.O_RDWR)
-        for fd in (0, 1, 2):
-            os.dup2(null, fd)
         os.close(read)
-        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+        settle_child(parent, held)
         data = pickle.dumps(_decode_all(text), protocol=pickle.HIGHEST_PROTOCOL)
         for part in (len(data).to_bytes(8, "little"), data):
             view = memoryview(part)
