@@ -32,6 +32,7 @@ import select
 import signal
 import sys
 import time
+import warnings
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 
@@ -148,8 +149,8 @@ def _start(started: list) -> None:
             except OSError:
                 pass
         try:
-            pid = os.fork()
-        except OSError:
+            pid = fork()
+        except Exception:          # (OSError; or anything else: no child then)
             for fd in fds:
                 os.close(fd)
             return
@@ -162,6 +163,16 @@ def _start(started: list) -> None:
         started.append(Helper(pid, calls_w, results_r))
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
+def fork() -> int:
+    """os.fork, where a child of rapidcomp's is forked: without the warning
+    Python 3.12 gives for a process with threads (numpy's BLAS keeps one;
+    the child runs none of their code), which a warnings filter set to
+    error would raise after the child exists, leaving it unknown."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        return os.fork()
 
 
 def settle_child(parent: int, held) -> None:
@@ -223,19 +234,27 @@ def _serve(parent: int, calls: int, results: int, held) -> None:
         os._exit(code)
 
 
-class _Timed(io.RawIOBase):
-    """The results' pipe, read with a deadline (TimeoutError past it): a
-    result is read as it is unpickled, not whole first (the diff of a CAM
-    program is 30 MB, at the process's peak)."""
+class _Pipe(io.RawIOBase):
+    """One end of a pipe to the helper, read or written with a deadline
+    (TimeoutError past it): a result is read as it is unpickled, not whole
+    first (the diff of a CAM program is 30 MB, at the process's peak); a
+    call is written as it is pickled, and a helper stuck in a call before
+    it does not hold this process (a call is larger than the pipe)."""
 
-    def __init__(self, fd: int):
+    def __init__(self, fd: int, writing: bool):
         self.fd = fd
         self.deadline = 0.0
+        self._writing = writing
+        if writing:
+            os.set_blocking(fd, False)     # (a write takes what the pipe has room for)
         self._poll = select.poll()
-        self._poll.register(fd, select.POLLIN)
+        self._poll.register(fd, select.POLLOUT if writing else select.POLLIN)
 
     def readable(self) -> bool:
-        return True
+        return not self._writing
+
+    def writable(self) -> bool:
+        return self._writing
 
     def fileno(self) -> int:
         return self.fd
@@ -245,11 +264,22 @@ class _Timed(io.RawIOBase):
             os.close(self.fd)
         super().close()
 
-    def readinto(self, buffer) -> int:
+    def _wait(self) -> None:
         left = self.deadline - time.monotonic()
         if left <= 0 or not self._poll.poll(left * 1000):
             raise TimeoutError
+
+    def readinto(self, buffer) -> int:
+        self._wait()
         return os.readv(self.fd, [buffer])
+
+    def write(self, data) -> int:
+        while True:
+            self._wait()
+            try:
+                return os.write(self.fd, data)
+            except BlockingIOError:        # (room for less than PIPE_BUF: wait again)
+                pass
 
 
 class Helper:
@@ -260,9 +290,9 @@ class Helper:
         self.pid = pid
         # (Calls are pickled into the pipe as they are made: no copy of a
         # call's 30 MB alive as bytes.)
-        self.calls = os.fdopen(calls, "wb", buffering=_BUFFER)
-        self._timed = _Timed(results)
-        self.results = io.BufferedReader(self._timed, _BUFFER)
+        self._ends = (_Pipe(calls, True), _Pipe(results, False))
+        self.calls = io.BufferedWriter(self._ends[0], _BUFFER)
+        self.results = io.BufferedReader(self._ends[1], _BUFFER)
         self.alive = True
         self._calls = 0
         self.status: int | None = None
@@ -274,6 +304,7 @@ class Helper:
             return pending
         self._calls += 1
         pending.number = self._calls
+        self._give(PATIENCE_S)
         try:
             # (A call the pipe holds returns at once; a larger one when the
             # helper, done with the calls before it, has read it.)
@@ -289,16 +320,22 @@ class Helper:
         """(value,) of the call, fetched, or None (made here then)."""
         if not self.alive:
             return None
+        self._give(PATIENCE_S)
         try:
             pickle.dump((pending.number,), self.calls, protocol=pickle.HIGHEST_PROTOCOL)
             self.calls.flush()
-            self._timed.deadline = time.monotonic() + PATIENCE_S
             got = pickle.load(self.results)
         except Exception:     # (the helper died, is too slow, or sent a broken result)
             got = None
         if got is None:
             self._fail()
         return got
+
+    def _give(self, seconds: float) -> None:
+        """What is written and read from now on is so within `seconds`."""
+        deadline = time.monotonic() + seconds
+        for end in self._ends:
+            end.deadline = deadline
 
     def drop_pipes(self) -> None:
         """In a child forked meanwhile: the pipes' descriptors closed, their
@@ -315,6 +352,7 @@ class Helper:
     def close(self) -> None:
         calls, self.calls = self.calls, None
         if calls is not None:
+            self._give(0.1)
             try:
                 calls.close()
             except OSError:           # (what the buffer held could not go: the helper is gone)

@@ -33,7 +33,7 @@ import time
 import numpy as np
 
 from ..cpus import side_by_side
-from ..side import HELD, settle_child
+from ..side import HELD, fork, settle_child
 from ..rewrite.names import words
 from .values import (JointTarget, RobTarget, frame_fields, head_size, plain_values,
                      share_tail, tail_text)
@@ -74,8 +74,8 @@ def start(text: str, children: list) -> None:
         except OSError:
             return
         try:
-            pid = os.fork()
-        except OSError:
+            pid = fork()
+        except Exception:          # (OSError; or anything else: no child then)
             os.close(read)
             os.close(write)
             return
