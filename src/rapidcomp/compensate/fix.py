@@ -198,10 +198,6 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     at: list | None = [] if cells is not None else None
     rows = use_rows(plan, solved, group_of=group_of, actions=actions, verified=verified,
                     mode=mode, written_conf=written_conf, at=at)
-    if cells is not None:
-        made = cells.get()
-        cells = tuple(None if i is None else made[i] for i in at)
-        made = at = None
     notes = plan_notes + _notes(rows, gs)
     if transient is not None:
         notes += _transient_notes(transient[0], state_errors if any(
@@ -211,6 +207,11 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # instead of growing the process further).
     plan = solved = gs = actions = group_of = written_conf = verified = None
     release()
+    # (The cells taken from the helper into what those freed.)
+    if cells is not None:
+        made = cells.get()
+        cells = tuple(None if i is None else made[i] for i in at)
+        made = at = None
     modules = []
     for fi, pf in enumerate(task.files):
         es = file_edits.get(fi, [])
