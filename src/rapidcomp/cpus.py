@@ -1,6 +1,7 @@
 """How many CPUs this process may use: where rapidcomp runs work side by
-side (the IK's two threads, the parse's second process, the pool of two
-workers for several modules), it does so only where there are two."""
+side (the IK's two threads, the parse's second process, a big job's
+helper process, the pool of two workers for several modules), it does so
+only where there are two."""
 
 from __future__ import annotations
 

@@ -2,14 +2,16 @@
 #14: both cores for one big module).
 
 Past the parse a job is one chain of stages on one core. Some of its work
-is a function of numbers and texts alone and is needed only later: the
-report's number cells of every target (known once the joints are solved,
-written once the report is), the diff of a module (known once its output is
-printed, written with the report). run(fn, *args) hands such a call to the
-helper and returns at once; get() then gives what fn(*args) returns, made
-by the helper, or here when there is no helper or it failed. The result is
-the same either way: the same function on the same (pickled) values; only
-where the work is done differs.
+is a function of numbers and texts alone: needed only later (the report's
+number cells of every target, known once the joints are solved, written
+with the report; the diff of a module, known once its output is printed),
+or in blocks that follow one another (the new texts of 8192 literals, the
+numbers of 8192 literals read back: alternate() hands every other block).
+run(fn, *args) hands such a call to the helper and returns at once; get()
+then gives what fn(*args) returns, made by the helper, or here when there
+is no helper or it failed. The result is the same either way: the same
+function on the same (pickled) values; only where the work is done
+differs.
 
 The helper is forked where the job starts, before the parse: the process
 is small then, and its later writes to its own memory copy few pages a
@@ -24,7 +26,6 @@ the calls in the order given and keeps each result until it is fetched
 
 from __future__ import annotations
 
-import fcntl
 import io
 import os
 import pickle
@@ -39,17 +40,17 @@ from contextlib import contextmanager
 from .cpus import side_by_side
 
 # Tasks from this size on (bytes of their modules) get a helper: below it
-# what the stages hand off costs less than a fork (1e4 targets, 1.7 MB:
-# ~30 ms to hand off).
+# the work handed off is about what handing it off costs (in-process,
+# alternating: 6e3 targets, 1 MB, 0.71-0.74 s either way; 1e4 targets,
+# 1.7 MB, 1.02-1.26 s against 1.15-1.28 s).
 HELP_FROM = 1 << 20
 # Off in the process pool's workers (job.py).
 enabled = True
-# How long a call may take in the helper, beyond what it would take here
-# (its inputs are moved once each way): a helper that takes longer is
-# stopped and the call made here.
+# How long handing a call off or fetching its result may wait on the
+# helper (for room in its pipe, for the result): a helper that takes longer
+# is stopped and the call made here.
 PATIENCE_S = 30.0
 _BUFFER = 1 << 20
-_F_SETPIPE_SZ = 1031          # (fcntl.F_SETPIPE_SZ, Linux; Python 3.10+ names it)
 
 _helper: "Helper | None" = None
 # The signals held back while a child is forked.
@@ -143,10 +144,11 @@ def _start(started: list) -> None:
                 os.close(fd)
             return
         calls_r, calls_w, results_r, results_w = fds
+        import fcntl                      # (Unix only: here on Linux)
         for fd in (calls_w, results_w):
             try:          # (fewer switches between the two: ~0.1 s per 60 MB -> ~0.06)
-                fcntl.fcntl(fd, _F_SETPIPE_SZ, 1 << 20)
-            except OSError:
+                fcntl.fcntl(fd, fcntl.F_SETPIPE_SZ, 1 << 20)
+            except (OSError, AttributeError):
                 pass
         try:
             pid = fork()
