@@ -88,10 +88,7 @@ def helps() -> bool:
 def run(fn, *args) -> "Pending":
     """fn(*args), made by the helper if there is one (fn: a module-level
     function; args and result: picklable)."""
-    h = _helper
-    if h is not None and h.alive:
-        return h.call(fn, args)
-    return Pending(None, fn, args)
+    return _helper.call(fn, args) if helps() else Pending(None, fn, args)
 
 
 def alternate(fn, parts: Iterable[tuple]) -> Iterator:

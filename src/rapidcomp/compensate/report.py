@@ -15,11 +15,9 @@ from itertools import islice
 
 import numpy as np
 
-from ..kinematics.frames import DEG
-
 from .fix import FixResult
 from .plan import line_ranges
-from .rows import FIELDS, UNTOUCHED, UseRow, rounded_rows
+from .rows import FIELDS, UNTOUCHED, UseRow, number_columns
 
 
 def _num(x, fmt: str) -> str:
@@ -183,16 +181,15 @@ def _table(rows: list[tuple[UseRow, str | None]], transient: bool = False) -> It
            "conf before | conf after | notes |",
            "|---:|---|---|---|---|---|---|---|---|---:|---:|---:|---|---|---|"]
     yield from out
-    yield from (_row(r) if c is None else _row_with(r, c) for r, c in rows)
+    yield from (_row(r, c) for r, c in rows)
 
 
-# A row with every number (a CAM report has 1e5): one % operation, the same
+# A row with every number (a CAM report has 1e5): two % operations, the same
 # conversions as format() (tested against _row_general). Its numbers from
-# the nominal joints to the error are _CELLS, which number_cells makes.
+# the nominal joints to the error are _CELLS, which number_cells makes too.
 _CELLS = (" ".join(["%.4f"] * 6) + " | " + " ".join(["%.4f"] * 6) + " | "
           + " ".join(["%+.5f"] * 6) + " | %.1f | %.4f")
-_FULL_ROW = "| %s | %s | %s | %s | %s | %s | " + _CELLS + " | %.3f | %s | %s | %s |"
-_ROW_WITH = "| %s | %s | %s | %s | %s | %s | %s | %.3f | %s | %s | %s |"
+_FULL_ROW = "| %s | %s | %s | %s | %s | %s | %s | %.3f | %s | %s | %s |"
 
 
 def _full(r: UseRow) -> bool:
@@ -202,40 +199,29 @@ def _full(r: UseRow) -> bool:
                 or r.residual_um is None)
 
 
-def _row(r: UseRow) -> str:
+def _row(r: UseRow, cells: str | None = None) -> str:
+    """r's line of the table; `cells`: its number cells when made already
+    (number_cells, of r's own numbers)."""
     if not _full(r):
         return _row_general(r)
+    if cells is None:
+        cells = _CELLS % (*r.nominal_deg, *r.compensated_deg, *r.delta_deg, r.error_um,
+                          r.error_deg)
     return _FULL_ROW % (r.line, r.instruction, _cell(r.target), r.status, _cell(r.rule or "-"),
-                        _cell(r.action or "-"), *r.nominal_deg, *r.compensated_deg,
-                        *r.delta_deg, r.error_um, r.error_deg, r.residual_um,
-                        _conf(r.conf_before), _conf(r.conf_after), _notes(r))
-
-
-def _row_with(r: UseRow, cells: str) -> str:
-    """_row(r), its number cells given (those of r's own numbers)."""
-    if not _full(r):
-        return _row_general(r)
-    return _ROW_WITH % (r.line, r.instruction, _cell(r.target), r.status, _cell(r.rule or "-"),
                         _cell(r.action or "-"), cells, r.residual_um, _conf(r.conf_before),
                         _conf(r.conf_after), _notes(r))
 
 
 def number_cells(qn_deg, qc_deg, err_p, err_r) -> list[str | None]:
-    """Of each solved target (its nominal and compensated joints, and the
-    uncompensated program's errors: Solved's q_deg rows, err_p, err_r):
-    the table's cells from its nominal joints to its error, as _row writes
-    them for a row with these numbers (rows.py makes a row's numbers so:
-    each joint column rounded_rows' row, err_p x 1000, err_r / DEG); None
-    where the joints have a NaN. A CAM report has 1e5: made beside the job
-    (side.py) while it goes on."""
-    qn, qc = np.asarray(qn_deg, float), np.asarray(qc_deg, float)
-    if qn.ndim != 2 or qn.shape[1] != 6:
-        return [None] * len(qn)
-    cols = (rounded_rows(qn), rounded_rows(qc), rounded_rows(qc - qn))
-    um = (np.asarray(err_p, float) * 1000).tolist()
-    deg = (np.asarray(err_r, float) / DEG).tolist()
+    """Of each solved target (Solved's q_deg rows, err_p, err_r): the
+    table's cells from its nominal joints to its error, as _row writes
+    them for a row of these numbers (rows.number_columns, which the rows
+    take too); None where the joints have a NaN. A CAM report has 1e5:
+    made beside the job (side.py) while it goes on."""
+    if np.ndim(qn_deg) != 2 or np.shape(qn_deg)[1] != 6:
+        return [None] * len(qn_deg)
     return [None if a is None or b is None or c is None else _CELLS % (*a, *b, *c, e, d)
-            for a, b, c, e, d in zip(*cols, um, deg)]
+            for a, b, c, e, d in zip(*number_columns(qn_deg, qc_deg, err_p, err_r))]
 
 
 def _row_general(r: UseRow) -> str:

@@ -77,16 +77,25 @@ def rounded_rows(a: np.ndarray) -> list[tuple[float, ...] | None]:
     return [None if bad else tuple(r) for r, bad in zip(rows, np.isnan(a).any(axis=1).tolist())]
 
 
+def number_columns(qn_deg, qc_deg, err_p, err_r) -> tuple[list, ...]:
+    """A row's numbers for every solved target (Solved's q_deg rows,
+    err_p, err_r): its nominal, compensated and delta joints (rounded_rows
+    of each) and its uncompensated error in um and deg. The rows take them
+    (_Columns), and so do the report's number cells made ahead
+    (report.number_cells): one computation, the same numbers."""
+    qn, qc = np.asarray(qn_deg, float), np.asarray(qc_deg, float)
+    return (rounded_rows(qn), rounded_rows(qc), rounded_rows(qc - qn),
+            (np.asarray(err_p, float) * 1000).tolist(), (np.asarray(err_r, float) / DEG).tolist())
+
+
 class _Columns:
     """The solved numbers of every row as Python lists, converted once (a
     CAM program has 1e5 rows; numpy scalars one by one cost ~10x more).
     Same values: elementwise, as for one row."""
 
     def __init__(self, solved: Solved):
-        qn, qc = solved.nominal.q_deg, solved.deformed.q_deg
-        self.qn, self.qc, self.dq = (rounded_rows(qn), rounded_rows(qc),
-                                     rounded_rows(qc - qn))
-        self.err_p, self.err_r = solved.err_p.tolist(), solved.err_r.tolist()
+        self.qn, self.qc, self.dq, self.err_um, self.err_deg = number_columns(
+            solved.nominal.q_deg, solved.deformed.q_deg, solved.err_p, solved.err_r)
         self.res_mm = solved.deformed.residual_mm.tolist()
         self.res_rad = solved.deformed.residual_rad.tolist()
         self.disp = solved.displacement_um_per_mm.tolist()
@@ -137,7 +146,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
     pick = solved.picks[i]
     qn = cols.qn[i]
     has_q = pick.failure is None
-    error = ((cols.err_p[i] * 1000, cols.err_r[i] / DEG) if has_q else (None, None))
+    error = (cols.err_um[i], cols.err_deg[i]) if has_q else (None, None)
     # confdata is a robtarget's: a MoveAbsJ has none. (A record's conf is
     # a tuple of ints already.)
     conf_before = u.conf
