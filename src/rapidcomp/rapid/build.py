@@ -8,6 +8,7 @@ Anonymous punctuation is filtered by Lark, so rules keep named terminals
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import sys
 from functools import partial
@@ -34,32 +35,69 @@ _INF = float("inf")
 # The nodes of one-token statements and declarations, made as their classes
 # make them (construct.py; a CAM program's 1e5 moves have ~15 each).
 _span = partial(tuple.__new__, Span)
-_arg, _ref, _num, _call, _decl, _numagg = (maker(c) for c in (A.Arg, A.Ref, A.Num, A.ProcCall,
-                                                               A.DataDecl, A.NumAgg))
+_arg, _ref, _call, _decl, _numagg = (maker(c) for c in (A.Arg, A.Ref, A.ProcCall, A.DataDecl,
+                                                         A.NumAgg))
 
 # The arguments after a FAST_CALL's first, by their text: a CAM program
-# repeats ",v100,z1,tool1\WObj:=wobj1;" 1e5 times. Lexed once, relative
-# offsets; the names' strings shared by every call that has them.
-_TAILS: dict[str, tuple] = {}
+# repeats ",v100,z1,tool1\\WObj:=wobj1;" 1e5 times. Lexed once into a
+# function of the text's offset that makes those arguments' nodes (written
+# for that text: its words and relative spans constants, each node set slot
+# by slot as construct.maker sets it, without a call per node); the names'
+# strings shared by every call that has them.
+_TAILS: dict[str, object] = {}
 
 
-def _fast_tail(tail: str) -> tuple:
+def _fast_tail(tail: str):
+    """make(at) -> the Arg nodes of the arguments in `tail`, a FAST_CALL's
+    text after its first argument, found at offset `at`."""
     hit = _TAILS.get(tail)
     if hit is None:
-        items = []
-        for m in _FAST_ITEM.finditer(tail):
-            opt, val, word = m.group(1, 2, 3)
-            if word is not None:
-                items.append((None, None, word, m.start(3), m.end(3), 0, 0, False, None))
-            else:
-                is_num = val is not None and val[0].isdigit()
-                items.append((opt, val, None, m.start(), m.end(),
-                              m.start(2), m.end(2), is_num,
-                              number_value(val) if is_num else None))
         if len(_TAILS) >= 4096:        # bounded: many programs in one process
             _TAILS.clear()
-        hit = _TAILS[tail] = tuple(items)
+        hit = _TAILS[tail] = _tail_maker(tail)
     return hit
+
+
+def _tail_maker(tail: str):
+    ns: dict = {"_t": tuple.__new__, "_Span": Span, "_o": object.__new__}
+    made: set = set()
+
+    def node(cls, var: str, values: list[str]) -> list[str]:
+        # var = cls(*values), made as construct.maker makes it.
+        key = cls.__name__
+        if key not in made:
+            made.add(key)
+            ns["_" + key] = cls
+            for i, f in enumerate(dataclasses.fields(cls)):
+                ns[f"_{key}{i}"] = getattr(cls, f.name).__set__
+        return [f"    {var} = _o(_{key})"] + [f"    _{key}{i}({var}, {v})"
+                                             for i, v in enumerate(values)]
+
+    lines = ["def make(at):"]
+    out = []
+    for j, m in enumerate(_FAST_ITEM.finditer(tail)):
+        opt, val, word = m.group(1, 2, 3)
+        ns[f"opt{j}"], ns[f"val{j}"], ns[f"word{j}"] = opt, val, word
+        if word is not None:
+            lines.append(f"    s{j} = _t(_Span, (at + {m.start(3)}, at + {m.end(3)}))")
+            lines += node(A.Ref, f"r{j}", [f"word{j}", "()", f"s{j}"])
+            lines += node(A.Arg, f"a{j}", ["'pos'", "None", f"r{j}", f"s{j}"])
+        elif val is None:
+            lines.append(f"    s{j} = _t(_Span, (at + {m.start()}, at + {m.end()}))")
+            lines += node(A.Arg, f"a{j}", ["'opt'", f"opt{j}", "None", f"s{j}"])
+        else:
+            lines.append(f"    v{j} = _t(_Span, (at + {m.start(2)}, at + {m.end(2)}))")
+            if val[0].isdigit():
+                ns[f"num{j}"] = number_value(val)
+                lines += node(A.Num, f"r{j}", [f"num{j}", f"val{j}", f"v{j}"])
+            else:
+                lines += node(A.Ref, f"r{j}", [f"val{j}", "()", f"v{j}"])
+            lines.append(f"    s{j} = _t(_Span, (at + {m.start()}, at + {m.end()}))")
+            lines += node(A.Arg, f"a{j}", ["'optval'", f"opt{j}", f"r{j}", f"s{j}"])
+        out.append(f"a{j}")
+    lines.append(f"    return ({''.join(a + ', ' for a in out)})")
+    exec("\n".join(lines) + "\n", ns)
+    return ns["make"]
 
 
 class NumberOutOfRange(Exception):
@@ -289,20 +327,10 @@ class NodeBuilder:
             span = _span((base + pos, base + end))
             args = [_arg("pos", None, _ref(first.group(3), (), span), span)]
             pos = end
-        at = base + pos
-        for opt, val, word, s0, e0, s2, e2, is_num, num in _fast_tail(text[pos:]):
-            if word is not None:
-                span = _span((at + s0, at + e0))
-                args.append(_arg("pos", None, _ref(word, (), span), span))
-            elif val is None:
-                args.append(_arg("opt", opt, None, _span((at + s0, at + e0))))
-            else:
-                vspan = _span((at + s2, at + e2))
-                value = _num(num, val, vspan) if is_num else _ref(val, (), vspan)
-                args.append(_arg("optval", opt, value, _span((at + s0, at + e0))))
         # (Plain by construction: names, a numeric aggregate, \Opt, \Opt:=name
         # or number.)
-        return _call(name, tuple(args), _span((base, base + len(text))), True)
+        return _call(name, (*args, *_fast_tail(text[pos:])(base + pos)),
+                     _span((base, base + len(text))), True)
 
     def fast_decl(self, c):
         """A FAST_DECL token: one-line declaration with a numeric aggregate."""
