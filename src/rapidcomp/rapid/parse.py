@@ -167,7 +167,10 @@ def _walk(source, stmts, routine: str, loops: list, out: list, cond: int = 0,
         if t is A.ProcCall:
             spec = motion_spec(s.name)
             if spec is not None:
-                guarded = [replace(lp, guarded=k < cond) for k, lp in enumerate(loops)]
+                # (Outside any loop, as a CAM program's 1e5 moves are: no
+                # list made per move.)
+                guarded = ([replace(lp, guarded=k < cond) for k, lp in enumerate(loops)]
+                           if loops else ())
                 out.append(_motion(source, s, spec, routine, guarded, known))
         elif t is A.For:
             loops.append(Loop(s.var, s.start, s.stop, s.step, s.span))
