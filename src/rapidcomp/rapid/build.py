@@ -35,30 +35,75 @@ _INF = float("inf")
 # The nodes of one-token statements and declarations, made as their classes
 # make them (construct.py; a CAM program's 1e5 moves have ~15 each).
 _span = partial(tuple.__new__, Span)
-_arg, _ref, _call, _decl, _numagg = (maker(c) for c in (A.Arg, A.Ref, A.ProcCall, A.DataDecl,
-                                                         A.NumAgg))
+_arg, _ref, _num, _call, _decl, _numagg = (maker(c) for c in (A.Arg, A.Ref, A.Num, A.ProcCall,
+                                                               A.DataDecl, A.NumAgg))
 
 # The arguments after a FAST_CALL's first, by their text: a CAM program
-# repeats ",v100,z1,tool1\\WObj:=wobj1;" 1e5 times. Lexed once into a
-# function of the text's offset that makes those arguments' nodes (written
-# for that text: its words and relative spans constants, each node set slot
-# by slot as construct.maker sets it, without a call per node); the names'
+# repeats ",v100,z1,tool1\\WObj:=wobj1;" 1e5 times. Lexed once; the names'
 # strings shared by every call that has them.
-_TAILS: dict[str, object] = {}
+_TAILS: dict[str, "_Tail"] = {}
+# Uses of one argument text after which its nodes are made by a function
+# written for it (~0.4 ms to write; then each call's nodes ~1 us faster). A
+# program whose every line has a text of its own (\ID:=n of a MultiMove
+# program) never pays for one.
+COMPILE_AFTER = 256
 
 
-def _fast_tail(tail: str):
-    """make(at) -> the Arg nodes of the arguments in `tail`, a FAST_CALL's
-    text after its first argument, found at offset `at`."""
+class _Tail:
+    """The arguments in `tail`, a FAST_CALL's text after its first: nodes(at)
+    makes their Arg nodes for the text found at offset `at`."""
+
+    __slots__ = ("items", "uses", "make")
+
+    def __init__(self, tail: str):
+        items = []
+        for m in _FAST_ITEM.finditer(tail):
+            opt, val, word = m.group(1, 2, 3)
+            if word is not None:
+                items.append((None, None, word, m.start(3), m.end(3), 0, 0, False, None))
+            else:
+                is_num = val is not None and val[0].isdigit()
+                items.append((opt, val, None, m.start(), m.end(),
+                              m.start(2), m.end(2), is_num,
+                              number_value(val) if is_num else None))
+        self.items = tuple(items)
+        self.uses = 0
+        self.make = None
+
+    def nodes(self, at: int) -> tuple:
+        make = self.make
+        if make is not None:
+            return make(at)
+        self.uses += 1
+        if self.uses >= COMPILE_AFTER:
+            self.make = _tail_maker(self.items)
+        args = []
+        for opt, val, word, s0, e0, s2, e2, is_num, num in self.items:
+            if word is not None:
+                span = _span((at + s0, at + e0))
+                args.append(_arg("pos", None, _ref(word, (), span), span))
+            elif val is None:
+                args.append(_arg("opt", opt, None, _span((at + s0, at + e0))))
+            else:
+                vspan = _span((at + s2, at + e2))
+                value = _num(num, val, vspan) if is_num else _ref(val, (), vspan)
+                args.append(_arg("optval", opt, value, _span((at + s0, at + e0))))
+        return tuple(args)
+
+
+def _fast_tail(tail: str) -> _Tail:
     hit = _TAILS.get(tail)
     if hit is None:
         if len(_TAILS) >= 4096:        # bounded: many programs in one process
             _TAILS.clear()
-        hit = _TAILS[tail] = _tail_maker(tail)
+        hit = _TAILS[tail] = _Tail(tail)
     return hit
 
 
-def _tail_maker(tail: str):
+def _tail_maker(items: tuple):
+    """make(at): _Tail.nodes of these items, written as code (their words,
+    values and relative spans constants; each node set slot by slot as
+    construct.maker sets it, without a call per node)."""
     ns: dict = {"_t": tuple.__new__, "_Span": Span, "_o": object.__new__}
     made: set = set()
 
@@ -75,24 +120,20 @@ def _tail_maker(tail: str):
 
     lines = ["def make(at):"]
     out = []
-    for j, m in enumerate(_FAST_ITEM.finditer(tail)):
-        opt, val, word = m.group(1, 2, 3)
-        ns[f"opt{j}"], ns[f"val{j}"], ns[f"word{j}"] = opt, val, word
+    for j, (opt, val, word, s0, e0, s2, e2, is_num, num) in enumerate(items):
+        ns[f"opt{j}"], ns[f"val{j}"], ns[f"word{j}"], ns[f"num{j}"] = opt, val, word, num
         if word is not None:
-            lines.append(f"    s{j} = _t(_Span, (at + {m.start(3)}, at + {m.end(3)}))")
+            lines.append(f"    s{j} = _t(_Span, (at + {s0}, at + {e0}))")
             lines += node(A.Ref, f"r{j}", [f"word{j}", "()", f"s{j}"])
             lines += node(A.Arg, f"a{j}", ["'pos'", "None", f"r{j}", f"s{j}"])
         elif val is None:
-            lines.append(f"    s{j} = _t(_Span, (at + {m.start()}, at + {m.end()}))")
+            lines.append(f"    s{j} = _t(_Span, (at + {s0}, at + {e0}))")
             lines += node(A.Arg, f"a{j}", ["'opt'", f"opt{j}", "None", f"s{j}"])
         else:
-            lines.append(f"    v{j} = _t(_Span, (at + {m.start(2)}, at + {m.end(2)}))")
-            if val[0].isdigit():
-                ns[f"num{j}"] = number_value(val)
-                lines += node(A.Num, f"r{j}", [f"num{j}", f"val{j}", f"v{j}"])
-            else:
-                lines += node(A.Ref, f"r{j}", [f"val{j}", "()", f"v{j}"])
-            lines.append(f"    s{j} = _t(_Span, (at + {m.start()}, at + {m.end()}))")
+            lines.append(f"    v{j} = _t(_Span, (at + {s2}, at + {e2}))")
+            lines += (node(A.Num, f"r{j}", [f"num{j}", f"val{j}", f"v{j}"]) if is_num
+                      else node(A.Ref, f"r{j}", [f"val{j}", "()", f"v{j}"]))
+            lines.append(f"    s{j} = _t(_Span, (at + {s0}, at + {e0}))")
             lines += node(A.Arg, f"a{j}", ["'optval'", f"opt{j}", f"r{j}", f"s{j}"])
         out.append(f"a{j}")
     lines.append(f"    return ({''.join(a + ', ' for a in out)})")
@@ -329,7 +370,7 @@ class NodeBuilder:
             pos = end
         # (Plain by construction: names, a numeric aggregate, \Opt, \Opt:=name
         # or number.)
-        return _call(name, (*args, *_fast_tail(text[pos:])(base + pos)),
+        return _call(name, (*args, *_fast_tail(text[pos:]).nodes(base + pos)),
                      _span((base, base + len(text))), True)
 
     def fast_decl(self, c):
