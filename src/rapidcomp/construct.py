@@ -24,8 +24,7 @@ def maker(cls):
     args = ", ".join(f"v{i}" for i in range(len(names)))
     namespace = {"_new": object.__new__, "_cls": cls}
     if "__slots__" in cls.__dict__:
-        namespace.update({f"_set{i}": getattr(cls, name).__set__
-                          for i, name in enumerate(names)})
+        namespace.update({f"_set{i}": s for i, s in enumerate(slot_setters(cls))})
         binds = "".join(f", _s{i}=_set{i}" for i in range(len(names)))
         body = "".join(f"    _s{i}(o, v{i})\n" for i in range(len(names)))
     else:
@@ -36,3 +35,12 @@ def maker(cls):
               f"    o = _n(_c)\n{body}    return o\n")
     exec(source, namespace)
     return namespace[f"new_{cls.__name__}"]
+
+
+def slot_setters(cls) -> list:
+    """The setter of each field of a frozen slots dataclass, in field order
+    (setter(o, value) sets it, as maker's functions do; code written for
+    one shape of nodes sets them so too: rapid/build.py)."""
+    if "__slots__" not in cls.__dict__:
+        raise TypeError(f"{cls.__name__}: slot_setters() takes a slots dataclass")
+    return [getattr(cls, f.name).__set__ for f in dataclasses.fields(cls)]

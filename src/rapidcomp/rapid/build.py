@@ -8,13 +8,12 @@ Anonymous punctuation is filtered by Lark, so rules keep named terminals
 
 from __future__ import annotations
 
-import dataclasses
 import re
 import sys
 from functools import partial
 
 
-from ..construct import maker
+from ..construct import maker, slot_setters
 from . import ast as A
 from .ast import Span
 from .lalr import FAST_NAME, Tok
@@ -113,8 +112,8 @@ def _tail_maker(items: tuple):
         if key not in made:
             made.add(key)
             ns["_" + key] = cls
-            for i, f in enumerate(dataclasses.fields(cls)):
-                ns[f"_{key}{i}"] = getattr(cls, f.name).__set__
+            for i, setter in enumerate(slot_setters(cls)):
+                ns[f"_{key}{i}"] = setter
         return [f"    {var} = _o(_{key})"] + [f"    _{key}{i}({var}, {v})"
                                              for i, v in enumerate(values)]
 

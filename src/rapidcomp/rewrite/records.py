@@ -88,13 +88,18 @@ def _new_numbers(q_old: np.ndarray, R: np.ndarray, p: np.ndarray):
     return turned, quats, numbers.fmt_many(p.ravel().tolist(), numbers.MM_DECIMALS)
 
 
+def _compact_texts(recs: list[RobTarget]) -> list[str] | None:
+    """The records' literals' texts, when every one is a compact literal
+    (its text kept, not lexed field by field), else None."""
+    lits = [r.lexed for r in recs]
+    return lits if all(type(t) is str for t in lits) else None
+
+
 def _plain_bounds(recs: list[RobTarget]):
     """values.plain_bounds of the records' literals, when every one is a
-    compact literal (its text kept, not lexed field by field), else None."""
-    lits = [r.lexed for r in recs]
-    if not all(type(t) is str for t in lits):
-        return None
-    return plain_bounds(lits)
+    compact literal, else None."""
+    lits = _compact_texts(recs)
+    return None if lits is None else plain_bounds(lits)
 
 
 def _plain_fields(recs: list[RobTarget]):
@@ -180,8 +185,8 @@ def plain_inputs(recs: list[RobTarget]) -> tuple | None:
     """What robtarget_block reads of the records (their literals' texts,
     values (n, 17) and offsets in their module), when every one is a
     compact literal (its text kept, not lexed field by field), else None."""
-    lits = [r.lexed for r in recs]
-    if not recs or not all(type(t) is str for t in lits):
+    lits = _compact_texts(recs)
+    if not recs or lits is None:
         return None
     return (lits, np.array([r.values for r in recs], float).reshape(len(recs), 17),
             np.array([r.span.start for r in recs], np.int64))
