@@ -545,3 +545,19 @@ def test_fix_gives_what_the_general_paths_give(name, mode, solver, monkeypatch):
     assert report.markdown(fast, meta) == report.markdown(slow, meta)
     assert report.as_json(fast, meta) == report.as_json(slow, meta)
     assert fast.summary()["compensated"] > 40
+
+
+def test_a_run_pattern_is_compiled_only_for_an_argument_list_met_again():
+    """Compiling a run's pattern costs ~1 ms: a program whose every line has
+    an argument list of its own (\\ID:=n of a MultiMove program) compiles
+    none, and lexes as one by one; a list met again gets its pattern."""
+    eng = engine()
+    lines = [f"MoveL [[{i},2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]\\ID:={i},v100,"
+             f"z1,tool_unique_run_test;\n" for i in range(300)]
+    text = "".join(lines)
+    before = {k for k in eng._runs if "tool_unique_run_test" in k[1][1]}
+    assert _tokens(text, True) == _tokens(text, False)
+    assert {k for k in eng._runs if "tool_unique_run_test" in k[1][1]} == before == set()
+    same = "MoveL p1,v100,z1,tool_again_run_test;\n" * 5
+    assert _tokens(same, True) == _tokens(same, False)
+    assert [k for k in eng._runs if k[1][1].endswith("tool_again_run_test;")]

@@ -117,6 +117,12 @@ class Engine:
         # the same text before the name: (kind, that part) -> the pattern
         # of the next one (_run).
         self._runs: dict[tuple, re.Pattern] = {}
+        # How often each such (kind, part) began a statement before it has
+        # a pattern: one is compiled (~1 ms: NUMAGG is long) only for a part
+        # met again, not for each line of a program whose every line has
+        # arguments of its own (\ID:=n of a MultiMove program: 2e4 lines
+        # took 23 s).
+        self._met: dict[tuple, int] = {}
         self._ws = next(t.pattern.to_regexp() for t in terms if t.name == "WS")
         numagg = next(t.pattern.to_regexp() for t in terms if t.name == "NUMAGG")
         # The runs' NUMAGG: first tried without its optional whitespace
@@ -269,10 +275,17 @@ class Engine:
         """Tokens of `kind` one after the other from pos (only whitespace
         between), each matched by the pattern regex() gives (its group 1
         the token, group 2 a name that must not be a reserved word, or
-        None), compiled once per (kind, key)."""
+        None), compiled once per (kind, key) met a second time (the first
+        time nothing is matched here: the next statement is lexed on its
+        own)."""
         pattern = self._runs.get((kind, key))
         if pattern is None:
-            if len(self._runs) >= 4096:      # bounded: many programs in one process
+            if len(self._met) >= 4096:       # bounded: many programs in one process
+                self._met.clear()
+            met = self._met[kind, key] = self._met.get((kind, key), 0) + 1
+            if met < 2:
+                return                       # (the next statement is lexed on its own)
+            if len(self._runs) >= 4096:
                 self._runs.clear()
             pattern = self._runs[kind, key] = re.compile(f"(?:{self._ws})?({regex()})")
         match = pattern.match
