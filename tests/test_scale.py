@@ -347,25 +347,26 @@ _cam = bench_module
 @pytest.mark.parametrize("confl", ["", "    ConfL\\Off;\n", "    ConfL\\On;\n"])
 def test_chooser_shortcut_gives_the_general_rules_results(confl, solver, monkeypatch):
     """The chooser's shortcut for a move after one move with one solution
-    (solve._Chooser._quick) picks what the general rules pick, on moves
-    where supervision is on, off or not known; and it is really taken."""
+    (solve._Chooser.run's quick cases) picks what the general rules pick,
+    on moves where supervision is on, off or not known; and it is really
+    taken."""
     from rapidcomp.compensate import solve as S
     tasks = [Task("cam.mod", (parse_text(_cam(400, seed, confl), "cam.mod"),))
              for seed in (1, 2)]
     tasks += [Task(p.name, (parse_file(p, p.name),)) for p in MODULES]
     taken = []
-    real = S._Chooser._quick
+    real = S._Chooser.run
 
-    def spy(self, *args):
-        out = real(self, *args)
-        taken.append(out is not None)
-        return out
+    def spy(self):
+        real(self)
+        taken.append(sum(self.taken))
     for task in tasks:
         plan = Plan(task)
-        monkeypatch.setattr(S._Chooser, "_quick", spy)
+        monkeypatch.setattr(S._Chooser, "run", spy)
         fast = S.solve(plan, solver)
-        monkeypatch.setattr(S._Chooser, "_quick", lambda *args: None)
+        monkeypatch.setattr(S._Chooser, "QUICK", False)
         slow = S.solve(plan, solver)
+        monkeypatch.undo()
         assert len(fast.picks) == len(slow.picks)
         for a, b in zip(fast.picks, slow.picks):
             assert a.rule == b.rule and a.failure == b.failure and a.kind == b.kind

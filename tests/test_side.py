@@ -69,6 +69,17 @@ def test_a_call_is_made_by_the_helper_and_gives_what_the_function_gives(helped):
     assert _reaped(helper.pid)
 
 
+def test_the_helper_runs_its_work_one_piece_at_a_time(helped):
+    """Its work runs beside the job's, which takes the other CPU: the IK
+    it is handed (solve.nominal_ahead) runs on one thread there."""
+    from rapidcomp import cpus
+    with side.helping(1):
+        pending = side.run(pid_and, None)
+        there = side.run(cpus.side_by_side)
+        assert pending.get()[0] != os.getpid()
+        assert there.get() == 1
+
+
 @pytest.mark.parametrize("why", ["disabled", "one CPU", "small"])
 def test_without_a_helper_a_call_is_made_here(why, helped, monkeypatch):
     size = 1
@@ -165,6 +176,8 @@ def test_the_golden_cases_are_written_as_reviewed_with_a_helper(helped, monkeypa
     # cases that change something (none made here instead).
     assert None not in made
     assert made.count("number_cells") == len(FIX_CASES) + len(TASK_CASES)
+    # (And the nominal IK of each, made while the flow was analysed.)
+    assert made.count("_nominal_and_candidates") == len(FIX_CASES) + len(TASK_CASES)
     assert made.count("columns_diff") >= len(FIX_CASES) + len(TASK_CASES) - 1
 
 
@@ -196,6 +209,7 @@ def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, 
         assert got == alone
     assert made and None not in made
     assert "columns_diff" in made
+    assert made.count("_nominal_and_candidates") == 5
     if mode != "absj":
         assert made.count("plain_block") >= 5 and made.count("_wanted_values") >= 5
     else:

@@ -33,7 +33,18 @@ def cores() -> float:
     return n
 
 
+# In a big job's helper process (side.py): it works beside the job, whose
+# own work takes the other CPU.
+_beside = False
+
+
+def work_beside() -> None:
+    """This process is a job's helper: its work runs one piece at a time."""
+    global _beside
+    _beside = True
+
+
 def side_by_side() -> int:
     """How many pieces of work to run at once: two where the process may
-    use two CPUs, else one."""
-    return 2 if cores() >= 2 else 1
+    use two CPUs (and is not a job's helper), else one."""
+    return 2 if not _beside and cores() >= 2 else 1

@@ -37,7 +37,7 @@ import warnings
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 
-from .cpus import side_by_side
+from .cpus import side_by_side, work_beside
 
 # Tasks from this size on (bytes of their modules) get a helper: below it
 # the work handed off is about what handing it off costs (in-process,
@@ -204,6 +204,7 @@ def _serve(parent: int, calls: int, results: int, held) -> None:
     code = 1
     try:
         settle_child(parent, held)
+        work_beside()
         source = os.fdopen(calls, "rb", buffering=_BUFFER)
         sink = os.fdopen(results, "wb", buffering=_BUFFER)
         made: dict = {}

@@ -33,7 +33,7 @@ from . import place as P
 from .edit import Editor, Values
 from .plan import Plan, Task, line_ranges
 from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, UseRow, summary, use_rows
-from .solve import solve
+from .solve import nominal_ahead, solve
 from .verify import VERIFY_DEG, VERIFY_UM, relex, relex_absj, reparse, verify
 
 MODES = P.MODES
@@ -100,7 +100,8 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}")
     clock = _Clock(timings)
-    plan = Plan(task, track, base)
+    # (The nominal IK made beside the flow's analysis: solve.nominal_ahead.)
+    plan = Plan(task, track, base, ahead=nominal_ahead(solver))
     clock("resolve")
     solved = solve(plan, solver, start)
     clock("solve")

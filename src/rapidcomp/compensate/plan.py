@@ -36,7 +36,11 @@ class Task:
 
 
 class Plan:
-    def __init__(self, task: Task, track=(), base=None):
+    def __init__(self, task: Task, track=(), base=None, ahead=None):
+        """ahead(uses), when given, is called once the uses are resolved
+        (their flange poses known), before the flow is analysed: what it
+        returns is kept as `ahead` (solve.py hands the nominal IK off there,
+        to be computed meanwhile)."""
         self.task = task
         self.files = task.all_files
         self.n_written = len(task.files)
@@ -50,6 +54,7 @@ class Plan:
                 self.uses.extend(self.resolver.resolve_all(pf, m, m.motions, (fi, mi)))
                 mi += len(m.motions)
         self.resolver.poses()
+        self.ahead = ahead(self.uses) if ahead is not None else None
         self.by_key = {u.key: u for u in self.uses}
         self.file_index = {id(pf): i for i, pf in enumerate(self.files)}
         self.flow: Flow = analyse(self.files, self.n_written, self.resolver, bool(track))

@@ -26,6 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import side
 from ..kinematics.conf import confdata
 from ..kinematics.frames import DEG
 from ..kinematics.ik import IKBatch, Solver, Status
@@ -83,7 +84,7 @@ def _in_text_order(keys) -> list:
     return sorted(keys, key=lambda k: (0, k) if len(k) == 4 else (1, (0, 0, k[0], ())))
 
 
-# _quick's rule where supervision may be on or off, by ConfJ/ConfL.
+# The quick cases' rule where supervision may be on or off, by ConfJ/ConfL.
 _SAME = {flag: f"confdata ({flag} on or off: the same solution)" for flag in ("ConfJ", "ConfL")}
 
 
@@ -175,6 +176,10 @@ class _Chooser:
     each run's turn). Other differences: not compensated, unless the
     confdata decides where supervision may be on (then with a caution)."""
 
+    # run() takes the quick cases without the general rules (tests switch
+    # it off to compare).
+    QUICK = True
+
     def __init__(self, plan: Plan, solver: Solver, uses: list[TargetUse], rows: dict,
                  start: np.ndarray | None = None):
         self.start = start
@@ -183,10 +188,6 @@ class _Chooser:
         self.uses = uses
         self.rows = rows
         rob = [i for i, u in enumerate(uses) if u.kind == "robtarget"]
-        R, p = flange_stack([uses[i] for i in rob])
-        conf = np.array([uses[i].conf for i in rob], dtype=int).reshape(-1, 4)
-        self.by_conf, self.cands = (solver.nominal_and_candidates(R, p, conf) if rob
-                                    else (None, None))
         self.rob_row = {i: k for k, i in enumerate(rob)}
         n = len(uses)
         self.q = np.full((n, 6), np.nan)
@@ -194,6 +195,7 @@ class _Chooser:
         self.sols: list = [[] for _ in range(n)]
         self.chosen: set[int] = set()   # rows whose solutions are set
         self.unsettled: set[int] = set()  # rows whose closest solution does not settle
+        self.taken = [0, 0, 0, 0]       # how many rows run() took by each quick case
         for i, u in enumerate(uses):
             if u.kind == "jointtarget":
                 self.q[i] = u.joints_deg
@@ -212,6 +214,8 @@ class _Chooser:
                 self.states[i] = plan.state(uses[i])
         scale = (solver.joint_map.scale if solver.joint_map is not None else np.zeros(6))
         self.scaled = [j for j in (0, 3, 5) if scale[j] != 0]
+        # (Taken as late as this: the plan may have handed it off.)
+        self.by_conf, self.cands = _nominal_of(plan, solver, [uses[i] for i in rob])
         self._speculate()
         self._quick_data()
 
@@ -274,7 +278,7 @@ class _Chooser:
         self._alternatives(need)
 
     def _quick_data(self) -> None:
-        """What _quick asks of every row, as Python values at once: the
+        """What run's quick cases ask of every row, as Python values at once: the
         predecessor, the guess as a list (exact floats: == is array_equal),
         whether the batch's closest solution is valid, and whether it is
         within SAME_DEG of the confdata's (decided here by a sum of squares
@@ -285,10 +289,10 @@ class _Chooser:
         self.spec_l = self.spec.tolist()
         self.off_ok = (~np.isnan(self.off_spec).any(axis=1)).tolist()
         self.near_conf = [None] * n
-        # Which of _quick's two cases a row is, where it does not depend on
+        # Which of the quick cases a row is, where it does not depend on
         # the solution its predecessor took (0: neither); whether the batch's
         # closest solution is the guess itself; whether a row's solution is
-        # its guess (_quick and _set keep it; None: not known yet).
+        # its guess (run and _set keep it; None: not known yet).
         self.quick = [0] * n
         self.off_is_spec = (self.off_spec == self.spec).all(axis=1).tolist()
         self.spec_hit: list = [None] * n
@@ -485,47 +489,6 @@ class _Chooser:
                            "the robot is, and that depends on which move ran before it (lines "
                            f"{where})")
 
-    def _quick(self, i: int, flag: str):
-        """choose() where a CAM program spends 1e5 moves, without the
-        general machinery, with its results (tested against it): one move
-        before, with one solution, the guess, whose closest solution here
-        came from the batch; supervision off (case 1), or on or off with
-        the confdata's solution that same one (case 2) or another (case 3;
-        _quick_data tells the cases from the row's state). None: not this
-        case."""
-        how = self.quick[i]
-        if not how:
-            return None
-        j = self.pred1_l[i]
-        sols = self.sols[j]
-        if j not in self.chosen or len(sols) != 1:
-            return None
-        s = sols[0]
-        hit = self.spec_hit[j]
-        if hit is None:
-            hit = s.q is not None and s.q.tolist() == self.spec_l[j]
-        if not hit:
-            return None
-        line = self.uses[j].line
-        caution = None if s.caution is None else (
-            f"follows line {line}, whose configuration is assumed: kept a robtarget move")
-        if how == 1:
-            q = self.off_spec[i]
-            self.spec_hit[i] = self.off_is_spec[i]
-            return ([Pick(q, "", None, "closest", s.q, line, caution)],
-                    Pick(q, f"closest to line {line} ({flag}\\Off)", None, "closest", s.q, line,
-                         caution))
-        # (The confdata's solution is the guess: _speculate guessed it.)
-        self.spec_hit[i] = True
-        q = self.by_conf.q_deg[self.rob_row[i]]
-        if how == 2:
-            on = Pick(q, _SAME[flag], None, "conf", None, None, caution)
-            return [on], on
-        # Case 3: supervision may be on or off, and off is another solution.
-        return self._on_or_off(Pick(q, _SAME[flag], None, "conf"),
-                               [Pick(self.off_spec[i], "", None, "closest", s.q, line, caution)],
-                               flag)
-
     def _on_or_off(self, on: Pick, off: list[Pick], flag: str) -> tuple[list[Pick], Pick]:
         """choose() where supervision may be on or off and the confdata
         names a solution (on): with the solutions supervision off gives."""
@@ -562,9 +525,6 @@ class _Chooser:
                 return [], _fail(why)
             return self._one(sols, "circle point: closest to {where}", flag)
         sup = st.supervision(u.motion.spec.interpolation)
-        quick = self._quick(i, flag)
-        if quick is not None:
-            return quick
         if OFF not in sup:
             p = self._by_conf(i, f"confdata ({flag}\\On)")
             return ([p] if p.q is not None else []), p
@@ -589,9 +549,23 @@ class _Chooser:
     def run(self) -> None:
         pending = []
         edges = []                    # (predecessor, row) in the order met
-        rows, chosen = self.rows, self.chosen
+        rows, chosen, states = self.rows, self.chosen, self.states
+        # The quick cases (see _quick_data), taken here without choose()'s
+        # general machinery, with its results (tested against it): one move
+        # before, with one solution, the guess, whose closest solution here
+        # came from the batch; supervision off (case 1), or on or off with
+        # the confdata's solution that same one (case 2) or another (case 3).
+        quick = self.quick if self.QUICK else [0] * len(self.uses)
+        uses, sols, picks, spec_hit = self.uses, self.sols, self.picks, self.spec_hit
+        pred1, spec_l, off_spec, off_is_spec = (self.pred1_l, self.spec_l, self.off_spec,
+                                                self.off_is_spec)
+        by_conf, rob_row, taken = self.by_conf, self.rob_row, self.taken
+        # (Their joints written into q after the loop, as _set writes them:
+        # the supervision-off solution (case 1), the confdata's (2, 3).)
+        off_rows: list[int] = []
+        conf_rows: list[int] = []
         for i in self.order:
-            st = self.states[i]
+            st = states[i]
             if st is None:            # (a MoveAbsJ)
                 continue
             last = st.last
@@ -607,7 +581,52 @@ class _Chooser:
                 edges.extend((j, i) for j in pred_rows)
                 if any(j not in chosen for j in pred_rows):
                     pending.append(i)
+            how = quick[i]
+            if how:
+                j = pred1[i]
+                before = sols[j]
+                if j in chosen and len(before) == 1:
+                    s = before[0]
+                    hit = spec_hit[j]
+                    if hit is None:
+                        hit = s.q is not None and s.q.tolist() == spec_l[j]
+                    if hit:
+                        line = uses[j].line
+                        caution = None if s.caution is None else (
+                            f"follows line {line}, whose configuration is assumed: kept a "
+                            "robtarget move")
+                        flag = "ConfJ" if uses[i].motion.spec.interpolation == "joint" \
+                            else "ConfL"
+                        if how == 1:
+                            q = off_spec[i]
+                            spec_hit[i] = off_is_spec[i]
+                            sols[i] = [Pick(q, "", None, "closest", s.q, line, caution)]
+                            picks[i] = Pick(q, f"closest to line {line} ({flag}\\Off)", None,
+                                            "closest", s.q, line, caution)
+                            off_rows.append(i)
+                        else:
+                            # (The confdata's solution is the guess: _speculate
+                            # guessed it.)
+                            spec_hit[i] = True
+                            q = by_conf.q_deg[rob_row[i]]
+                            if how == 2:
+                                picks[i] = on = Pick(q, _SAME[flag], None, "conf", None, None,
+                                                     caution)
+                                sols[i] = [on]
+                            else:
+                                sols[i], picks[i] = self._on_or_off(
+                                    Pick(q, _SAME[flag], None, "conf"),
+                                    [Pick(off_spec[i], "", None, "closest", s.q, line,
+                                          caution)], flag)
+                            conf_rows.append(i)
+                        chosen.add(i)
+                        taken[how] += 1
+                        continue
             self._set(i, st)
+        if off_rows:
+            self.q[off_rows] = off_spec[off_rows]
+        if conf_rows:
+            self.q[conf_rows] = by_conf.q_deg[[rob_row[i] for i in conf_rows]]
         # Who follows whom, where a move is chosen again (below).
         succ: dict[int, list[int]] = {}
         if pending:
@@ -642,7 +661,7 @@ class _Chooser:
     def _set(self, i: int, st: State | None = None) -> None:
         if i in self.unsettled:
             return
-        self.spec_hit[i] = None              # (_quick says it where it knows)
+        self.spec_hit[i] = None              # (run's quick cases say it where they know)
         sols, pick = self.choose(i, st)
         if len(sols) > 8:
             sols, pick = [], _fail("reached on more than 8 configurations")
@@ -650,6 +669,38 @@ class _Chooser:
         self.q[i] = pick.q if pick.q is not None else np.nan
         self.picks[i] = pick
         self.chosen.add(i)
+
+
+def nominal_ahead(solver: Solver):
+    """Plan's `ahead` for solve() with this solver: the nominal IK of every
+    robtarget use (the choice's first batch) handed to the job's helper
+    (side.py) as soon as their flange poses are known, made there while
+    this process analyses the flow (without a helper: made when solve()
+    asks for it)."""
+    def start(uses):
+        rob = [u for u in uses if u.reason is None and u.kind == "robtarget"]
+        return solver, len(rob), side.run(_nominal_and_candidates, solver, *_ik_input(rob))
+    return start
+
+
+def _ik_input(rob: list) -> tuple:
+    """(R, p, conf) of robtarget uses, as the nominal IK takes them."""
+    R, p = flange_stack(rob)
+    return R, p, np.array([u.conf for u in rob], dtype=int).reshape(-1, 4)
+
+
+def _nominal_and_candidates(solver: Solver, R, p, conf):
+    return solver.nominal_and_candidates(R, p, conf) if len(p) else (None, None)
+
+
+def _nominal_of(plan: Plan, solver: Solver, rob: list) -> tuple:
+    """(solve_nominal, candidates) of the robtarget uses `rob` (those of
+    plan.uses, solved, in order): what the plan handed off for this
+    solver, taken once; else made here."""
+    ahead, plan.ahead = plan.ahead, None
+    if ahead is not None and ahead[0] is solver and ahead[1] == len(rob):
+        return ahead[2].get()
+    return _nominal_and_candidates(solver, *_ik_input(rob))
 
 
 def solve(plan: Plan, solver: Solver, start=None) -> Solved:
