@@ -176,8 +176,10 @@ def test_the_golden_cases_are_written_as_reviewed_with_a_helper(helped, monkeypa
     # cases that change something (none made here instead).
     assert None not in made
     assert made.count("number_cells") == len(FIX_CASES) + len(TASK_CASES)
-    # (And the nominal IK of each, made while the flow was analysed.)
+    # (And the nominal IK of each, made while the flow was analysed, and
+    # the deformed robot's, made while the uses were grouped.)
     assert made.count("_nominal_and_candidates") == len(FIX_CASES) + len(TASK_CASES)
+    assert made.count("_solve_deformed") == len(FIX_CASES) + len(TASK_CASES)
     assert made.count("columns_diff") >= len(FIX_CASES) + len(TASK_CASES) - 1
 
 
@@ -209,7 +211,7 @@ def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, 
         assert got == alone
     assert made and None not in made
     assert "columns_diff" in made
-    assert made.count("_nominal_and_candidates") == 5
+    assert made.count("_nominal_and_candidates") == made.count("_solve_deformed") == 5
     if mode != "absj":
         assert made.count("plain_block") >= 5 and made.count("_wanted_values") >= 5
     else:

@@ -33,7 +33,7 @@ from . import place as P
 from .edit import Editor, Values
 from .plan import Plan, Task, line_ranges
 from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, UseRow, summary, use_rows
-from .solve import nominal_ahead, solve
+from .solve import Solving, nominal_ahead
 from .verify import VERIFY_DEG, VERIFY_UM, relex, relex_absj, reparse, verify
 
 MODES = P.MODES
@@ -103,16 +103,15 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # (The nominal IK made beside the flow's analysis: solve.nominal_ahead.)
     plan = Plan(task, track, base, ahead=nominal_ahead(solver))
     clock("resolve")
-    solved = solve(plan, solver, start)
+    # The uses grouped as far as their nominal solutions decide, while the
+    # deformed robot's IK is made beside (solve.Solving).
+    solving = Solving(plan, solver, start)
+    gs = P.grouping(plan, solving, mode)
+    solved = solving.finish()
+    solving = None
+    P.settle(gs, solved)
     clock("solve")
-    # The report's number cells of every target, made beside the job while
-    # it goes on (side.py; without a helper the report makes them).
     cells = None
-    if side.helps():
-        from .report import number_cells         # (report.py imports this module)
-        cells = side.run(number_cells, solved.nominal.q_deg, solved.deformed.q_deg,
-                         solved.err_p, solved.err_r)
-    gs = P.groups(plan, solved, mode)
     # Past the groups nothing reads the flow (printing and verifying the
     # values read the plan's uses and resolver; the rows its uses and
     # track): the plan's notes are made now, and the flow's per-use states
@@ -127,6 +126,13 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # placed, written and verified again without it.
     for _ in range(4):
         values.prepare(gs)
+        if cells is None and side.helps():
+            # The report's number cells of every target, made beside the
+            # job while it places, edits and splices (side.py; without a
+            # helper the report makes them).
+            from .report import number_cells         # (report.py imports this module)
+            cells = side.run(number_cells, solved.nominal.q_deg, solved.deformed.q_deg,
+                             solved.err_p, solved.err_r)
         P.place(plan, gs)
         P.fill_slots(plan, solver, gs)
         editor = Editor(plan, values, transient is not None)

@@ -24,7 +24,7 @@ from ..errors import InputError
 from ..kinematics.ik import Solver, Warn
 from ..rapid.model import Declaration, Module
 from .plan import Plan
-from .solve import Solved, same_joints, solve_slots
+from .solve import Solved, Solving, same_joints, solve_slots
 from .targets import Source, TargetUse, flange_pose
 
 MODES = ("auto", "absj", "robtarget")
@@ -126,6 +126,15 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
     group per array (one value per element); any other use joins it when
     its solution there is the same, else groups by its own solution (a
     target reached on two solutions needs two values)."""
+    gs = grouping(plan, solved, mode)
+    settle(gs, solved)
+    return gs
+
+
+def grouping(plan: Plan, solved: Solved | Solving, mode: str) -> list[Group]:
+    """groups() as far as the nominal solutions decide them (a Solving's
+    uses, rows, nominal solutions and picks: made while the deformed
+    robot's IK is under way); settle() completes them."""
     file_index = plan.file_index
     by_key: dict = {}
     out: list[Group] = []
@@ -164,16 +173,21 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
         g.rows_seen.setdefault(src.element, row)
         if u.key in kept:
             g.kept = g.kept | {u.key}
+    return out
+
+
+def settle(gs: list[Group], solved: Solved) -> None:
+    """Each group's elements, rows and failure, and whether a new
+    declaration of it is LOCAL (groups() past grouping())."""
     # Whether each row is solved, and needs a J4/J6 split at the wrist
     # singularity (_elements, _wrist: as Python values at once).
     ok = solved.oks()
     left = ((solved.deformed.warnings.astype(np.int64) & _LEFT) != 0).tolist()
-    for g in out:
+    for g in gs:
         _elements(g, solved, ok, left)
         uses = g.uses
         g.local = (uses[0].module is g.home[1] if len(uses) == 1
                    else all(u.module is g.home[1] for u in uses))
-    return out
 
 
 def _one_statement(uses: list[TargetUse], modes: list[str]) -> frozenset:

@@ -707,48 +707,72 @@ def solve(plan: Plan, solver: Solver, start=None) -> Solved:
     """start: the joints (deg) the robot is at where the program leaves its
     position unknown (--start), for moves without supervision whose
     confdata names no solution; default: the program's first jointtarget."""
-    uses = [u for u in plan.uses if u.reason is None]
-    rows = {u.key: i for i, u in enumerate(uses)}
-    n = len(uses)
-    start = None if start is None else np.asarray(start, float)
-    chooser = _Chooser(plan, solver, uses, rows, start)
-    chooser.run()
-    q_nom = chooser.q
-    picks = chooser.picks
-    # The chooser's candidates, guesses and solutions (1e5 targets: ~100
-    # MB) go before the deformed robot's batches are made.
-    chooser = None
-    # The intended flange poses: a robtarget's as resolved, a MoveAbsJ's the
-    # nominal FK of its joints.
-    # (seed_from_joints's own arrays, written into.)
-    R, p, seed = solver.seed_from_joints(np.nan_to_num(q_nom))
-    rob = [i for i, u in enumerate(uses) if u.kind == "robtarget"]
-    R[rob], p[rob] = flange_stack([uses[i] for i in rob])
-    # Joint limits of the chosen joints (MoveAbsJ targets) are failures too.
-    status = seed.status.copy()
-    bad = (status != Status.OK).tolist()
-    for i in range(n):
-        if picks[i].failure is not None:
-            status[i] = Status.NO_CONFIGURATION
-        elif bad[i]:
-            picks[i] = _fail(f"nominal: {seed.reason(i)}")
-    seed = IKBatch(np.where(np.isnan(q_nom), np.nan, seed.q_deg), status, seed.detail,
-                   seed.detail_joint, seed.conf, seed.residual_mm, seed.residual_rad,
-                   seed.iterations, seed.warnings)
-    tcp = tcp_of(uses)
-    deformed = solver.solve_deformed(R, p, seed, tcp)
-    err_p, err_r = solver.deformed_pose_error(np.nan_to_num(q_nom) * DEG, R, p, tcp)
-    qc = np.nan_to_num(deformed.q_deg) * DEG
-    Rn, pn, wrist = solver.nominal_pose_and_wrist(qc)
-    conf_after = confdata(qc, wrist, solver.geometry.phi)
-    wrist = None
-    disp = np.full(n, np.nan)
-    moved = [i for i, u in enumerate(uses) if u.kind == "robtarget" and plan.may_be_displaced(u)
-             and picks[i].failure is None and deformed.success[i]]
-    if moved:
-        disp[moved] = _displacement_sensitivity(solver, deformed.q_deg[moved])
-    return Solved(uses, rows, R, p, seed, deformed, err_p, err_r, Rn, pn, conf_after, picks,
-                  disp, start)
+    return Solving(plan, solver, start).finish()
+
+
+class Solving:
+    """A solve whose nominal half is made (the choice of each use's nominal
+    solution) and whose deformed robot's IK is under way: handed to the
+    job's helper (side.py), made there while this process goes on with what
+    needs the nominal half only (uses, row, R, p, nominal and picks, as
+    Solved has them: place.grouping); finish() gives the Solved."""
+
+    def __init__(self, plan: Plan, solver: Solver, start=None):
+        uses = self.uses = [u for u in plan.uses if u.reason is None]
+        self.row = rows = {u.key: i for i, u in enumerate(uses)}
+        n = len(uses)
+        self.start = None if start is None else np.asarray(start, float)
+        chooser = _Chooser(plan, solver, uses, rows, self.start)
+        chooser.run()
+        q_nom = chooser.q
+        self.picks = picks = chooser.picks
+        # The chooser's candidates, guesses and solutions (1e5 targets: ~100
+        # MB) go before the deformed robot's batches are made.
+        chooser = None
+        # The intended flange poses: a robtarget's as resolved, a MoveAbsJ's
+        # the nominal FK of its joints.
+        # (seed_from_joints's own arrays, written into.)
+        R, p, seed = solver.seed_from_joints(np.nan_to_num(q_nom))
+        rob = [i for i, u in enumerate(uses) if u.kind == "robtarget"]
+        R[rob], p[rob] = flange_stack([uses[i] for i in rob])
+        # Joint limits of the chosen joints (MoveAbsJ targets) are failures too.
+        status = seed.status.copy()
+        bad = (status != Status.OK).tolist()
+        for i in range(n):
+            if picks[i].failure is not None:
+                status[i] = Status.NO_CONFIGURATION
+            elif bad[i]:
+                picks[i] = _fail(f"nominal: {seed.reason(i)}")
+        self.nominal = seed = IKBatch(np.where(np.isnan(q_nom), np.nan, seed.q_deg), status,
+                                      seed.detail, seed.detail_joint, seed.conf,
+                                      seed.residual_mm, seed.residual_rad, seed.iterations,
+                                      seed.warnings)
+        self.R, self.p = R, p
+        tcp = tcp_of(uses)
+        self._deformed = side.run(_solve_deformed, solver, R, p, seed, tcp)
+        self.err_p, self.err_r = solver.deformed_pose_error(np.nan_to_num(q_nom) * DEG, R, p,
+                                                            tcp)
+        self._plan, self._solver = plan, solver
+
+    def finish(self) -> Solved:
+        plan, solver, uses, picks = self._plan, self._solver, self.uses, self.picks
+        deformed = self._deformed.get()
+        qc = np.nan_to_num(deformed.q_deg) * DEG
+        Rn, pn, wrist = solver.nominal_pose_and_wrist(qc)
+        conf_after = confdata(qc, wrist, solver.geometry.phi)
+        wrist = None
+        disp = np.full(len(uses), np.nan)
+        moved = [i for i, u in enumerate(uses) if u.kind == "robtarget"
+                 and plan.may_be_displaced(u) and picks[i].failure is None
+                 and deformed.success[i]]
+        if moved:
+            disp[moved] = _displacement_sensitivity(solver, deformed.q_deg[moved])
+        return Solved(uses, self.row, self.R, self.p, self.nominal, deformed, self.err_p,
+                      self.err_r, Rn, pn, conf_after, picks, disp, self.start)
+
+
+def _solve_deformed(solver: Solver, R, p, seed: IKBatch, tcp) -> IKBatch:
+    return solver.solve_deformed(R, p, seed, tcp)
 
 
 class Slot(NamedTuple):
