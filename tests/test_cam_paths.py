@@ -312,6 +312,23 @@ def test_the_flow_of_plain_calls_is_that_of_any_call():
         assert fast.before == slow.before and fast.entry == slow.entry
 
 
+def test_the_references_of_plain_calls_are_those_of_any_call():
+    """usage() reads a plain move's references itself: the references,
+    writes, assignments and calls are those of the same module with no
+    call plain, in the same order."""
+    from rapidcomp.rapid.refs import nodes, usage
+    plain = 0
+    for task in _tasks():
+        for pf in task.all_files:
+            for m in pf.modules:
+                fast, slow = usage(m.node), usage(_not_plain(m.node))
+                assert fast.refs == slow.refs and list(fast.refs) == list(slow.refs)
+                assert fast.writes == slow.writes and fast.assigns == slow.assigns
+                assert [c.span for c in fast.calls] == [c.span for c in slow.calls]
+                plain += sum(1 for n in nodes(m.node) if type(n) is A.ProcCall and n.plain)
+    assert plain > 100
+
+
 def _pick(p):
     return (p.rule, p.failure, p.kind, p.caution, p.line,
             None if p.q is None else p.q.tolist(), None if p.prev is None else p.prev.tolist())

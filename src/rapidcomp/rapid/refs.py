@@ -39,8 +39,10 @@ class Usage:
     assigns: dict = field(default_factory=dict)  # lower-case name -> whole-value Assigns
 
 
-def nodes(root):
-    """Every syntax node below root (numeric aggregates hold no names)."""
+def nodes(root, plain_calls: bool = False):
+    """Every syntax node below root (numeric aggregates hold no names);
+    plain_calls: a plain ProcCall (names and literals only) without the
+    nodes below it (the caller reads its arguments)."""
     stack: list = [root]
     while stack:
         node = stack.pop()
@@ -59,6 +61,8 @@ def nodes(root):
             # the general walk gives them (last argument first), without
             # a push and pop per node.
             yield node
+            if plain_calls:
+                continue
             for arg in reversed(node.args):
                 yield arg
                 v = arg.value
@@ -89,29 +93,45 @@ def usage(module: A.ModuleNode) -> Usage:
     writes: dict[str, list[A.Span]] = {}
     assigns: dict[str, list[A.Assign]] = {}
     calls = []
-    for node in nodes(module.items):
+    for node in nodes(module.items, plain_calls=True):
         t = type(node)
         if t is A.Ref:
             refs.setdefault(node.name.lower(), []).append(node)
         elif t is A.Arg:      # (the next commonest: its value comes as a node of its own)
             continue
+        elif t is A.ProcCall and node.plain:
+            # (A CAM move, 1e5 of them: its references, in the order the
+            # walk gives them, read here.)
+            for arg in reversed(node.args):
+                v = arg.value
+                if type(v) is A.Ref:
+                    refs.setdefault(v.name.lower(), []).append(v)
+            spec = motion_spec(node.name)
+            if spec is None:
+                calls.append(node)
+            elif "search" in spec.roles:
+                _search_writes(node, spec, writes)
         elif t is A.Assign:
             writes.setdefault(node.target.name.lower(), []).append(node.span)
             if not node.target.selectors:
                 assigns.setdefault(node.target.name.lower(), []).append(node)
         elif t is A.ProcCall:
             spec = motion_spec(node.name)
-            if spec is not None:
-                if "search" in spec.roles:
-                    positional = [a for a in node.args if a.kind in ("pos", "named")]
-                    for role, arg in zip(spec.roles, positional):
-                        if role == "search" and isinstance(arg.value, A.Ref):
-                            writes.setdefault(arg.value.name.lower(), []).append(arg.span)
-                continue
-            calls.append(node)
+            if spec is None:
+                calls.append(node)
+            elif "search" in spec.roles:
+                _search_writes(node, spec, writes)
         elif t is A.LateCall or t is A.Call:
             calls.append(node)
     return Usage(refs, writes, tuple(calls), assigns)
+
+
+def _search_writes(node: A.ProcCall, spec, writes: dict) -> None:
+    """A search instruction writes the robtarget it names as its result."""
+    positional = [a for a in node.args if a.kind in ("pos", "named")]
+    for role, arg in zip(spec.roles, positional):
+        if role == "search" and isinstance(arg.value, A.Ref):
+            writes.setdefault(arg.value.name.lower(), []).append(arg.span)
 
 
 def calls_in(expr):
