@@ -27,7 +27,7 @@ from rapidcomp.compensate import targets as T
 from rapidcomp.compensate import verify as V
 from rapidcomp.compensate.load import load_solver
 from rapidcomp.compensate.plan import Plan, Task
-from rapidcomp.construct import maker
+from rapidcomp.construct import maker, twin
 from rapidcomp.rapid import ast as A
 from rapidcomp.rapid.grammar import engine
 from rapidcomp.rapid.model import Motion
@@ -92,6 +92,20 @@ def test_maker_refuses_what_it_cannot_make_alike():
     for cls in (Open, Checked, int):
         with pytest.raises(TypeError):
             maker(cls)
+
+    # A slots class is made as its twin, of its layout: one based on a
+    # class of its own has none here.
+    @dataclasses.dataclass(frozen=True, slots=True)
+    class Based:
+        a: int
+
+    @dataclasses.dataclass(frozen=True, slots=True)
+    class Derived(Based):
+        b: int
+
+    assert twin(Based).__slots__ == Based.__slots__
+    with pytest.raises(TypeError):
+        twin(Derived)
 
 
 # ---------------------------------------------------------------- lexer, parser

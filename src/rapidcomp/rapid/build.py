@@ -8,12 +8,13 @@ Anonymous punctuation is filtered by Lark, so rules keep named terminals
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import sys
 from functools import partial
 
 
-from ..construct import maker, slot_setters
+from ..construct import maker, twin
 from . import ast as A
 from .ast import Span
 from .lalr import FAST_NAME, Tok
@@ -101,21 +102,18 @@ def _fast_tail(tail: str) -> _Tail:
 
 def _tail_maker(items: tuple):
     """make(at): _Tail.nodes of these items, written as code (their words,
-    values and relative spans constants; each node set slot by slot as
-    construct.maker sets it, without a call per node)."""
+    values and relative spans constants; each node made as construct.maker
+    makes it, without a call per node)."""
     ns: dict = {"_t": tuple.__new__, "_Span": Span, "_o": object.__new__}
-    made: set = set()
 
     def node(cls, var: str, values: list[str]) -> list[str]:
-        # var = cls(*values), made as construct.maker makes it.
+        # var = cls(*values), made as construct.maker makes it: as its twin,
+        # then given its class.
         key = cls.__name__
-        if key not in made:
-            made.add(key)
-            ns["_" + key] = cls
-            for i, setter in enumerate(slot_setters(cls)):
-                ns[f"_{key}{i}"] = setter
-        return [f"    {var} = _o(_{key})"] + [f"    _{key}{i}({var}, {v})"
-                                             for i, v in enumerate(values)]
+        ns["_" + key], ns[f"_{key}Twin"] = cls, twin(cls)
+        return ([f"    {var} = _o(_{key}Twin)"]
+                + [f"    {var}.{f.name} = {v}" for f, v in zip(dataclasses.fields(cls), values)]
+                + [f"    {var}.__class__ = _{key}"])
 
     lines = ["def make(at):"]
     out = []
