@@ -32,7 +32,7 @@ from rapidcomp.rapid import ast as A
 from rapidcomp.rapid.grammar import engine
 from rapidcomp.rapid.model import Motion
 from rapidcomp.rapid.parse import parse_file, parse_text
-from rapidcomp.rapid.values import decode
+from rapidcomp.rapid.values import RobTarget, decode
 from rapidcomp.source import SourceText
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -94,7 +94,7 @@ def test_maker_refuses_what_it_cannot_make_alike():
             maker(cls)
 
     # A slots class is made as its twin, of its layout: one based on a
-    # class of its own has none here.
+    # class that sets fields of its own (a frozen dataclass) has none.
     @dataclasses.dataclass(frozen=True, slots=True)
     class Based:
         a: int
@@ -106,6 +106,11 @@ def test_maker_refuses_what_it_cannot_make_alike():
     assert twin(Based).__slots__ == Based.__slots__
     with pytest.raises(TypeError):
         twin(Derived)
+    with pytest.raises(TypeError):
+        maker(Derived)
+    made = maker(RobTarget)(tuple(map(float, range(17))), "[x]", A.Span(0, 3))
+    assert type(made) is RobTarget and made == RobTarget(tuple(map(float, range(17))), "[x]",
+                                                         A.Span(0, 3))
 
 
 # ---------------------------------------------------------------- lexer, parser

@@ -51,15 +51,19 @@ _TWINS: dict = {}
 
 
 def twin(cls) -> type:
-    """A class of cls's memory layout (its bases, none but object, and its
-    slots) without its frozen __setattr__: an instance of it is filled by
-    plain assignment and then made cls's (o.__class__ = cls)."""
+    """A class of cls's memory layout (its bases and its slots) without its
+    frozen __setattr__: an instance of it is filled by plain assignment and
+    then made cls's (o.__class__ = cls). Its bases must set nothing
+    themselves (slots of their own, no __setattr__: values.py's _Numeric)."""
     got = _TWINS.get(cls)
     if got is None:
-        if cls.__bases__ != (object,) or "__slots__" not in cls.__dict__:
-            raise TypeError(f"{cls.__name__}: twin() takes a slots class based on object")
-        got = type(f"{cls.__name__}Twin", (), {"__slots__": cls.__dict__["__slots__"],
-                                               "__module__": cls.__module__})
+        if "__slots__" not in cls.__dict__ or any(
+                "__slots__" not in b.__dict__ or "__setattr__" in b.__dict__
+                for b in cls.__mro__[1:-1]):
+            raise TypeError(f"{cls.__name__}: twin() takes a slots class whose bases set "
+                            "nothing themselves")
+        got = type(f"{cls.__name__}Twin", cls.__bases__,
+                   {"__slots__": cls.__dict__["__slots__"], "__module__": cls.__module__})
         probe = object.__new__(got)
         probe.__class__ = cls             # (TypeError here, were the layouts to differ)
         _TWINS[cls] = got

@@ -109,11 +109,12 @@ def _declaration(source: SourceText, decl: A.DataDecl, routine: str | None,
                     raise source.error(exc.span.start, f"{exc.reason} (a {type_} value)") \
                         from None
                 issue = exc.reason
-    return Declaration(decl, routine, type_, dims, value, issue)
+    return _new_decl(decl, routine, type_, dims, value, issue)
 
 
-# (A CAM program's 1e5 moves: made as their classes make them, construct.py.)
-_new_motion, _new_target = maker(Motion), maker(TargetArg)
+# (A CAM program's 1e5 moves and 5e4 declarations: made as their classes
+# make them, construct.py.)
+_new_motion, _new_target, _new_decl = maker(Motion), maker(TargetArg), maker(Declaration)
 _TARGET_ROLES = frozenset(("to", "cir", "search"))
 
 

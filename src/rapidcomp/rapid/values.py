@@ -14,6 +14,7 @@ from typing import NamedTuple, Union
 
 import numpy as np
 
+from ..construct import maker
 from . import ast as A
 from .ast import Span
 
@@ -274,6 +275,8 @@ ROBTARGET_FRAME = "[[%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s,%s,%s]]"
 JOINTTARGET_FRAME = "[[%s,%s,%s,%s,%s,%s],[%s,%s,%s,%s,%s,%s]]"
 _PLAIN = {RobTarget: ROBTARGET_FRAME, JointTarget: JOINTTARGET_FRAME}
 _COMPACT = {"robtarget": RobTarget, "jointtarget": JointTarget}
+# (A CAM program's 1e5 literals: made as their classes make them, construct.py.)
+_MAKE = {cls: maker(cls) for cls in (RobTarget, JointTarget)}
 _COUNT = {RobTarget: 17, JointTarget: 12}
 # Over these characters float() reads exactly what NUMBER_RE matches (a
 # sign, digits, one '.', an exponent); hex, octal and binary have others.
@@ -431,10 +434,10 @@ def _compact(t: str, expr, where: str, known=None) -> Record:
         if known is not None:
             values = known.values(cls, expr.span)
             if values is not None:
-                return cls(values, text, expr.span)
+                return _MAKE[cls](values, text, expr.span)
         values = plain_values(cls, frame_fields(text), text)
         if values is not None:
-            return cls(values, text, expr.span)
+            return _MAKE[cls](values, text, expr.span)
         m = _FAST[t].fullmatch(expr.text)
         if m is not None:
             texts = m.groups()
