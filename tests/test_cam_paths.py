@@ -66,7 +66,7 @@ def test_maker_makes_what_the_class_makes():
     cases = [(A.Arg, ("pos", None, A.Ref("p1", (), span), span)),
              (A.Ref, ("p1", (), span)), (A.NumAgg, ("[1,2]", span)),
              (A.ProcCall, ("MoveL", (), span, True)),
-             (Motion, ("MoveL", None, span, "Path", (), (), (), None, None, None, None, ()))]
+             (Motion, ("MoveL", None, span, "Path", (), (), (), None, None, None, None, (), False))]
     for cls, values in cases:
         made = maker(cls)(*values)
         assert type(made) is cls and made == cls(*values)
@@ -75,6 +75,23 @@ def test_maker_makes_what_the_class_makes():
     assert [n.value for n in agg.items] == [1.0, 2.0]       # its cached view still works
     with pytest.raises(dataclasses.FrozenInstanceError):
         maker(A.Ref)("p", (), span).name = "q"
+
+
+def test_a_move_says_whether_it_names_its_target_parameter():
+    """Motion.to_point: an argument ToPoint:= (any letter case) among the
+    move's, as a look at its arguments finds it, on every fixture and a
+    snippet of each kind."""
+    text = ("MODULE m\n  PROC p()\n    MoveL ToPoint:=p1,v100,z1,tool0;\n"
+            "    MoveJ p1,v100,z1,tool0;\n    MoveL topoint:=p1,v100,z1,tool0\\WObj:=w;\n"
+            "    MoveC p1,ToPoint:=p2,v100,z1,tool0;\n  ENDPROC\nENDMODULE\n")
+    moves = [mo for m in parse_text(text, "m.mod").modules for mo in m.motions]
+    assert [mo.to_point for mo in moves] == [True, False, True, True]
+    for task in _tasks():
+        for pf in task.all_files:
+            for m in pf.modules:
+                for mo in m.motions:
+                    assert mo.to_point == any(a.kind == "named" and a.name.lower() == "topoint"
+                                              for a in mo.args)
 
 
 def test_maker_refuses_what_it_cannot_make_alike():

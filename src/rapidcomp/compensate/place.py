@@ -94,10 +94,7 @@ def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int) -> st
 def names_to_point(m) -> bool:
     """The move names its target parameter (`MoveL ToPoint:=p10,...`):
     MoveAbsJ's is ToJointPos, so it stays a robtarget move."""
-    for a in m.args:     # (a loop: asked of every move of a CAM program)
-        if a.kind == "named" and a.name.lower() == "topoint":
-            return True
-    return False
+    return m.to_point
 
 
 def _call_key(src: Source):

@@ -51,6 +51,8 @@ class Motion:
     tool: A.Expr | None
     wobj: A.Expr | None
     optional: tuple[A.Arg, ...]  # optional arguments other than \WObj
+    # The move names its target parameter (`MoveL ToPoint:=p10,...`).
+    to_point: bool = False
 
     @property
     def name_span(self) -> Span:

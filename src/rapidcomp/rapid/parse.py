@@ -126,10 +126,13 @@ def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops,
     targets = []
     wobj = None
     optional = []
+    to_point = False
     k = 0
     for a in call.args:
         kind = a.kind
         if kind == "pos" or kind == "named":
+            if kind == "named" and a.name.lower() == "topoint":
+                to_point = True
             if k < n_roles:
                 role = roles[k]
                 value = a.value
@@ -154,7 +157,7 @@ def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops,
     get = slots.get
     return _new_motion(call.name, spec, call.span, routine, tuple(loops), call.args,
                        tuple(targets), get("speed"), get("zone"), get("tool"), wobj,
-                       tuple(optional))
+                       tuple(optional), to_point)
 
 
 def _walk(source, stmts, routine: str, loops: list, out: list, cond: int = 0,
