@@ -57,10 +57,12 @@ class Group:
     # Uses kept robtarget moves because other iterations of their statement
     # must stay ones (_one_statement).
     kept: frozenset = frozenset()
+    # src.decl (asked of every group again and again: a field, not a
+    # property).
+    decl: Declaration | None = field(init=False)
 
-    @property
-    def decl(self) -> Declaration | None:
-        return self.src.decl
+    def __post_init__(self) -> None:
+        self.decl = self.src.decl
 
     @property
     def home_module(self) -> Module:

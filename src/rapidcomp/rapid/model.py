@@ -68,10 +68,8 @@ class Declaration:
     dims: tuple[int | None, ...]   # None: a dimension that is not a literal
     value: Record | tuple[Record, ...] | None  # tuple for arrays (row-major)
     issue: str | None              # why a value of a decoded type is not known
-
-    @property
-    def name(self) -> str:
-        return self.node.name
+    # node.name, kept (asked of every group and literal of a CAM program).
+    name: str
 
     @property
     def storage(self) -> str:

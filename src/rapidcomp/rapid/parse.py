@@ -109,7 +109,7 @@ def _declaration(source: SourceText, decl: A.DataDecl, routine: str | None,
                     raise source.error(exc.span.start, f"{exc.reason} (a {type_} value)") \
                         from None
                 issue = exc.reason
-    return _new_decl(decl, routine, type_, dims, value, issue)
+    return _new_decl(decl, routine, type_, dims, value, issue, decl.name)
 
 
 # (A CAM program's 1e5 moves and 5e4 declarations: made as their classes
