@@ -118,8 +118,13 @@ class Plan:
                        "its external axis and direction; MoveAbsJ targets (joints, relative "
                        "to the base) are, their external axis values copied as written")
             return out
-        active = [u for u in self.uses if u.reason is None
-                  and any(abs(v) < EXTAX_UNUSED for v in u.ext)]
+        # (Each external axes' tuple looked at once: a CAM program's 1e5 uses
+        # share a few.)
+        used: dict = {}
+        for u in self.uses:
+            if u.reason is None and id(u.ext) not in used:
+                used[id(u.ext)] = any(abs(v) < EXTAX_UNUSED for v in u.ext)
+        active = [u for u in self.uses if u.reason is None and used[id(u.ext)]]
         if active:
             axes = sorted({"abcdef"[i] for u in active for i, v in enumerate(u.ext)
                            if abs(v) < EXTAX_UNUSED})

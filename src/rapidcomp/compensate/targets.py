@@ -23,7 +23,9 @@ a name no given module declares), which fails the compensation.
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass
+from itertools import repeat
 from typing import NamedTuple
 
 import numpy as np
@@ -153,7 +155,7 @@ def stacked_poses(poses: list) -> tuple[np.ndarray, np.ndarray]:
     """(R (n, 3, 3), p (n, 3)) of poses (R, p), most of them one object (a
     CAM program's tool, work object and base): each distinct pose converted
     once, then copied into place (C order, as the products expect)."""
-    if poses and all(pose is poses[0] for pose in poses):
+    if poses and all(map(operator.is_, poses, repeat(poses[0]))):
         # (One pose, as a CAM program's tool, work object and base are: its
         # rows copied, no index per pose.)
         r, v = poses[0]
