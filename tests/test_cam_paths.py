@@ -365,6 +365,27 @@ def test_the_references_of_plain_calls_are_those_of_any_call():
     assert plain > 100
 
 
+def test_a_resolver_of_the_same_files_takes_the_plans_tables():
+    """verify.py's resolver takes the plan's tables of the declarations
+    where its files are the plan's very objects: the tables it would make;
+    of other files (an output parsed again) it makes its own."""
+    for task in _tasks():
+        plan = Plan(task)
+        files = plan.files
+        own = T.Resolver(files, float32=True, usages=plan.resolver.usages, writes=False)
+        taken = T.Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
+                           like=plan.resolver)
+        for name in ("params", "home", "home_module", "module_decls", "globals",
+                     "routine_decls"):
+            assert getattr(taken, name) == getattr(own, name), (task.name, name)
+            assert getattr(taken, name) is getattr(plan.resolver, name)
+        again = [parse_text(pf.source.text, pf.source.display_path) for pf in files]
+        other = T.Resolver(again, float32=True, writes=False, usages={}, like=plan.resolver)
+        assert other.home is not plan.resolver.home
+        assert set(other.home) == {id(d) for pf in again for m in pf.modules
+                                   for d in m.declarations}
+
+
 def _pick(p):
     return (p.rule, p.failure, p.kind, p.caution, p.line,
             None if p.q is None else p.q.tolist(), None if p.prev is None else p.prev.tolist())

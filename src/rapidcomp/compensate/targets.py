@@ -299,8 +299,12 @@ class Resolver:
 
     def __init__(self, files: list[ParsedFile], float32: bool = False,
                  usages: dict | None = None, writes: bool = True, track=(), base=None,
-                 observers=(), moved_by: str | None = None, written: Written | None = None):
+                 observers=(), moved_by: str | None = None, written: Written | None = None,
+                 like: "Resolver | None" = None):
+        """like: a resolver of these very files (the plan's, for verify.py):
+        its tables of the files' declarations are taken, not made again."""
         self.float32 = float32
+        self.files = list(files)
         # Records as an output writes them (verify.py, when every edit is of
         # numeric fields).
         self.written = written if written is not None else Written({}, [], np.empty((0, 17)), [])
@@ -327,7 +331,30 @@ class Resolver:
         # (a CAM program's 1e5 uses have a few: ~15 MB).
         self._same: dict = {}
         self._same_floats: dict = {}
+        if like is not None and len(like.files) == len(self.files) and all(
+                a is b for a, b in zip(like.files, self.files)):
+            # (5e4 declarations of a CAM program: the same tables.)
+            self.params, self.home, self.home_module = like.params, like.home, like.home_module
+            self.module_decls, self.globals = like.module_decls, like.globals
+            self.routine_decls = like.routine_decls
+        else:
+            self._tables()
         for pf in files:
+            for m in pf.modules:
+                mid = id(m)
+                us = usages.get(mid) if usages is not None else None
+                if us is None:
+                    if not writes:
+                        continue
+                    us = usage(m.node)
+                self.usages[mid] = us
+        if writes or usages is None:
+            self._task_writes(files, observers)
+
+    def _tables(self) -> None:
+        """The files' declarations by where their names are seen, and the
+        routines' parameters."""
+        for pf in self.files:
             for m in pf.modules:
                 mid = id(m)
                 for r in m.routines:
@@ -342,14 +369,6 @@ class Resolver:
                             self.globals.setdefault(name, []).append(d)
                     else:
                         self.routine_decls[(mid, d.routine.lower(), name)] = d
-                us = usages.get(mid) if usages is not None else None
-                if us is None:
-                    if not writes:
-                        continue
-                    us = usage(m.node)
-                self.usages[mid] = us
-        if writes or usages is None:
-            self._task_writes(files, observers)
 
     def _num(self, values) -> np.ndarray:
         a = np.asarray(values, float)

@@ -555,7 +555,8 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
     files += list(plan.task.context)
     # Run-time writes were ruled out on the input; the output adds none.
     res = Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
-                   track=plan.track, base=plan.resolver.base, written=written)
+                   track=plan.track, base=plan.resolver.base, written=written,
+                   like=plan.resolver)
     if written is not None:
         # The structure is the input's but for the moves turned into
         # MoveAbsJ (relex() and relex_absj() made sure every other edit is
