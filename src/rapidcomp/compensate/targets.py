@@ -309,6 +309,7 @@ class Resolver:
         # numeric fields).
         self.written = written if written is not None else Written({}, [], np.empty((0, 17)), [])
         self._memos: dict = {}
+        self._pairs: dict = {}                  # _tool_wobj's
         # Robtarget uses whose flange pose is composed in one batch (poses()).
         self._pending: list = []
         self.track = tuple(track)
@@ -539,6 +540,29 @@ class Resolver:
             self._memos[written] = hit
         self._notes.extend(hit[1])
         return hit[0]
+
+    def _tool_wobj(self, motion, module) -> tuple:
+        """(tool(), wobj()) of a move, the work object not resolved (None)
+        where the tool is not; by one lookup where the move names both by
+        a plain name (a CAM program's 1e5 moves name the same two), with
+        the notes their resolution gave."""
+        t, w, routine = motion.tool, motion.wobj, motion.routine
+        if type(t) is not A.Ref or type(w) is not A.Ref or t.selectors or w.selectors:
+            tool = self.tool(t, module, routine)
+            return tool, (None if type(tool) is Unresolved else self.wobj(w, module, routine))
+        key = (id(module), routine, t.name, w.name)
+        hit = self._pairs.get(key)
+        if hit is not None:
+            if hit[2]:
+                self._notes.extend(hit[2])
+            return hit[0], hit[1]
+        before = len(self._notes)
+        tool = self.tool(t, module, routine)
+        if type(tool) is Unresolved:
+            return tool, None
+        wobj = self.wobj(w, module, routine)
+        self._pairs[key] = (tool, wobj, tuple(self._notes[before:]))
+        return tool, wobj
 
     def tool(self, expr, module, routine: str):
         """(key, tframe as (R, p)), or Unresolved."""
@@ -902,11 +926,8 @@ class Resolver:
             src = _source(d.value, d, self.home[key], None, False, expr, expr, None, None,
                           None, self.home_module[key])
             label = pf.source.text[expr.span.start:expr.span.end]
-        tool = self.tool(motion.tool, module, motion.routine)
-        if type(tool) is Unresolved:
-            return None
-        wobj = self.wobj(motion.wobj, module, motion.routine)
-        if type(wobj) is Unresolved:
+        tool, wobj = self._tool_wobj(motion, module)
+        if type(tool) is Unresolved or type(wobj) is Unresolved:
             return None
         record = src.record
         u = _use(motion, t.role, label, line, "robtarget", None, None, self._one(record.conf),
