@@ -66,7 +66,8 @@ def test_maker_makes_what_the_class_makes():
     cases = [(A.Arg, ("pos", None, A.Ref("p1", (), span), span)),
              (A.Ref, ("p1", (), span)), (A.NumAgg, ("[1,2]", span)),
              (A.ProcCall, ("MoveL", (), span, True)),
-             (Motion, ("MoveL", None, span, "Path", (), (), (), None, None, None, None, (), False))]
+             (Motion, ("MoveL", None, span, "Path", (), (), (), None, None, None, None, (),
+                       False))]
     for cls, values in cases:
         made = maker(cls)(*values)
         assert type(made) is cls and made == cls(*values)
