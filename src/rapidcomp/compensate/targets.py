@@ -1068,17 +1068,19 @@ class Resolver:
         # Rows of the written array (at: their place in done), records' values.
         at, rows = [], []
         written = self.written
+        written_row = written.row
         for n, u in enumerate(uses):
             src = u.source
             if u.kind != "robtarget" or src.call is not None:
                 continue
-            tool = self.tool(u.motion.tool, u.module, u.motion.routine)
-            wobj = self.wobj(u.motion.wobj, u.module, u.motion.routine)
-            if isinstance(tool, Unresolved) or isinstance(wobj, Unresolved):
+            # (A use whose tool is not resolved goes to again(), which says
+            # why: its work object is not needed here.)
+            tool, wobj = self._tool_wobj(u.motion, u.module)
+            if type(tool) is Unresolved or type(wobj) is Unresolved:
                 continue
             if not isinstance(src.record, RobTarget):
                 continue
-            row = written.row(_written_key(src, u.file))
+            row = written_row(_written_key(src, u.file))
             if row is not None:
                 at.append(len(done))
                 rows.append(row)
