@@ -107,17 +107,18 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # deformed robot's IK is made beside (solve.Solving).
     solving = Solving(plan, solver, start)
     gs = P.grouping(plan, solving, mode)
+    # The plan's notes made meanwhile too: past the groups nothing reads the
+    # flow (printing and verifying the values read the plan's uses and
+    # resolver; the rows its uses and track).
+    plan_notes = plan.notes()
     solved = solving.finish()
     solving = None
     P.settle(gs, solved)
     clock("solve")
     cells = None
-    # Past the groups nothing reads the flow (printing and verifying the
-    # values read the plan's uses and resolver; the rows its uses and
-    # track): the plan's notes are made now, and the flow's per-use states
-    # go before the values are printed and verified (1e5 targets: ~50 MB
-    # off the peak; a later use of them fails loudly).
-    plan_notes = plan.notes()
+    # The flow's per-use states go before the values are printed and
+    # verified (1e5 targets: ~50 MB off the peak; a later use of them fails
+    # loudly).
     plan.flow = plan.by_key = None
     values = Values(plan, solved, solver.options.quadrant_tol_deg)
     state_errors: dict = {}

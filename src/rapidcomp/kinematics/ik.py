@@ -664,8 +664,7 @@ class Solver:
         q_deg = np.asarray(q_deg, float).reshape(-1, 6)
         N = len(q_deg)
         q = q_deg * DEG
-        R, p = self.nominal_chain.fk(q)
-        _, ps = self.nominal_chain.joint_frames(q)
+        (R, p), (_, ps) = self.nominal_chain.fk_and_frames(q)
         status = np.zeros(N, dtype=int)
         detail = np.zeros(N)
         djoint = np.full(N, -1)
