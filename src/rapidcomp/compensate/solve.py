@@ -214,34 +214,18 @@ class _Chooser:
                 self.states[i] = plan.state(uses[i])
         scale = (solver.joint_map.scale if solver.joint_map is not None else np.zeros(6))
         self.scaled = [j for j in (0, 3, 5) if scale[j] != 0]
+        need = self._needing_guess()
         # (Taken as late as this: the plan may have handed it off.)
         self.by_conf, self.cands = _nominal_of(plan, solver, [uses[i] for i in rob])
-        self._speculate()
+        self._speculate(need)
         self._quick_data()
 
     # ------------------------------------------------------------ speed
-    def _speculate(self) -> None:
-        """A guess of every row's joints and, in one batch, the solution of
-        each row closest to its guessed predecessor. The choice in flow
-        order (run) takes the batch result wherever the predecessor's real
-        joints equal the guess, and computes it afresh elsewhere: the guess
-        changes the speed, never the result. Guess: the confdata's solution
-        where it is valid, MoveAbsJ joints as written, and along a chain of
-        moves without supervision the branch of the chain's first move,
-        followed turn by turn (Solver.follow)."""
+    def _needing_guess(self) -> list[int]:
+        """The rows whose predecessor's joints decide their solution
+        (supervision may be off, and circle points), in flow order; and
+        pred1, each row's one predecessor (-1: none or several)."""
         n = len(self.uses)
-        self.spec = np.full((n, 6), np.nan)
-        self.pred1 = np.full(n, -1)
-        self.off_spec = np.full((n, 6), np.nan)
-        self.more: dict[int, list] = {}   # row -> [(previous joints, closest)]
-        if not self.rob_row:
-            return
-        for i, u in enumerate(self.uses):
-            if u.kind == "jointtarget":
-                self.spec[i] = self.q[i]
-        ok = self.by_conf.success
-        rob = np.array(list(self.rob_row))
-        self.spec[rob[ok]] = self.by_conf.q_deg[ok]
         need = []
         pred1 = [-1] * n
         for i in self.order:
@@ -256,6 +240,30 @@ class _Chooser:
                 pred1[i] = self.rows.get(pk, -1)
             need.append(i)
         self.pred1 = np.array(pred1)
+        return need
+
+    def _speculate(self, need: list[int]) -> None:
+        """A guess of every row's joints and, in one batch, the solution of
+        each row closest to its guessed predecessor. The choice in flow
+        order (run) takes the batch result wherever the predecessor's real
+        joints equal the guess, and computes it afresh elsewhere: the guess
+        changes the speed, never the result. Guess: the confdata's solution
+        where it is valid, MoveAbsJ joints as written, and along a chain of
+        moves without supervision the branch of the chain's first move,
+        followed turn by turn (Solver.follow)."""
+        n = len(self.uses)
+        self.spec = np.full((n, 6), np.nan)
+        self.off_spec = np.full((n, 6), np.nan)
+        self.more: dict[int, list] = {}   # row -> [(previous joints, closest)]
+        if not self.rob_row:
+            return
+        for i, u in enumerate(self.uses):
+            if u.kind == "jointtarget":
+                self.spec[i] = self.q[i]
+        ok = self.by_conf.success
+        rob = np.array(list(self.rob_row))
+        self.spec[rob[ok]] = self.by_conf.q_deg[ok]
+        pred1 = self.pred1.tolist()
         # Chains: consecutive rows each following the one before (rows
         # without a guess yet: _follow_run sets only rows already passed).
         unguessed = np.isnan(self.spec).any(axis=1).tolist()
