@@ -27,24 +27,31 @@ def maker(cls):
     if params is None or not params.frozen or hasattr(cls, "__post_init__"):
         raise TypeError(f"{cls.__name__}: maker() takes a frozen dataclass without "
                         "__post_init__")
-    names = [f.name for f in dataclasses.fields(cls)]
-    args = ", ".join(f"v{i}" for i in range(len(names)))
-    namespace = {"_new": object.__new__, "_cls": cls}
-    made = "_c"
-    if "__slots__" in cls.__dict__:
-        namespace["_twin"] = twin(cls)
-        made = "_t"
-        binds = ", _t=_twin"
-        body = "".join(f"    o.{name} = v{i}\n" for i, name in enumerate(names))
-        body += "    o.__class__ = _c\n"
-    else:
-        binds = ""
-        body = "    d = o.__dict__\n" + "".join(f"    d[{name!r}] = v{i}\n"
-                                            for i, name in enumerate(names))
-    source = (f"def new_{cls.__name__}({args}, _n=_new, _c=_cls{binds}):\n"
-              f"    o = _n({made})\n{body}    return o\n")
+    n = len(dataclasses.fields(cls))
+    namespace: dict = {}
+    body = made_as(cls, "o", [f"v{i}" for i in range(n)], namespace)
+    # (What the body names bound as defaults: locals, not globals.)
+    binds = "".join(f", {k}={k}" for k in namespace)
+    source = (f"def new_{cls.__name__}({', '.join(f'v{i}' for i in range(n))}{binds}):\n"
+              + "".join(f"    {line}\n" for line in body) + "    return o\n")
     exec(source, namespace)
     return namespace[f"new_{cls.__name__}"]
+
+
+def made_as(cls, var: str, values: list[str], namespace: dict) -> list[str]:
+    """Lines of Python making `var = cls(*values)` (values: expressions) as
+    maker's functions make it, the names they use put in namespace; code
+    written for one shape of nodes makes them so too (rapid/build.py)."""
+    key = cls.__name__
+    namespace["_o"], namespace[f"_{key}"] = object.__new__, cls
+    fields = dataclasses.fields(cls)
+    if "__slots__" in cls.__dict__:
+        namespace[f"_{key}Twin"] = twin(cls)
+        return ([f"{var} = _o(_{key}Twin)"]
+                + [f"{var}.{f.name} = {v}" for f, v in zip(fields, values)]
+                + [f"{var}.__class__ = _{key}"])
+    return ([f"{var} = _o(_{key})", f"_d = {var}.__dict__"]
+            + [f"_d[{f.name!r}] = {v}" for f, v in zip(fields, values)])
 
 
 _TWINS: dict = {}

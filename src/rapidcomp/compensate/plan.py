@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..rapid.model import ParsedFile
-from .flow import ON, Flow, State, analyse
+from .flow import Flow, State, analyse
 from .targets import EXTAX_UNUSED, Resolver, TargetUse
 
 
@@ -86,10 +86,8 @@ class Plan:
         return self.flow.before.get(u.key, self.flow.entry)
 
     def may_be_displaced(self, u: TargetUse) -> bool:
-        # (state(u).may_be_displaced, asked of every move: without the two
-        # calls.)
-        st = self.flow.before.get(u.key, self.flow.entry)
-        return ON in st.pdisp or ON in st.eoffs
+        # (state(u)'s, asked of every move: without the call.)
+        return self.flow.before.get(u.key, self.flow.entry).may_be_displaced
 
     def order(self) -> list[TargetUse]:
         """Uses in the order the controller reaches them first; uses the

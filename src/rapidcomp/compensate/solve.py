@@ -32,7 +32,7 @@ from ..kinematics.frames import DEG
 from ..kinematics.ik import IKBatch, Solver, Status
 from .flow import OFF, ON, PROGRAM_START, State
 from .plan import Plan, line_ranges
-from .targets import TargetUse, flange_stack
+from .targets import IDENTITY_POSE, TargetUse, flange_stack, stacked_poses
 
 # Two solutions closer than this (deg, Euclidean) are the same solution.
 SAME_DEG = 1e-6
@@ -734,6 +734,7 @@ class Solving:
         chooser.run()
         q_nom = chooser.q
         self.picks = picks = chooser.picks
+        rob = list(chooser.rob_row)
         # The chooser's candidates, guesses and solutions (1e5 targets: ~100
         # MB) go before the deformed robot's batches are made.
         chooser = None
@@ -741,7 +742,6 @@ class Solving:
         # the nominal FK of its joints.
         # (seed_from_joints's own arrays, written into.)
         R, p, seed = solver.seed_from_joints(np.nan_to_num(q_nom))
-        rob = [i for i, u in enumerate(uses) if u.kind == "robtarget"]
         R[rob], p[rob] = flange_stack([uses[i] for i in rob])
         # Joint limits of the chosen joints (MoveAbsJ targets) are failures too.
         status = seed.status.copy()
@@ -791,22 +791,10 @@ class Slot(NamedTuple):
 def tcp_of(uses) -> np.ndarray:
     """The tool centre point of each use in the flange frame (mm): where
     errors are measured and what the wrist fallback holds exact."""
-    # (Each tool's row once, taken for every use of it: a CAM program's 1e5
-    # uses share one tool, and an array of 1e5 small arrays costs ~0.6 us
-    # a row.)
-    tools: list = []
-    where: dict = {}
-    at = []
-    for u in uses:
-        t = u.tool
-        k = where.get(id(t))
-        if k is None:
-            k = where[id(t)] = len(tools)
-            tools.append(t)
-        at.append(k)
-    tcps = np.array([t[1][1] if t is not None else np.zeros(3) for t in tools],
-                    float).reshape(-1, 3)
-    return tcps[at] if at else tcps
+    # (stacked_poses: each tool converted once, a CAM program's 1e5 uses
+    # share one.)
+    return stacked_poses([u.tool[1] if u.tool is not None else IDENTITY_POSE
+                          for u in uses])[1]
 
 
 def solve_slots(solver: Solver, R, p, conf, valid) -> list[Slot]:

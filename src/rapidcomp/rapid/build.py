@@ -8,13 +8,12 @@ Anonymous punctuation is filtered by Lark, so rules keep named terminals
 
 from __future__ import annotations
 
-import dataclasses
 import re
 import sys
 from functools import partial
 
 
-from ..construct import maker, twin
+from ..construct import made_as, maker
 from . import ast as A
 from .ast import Span
 from .lalr import FAST_NAME, Tok
@@ -107,13 +106,8 @@ def _tail_maker(items: tuple):
     ns: dict = {"_t": tuple.__new__, "_Span": Span, "_o": object.__new__}
 
     def node(cls, var: str, values: list[str]) -> list[str]:
-        # var = cls(*values), made as construct.maker makes it: as its twin,
-        # then given its class.
-        key = cls.__name__
-        ns["_" + key], ns[f"_{key}Twin"] = cls, twin(cls)
-        return ([f"    {var} = _o(_{key}Twin)"]
-                + [f"    {var}.{f.name} = {v}" for f, v in zip(dataclasses.fields(cls), values)]
-                + [f"    {var}.__class__ = _{key}"])
+        # var = cls(*values), made as construct.maker makes it.
+        return ["    " + line for line in made_as(cls, var, values, ns)]
 
     lines = ["def make(at):"]
     out = []

@@ -99,23 +99,18 @@ def usage(module: A.ModuleNode) -> Usage:
             refs.setdefault(node.name.lower(), []).append(node)
         elif t is A.Arg:      # (the next commonest: its value comes as a node of its own)
             continue
-        elif t is A.ProcCall and node.plain:
-            # (A CAM move, 1e5 of them: its references, in the order the
-            # walk gives them, read here.)
-            for arg in reversed(node.args):
-                v = arg.value
-                if type(v) is A.Ref:
-                    refs.setdefault(v.name.lower(), []).append(v)
-            spec = motion_spec(node.name)
-            if spec is None:
-                calls.append(node)
-            elif "search" in spec.roles:
-                _search_writes(node, spec, writes)
         elif t is A.Assign:
             writes.setdefault(node.target.name.lower(), []).append(node.span)
             if not node.target.selectors:
                 assigns.setdefault(node.target.name.lower(), []).append(node)
         elif t is A.ProcCall:
+            if node.plain:
+                # (A CAM move, 1e5 of them: its references, in the order the
+                # walk gives them, read here.)
+                for arg in reversed(node.args):
+                    v = arg.value
+                    if type(v) is A.Ref:
+                        refs.setdefault(v.name.lower(), []).append(v)
             spec = motion_spec(node.name)
             if spec is None:
                 calls.append(node)
