@@ -217,7 +217,8 @@ def plain_block(lits: list[str], values: np.ndarray, offsets: np.ndarray, R: np.
     why = np.array(whys, dtype=object)[rows]
     shift = offsets[rows] - off[rows]
     edits = EditColumns(a + shift, b + shift, new, why)
-    spliced = apply_edits(joined, EditColumns(a, b, new, why, pack=False))
+    # (The texts as the edits packed them: spliced as bytes, edits.py.)
+    spliced = apply_edits(joined, EditColumns(a, b, edits.texts_column(), why))
     grow = size - (b - a)
     # (Each literal's length as written: the distance to the next one's
     # offset, less the ',' joining them.)
