@@ -22,6 +22,7 @@ from ..atomic import utf8
 from ..collector import paused
 from ..cpus import side_by_side
 from ..errors import Errors, InputError, RapidcompError
+from ..process import let_go
 from ..progress import Progress
 from ..rapid.task import TaskSource
 from . import report
@@ -130,6 +131,8 @@ def run(spec: JobSpec) -> JobOutcome:
 
 def _run(spec: JobSpec) -> JobOutcome:
     allow_deep_nesting()
+    # (What the job before kept goes now: process.py.)
+    let_go(None)
     src = spec.source
     progress = Progress(src.name, spec.progress)
     # A big task's job hands work to a second process (side.py), forked
@@ -189,10 +192,12 @@ def _run_helped(spec: JobSpec, src: TaskSource, progress: Progress) -> JobOutcom
                                                            else ""),
                 "modules": len(src.modules), **meta}
     # Past the result the parsed task is not needed, but for each module's
-    # encoding and the transient support module (1e5 targets: ~300 MB gone
-    # before the output is encoded and the reports are rendered).
+    # encoding and the transient support module (1e5 targets: ~300 MB; in
+    # the command's own process kept to its end instead of freed object by
+    # object, process.py).
     sources = [pf.source for pf in task.files]
     if spec.transient is None:
+        let_go(task)
         task = None
     out = []
     for source, m in zip(sources, result.modules):
