@@ -76,3 +76,22 @@ def test_a_job_of_a_library_call_keeps_nothing(monkeypatch, tmp_path):
     monkeypatch.setattr(process, "_kept", None)
     J.run(_spec(tmp_path, "a.mod"))
     assert process._kept is None
+
+
+def test_a_worker_lets_go_before_it_renders(monkeypatch, tmp_path):
+    """A pool worker (forked from the command, so its own process) renders
+    its reports after the job and goes on to its next module: it keeps
+    nothing."""
+    from rapidcomp import side
+    from rapidcomp.rapid import predecode
+    monkeypatch.setattr(process, "_owned", True)
+    monkeypatch.setattr(process, "_kept", None)
+    monkeypatch.setattr(predecode, "enabled", True)
+    monkeypatch.setattr(side, "enabled", True)
+    spec = J.JobSpec(tasks_of(f"{FIXTURES}/cubes.mod")[0], str(tmp_path / "a.mod"),
+                     str(tmp_path / "a.md"), None, f"{FIXTURES}/warm.csv", None, (), "auto",
+                     False, ("J5=-120:120",))
+    out = J._run_rendered(spec)
+    assert process._kept is None
+    assert any(path.endswith("a.md") and data.startswith(b"# rapidcomp fix")
+               for path, data in out.files)

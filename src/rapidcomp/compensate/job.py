@@ -304,6 +304,9 @@ def _run_rendered(spec: JobSpec) -> JobOutcome:
     from ..rapid import predecode
     predecode.enabled = side.enabled = False
     out = run(spec)
+    # (The parsed program goes before the reports are rendered here: a
+    # worker goes on to its next module, and ends without os._exit.)
+    let_go(None)
     return replace(out, files=tuple((path, data.render() if isinstance(data, Report) else data)
                                     for path, data in out.files))
 
