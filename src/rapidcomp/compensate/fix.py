@@ -301,11 +301,17 @@ def _missed(solved, gs, verified) -> dict:
 
 def _notes(rows: list[UseRow], gs: list[P.Group]) -> list[str]:
     notes = []
-    absj = sorted({(r.file, r.line) for r in rows if LINEAR_WARNING in r.warnings})
+    # The lines of the moves turned into MoveAbsJ, by file (a set of ints
+    # each: 1e5 of a CAM program, no tuple each to sort).
+    absj: dict[str, set] = {}
+    for r in rows:
+        if LINEAR_WARNING in r.warnings:
+            lines = absj.get(r.file)
+            if lines is None:
+                lines = absj[r.file] = set()
+            lines.add(r.line)
     if absj:
-        files = sorted({f for f, _ in absj})
-        where = "; ".join(f"{f}: lines {line_ranges([ln for g, ln in absj if g == f])}"
-                          for f in files)
+        where = "; ".join(f"{f}: lines {line_ranges(sorted(absj[f]))}" for f in sorted(absj))
         notes.append("MoveL -> MoveAbsJ gives up the straight-line path between points "
                      f"({where}); use --emit robtarget to keep MoveL linear.")
     for g in gs:
