@@ -6,6 +6,8 @@ objects themselves."""
 
 import weakref
 
+import pytest
+
 from rapidcomp import process
 from rapidcomp.compensate import job as J
 from rapidcomp.compensate.plan import Task
@@ -18,24 +20,15 @@ class _Thing:
     pass
 
 
-def test_a_library_call_lets_go_at_once(monkeypatch):
-    monkeypatch.setattr(process, "_owned", False)
+@pytest.mark.parametrize("owned", [False, True])
+def test_kept_in_the_command_until_the_next_let_go_else_let_go_at_once(monkeypatch, owned):
+    monkeypatch.setattr(process, "_owned", owned)
     monkeypatch.setattr(process, "_kept", None)
     thing = _Thing()
     ref = weakref.ref(thing)
     process.let_go(thing)
     del thing
-    assert ref() is None
-
-
-def test_the_command_keeps_it_until_the_next_let_go(monkeypatch):
-    monkeypatch.setattr(process, "_owned", True)
-    monkeypatch.setattr(process, "_kept", None)
-    thing = _Thing()
-    ref = weakref.ref(thing)
-    process.let_go(thing)
-    del thing
-    assert ref() is not None
+    assert (ref() is not None) == owned
     process.let_go(None)
     assert ref() is None
 
