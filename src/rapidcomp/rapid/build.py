@@ -103,7 +103,7 @@ def _tail_maker(items: tuple):
     """make(at): _Tail.nodes of these items, written as code (their words,
     values and relative spans constants; each node made as construct.maker
     makes it, without a call per node)."""
-    ns: dict = {"_t": tuple.__new__, "_Span": Span, "_o": object.__new__}
+    ns: dict = {"_t": tuple.__new__, "_Span": Span}
 
     def node(cls, var: str, values: list[str]) -> list[str]:
         # var = cls(*values), made as construct.maker makes it.
