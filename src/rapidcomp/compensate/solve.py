@@ -20,6 +20,7 @@ controller reaches the moves, because each may depend on the one before.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -29,7 +30,7 @@ import numpy as np
 from .. import side
 from ..kinematics.conf import confdata
 from ..kinematics.frames import DEG
-from ..kinematics.ik import IKBatch, Solver, Status
+from ..kinematics.ik import IKBatch, Solver, Status, reusing
 from .flow import OFF, ON, PROGRAM_START, State
 from .plan import Plan, line_ranges
 from .targets import IDENTITY_POSE, TargetUse, flange_stack, stacked_poses
@@ -216,7 +217,12 @@ class _Chooser:
         self.scaled = [j for j in (0, 3, 5) if scale[j] != 0]
         need = self._needing_guess()
         # (Taken as late as this: the plan may have handed it off.)
-        self.by_conf, self.cands = _nominal_of(plan, solver, [uses[i] for i in rob])
+        self.by_conf, self.cands, *self.flange = _nominal_of(plan, solver,
+                                                             [uses[i] for i in rob])
+        self.tcp = tcp_of(uses)
+        # The deformed robot's IK guessed from these solutions, made by the
+        # job's helper while this process chooses (see _guess_deformed).
+        self.guessed = _guess_ahead(solver, self.q, rob, self.by_conf, *self.flange, self.tcp)
         self._speculate(need)
         self._quick_data()
 
@@ -684,10 +690,11 @@ def nominal_ahead(solver: Solver):
     robtarget use (the choice's first batch) handed to the job's helper
     (side.py) as soon as their flange poses are known, made there while
     this process analyses the flow (without a helper: made when solve()
-    asks for it)."""
+    asks for it); with those flange poses, which the solve takes too."""
     def start(uses):
         rob = [u for u in uses if u.reason is None and u.kind == "robtarget"]
-        return solver, len(rob), side.run(_nominal_and_candidates, solver, *_ik_input(rob))
+        R, p, conf = _ik_input(rob)
+        return solver, len(rob), side.run(_nominal_and_candidates, solver, R, p, conf), R, p
     return start
 
 
@@ -702,13 +709,14 @@ def _nominal_and_candidates(solver: Solver, R, p, conf):
 
 
 def _nominal_of(plan: Plan, solver: Solver, rob: list) -> tuple:
-    """(solve_nominal, candidates) of the robtarget uses `rob` (those of
-    plan.uses, solved, in order): what the plan handed off for this
-    solver, taken once; else made here."""
+    """(solve_nominal, candidates, R, p) of the robtarget uses `rob` (those
+    of plan.uses, solved, in order; R, p their flange poses): what the
+    plan handed off for this solver, taken once; else made here."""
     ahead, plan.ahead = plan.ahead, None
     if ahead is not None and ahead[0] is solver and ahead[1] == len(rob):
-        return ahead[2].get()
-    return _nominal_and_candidates(solver, *_ik_input(rob))
+        return (*ahead[2].get(), ahead[3], ahead[4])
+    R, p, conf = _ik_input(rob)
+    return (*_nominal_and_candidates(solver, R, p, conf), R, p)
 
 
 def solve(plan: Plan, solver: Solver, start=None) -> Solved:
@@ -735,40 +743,25 @@ class Solving:
         q_nom = chooser.q
         self.picks = picks = chooser.picks
         rob = list(chooser.rob_row)
+        flange, tcp, guessed = chooser.flange, chooser.tcp, chooser.guessed
         # The chooser's candidates, guesses and solutions (1e5 targets: ~100
         # MB) go before the deformed robot's batches are made.
         chooser = None
-        # The intended flange poses: a robtarget's as resolved, a MoveAbsJ's
-        # the nominal FK of its joints.
-        # (seed_from_joints's own arrays, written into.)
-        R, p, seed = solver.seed_from_joints(np.nan_to_num(q_nom))
-        R[rob], p[rob] = flange_stack([uses[i] for i in rob])
+        failed = np.array([pick.failure is not None for pick in picks], dtype=bool)
+        R, p, seed, self.nominal = _seed_of(solver, q_nom, rob, *flange, failed)
         # Joint limits of the chosen joints (MoveAbsJ targets) are failures too.
-        status = seed.status.copy()
-        bad = (status != Status.OK).tolist()
+        bad = (seed.status != Status.OK).tolist()
         for i in range(n):
-            if picks[i].failure is not None:
-                status[i] = Status.NO_CONFIGURATION
-            elif bad[i]:
+            if bad[i] and picks[i].failure is None:
                 picks[i] = _fail(f"nominal: {seed.reason(i)}")
-        self.nominal = seed = IKBatch(np.where(np.isnan(q_nom), np.nan, seed.q_deg), status,
-                                      seed.detail, seed.detail_joint, seed.conf,
-                                      seed.residual_mm, seed.residual_rad, seed.iterations,
-                                      seed.warnings)
         self.R, self.p = R, p
-        tcp = tcp_of(uses)
-        self._deformed = side.run(_solve_deformed, solver, R, p, seed, tcp)
-        self.err_p, self.err_r = solver.deformed_pose_error(np.nan_to_num(q_nom) * DEG, R, p,
-                                                            tcp)
+        self._deformed = side.run(_solve_deformed, guessed, solver, R, p, self.nominal, tcp,
+                                  np.nan_to_num(q_nom) * DEG)
         self._plan, self._solver = plan, solver
 
     def finish(self) -> Solved:
         plan, solver, uses, picks = self._plan, self._solver, self.uses, self.picks
-        deformed = self._deformed.get()
-        qc = np.nan_to_num(deformed.q_deg) * DEG
-        Rn, pn, wrist = solver.nominal_pose_and_wrist(qc)
-        conf_after = confdata(qc, wrist, solver.geometry.phi)
-        wrist = None
+        deformed, self.err_p, self.err_r, Rn, pn, conf_after = self._deformed.get()
         disp = np.full(len(uses), np.nan)
         moved = [i for i, u in enumerate(uses) if u.kind == "robtarget"
                  and plan.may_be_displaced(u) and picks[i].failure is None
@@ -779,8 +772,83 @@ class Solving:
                       self.err_r, Rn, pn, conf_after, picks, disp, self.start)
 
 
-def _solve_deformed(solver: Solver, R, p, seed: IKBatch, tcp) -> IKBatch:
-    return solver.solve_deformed(R, p, seed, tcp)
+def _seed_of(solver: Solver, q_nom: np.ndarray, rob: list, R_rob, p_rob, failed: np.ndarray):
+    """(R, p, seed, nominal) of the chosen nominal joints q_nom (NaN: no
+    solution; `failed`: the rows whose choice failed): the intended flange
+    poses (a robtarget's as resolved, R_rob, p_rob of the rows `rob`; a
+    MoveAbsJ's the nominal FK of its joints), seed_from_joints's batch,
+    and the nominal batch the deformed robot's IK starts from (a failed
+    row's status NO_CONFIGURATION)."""
+    # (seed_from_joints's own arrays, written into.)
+    R, p, seed = solver.seed_from_joints(np.nan_to_num(q_nom))
+    R[rob], p[rob] = R_rob, p_rob
+    status = seed.status.copy()
+    status[failed] = Status.NO_CONFIGURATION
+    nominal = IKBatch(np.where(np.isnan(q_nom), np.nan, seed.q_deg), status, seed.detail,
+                      seed.detail_joint, seed.conf, seed.residual_mm, seed.residual_rad,
+                      seed.iterations, seed.warnings)
+    return R, p, seed, nominal
+
+
+def _solve_deformed(guessed, solver: Solver, R, p, nominal: IKBatch, tcp, q_cmd) -> tuple:
+    """(deformed, err_p, err_r, Rn, pn, conf_after) as Solved has them: the
+    deformed robot's IK of the flange poses R, p from the nominal batch,
+    the uncompensated error of q_cmd (rad), the nominal FK of the
+    compensated joints and their confdata. Each block of rows is taken
+    from the guess made ahead (_guess_deformed) where its inputs are the
+    guess's, byte for byte: the same results (ik.reusing)."""
+    global _guessed
+    known = _guessed[1] if _guessed is not None and _guessed[0] == guessed else {}
+    _guessed = None
+    deformed = reusing(Solver.solve_deformed, solver, (R, p, nominal, tcp), known.get("ik"))
+    err_p, err_r = reusing(Solver.deformed_pose_error, solver, (q_cmd, R, p, tcp),
+                           known.get("error"))
+    qc = np.nan_to_num(deformed.q_deg) * DEG
+    Rn, pn, wrist = reusing(Solver.nominal_pose_and_wrist, solver, (qc,), known.get("fk"))
+    return deformed, err_p, err_r, Rn, pn, confdata(qc, wrist, solver.geometry.phi)
+
+
+# The guess _guess_deformed made in the job's helper: (its number, what
+# _solve_deformed may take of it), until _solve_deformed takes it.
+_guessed: tuple | None = None
+_guesses = itertools.count(1)
+
+
+def _guess_ahead(solver: Solver, q: np.ndarray, rob: list, by_conf: IKBatch, R_rob, p_rob,
+                 tcp) -> int | None:
+    """Hand the helper (side.py) the guess of the deformed robot's IK (made
+    there while this process chooses the nominal solutions: _guess_deformed);
+    its number, which _solve_deformed is given, or None (no helper, no
+    robtarget)."""
+    if not rob or not side.helps():
+        return None
+    # The guess: each robtarget's confdata solution (a CAM program's choice
+    # nearly everywhere), a MoveAbsJ's joints as written (q).
+    q = q.copy()
+    rows = np.array(rob, dtype=np.intp)        # (pickled as one array, not 1e5 ints)
+    ok = by_conf.success
+    q[rows[ok]] = by_conf.q_deg[ok]
+    number = next(_guesses)
+    side.run(_guess_deformed, number, solver, q, rows, R_rob, p_rob, tcp)
+    return number
+
+
+def _guess_deformed(number: int, solver: Solver, q_nom, rob, R_rob, p_rob, tcp) -> None:
+    """In the helper: _solve_deformed's work on the nominal joints guessed
+    (q_nom; NaN: failed), kept as the guess numbered `number` for the
+    _solve_deformed call that comes with that number; where the choice took
+    other joints, their blocks are computed there again."""
+    global _guessed
+    _guessed = None
+    failed = np.isnan(q_nom).any(axis=1)
+    R, p, _, nominal = _seed_of(solver, q_nom, rob, R_rob, p_rob, failed)
+    deformed = solver.solve_deformed(R, p, nominal, tcp)
+    q_cmd = np.nan_to_num(q_nom) * DEG
+    error = solver.deformed_pose_error(q_cmd, R, p, tcp)
+    qc = np.nan_to_num(deformed.q_deg) * DEG
+    fk = solver.nominal_pose_and_wrist(qc)
+    _guessed = (number, {"ik": ((R, p, nominal, tcp), deformed),
+                         "error": ((q_cmd, R, p, tcp), error), "fk": ((qc,), fk)})
 
 
 class Slot(NamedTuple):

@@ -250,6 +250,42 @@ def _chunked(method):
     return run
 
 
+def reusing(method, solver, args: tuple, known: tuple | None):
+    """method(solver, *args) for a Solver method made @_chunked, with each
+    block of rows it computes alone taken from `known` = (arguments,
+    result) of an earlier call of it (a guess made ahead) where that
+    block's arguments were the very same, byte for byte: the same block,
+    the same result, bit for bit. The other blocks are computed; without
+    `known` (or of another length) all of them, as the method does."""
+    n = len(args[0])
+    if known is None or len(known[0][0]) != n or len(known[0]) != len(args):
+        return method(solver, *args)
+    old_args, old = known
+    blocks = [slice(i, i + CHUNK) for i in range(0, n, CHUNK)] if n > CHUNK else [slice(0, n)]
+    parts = []
+    for sl in blocks:
+        if all(_same_rows(a, b, sl) for a, b in zip(args, old_args)):
+            parts.append(tuple(_rows(r, sl) for r in old) if isinstance(old, tuple)
+                         else _rows(old, sl))
+        else:
+            parts.append(method.__wrapped__(solver, *(_rows(a, sl) for a in args)))
+    return parts[0] if len(parts) == 1 else _join(parts)
+
+
+def _same_rows(a, b, sl: slice) -> bool:
+    """a and b hold the same bytes in rows sl (IKBatch: each field)."""
+    if isinstance(a, IKBatch) or isinstance(b, IKBatch):
+        return (isinstance(a, IKBatch) and isinstance(b, IKBatch)
+                and all(_same_rows(getattr(a, f.name), getattr(b, f.name), sl)
+                        for f in dataclasses.fields(IKBatch)))
+    if a is None or b is None:
+        return a is None and b is None
+    if not (isinstance(a, np.ndarray) and isinstance(b, np.ndarray)):
+        return False
+    a, b = a[sl], b[sl]
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
 class Solver:
     """IK for one nominal robot and, optionally, its deformed copy."""
 
