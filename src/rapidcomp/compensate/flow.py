@@ -177,6 +177,9 @@ class _Walker:
         self.called: dict[int, tuple[str, ...]] = {}   # id(routine node) -> names it calls
         self.visits = 0
         self.memo: dict = {}
+        # (id(statements), index) -> (state in, end, state out) of a run
+        # of plain moves walked (_moves).
+        self.runs: dict = {}
         self.recursed: set = set()
         self.cycle_ends: list = []
         self.table = RoutineTable()
@@ -579,6 +582,18 @@ class _Walker:
         (`last`), so each is absorbed into the frame as the first was; a
         search or a move of external axes ends the run. Returns where the
         run ends and the state after it."""
+        # The run walked again in the state it was walked in before (main's
+        # second cycle meets a CAM program's 1e5 moves so): each move joins
+        # the state it was reached in then, which changes nothing, and the
+        # run ends where and as it did.
+        start = i
+        again = self.runs.get((id(stmts), start))
+        if again is not None and again[0] == st:
+            self.visits += again[1] - start
+            if self.visits > MAX_VISITS:
+                raise _TooLarge
+            return again[1], again[2]
+        entered = st
         fi = rt.fi
         written = fi < self.n_written
         index, names, reach = self.motion_index, self.target_names, self._reach
@@ -597,6 +612,7 @@ class _Walker:
             for role, _ in names[(fi, mi)]:
                 st = reach((fi, mi, role, ()), st, written)
             i += 1
+        self.runs[(id(stmts), start)] = (entered, i, st)
         return i, st
 
     def _reach(self, key: tuple, st: State, written: bool) -> State:
