@@ -13,7 +13,6 @@ against the intended pose is what the report shows as "after".
 
 from __future__ import annotations
 
-import bisect
 import re
 from array import array
 from typing import NamedTuple
@@ -188,29 +187,41 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
             spans = np.array([it[0].motion.span for it in items], np.int64).reshape(-1, 2)
             # (Where each statement's ends lie in the output.)
             moved = spans + shift[np.searchsorted(es.ends, spans, "right")]
-            # Each move's row of declared_joints, where its literal is a
-            # declaration's read already (the same text: the same joints).
-            ks = []
-            for n, ((u, literal, name, called), (a, b), (at, to)) in enumerate(zip(
-                    items, spans.tolist(), moved.tolist()), first):
-                ks.append(-1)
-                m = u.motion
-                expr = u.source.expr.span
-                head = called + src[m.name_span.end:expr.start]
-                if (called.lower() != "moveabsj"
-                        or text[at:to] != head + (name or literal) + src[expr.end:b]):
+            # Each statement as meant, the output's texts compared as one
+            # list (a CAM program's 1e5: no check made move by move).
+            if any(it[3].lower() != "moveabsj" for it in items):
+                return None
+            motions = [it[0].motion for it in items]
+            exprs = [it[0].source.expr.span for it in items]
+            if [text[at:to] for at, to in moved.tolist()] != [
+                    called + src[m.span.start + len(m.instruction):e.start] + (name or literal)
+                    + src[e.end:b]
+                    for (_, literal, name, called), m, e, b in zip(
+                        items, motions, exprs, spans[:, 1].tolist())]:
+                return None
+            # Each new declaration a move names: in the move's scope, of the
+            # literal meant (an inline literal is checked below, with its
+            # block); each move's row of declared_joints, where its literal
+            # is a declaration's read already (the same text: the same joints).
+            ks = [-1] * len(items)
+            named = [n for n, it in enumerate(items) if it[2] is not None]
+            if named:
+                found = [names.get(items[n][2].lower()) for n in named]
+                if None in found:
                     return None
-                # (An inline literal is checked below, with its block.)
-                if name is not None:
-                    k = names.get(name.lower())
-                    if k is None:
-                        return None
-                    x, y = aggs[2 * k], aggs[2 * k + 1]
-                    if not (scopes[2 * k] <= a and b <= scopes[2 * k + 1]
-                            and y - x == len(literal) and text.startswith(literal, x)):
-                        return None
-                    if declared_joints is not None:
-                        ks[-1] = k
+                k2 = 2 * np.array(found, np.int64)
+                at2, scope2 = np.frombuffer(aggs, np.int64), np.frombuffer(scopes, np.int64)
+                x = at2[k2]
+                lits = [items[n][1] for n in named]
+                size = np.fromiter(map(len, lits), np.int64, len(lits))
+                if not ((scope2[k2] <= spans[named, 0]) & (spans[named, 1] <= scope2[k2 + 1])
+                        & (at2[k2 + 1] - x == size)).all():
+                    return None
+                if not all(map(text.startswith, lits, x.tolist())):
+                    return None
+                if declared_joints is not None:
+                    for n, k in zip(named, found):
+                        ks[n] = k
             known = [n for n, k in enumerate(ks) if k >= 0]
             if known:
                 records[[first + n for n in known]] = declared_joints[[ks[n] for n in known]]
@@ -389,28 +400,46 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     if not len(inserts):
         return out, scopes, aggs, None
     # (Each insert's offset in the input and in the output, and its length,
-    # as ints at once: 5e4 of them in a CAM program turned into MoveAbsJ.)
-    sites = zip(es.starts[inserts].tolist(), (es.starts[inserts] + shift[inserts]).tolist(),
-                es.lengths()[inserts].tolist())
-    routines = sorted((r.node.span.start, r.node.span.end)
-                      for m in pf.modules for r in m.routines)
-    starts = [a for a, _ in routines]
+    # as arrays: 5e4 of them in a CAM program turned into MoveAbsJ.)
+    at_in = es.starts[inserts]
+    at_out = at_in + shift[inserts]
     src = pf.source.text
-    ends = sorted(d.node.span.end for m in pf.modules for d in m.declarations)
-    places = []
-    for at, a, size in sites:
-        scope = _scope(pf, at, routines, starts)
-        last = bisect.bisect_right(ends, at) - 1
-        if scope is None or last < 0:
-            return None
-        rest = src[ends[last]:at].lstrip(" \t")
+    ends = np.array(sorted(d.node.span.end for m in pf.modules for d in m.declarations),
+                    np.int64)
+    # The declaration each insert follows: right after it (a CAM program's
+    # every one), or with blanks and a comment between on its line.
+    last = np.searchsorted(ends, at_in, "right") - 1
+    if (last < 0).any():
+        return None
+    after = ends[last]
+    away = after != at_in
+    for at, end in zip(at_in[away].tolist(), after[away].tolist()):
+        rest = src[end:at].lstrip(" \t")
         if "\n" in rest or "\r" in rest or rest[:1] not in ("", "!"):
             return None
-        places.append((scope, a, text[a:a + size]))
+    in_scope = _scopes(pf, at_in)
+    if in_scope is None:
+        return None
+    places = list(zip(in_scope, at_out.tolist(),
+                      [text[a:a + n] for a, n in zip(at_out.tolist(),
+                                                     es.lengths()[inserts].tolist())]))
     plain = _plain_declared(eng, [piece for _, _, piece in places])
     joints = None
     if plain is not None:
         plain, joints = plain
+    if plain is not None and all(len(decls) == 1 for decls in plain):
+        # One declaration per insert (a CAM program's 5e4): as the loop
+        # below reads them, at once.
+        decls = [decls[0] for decls in plain]
+        if not all(storage == "CONST" and type_name.lower() == "jointtarget"
+                   for storage, type_name, _, _, _ in decls):
+            return None
+        # (A later one of the same name wins, as a dict's last value.)
+        out = {name.lower(): k for k, (_, _, name, _, _) in enumerate(decls)}
+        scopes.extend([x for scope, _, _ in places for x in scope])
+        aggs.extend([x for (_, a, _), (_, _, _, x0, y0) in zip(places, decls)
+                     for x in (a + x0, a + y0)])
+        return out, scopes, aggs, joints
     for n, (scope, a, piece) in enumerate(places):
         if plain is not None:
             decls = plain[n]
@@ -436,18 +465,26 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     return out, scopes, aggs, joints
 
 
-def _scope(pf: ParsedFile, at: int, routines: list, starts: list) -> tuple[int, int] | None:
-    """(start, end) of the routine, else the module, holding input offset
-    `at`: where a declaration inserted there is seen (routines: the file's
-    routines' spans in order, starts: theirs)."""
-    k = bisect.bisect_right(starts, at) - 1
-    if k >= 0 and at < routines[k][1]:
-        return routines[k]
-    for m in pf.modules:
+def _scopes(pf: ParsedFile, ats: np.ndarray) -> list[tuple[int, int]] | None:
+    """(start, end) of the routine, else the module, holding each input
+    offset of `ats`: where a declaration inserted there is seen; None where
+    one is in neither."""
+    spans = sorted((r.node.span.start, r.node.span.end) for m in pf.modules for r in m.routines)
+    choice = np.full(len(ats), -1, np.int64)
+    if spans:
+        # (The last routine starting at or before the offset, if it holds it.)
+        k = np.searchsorted(np.array([a for a, _ in spans], np.int64), ats, "right") - 1
+        inside = (k >= 0) & (ats < np.array([b for _, b in spans], np.int64)[np.maximum(k, 0)])
+        choice[inside] = k[inside]
+    for m in pf.modules:                 # (the first module holding it)
         span = m.node.span
-        if span.start <= at < span.end:
-            return span.start, span.end
-    return None
+        free = (choice < 0) & (span.start <= ats) & (ats < span.end)
+        if free.any():
+            choice[free] = len(spans)
+            spans.append((span.start, span.end))
+    if (choice < 0).any():
+        return None
+    return [spans[c] for c in choice.tolist()]
 
 
 def _flat_texts(wants: list) -> list[str] | None:
