@@ -20,6 +20,7 @@ controller reaches the moves, because each may depend on the one before.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -113,6 +114,11 @@ class Pick(NamedTuple):
     # configuration stays the controller's choice, and the report says what
     # was assumed.
     caution: str | None = None
+
+
+# (A Pick as its class makes it, every field given: run's quick cases make
+# one or two for each of a CAM program's 1e5 moves.)
+_pick = functools.partial(tuple.__new__, Pick)
 
 
 def _fail(why: str) -> Pick:
@@ -287,8 +293,12 @@ class _Chooser:
         pred = self.pred1[need]
         sel = need[~np.isnan(self.spec[pred]).any(axis=1)]
         if len(sel):
-            ks = [self.rob_row[i] for i in sel.tolist()]
-            self.off_spec[sel] = self.solver.closest(self.cands[ks], self.spec[self.pred1[sel]])
+            # (Rows of the robtargets in order: rob is ascending. Every one,
+            # in order, as a CAM program's: the candidates as they are.)
+            ks = np.searchsorted(rob, sel)
+            cands = (self.cands if len(ks) == len(self.cands)
+                     and np.array_equal(ks, np.arange(len(ks))) else self.cands[ks])
+            self.off_spec[sel] = self.solver.closest(cands, self.spec[self.pred1[sel]])
         self._alternatives(need)
 
     def _quick_data(self) -> None:
@@ -614,9 +624,9 @@ class _Chooser:
                         if how == 1:
                             q = off_spec[i]
                             spec_hit[i] = off_is_spec[i]
-                            sols[i] = [Pick(q, "", None, "closest", s.q, line, caution)]
-                            picks[i] = Pick(q, f"closest to line {line} ({flag}\\Off)", None,
-                                            "closest", s.q, line, caution)
+                            sols[i] = [_pick((q, "", None, "closest", s.q, line, caution))]
+                            picks[i] = _pick((q, f"closest to line {line} ({flag}\\Off)", None,
+                                              "closest", s.q, line, caution))
                             off_rows.append(i)
                         else:
                             # (The confdata's solution is the guess: _speculate
@@ -624,8 +634,8 @@ class _Chooser:
                             spec_hit[i] = True
                             q = by_conf.q_deg[rob_row[i]]
                             if how == 2:
-                                picks[i] = on = Pick(q, _SAME[flag], None, "conf", None, None,
-                                                     caution)
+                                picks[i] = on = _pick((q, _SAME[flag], None, "conf", None, None,
+                                                       caution))
                                 sols[i] = [on]
                             else:
                                 sols[i], picks[i] = self._on_or_off(
