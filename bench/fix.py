@@ -12,7 +12,8 @@ jointtargets of their own, read again where the output holds them; the
 whole output parsed again when an edit is anything else) and verify of
 the output, report (rows, diff + Markdown, rendered in the pieces the
 command writes it in). Then the
-largest size through the command line end to end (also with --json: the
+largest size through the command line end to end (three runs, their median
+and each; also once with --json: the
 reports are written as they are rendered; and with Path called from main,
 every move turned into MoveAbsJ), and the same total with
 two modules in one call (`fix a.mod b.mod -o DIR`, one worker process per
@@ -152,6 +153,17 @@ def cli(path: str, out: str, *extra: str, env: dict | None = None) -> dict:
     return {"s": seconds, "peak_MB": usage.ru_maxrss / 1024}
 
 
+RUNS = 3
+
+
+def _runs(runs: list[dict]) -> str:
+    """The median of runs' seconds, each run's, and the largest peak."""
+    s = sorted(r["s"] for r in runs)
+    each = ", ".join(f"{r['s']:.2f}" for r in runs)
+    return (f"median {s[len(s) // 2]:.2f} s ({each}), "
+            f"peak {max(r['peak_MB'] for r in runs):.0f} MB")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sizes", default="1000,10000,100000")
@@ -188,17 +200,18 @@ def main() -> None:
         env = installed_env(str(Path(tmp) / "pycache"))
         path = Path(tmp) / "cam.mod"
         path.write_text(cam_module(n))
-        r = cli(str(path), str(Path(tmp) / "cam_comp.mod"), env=env)
+        # (Three runs of each shape, one after the other: this machine's
+        # runs vary by up to a second; the median and every run printed.)
+        r = [cli(str(path), str(Path(tmp) / "cam_comp.mod"), env=env) for _ in range(RUNS)]
         j = cli(str(path), str(Path(tmp) / "cam_comp.mod"), "--json",
                 str(Path(tmp) / "cam_comp.json"), env=env)
         path.write_text(cam_module(n, main=True))
-        m = cli(str(path), str(Path(tmp) / "cam_comp.mod"), env=env)
+        m = [cli(str(path), str(Path(tmp) / "cam_comp.mod"), env=env) for _ in range(RUNS)]
     print(f"1 module x {n} targets, `rapidcomp fix --emit absj` end to end (start-up with "
-          f"its bytecode compiled, as installed; reading, report, writing): {r['s']:.2f} s, "
-          f"peak {r['peak_MB']:.0f} MB; "
+          f"its bytecode compiled, as installed; reading, report, writing): {_runs(r)}; "
           f"with --json too: {j['s']:.2f} s, peak {j['peak_MB']:.0f} MB")
     print(f"the same with Path called from main (every MoveL -> MoveAbsJ on a jointtarget "
-          f"of its own, read again): {m['s']:.2f} s, peak {m['peak_MB']:.0f} MB")
+          f"of its own, read again): {_runs(m)}")
     # Two modules in one call: the process pool uses both cores.
     n //= 2
     with tempfile.TemporaryDirectory() as tmp:
