@@ -110,14 +110,10 @@ def test_the_solve_is_the_same_whatever_was_guessed(text, solver, monkeypatch):
         got = _bits(S._solve_deformed(1, *args))
         assert S._guessed is None                  # (taken once)
         return got, len(made)
-    # The guess as handed: the confdata's solutions, MoveAbsJ's joints.
-    q = chooser.q.copy()
-    q[rob] = np.nan
-    ok = chooser.by_conf.success
-    q[np.array(rob)[ok]] = chooser.by_conf.q_deg[ok]
-    # (Here every choice is its confdata's solution or the joints written,
-    # bit for bit, supervision off too: every block taken.)
-    got, computed = guessed(1, q)
+    # The guess as handed: the joints the choice is expected to take.
+    # (Here every choice is the one expected, bit for bit, supervision off
+    # too: every block taken.)
+    got, computed = guessed(1, chooser._expected(np.flatnonzero(np.array(chooser.quick) == 1)))
     assert got == alone and computed == 0
     # One solved row of block 1 and one of the last block a hundredth of a
     # degree off: those two blocks computed again, the same results.
@@ -140,3 +136,58 @@ def test_the_solve_is_the_same_whatever_was_guessed(text, solver, monkeypatch):
     assert S._guessed is None
     S._guessed = (1, {"ik": ((R, p, nominal, chooser.tcp), fake)})
     assert _bits(S._solve_deformed(1, *args)[0]) == _bits(fake)
+
+
+class _Now:
+    """side.run made at once, in this process (a helper stand-in)."""
+
+    def __init__(self, fn, *args):
+        self.fn = fn
+        self.value = fn(*args)
+
+    def get(self):
+        return self.value
+
+
+@pytest.mark.parametrize("confl, guessed", [("", True), ("    ConfL\\On;\n", True),
+                                            ("    ConfL\\Off;\n", False)])
+def test_the_job_guesses_where_the_choice_is_foreseen(confl, guessed, solver, monkeypatch):
+    """As the job runs it (Solving, with a helper: here one that makes each
+    call at once): the guess is handed where supervision may be on, and
+    every block of the deformed robot's IK is then taken from it; under
+    ConfL\\Off (each move follows the one before as it really went) none is
+    handed. The solve is the one made without a helper, bit for bit."""
+    from rapidcomp import side
+    monkeypatch.setattr(ik, "CHUNK", 16)
+    text = cam_variants.bench_module(100, 21, confl)
+
+    def solved():
+        plan = Plan(Task("cam.mod", (parse_text(text, "cam.mod"),)))
+        s = S.solve(plan, solver)
+        return _bits((s.nominal, s.deformed, s.err_p, s.err_r, s.flange_R, s.flange_p,
+                      s.conf_after))
+    alone = solved()
+    calls: list = []
+
+    def run(fn, *args):
+        calls.append(fn.__name__)
+        return _Now(fn, *args)
+    made = _computed(monkeypatch, Solver.solve_deformed)
+    known: list = []
+
+    def reused(method, solver, args, guess):
+        known.append(guess is not None)
+        return reusing(method, solver, args, guess)
+    with monkeypatch.context() as m:
+        m.setattr(side, "helps", lambda: True)
+        m.setattr(side, "run", run)
+        m.setattr(S, "reusing", reused)
+        got = solved()
+    assert got == alone
+    assert ("_guess_deformed" in calls) == guessed
+    assert "_solve_deformed" in calls
+    # The IK, the error and the FK each given the guess (and no block of
+    # the IK computed again), or none.
+    assert known == [guessed] * 3
+    assert made == []
+    assert S._guessed is None

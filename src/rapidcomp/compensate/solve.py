@@ -226,13 +226,30 @@ class _Chooser:
         self.by_conf, self.cands, *self.flange = _nominal_of(plan, solver,
                                                              [uses[i] for i in rob])
         self.tcp = tcp_of(uses)
-        # The deformed robot's IK guessed from these solutions, made by the
-        # job's helper while this process chooses (see _guess_deformed).
-        self.guessed = _guess_ahead(solver, self.q, rob, self.by_conf, *self.flange, self.tcp)
         self._speculate(need)
         self._quick_data()
+        # The deformed robot's IK guessed from the solutions run() is expected
+        # to choose, made by the job's helper while this process chooses
+        # (see _guess_deformed). Not where more than 1 % of the robtargets
+        # run without supervision: each follows the solution its move before
+        # really took, and once one is off the guess, those after it are too
+        # (a CAM program under ConfL\Off: ~1e4 of 1e5 rows, in every block,
+        # and the helper would solve twice).
+        off = np.flatnonzero(np.array(self.quick) == 1)
+        self.guessed = (_guess_ahead(solver, self._expected(off), rob, *self.flange, self.tcp)
+                        if len(off) * 100 <= len(rob) else None)
 
     # ------------------------------------------------------------ speed
+    def _expected(self, off: np.ndarray) -> np.ndarray:
+        """The joints run() is expected to choose (NaN: none): the guess
+        (_speculate: the confdata's solution, MoveAbsJ joints as written,
+        along a chain without supervision its first move's branch), and in
+        the rows `off` (supervision off: run's first quick case) the
+        solution closest to the guessed joints before."""
+        q = self.spec.copy()
+        q[off] = self.off_spec[off]
+        return q
+
     def _needing_guess(self) -> list[int]:
         """The rows whose predecessor's joints decide their solution
         (supervision may be off, and circle points), in flow order; and
@@ -824,20 +841,14 @@ _guessed: tuple | None = None
 _guesses = itertools.count(1)
 
 
-def _guess_ahead(solver: Solver, q: np.ndarray, rob: list, by_conf: IKBatch, R_rob, p_rob,
-                 tcp) -> int | None:
-    """Hand the helper (side.py) the guess of the deformed robot's IK (made
-    there while this process chooses the nominal solutions: _guess_deformed);
-    its number, which _solve_deformed is given, or None (no helper, no
-    robtarget)."""
+def _guess_ahead(solver: Solver, q: np.ndarray, rob: list, R_rob, p_rob, tcp) -> int | None:
+    """Hand the helper (side.py) the deformed robot's IK from the nominal
+    joints q the choice is expected to take (made there while this process
+    chooses: _guess_deformed); its number, which _solve_deformed is given,
+    or None (no helper, no robtarget)."""
     if not rob or not side.helps():
         return None
-    # The guess: each robtarget's confdata solution (a CAM program's choice
-    # nearly everywhere), a MoveAbsJ's joints as written (q).
-    q = q.copy()
     rows = np.array(rob, dtype=np.intp)        # (pickled as one array, not 1e5 ints)
-    ok = by_conf.success
-    q[rows[ok]] = by_conf.q_deg[ok]
     number = next(_guesses)
     side.run(_guess_deformed, number, solver, q, rows, R_rob, p_rob, tcp)
     return number
