@@ -48,6 +48,12 @@ def _bits(x):
     return x.dtype.str, x.shape, x.tobytes()
 
 
+def _fake(batch: ik.IKBatch) -> ik.IKBatch:
+    """A result no solve gives: every number of batch plus one."""
+    return ik.IKBatch(*(None if v is None else np.asarray(v) + 1
+                        for v in (getattr(batch, f) for f in batch.__dataclass_fields__)))
+
+
 def test_reusing_takes_a_block_only_where_its_inputs_are_the_guess(solver, monkeypatch):
     monkeypatch.setattr(ik, "CHUNK", 7)
     rng = np.random.default_rng(4)
@@ -58,8 +64,7 @@ def test_reusing_takes_a_block_only_where_its_inputs_are_the_guess(solver, monke
     full = solver.solve_deformed(*args)
     # A "result" no solve gives, for inputs equal to these: taken as it is
     # in every block (nothing computed).
-    fake = ik.IKBatch(*(None if v is None else np.asarray(v) + 1
-                        for v in (getattr(full, f) for f in full.__dataclass_fields__)))
+    fake = _fake(full)
     made = _computed(monkeypatch, Solver.solve_deformed)
     assert _bits(reusing(Solver.solve_deformed, solver, args, (args, fake))) == _bits(fake)
     assert made == []
@@ -129,8 +134,7 @@ def test_the_solve_is_the_same_whatever_was_guessed(text, solver, monkeypatch):
     # Another call's guess is not taken (were it, this one's results would
     # be a result no solve gives).
     deformed = S._solve_deformed(None, *args)[0]
-    fake = ik.IKBatch(*(None if v is None else np.asarray(v) + 1
-                        for v in (getattr(deformed, f) for f in deformed.__dataclass_fields__)))
+    fake = _fake(deformed)
     S._guessed = (2, {"ik": ((R, p, nominal, chooser.tcp), fake)})
     assert _bits(S._solve_deformed(1, *args)) == alone
     assert S._guessed is None
@@ -142,7 +146,6 @@ class _Now:
     """side.run made at once, in this process (a helper stand-in)."""
 
     def __init__(self, fn, *args):
-        self.fn = fn
         self.value = fn(*args)
 
     def get(self):
@@ -187,7 +190,7 @@ def test_the_job_guesses_where_the_choice_is_foreseen(confl, guessed, solver, mo
     assert ("_guess_deformed" in calls) == guessed
     assert "_solve_deformed" in calls
     # The IK, the error and the FK each given the guess (and no block of
-    # the IK computed again), or none.
-    assert known == [guessed] * 3
+    # the IK computed again), or none; the guess's own made without one.
+    assert known == ([False] * 3 + [True] * 3 if guessed else [False] * 3)
     assert made == []
     assert S._guessed is None

@@ -377,9 +377,6 @@ class Editor:
         """An edit of anything but a literal's numbers (those are
         field_lists): the output's structure changes."""
         self.others = True
-        self._edit(fi, span, text, why)
-
-    def _edit(self, fi: int, span, text: str, why: str) -> None:
         self._edit_at(fi, span.start, span.end, text, why)
 
     def _edit_at(self, fi: int, start: int, end: int, text: str, why: str) -> None:

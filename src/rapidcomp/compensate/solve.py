@@ -827,12 +827,22 @@ def _solve_deformed(guessed, solver: Solver, R, p, nominal: IKBatch, tcp, q_cmd)
     global _guessed
     known = _guessed[1] if _guessed is not None and _guessed[0] == guessed else {}
     _guessed = None
-    deformed = reusing(Solver.solve_deformed, solver, (R, p, nominal, tcp), known.get("ik"))
-    err_p, err_r = reusing(Solver.deformed_pose_error, solver, (q_cmd, R, p, tcp),
-                           known.get("error"))
+    work = _deformed_work(solver, R, p, nominal, tcp, q_cmd, known)
+    (qc,), (Rn, pn, wrist) = work["fk"]
+    return (work["ik"][1], *work["error"][1], Rn, pn,
+            confdata(qc, wrist, solver.geometry.phi))
+
+
+def _deformed_work(solver: Solver, R, p, nominal: IKBatch, tcp, q_cmd, known: dict) -> dict:
+    """The IK, the error and the FK _solve_deformed computes, each as
+    (its arguments, its result), each block taken from `known` (the same
+    of a guess) where its arguments are the guess's (ik.reusing)."""
+    ik_args, error_args = (R, p, nominal, tcp), (q_cmd, R, p, tcp)
+    deformed = reusing(Solver.solve_deformed, solver, ik_args, known.get("ik"))
+    error = reusing(Solver.deformed_pose_error, solver, error_args, known.get("error"))
     qc = np.nan_to_num(deformed.q_deg) * DEG
-    Rn, pn, wrist = reusing(Solver.nominal_pose_and_wrist, solver, (qc,), known.get("fk"))
-    return deformed, err_p, err_r, Rn, pn, confdata(qc, wrist, solver.geometry.phi)
+    fk = reusing(Solver.nominal_pose_and_wrist, solver, (qc,), known.get("fk"))
+    return {"ik": (ik_args, deformed), "error": (error_args, error), "fk": ((qc,), fk)}
 
 
 # The guess _guess_deformed made in the job's helper: (its number, what
@@ -863,13 +873,8 @@ def _guess_deformed(number: int, solver: Solver, q_nom, rob, R_rob, p_rob, tcp) 
     _guessed = None
     failed = np.isnan(q_nom).any(axis=1)
     R, p, _, nominal = _seed_of(solver, q_nom, rob, R_rob, p_rob, failed)
-    deformed = solver.solve_deformed(R, p, nominal, tcp)
-    q_cmd = np.nan_to_num(q_nom) * DEG
-    error = solver.deformed_pose_error(q_cmd, R, p, tcp)
-    qc = np.nan_to_num(deformed.q_deg) * DEG
-    fk = solver.nominal_pose_and_wrist(qc)
-    _guessed = (number, {"ik": ((R, p, nominal, tcp), deformed),
-                         "error": ((q_cmd, R, p, tcp), error), "fk": ((qc,), fk)})
+    _guessed = (number, _deformed_work(solver, R, p, nominal, tcp,
+                                       np.nan_to_num(q_nom) * DEG, {}))
 
 
 class Slot(NamedTuple):
