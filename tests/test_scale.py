@@ -508,10 +508,11 @@ def _miss_module() -> str:
 @pytest.mark.parametrize("relex", [True, False])
 def test_a_value_that_would_miss_is_left_as_written_and_the_rest_written_again(
         relex, solver, monkeypatch):
-    """Verification finds the written value of line 36 missing its pose: a
-    second round writes everything else (as one batch again) and verifies
-    it; line 36 keeps its text and is listed with the reason. The same with
-    the output lexed again and parsed again."""
+    """Verification finds the written value of line 36 missing its pose:
+    line 36 keeps its text and is listed with the reason, everything else
+    is written. Lexed again, its inline literal's edits are taken back
+    (takeback.py: one round); parsed again, a second round writes everything
+    else (as one batch again) and verifies it."""
     from rapidcomp.compensate import place as P
     text = _miss_module()
     served = []
@@ -522,7 +523,7 @@ def test_a_value_that_would_miss_is_left_as_written_and_the_rest_written_again(
     real = P.place
     monkeypatch.setattr(P, "place", lambda *a: (rounds.append(1), real(*a))[1])
     result = F.fix(Task("miss.mod", (parse_text(text, "miss.mod"),)), solver, "auto")
-    assert len(rounds) == 2
+    assert len(rounds) == (1 if relex else 2)
     failed = [r for r in result.rows if r.status != "compensated"]
     assert [r.line for r in failed] == [36]
     assert "would miss" in failed[0].reason and "does not land" in failed[0].reason
@@ -531,7 +532,7 @@ def test_a_value_that_would_miss_is_left_as_written_and_the_rest_written_again(
     assert out[35] == src[35]                           # line 36 as written
     assert all(out[i] != src[i] for i in range(5, 35))  # the others compensated
     assert max(r.residual_um for r in result.rows if r.status == "compensated") <= 1.0
-    assert len(served) == 2         # asked in both rounds (edits of numbers only)
+    assert len(served) == len(rounds)    # asked in each round (edits of numbers only)
 
 
 def test_batched_quaternion_texts_are_those_of_one():

@@ -34,6 +34,7 @@ from .edit import Editor, Values
 from .plan import Plan, Task, line_ranges
 from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, UseRow, summary, use_rows
 from .solve import Solving, nominal_ahead
+from .takeback import take_back
 from .verify import VERIFY_DEG, VERIFY_UM, relex, relex_absj, reparse, verify
 
 MODES = P.MODES
@@ -180,6 +181,23 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
             g.failure = (f"the written value would miss by {um:.3f} um / {deg:.2e} deg: the "
                          "ideal controller's IK does not land on the compensated joints here",
                          u.source.element)
+        # Where each group that misses wrote its literals alone, its edits
+        # are taken back and the rest stays as written and verified
+        # (takeback.py); else every group is placed, written and verified
+        # again.
+        taken = (take_back(plan, gs, list(missed), file_edits, texts)
+                 if transient is None and written is not None else None)
+        if taken is not None:
+            file_edits, texts = taken
+            gone = {u.key for g in missed for u in g.uses}
+            verified = {k: v for k, v in verified.items() if k not in gone}
+            written_conf = {k: c for k, c in written_conf.items() if k not in gone}
+            for k in gone:
+                editor.actions.pop(k, None)
+            for g in missed:
+                g.placement = None
+            clock("print")
+            break
     else:
         raise InternalError("the written values do not settle (verification keeps failing)")
     # The diff of the largest module edited, made beside the job while the
