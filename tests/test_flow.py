@@ -567,6 +567,36 @@ ENDMODULE""")
     assert rows[5].status == "compensated" and rows[5].action.startswith("MoveJ -> MoveAbsJ")
 
 
+def test_a_wrist_singular_move_kept_a_robtarget_move_says_why_not_which_option():
+    """The refusal at the wrist names what keeps the move from MoveAbsJ,
+    which would carry the split: the mode only where nothing else does
+    (auto, a MoveL: --emit absj); where supervision is off from an unknown
+    start or program displacement may be on, that, and no --emit hint
+    (--emit absj was given)."""
+    home = f"[[515,0,712],[0.707107,0,0.707107,0],[0,0,0,0],{EXT}]"
+
+    def reason(before: str, mode: str) -> str:
+        t = task(f"""MODULE A
+    CONST robtarget pHome:={home};
+    PROC main()
+{before}        MoveL pHome, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+        rows = [r for r in fix(t, SOLVER, mode).rows if r.instruction == "MoveL"]
+        assert len(rows) == 1 and rows[0].status == "not compensated"
+        assert "J4/J6 split a robtarget cannot carry" in rows[0].reason
+        return rows[0].reason.split("itself)", 1)[1]
+    assert reason("", "auto") == ": a MoveAbsJ can (--emit absj for a MoveL)"
+    assert reason("", "robtarget") == ": a MoveAbsJ can (--emit absj)"
+    off = reason("        ConfL\\Off;\n", "absj")
+    # (main runs again: the move follows itself, from an unknown start.)
+    assert off == (": a MoveAbsJ can, but follows line 5, whose configuration is assumed: kept "
+                   "a robtarget move")
+    disp = reason("        PDispOn \\ExeP:=pHome, pHome, tool0;\n", "absj")
+    assert disp == (": a MoveAbsJ can, but program displacement may be active here (a "
+                    "MoveAbsJ would ignore it): kept a robtarget move")
+
+
 def test_join_of_states_is_their_flags_and_last_moves_united():
     """State.join unites each flag set and the moves that may have run
     last (None: unknown wins); an equal state joins to the state itself."""

@@ -114,7 +114,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     plan_notes = plan.notes()
     solved = solving.finish()
     solving = None
-    P.settle(gs, solved)
+    P.settle(gs, solved, plan, mode)
     clock("solve")
     cells = None
     # The flow's per-use states go before the values are printed and

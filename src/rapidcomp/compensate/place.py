@@ -83,14 +83,47 @@ def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int) -> st
     name = m.spec.name.lower()
     # (row: the use's row in solved. A CAM move has no optional argument but
     # \WObj: no generator for those.)
-    if (name in (ABSJ_FROM[mode])
-            and (not m.optional or all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional))
-            and not names_to_point(m)
-            and not plan.may_be_displaced(u)
-            and solved.picks[row].caution is None
-            and not (u.source.decl is not None and u.source.decl.storage == "PERS")):
+    if name in ABSJ_FROM[mode] and kept_robtarget(u, plan, solved, row) is None:
         return "absj"
     return "rob"
+
+
+def kept_robtarget(u: TargetUse, plan: Plan, solved: Solved, row: int) -> str | None:
+    """Why a MoveJ/MoveL stays a robtarget move whatever --emit asks (None:
+    nothing but the mode keeps it)."""
+    m = u.motion
+    # (A CAM move has no optional argument but \WObj.)
+    if m.optional and not all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional):
+        odd = next(a.name for a in m.optional if a.name.lower() not in ABSJ_OPTIONALS)
+        return f"MoveAbsJ has no \\{odd}: kept a robtarget move"
+    if names_to_point(m):
+        return "it names ToPoint (MoveAbsJ's is ToJointPos): kept a robtarget move"
+    if plan.may_be_displaced(u):
+        return ("program displacement may be active here (a MoveAbsJ would ignore it): kept a "
+                "robtarget move")
+    caution = solved.picks[row].caution
+    if caution is not None:
+        return caution
+    if u.source.decl is not None and u.source.decl.storage == "PERS":
+        return (f"{u.source.decl.name} is PERS data (ModPos or another task may change it; a "
+                "MoveAbsJ would not follow): kept a robtarget move")
+    return None
+
+
+def absj_hint(g: Group, mode: str, plan: Plan, solved: Solved) -> str:
+    """What a robtarget group's failure at the wrist singularity says of
+    MoveAbsJ, which carries any J4/J6 split: why its move is not one."""
+    u = g.uses[0]
+    if u.kind == "jointtarget" or u.motion.spec.name.lower() not in TO_ABSJ:
+        return ""
+    if any(x.key in g.kept for x in g.uses):
+        return (": a MoveAbsJ can, but other runs of its statement (a FOR loop) must stay "
+                "robtarget moves")
+    why = next((w for w in (kept_robtarget(x, plan, solved, solved.row[x.key]) for x in g.uses)
+                if w is not None), None)
+    if why is not None:
+        return f": a MoveAbsJ can, but {why}"
+    return ": a MoveAbsJ can (--emit absj" + (" for a MoveL)" if mode == "auto" else ")")
 
 
 def names_to_point(m) -> bool:
@@ -126,7 +159,7 @@ def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
     its solution there is the same, else groups by its own solution (a
     target reached on two solutions needs two values)."""
     gs = grouping(plan, solved, mode)
-    settle(gs, solved)
+    settle(gs, solved, plan, mode)
     return gs
 
 
@@ -175,7 +208,7 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str) -> list[Group]:
     return out
 
 
-def settle(gs: list[Group], solved: Solved) -> None:
+def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
     """Each group's elements, rows and failure, and whether a new
     declaration of it is LOCAL (groups() past grouping())."""
     # Whether each row is solved, and needs a J4/J6 split at the wrist
@@ -184,6 +217,8 @@ def settle(gs: list[Group], solved: Solved) -> None:
     left = ((solved.deformed.warnings.astype(np.int64) & _LEFT) != 0).tolist()
     for g in gs:
         _elements(g, solved, ok, left)
+        if g.failure is None and g.mode == "rob":
+            _wrist(g, solved, left, plan, mode)
         uses = g.uses
         g.local = (uses[0].module is g.home[1] if len(uses) == 1
                    else all(u.module is g.home[1] for u in uses))
@@ -227,7 +262,6 @@ def _elements(g: Group, solved: Solved, ok: list, left: list) -> None:
         # (rows_seen is {k: row} already: one dict, not two, per group;
         # neither changes past the grouping. 1e5 groups: ~20 MB.)
         g.elements, g.rows = [k], g.rows_seen
-        _wrist(g, solved, left)
         return
     g.array = any(u.source.by_loop for u in g.uses)
     seen: dict = {}
@@ -249,22 +283,19 @@ def _elements(g: Group, solved: Solved, ok: list, left: list) -> None:
         g.failure = (solved.reason(solved.row[bad.key]), bad.source.element)
     g.elements = sorted(seen) if g.array else list(seen)
     g.rows = seen
-    _wrist(g, solved, left)
 
 
-def _wrist(g: Group, solved: Solved, left: list) -> None:
+def _wrist(g: Group, solved: Solved, left: list, plan: Plan, mode: str) -> None:
     """A robtarget group fails where the compensation needs a J4/J6 split
     at the wrist singularity (left[row])."""
-    if g.failure is None and g.mode == "rob":
-        for k in g.elements:
-            i = g.rows[k]
-            if left[i]:
-                g.failure = (
-                    f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
-                    "compensation needs a J4/J6 split a robtarget cannot carry (the "
-                    "controller's IK chooses the split itself): a MoveAbsJ can "
-                    "(--emit absj for a MoveL)", k)
-                break
+    for k in g.elements:
+        i = g.rows[k]
+        if left[i]:
+            g.failure = (
+                f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
+                "compensation needs a J4/J6 split a robtarget cannot carry (the "
+                "controller's IK chooses the split itself)" + absj_hint(g, mode, plan, solved), k)
+            break
 
 
 def place(plan: Plan, gs: list[Group]) -> None:
