@@ -590,11 +590,41 @@ ENDMODULE""")
     assert reason("", "robtarget") == ": a MoveAbsJ can (--emit absj)"
     off = reason("        ConfL\\Off;\n", "absj")
     # (main runs again: the move follows itself, from an unknown start.)
-    assert off == (": a MoveAbsJ can, but follows line 5, whose configuration is assumed: kept "
-                   "a robtarget move")
+    assert off == (": a MoveAbsJ can, but not here: follows line 5, whose configuration is "
+                   "assumed: kept a robtarget move")
     disp = reason("        PDispOn \\ExeP:=pHome, pHome, tool0;\n", "absj")
-    assert disp == (": a MoveAbsJ can, but program displacement may be active here (a "
-                    "MoveAbsJ would ignore it): kept a robtarget move")
+    assert disp == (": a MoveAbsJ can, but not here: program displacement may be active here "
+                    "(a MoveAbsJ would ignore it): kept a robtarget move")
+
+
+def test_a_wrist_refusal_shared_by_moves_says_per_line_what_keeps_each():
+    """One value read by moves kept robtarget moves for different reasons
+    (one displaced, one not; a MoveC beside a MoveL): the refusal each row
+    carries names the lines and what keeps each, and says nothing of
+    MoveAbsJ for the MoveC."""
+    home = f"[[515,0,712],[0.707107,0,0.707107,0],[0,0,0,0],{EXT}]"
+    mid = f"[[515,60,700],[0.707107,0,0.707107,0],[0,0,0,0],{EXT}]"
+
+    def reasons(body: str) -> dict:
+        t = task(f"""MODULE A
+    CONST robtarget pHome:={home};
+    CONST robtarget pMid:={mid};
+    PROC main()
+{body}    ENDPROC
+ENDMODULE""")
+        return {r.line: r.reason.split("itself)", 1)[1] for r in fix(t, SOLVER, "auto").rows
+                if r.target == "pHome" and r.status == "not compensated"}
+    got = reasons("        MoveL pHome, v100, fine, tool0;\n        PDispOn \\ExeP:=pHome, "
+                  "pHome, tool0;\n        MoveL pHome, v100, fine, tool0;\n"
+                  "        PDispOff;\n")
+    want = (": line 5: a MoveAbsJ can (--emit absj for a MoveL); line 7: a MoveAbsJ can, but "
+            "not here: program displacement may be active here (a MoveAbsJ would ignore it): "
+            "kept a robtarget move")
+    assert got == {5: want, 7: want}
+    got = reasons("        MoveC pMid, pHome, v100, fine, tool0;\n"
+                  "        MoveL pHome, v100, fine, tool0;\n")
+    assert got == {5: ": line 6: a MoveAbsJ can (--emit absj for a MoveL)",
+                   6: ": line 6: a MoveAbsJ can (--emit absj for a MoveL)"}
 
 
 def test_join_of_states_is_their_flags_and_last_moves_united():

@@ -89,9 +89,8 @@ def test_taking_back_gives_what_a_second_round_gives(name, mode, solver, monkeyp
     _same(taken, again, mode)
     # Literals rewritten where they stand, each by one group (CAM programs;
     # robtarget mode of most fixtures): taken back, no second round.
-    if name.startswith("cam") and mode != "absj" or name == "cam_off":
+    if (name.startswith("cam") and mode != "absj") or name == "cam_off":
         assert rounds == 1
-
 
 
 def test_both_ways_are_met_among_the_fixtures(solver, monkeypatch):

@@ -35,7 +35,8 @@ from .plan import Plan, Task, line_ranges
 from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, UseRow, summary, use_rows
 from .solve import Solving, nominal_ahead
 from .takeback import take_back
-from .verify import VERIFY_DEG, VERIFY_UM, relex, relex_absj, reparse, verify
+from .verify import (VERIFY_DEG, VERIFY_UM, relex, relex_absj, reparse, verify,
+                     verify_states)
 
 MODES = P.MODES
 
@@ -124,8 +125,9 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     values = Values(plan, solved, solver.options.quadrant_tol_deg)
     state_errors: dict = {}
     # A written value that does not reproduce its compensated joints (the
-    # ideal controller's IK lands elsewhere) fails its group; the rest is
-    # placed, written and verified again without it.
+    # ideal controller's IK lands elsewhere) fails its group; its edits are
+    # taken back (takeback.py), or the rest is placed, written and verified
+    # again without it.
     for _ in range(4):
         values.prepare(gs)
         if cells is None and side.helps():
@@ -171,7 +173,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
             verified = verify(plan, solved, keys, out_files, solver,
                               written, converted) if keys else {}
         else:
-            verified, state_errors = _verify_states(plan, solved, keys, texts, out_files,
+            verified, state_errors = _verify_states(plan, solved, keys, out_files,
                                                     transient[1])
         clock("verify")
         missed = _missed(solved, gs, verified)
@@ -185,8 +187,10 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         # are taken back and the rest stays as written and verified
         # (takeback.py); else every group is placed, written and verified
         # again.
+        # (written: the output was read back by re-lexing it; never so in
+        # transient mode.)
         taken = (take_back(plan, gs, list(missed), file_edits, texts)
-                 if transient is None and written is not None else None)
+                 if written is not None else None)
         if taken is not None:
             file_edits, texts = taken
             gone = {u.key for g in missed for u in g.uses}
@@ -251,17 +255,16 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     return FixResult(mode, task.name, tuple(modules), tuple(rows), tuple(notes), cells)
 
 
-def _verify_states(plan, solved, keys, texts, parsed, solvers) -> tuple[dict, dict]:
-    """Transient: the written program at every thermal state s, each
-    rcTcJ(cold, dq) evaluated as the controller does, verified on the robot
-    deformed by s . profile. Per use the worst state's residual; per state
-    the worst use's."""
-    from .transient import materialize
+def _verify_states(plan, solved, keys, out_files, solvers) -> tuple[dict, dict]:
+    """Transient: the written program (out_files: parsed again) at every
+    thermal state s, each rcTcJ/rcTcR(cold, dq) evaluated as the controller
+    does, verified on the robot deformed by s . profile. Per use the worst
+    state's residual; per state the worst use's."""
     worst: dict = {}
     by_state: dict = {}
-    for s, state_solver in solvers.items():
-        out_files = reparse(plan, materialize(texts, parsed, s))
-        got = verify(plan, solved, keys, out_files, state_solver) if keys else {}
+    states = verify_states(plan, solved, keys, out_files, solvers) if keys else {}
+    for s in solvers:
+        got = states.get(s, {})
         # A wrist-singular target's orientation is what the wrist can hold
         # (its row says what is left): not the figure of the rest.
         held = [deg for k, (_, deg) in got.items()

@@ -81,8 +81,7 @@ def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int) -> st
         return "joint"
     m = u.motion
     name = m.spec.name.lower()
-    # (row: the use's row in solved. A CAM move has no optional argument but
-    # \WObj: no generator for those.)
+    # (row: the use's row in solved.)
     if name in ABSJ_FROM[mode] and kept_robtarget(u, plan, solved, row) is None:
         return "absj"
     return "rob"
@@ -92,7 +91,8 @@ def kept_robtarget(u: TargetUse, plan: Plan, solved: Solved, row: int) -> str | 
     """Why a MoveJ/MoveL stays a robtarget move whatever --emit asks (None:
     nothing but the mode keeps it)."""
     m = u.motion
-    # (A CAM move has no optional argument but \WObj.)
+    # (A CAM move's only optional argument is \WObj, which m.optional
+    # leaves out: nothing to look at.)
     if m.optional and not all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional):
         odd = next(a.name for a in m.optional if a.name.lower() not in ABSJ_OPTIONALS)
         return f"MoveAbsJ has no \\{odd}: kept a robtarget move"
@@ -112,18 +112,28 @@ def kept_robtarget(u: TargetUse, plan: Plan, solved: Solved, row: int) -> str | 
 
 def absj_hint(g: Group, mode: str, plan: Plan, solved: Solved) -> str:
     """What a robtarget group's failure at the wrist singularity says of
-    MoveAbsJ, which carries any J4/J6 split: why its move is not one."""
-    u = g.uses[0]
-    if u.kind == "jointtarget" or u.motion.spec.name.lower() not in TO_ABSJ:
+    MoveAbsJ, which carries any J4/J6 split: per move of the group, why it
+    is not one (the mode, or what keeps it a robtarget move); by line where
+    its moves differ. Nothing for a move no MoveAbsJ replaces (MoveC)."""
+    lines: dict[str, list[int]] = {}
+    for u in g.uses:
+        if u.motion.spec.name.lower() not in TO_ABSJ:
+            continue
+        if u.key in g.kept:
+            said = ("a MoveAbsJ can, but not here: other runs of its statement (a FOR loop) "
+                    "must stay robtarget moves")
+        else:
+            why = kept_robtarget(u, plan, solved, solved.row[u.key])
+            said = (f"a MoveAbsJ can, but not here: {why}" if why is not None else
+                    "a MoveAbsJ can (--emit absj" + (" for a MoveL)" if mode == "auto" else ")"))
+        lines.setdefault(said, []).append(u.line)
+    if not lines:
         return ""
-    if any(x.key in g.kept for x in g.uses):
-        return (": a MoveAbsJ can, but other runs of its statement (a FOR loop) must stay "
-                "robtarget moves")
-    why = next((w for w in (kept_robtarget(x, plan, solved, solved.row[x.key]) for x in g.uses)
-                if w is not None), None)
-    if why is not None:
-        return f": a MoveAbsJ can, but {why}"
-    return ": a MoveAbsJ can (--emit absj" + (" for a MoveL)" if mode == "auto" else ")")
+    if len(lines) == 1 and len(next(iter(lines.values()))) == len(g.uses):
+        return ": " + next(iter(lines))
+    return ": " + "; ".join(f"line{'s' if len(set(ls)) > 1 else ''} "
+                            f"{', '.join(map(str, sorted(set(ls))))}: {said}"
+                            for said, ls in lines.items())
 
 
 def names_to_point(m) -> bool:

@@ -39,6 +39,7 @@ from ..rapid.model import Declaration, Module, Motion, ParsedFile
 from ..rapid.refs import literal_leaves, loop_names, usage
 from ..rapid.writes import Writes, task_writes
 from ..rapid.values import DecodeIssue, JointTarget, Pose, RobTarget, ToolData, WobjData, decode
+from .transient import FUNC_J, FUNC_R, state_values
 
 IDENTITY_POSE = (np.eye(3), np.zeros(3))
 # A quaternion further than this from unit length is reported when normalised.
@@ -54,6 +55,8 @@ MAX_LOOP_ITERATIONS = 1_000_000
 MISSING_HINT = ("give the whole task: its folder, program file or backup, or the declaring "
                 "module with --with")
 AXES = "abcdef"
+# A transient output's targets (transient.py), evaluated at a thermal state.
+_STATE_FUNCS = frozenset((FUNC_J.lower(), FUNC_R.lower()))
 
 
 @dataclass(frozen=True, eq=False, slots=True)
@@ -300,10 +303,18 @@ class Resolver:
     def __init__(self, files: list[ParsedFile], float32: bool = False,
                  usages: dict | None = None, writes: bool = True, track=(), base=None,
                  observers=(), moved_by: str | None = None, written: Written | None = None,
-                 like: "Resolver | None" = None):
+                 like: "Resolver | None" = None, states: tuple[float, ...] = ()):
         """like: a resolver of these very files (the plan's, for verify.py):
-        its tables of the files' declarations are taken, not made again."""
+        its tables of the files' declarations are taken, not made again.
+        states: the thermal states a transient output is read at, each in
+        turn (self.state, one of them): its rcTcJ/rcTcR(cold, dq) are
+        evaluated there as the controller does (_at_state)."""
         self.float32 = float32
+        self.states = tuple(states)
+        self.state: float | None = None
+        # (call, its FOR loops' values) -> (the Source of its cold value, its
+        # values at each of self.states), or why not: read once, not per state.
+        self._at_states: dict = {}
         self.files = list(files)
         # Records as an output writes them (verify.py, when every edit is of
         # numeric fields).
@@ -618,8 +629,10 @@ class Resolver:
         return self.base[0], self.base[1] + d
 
     # ------------------------------------------------------------ targets
-    def _source(self, pf, expr, module, routine: str, env: dict[str, int], outer=None):
-        """The Source of a target expression, or Unresolved."""
+    def _source(self, pf, expr, module, routine: str, env: dict[str, int], outer=None,
+                types: tuple[str, ...] = ("robtarget", "jointtarget")):
+        """The Source of a target expression (types: of declared data, the
+        types it may have), or Unresolved."""
         whole = outer if outer is not None else expr
         if isinstance(expr, A.Ref):
             d = self.lookup(expr.name, module, routine)
@@ -628,7 +641,7 @@ class Resolver:
             if d is None:
                 return Unresolved(f"{expr.name} is not declared in the given modules "
                                   f"({MISSING_HINT})", True)
-            if d.type not in ("robtarget", "jointtarget"):
+            if d.type not in types:
                 return Unresolved(f"{expr.name} is a {d.type}, not a target", True)
             if d.value is None:
                 return Unresolved(f"{expr.name} has no literal value "
@@ -682,6 +695,9 @@ class Resolver:
             return Unresolved(f"{expr.name} with components is not a target")
         if isinstance(expr, A.Call) and expr.name.lower() in ("offs", "reltool") and outer is None:
             return self._offset(pf, expr, module, routine, env)
+        if (self.states and isinstance(expr, A.Call)
+                and expr.name.lower() in _STATE_FUNCS):
+            return self._at_state(pf, expr, module, routine, env, whole)
         if isinstance(expr, (A.Agg, A.NumAgg)):
             return Unresolved("inline aggregate is not a literal value")
         return Unresolved("the target is computed at run time")
@@ -724,6 +740,54 @@ class Resolver:
             return Unresolved("Offs takes no optional arguments")
         return Source(base.record, base.decl, base.home, base.element, base.by_loop, base.ref,
                       call, call, rot, d, base.home_module)
+
+    def _at_state(self, pf, call: A.Call, module, routine: str, env, whole):
+        """rcTcJ/rcTcR(cold, dq) of a transient output at thermal state
+        self.state, as the controller computes it (transient.state_values):
+        the Source of the cold value holding that value."""
+        key = (id(call), tuple(sorted(env.items())))
+        got = self._at_states.get(key)
+        if got is None:
+            got = self._at_states[key] = self._state_parts(pf, call, module, routine, env,
+                                                           whole)
+        if type(got) is Unresolved:
+            return got
+        cold, values = got
+        c = cold.record
+        new = values[self.states.index(self.state)]
+        return Source(type(c)(new + c.values[len(new):], c.lexed, c.span), cold.decl,
+                      cold.home, cold.element, cold.by_loop, cold.ref, whole, None, None, None,
+                      cold.home_module)
+
+    def _state_parts(self, pf, call: A.Call, module, routine: str, env, whole):
+        """(the Source of rcTcJ/rcTcR's cold value, the numbers the call
+        gives at each of self.states: rcTcJ's joints, rcTcR's position and
+        quaternion), or Unresolved."""
+        joint = call.name.lower() == FUNC_J.lower()
+        if len(call.args) != 2 or any(a.kind != "pos" for a in call.args):
+            return Unresolved(f"{call.name} takes two arguments")
+        parts = []
+        for a, type_ in zip(call.args, ("jointtarget", "jointtarget") if joint
+                            else ("robtarget", "pose")):
+            v = a.value
+            if isinstance(v, (A.Agg, A.NumAgg)):
+                try:
+                    record = decode(type_, v, f"{call.name} {type_}")
+                except DecodeIssue as exc:
+                    return Unresolved(exc.reason)
+                parts.append(Source(record, None, None, None, False, v, whole, None, None, None))
+            else:
+                src = self._source(pf, v, module, routine, env, outer=whole, types=(type_,))
+                if isinstance(src, Unresolved):
+                    return src
+                parts.append(src)
+        cold, dq = parts
+        c, d = cold.record, dq.record
+        if joint:
+            values = state_values(c.joints, d.joints, self.states, True)
+        else:
+            values = state_values(c.xyz + c.quat_wxyz, d.xyz + d.quat_wxyz, self.states, False)
+        return cold, list(map(tuple, values.tolist()))
 
     def target_pose(self, src: Source, pf: ParsedFile | None = None):
         """wobj_M_target of a robtarget source, with Offs/RelTool applied

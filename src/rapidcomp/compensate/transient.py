@@ -21,10 +21,10 @@ generated support module (support_module) that also keeps s up to date:
 `state_after` is the Python twin of the clock law; tests execute the
 generated RAPID (a small evaluator in tests/) and compare the two.
 
-Verification (fix.py): for every s in STATES the written program is
-materialized (each rcTcJ(cold, dq) replaced by its float32 value, as the
-controller computes it) and verified as any output is, on the robot
-deformed by s . profile.
+Verification (fix.py, verify.verify_states): the written program is parsed
+again and read at every s in STATES, each rcTcJ/rcTcR(cold, dq) evaluated
+as the controller computes it (state_values, float32), and verified as any
+output is, on the robot deformed by s . profile.
 """
 
 from __future__ import annotations
@@ -34,12 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..edits import BY_SPAN, SpanEdit, apply_edits
-from ..errors import InternalError, RapidcompError
-from ..rapid import ast as A
+from ..errors import RapidcompError
 from ..rapid.parse import parse_text
-from ..rapid.refs import nodes
-from ..rapid.values import DecodeIssue, decode_array
 from ..rewrite import numbers
 from ..rewrite.names import NameAllocator
 
@@ -327,129 +323,20 @@ def f32(x) -> np.ndarray:
     return np.asarray(x, dtype=np.float32)
 
 
-def state_joints(cold, dq, s: float) -> np.ndarray:
-    """rcTcJ as the controller computes it: float32 numbers, float32
-    arithmetic (cold + s * dq)."""
-    return (f32(cold) + f32(f32(s) * f32(dq))).astype(np.float32)
-
-
-def state_pose(trans, rot, d_trans, d_rot, s: float):
-    """rcTcR as the controller computes it: translation and quaternion
-    components cold + s * dq in float32, the quaternion normalized
-    (NOrient)."""
-    t = state_joints(trans, d_trans, s)
-    q = state_joints(rot, d_rot, s).astype(float)
-    norm = np.linalg.norm(q)
-    # A spare slot no move reaches may hold [0,0,0,0]: left as it is.
-    return t, f32(q / norm if norm > 0 else q)
-
-
-def _records(kind: str, expr, dims: tuple[int, ...]) -> tuple:
-    """The literal `expr` (of `dims`, an array) decoded, row-major."""
-    try:
-        return decode_array(kind, expr, dims, kind)
-    except DecodeIssue as exc:
-        raise InternalError(f"a transient value does not decode: {exc.reason}") from None
-
-
-def _state_text(text: str, cold, dq, func: str, s: float, dims=()) -> str:
-    """The cold value's text (a literal or an array of them) with every
-    number the state changes replaced by its value at s."""
-    joint = func == FUNC_J
-    c = _records("jointtarget" if joint else "robtarget", cold, dims)
-    d = _records("jointtarget" if joint else "pose", dq, dims)
-    base = cold.span.start
-    edits = []
-    for cv, dv in zip(c, d):
-        if joint:
-            fields, new = cv.robax, state_joints(cv.joints, dv.joints, s)
-        else:
-            t, q = state_pose(cv.xyz, cv.quat_wxyz, dv.xyz, dv.quat_wxyz, s)
-            fields, new = cv.trans + cv.rot, np.concatenate([t, q])
-        edits += [SpanEdit(f.span.start - base, f.span.end - base, _text(v), "state value")
-                  for f, v in zip(fields, new)]
-    return apply_edits(text[cold.span.start:cold.span.end],
-                       sorted(edits, key=BY_SPAN))
-
-
-def _text(v) -> str:
-    return f"{float(v):.9g}"
-
-
-def materialize(texts: dict, parsed: dict, s: float) -> dict:
-    """The written files (index -> text, and as parsed) with every
-    rcTcJ/rcTcR(cold, dq) replaced by its value at state s, computed as the
-    controller does (float32): the program a controller without the
-    functions would run at that state. A call on declared data becomes a
-    reference to a new constant holding that value, declared after the
-    correction; a call on an array element with a literal index, or on an
-    inline literal, becomes the literal. Only for verification: never
-    written."""
-    decls = {}
-    for fi, pf in parsed.items():
-        for m in pf.modules:
-            for item in m.node.items:
-                if isinstance(item, A.DataDecl):
-                    decls[item.name.lower()] = (fi, item)
-                elif isinstance(item, A.Routine):
-                    for d in item.decls:
-                        decls.setdefault(d.name.lower(), (fi, d))
-    fresh = NameAllocator(list(texts.values()))
-    edits: dict = {fi: [] for fi in texts}
-    made: dict = {}
-    funcs = {FUNC_J.lower(): FUNC_J, FUNC_R.lower(): FUNC_R}
-    for fi, pf in parsed.items():
-        text = texts[fi]
-        for m in pf.modules:
-            for node in nodes(m.node):
-                if not (isinstance(node, A.Call) and node.name.lower() in funcs):
-                    continue
-                func = funcs[node.name.lower()]
-                cold, dq = (a.value for a in node.args)
-                if not isinstance(cold, A.Ref):
-                    if isinstance(dq, A.Ref):
-                        raise InternalError(f"{func}: an inline value with a declared correction")
-                    new = _state_text(text, cold, dq, func, s)
-                else:
-                    (cfi, cold_decl), (dfi, dq_decl) = (_declared(decls, r, func)
-                                                        for r in (cold, dq))
-                    if cold.selectors and not dq.selectors:
-                        # One element (a literal index) with its own correction.
-                        new = _state_text(texts[cfi], _element(cold_decl, cold), dq_decl.init,
-                                          func, s)
-                    else:
-                        key = (cold.name.lower(), dq.name.lower())
-                        if key not in made:
-                            made[key] = fresh.new("rcState")
-                            dims = tuple(int(x.value) for x in dq_decl.dims)
-                            value = _state_text(texts[cfi], cold_decl.init, dq_decl.init, func,
-                                                s, dims)
-                            type_name = "jointtarget" if func == FUNC_J else "robtarget"
-                            shape = "{" + ",".join(map(str, dims)) + "}" if dims else ""
-                            edits[dfi].append(SpanEdit(
-                                dq_decl.span.end, dq_decl.span.end,
-                                f"\nCONST {type_name} {made[key]}{shape}:={value};",
-                                "state value"))
-                        new = made[key] + text[cold.span.start:cold.span.end][len(cold.name):]
-                edits[fi].append(SpanEdit(node.span.start, node.span.end, new, "state value"))
-    return {fi: apply_edits(texts[fi], sorted(es, key=BY_SPAN))
-            for fi, es in edits.items()}
-
-
-def _declared(decls: dict, ref, func: str):
-    if ref.name.lower() not in decls:
-        raise InternalError(f"{func}: {ref.name} is not declared in the output")
-    return decls[ref.name.lower()]
-
-
-def _element(decl, ref):
-    """The literal of decl's element that `ref` (literal indices) names."""
-    node = decl.init
-    for sel in ref.selectors:
-        if not isinstance(sel, A.Index):
-            raise InternalError(f"{ref.name}: a component where an element was expected")
-        for idx in sel.indices:
-            if not isinstance(idx, A.Num) or not isinstance(node, (A.Agg, A.NumAgg)):
-                raise InternalError(f"{ref.name}: an element that is not a literal")
-            node = node.items[int(idx.value) - 1]
-    return node
+def state_values(cold, dq, states, joint: bool) -> np.ndarray:
+    """rcTcJ(cold, dq) (joint: the 6 joints) or rcTcR's position and
+    quaternion (7 numbers: cold and dq a position and a quaternion, RAPID
+    order) at each thermal state of `states` (rows), as the controller
+    computes them: float32 numbers and float32 arithmetic, cold + s * dq;
+    rcTcR's quaternion normalized (NOrient; a spare slot no move reaches
+    may hold [0,0,0,0]: left as it is)."""
+    s = f32(states).reshape(-1, 1)
+    out = (f32(cold) + f32(s * f32(dq))).astype(np.float32)
+    if joint:
+        return out
+    q = out[:, 3:].astype(float)
+    # (Each row's norm as np.linalg.norm takes one vector's: its dot
+    # product, which a row-wise sum does not round alike.)
+    norm = np.array([math.sqrt(r.dot(r)) for r in q]).reshape(-1, 1)
+    out[:, 3:] = f32(np.divide(q, norm, out=q.copy(), where=norm > 0))
+    return out

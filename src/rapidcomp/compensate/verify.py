@@ -588,12 +588,7 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
     structure with the records as relex() read them, but for the moves
     turned into MoveAbsJ (converted: use key -> its joints as relex_absj()
     read them)."""
-    files = [out_files.get(fi, pf) for fi, pf in enumerate(plan.task.files)]
-    files += list(plan.task.context)
-    # Run-time writes were ruled out on the input; the output adds none.
-    res = Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
-                   track=plan.track, base=plan.resolver.base, written=written,
-                   like=plan.resolver)
+    res = _resolver(plan, out_files, written)
     if written is not None:
         # The structure is the input's but for the moves turned into
         # MoveAbsJ (relex() and relex_absj() made sure every other edit is
@@ -629,6 +624,43 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
             found.update({o.key: _Written.of(o) for o in batch})
             out.update(_residuals(solved, solver, block, many_rows, many, found))
         return out
+    return _residuals(solved, solver, sorted((solved.row[k] for k in keys)), [], [],
+                      _resolved(plan, res, keys))
+
+
+def verify_states(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFile],
+                  solvers: dict) -> dict:
+    """verify() of a transient output (out_files: parsed again) at every
+    thermal state s (solvers: s -> Solver of the robot deformed by s .
+    profile), each rcTcJ/rcTcR(cold, dq) evaluated as the controller does at
+    s (targets.Resolver): s -> residual (um, deg) by use key. One resolver
+    for every state: each call's cold value and correction are read once,
+    and its values at every state computed at once."""
+    res = _resolver(plan, out_files, None, tuple(solvers))
+    out = {}
+    for s, solver in solvers.items():
+        res.state = s
+        out[s] = _residuals(solved, solver, sorted((solved.row[k] for k in keys)), [], [],
+                            _resolved(plan, res, keys))
+    return out
+
+
+def _resolver(plan: Plan, out_files: dict, written: Written | None,
+              states: tuple = ()) -> Resolver:
+    """The resolver of the output (float32, as the controller stores
+    numbers): out_files where parsed again, else the input's files (with
+    `written`, the records as written)."""
+    files = [out_files.get(fi, pf) for fi, pf in enumerate(plan.task.files)]
+    files += list(plan.task.context)
+    # Run-time writes were ruled out on the input; the output adds none.
+    return Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
+                    track=plan.track, base=plan.resolver.base, written=written,
+                    like=plan.resolver, states=states)
+
+
+def _resolved(plan: Plan, res: Resolver, keys: list) -> dict:
+    """Each use of `keys` resolved on the output res reads (parsed again),
+    as what the check needs of it (use key -> _Written)."""
     wanted = set(keys)
     motions = {k[:2] for k in keys}
     found: dict = {}
@@ -640,7 +672,7 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
         for o in batch:
             found[o.key] = _Written.of(o)
         batch.clear()
-    for fi, pf in enumerate(files[:plan.n_written]):
+    for fi, pf in enumerate(res.files[:plan.n_written]):
         mi = 0
         for m in pf.modules:
             for motion in m.motions:
@@ -651,7 +683,7 @@ def verify(plan: Plan, solved: Solved, keys: list, out_files: dict[int, ParsedFi
                         keep()
                 mi += 1
     keep()
-    return _residuals(solved, solver, sorted((solved.row[k] for k in keys)), [], [], found)
+    return found
 
 
 def _residuals(solved: Solved, solver: Solver, rows: list, many_rows: list, many: list,

@@ -1,0 +1,145 @@
+"""`fix --transient` verifies the written program at every thermal state by
+reading it once and evaluating each rcTcJ/rcTcR(cold, dq) at each state
+(verify.verify_states, targets.Resolver). Oracle: the program materialized
+at each state (every call replaced by its value's text), parsed again and
+verified as any output (tests/transient_oracle.py, the way it was first
+made). Both must give the same residual of every use at every state, bit
+for bit, and so the same output and report; on the fixtures in both
+modes, and on programs with declared, inline and array targets, FOR loops,
+Offs, MoveAbsJ on jointtargets, MoveC."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import transient_oracle
+from rapidcomp.compensate import fix as F
+from rapidcomp.compensate import report
+from rapidcomp.compensate.load import load_solver, load_state_solvers
+from rapidcomp.compensate.plan import Task
+from rapidcomp.compensate.transient import Transient, state_values
+from rapidcomp.rapid.parse import parse_source, parse_text
+from rapidcomp.source import read_source
+
+ROOT = Path(__file__).resolve().parents[1]
+WARM = str(ROOT / "fixtures" / "warm.csv")
+LIMITS = ("J5=-120:120",)
+EXT = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
+LOOPS = f"""MODULE Loops
+  CONST robtarget pArr{{3}}:=[[[400,300,250],[0.707107,0,0.707107,0],[0,0,-1,1],{EXT}],
+    [[400,200,250],[0.707107,0,0.707107,0],[0,0,-1,1],{EXT}],
+    [[400,100,260],[0.707107,0,0.707107,0],[0,0,-1,1],{EXT}]];
+  CONST robtarget pOne:=[[450,0,300],[0.707107,0,0.707107,0],[0,0,-1,1],{EXT}];
+  CONST jointtarget jStart:=[[35,40,25,40,-70,-10],{EXT}];
+  PROC main()
+    MoveAbsJ jStart,v100,fine,tool0;
+    MoveAbsJ [[30,35,20,35,-65,-5],{EXT}],v100,fine,tool0;
+    FOR i FROM 1 TO 3 DO
+      MoveL pArr{{i}},v100,z1,tool0;
+      MoveL Offs(pArr{{i}},0,0,20),v100,z1,tool0;
+    ENDFOR
+    MoveJ pOne,v100,z1,tool0;
+    MoveL [[420,50,280],[0.707107,0,0.707107,0],[0,0,-1,1],{EXT}],v100,fine,tool0;
+    MoveC [[430,60,280],[0.707107,0,0.707107,0],[0,0,-1,1],{EXT}],pOne,v100,fine,tool0;
+  ENDPROC
+ENDMODULE
+"""
+
+
+@pytest.fixture(scope="module")
+def solvers():
+    return (load_solver(WARM, None, False, LIMITS),
+            load_state_solvers(WARM, None, False, LIMITS))
+
+
+def _task(name: str) -> Task:
+    if name == "loops":
+        pf = parse_text(LOOPS, "loops.mod")
+    elif name == "cam":
+        sys.path.insert(0, str(ROOT / "bench"))
+        from fix import cam_module
+        pf = parse_text(cam_module(300, 5, main=True), "cam.mod")
+    else:
+        pf = parse_source(read_source(ROOT / "fixtures" / name))
+    return Task(name, (pf,))
+
+
+def _fix(task, solvers, mode, monkeypatch, oracle: bool):
+    """fix --transient, its states verified by verify_states or by the
+    oracle; also what each gave at every state."""
+    seen = []
+    if oracle:
+        def states(plan, solved, keys, out_files, state_solvers):
+            texts = {fi: pf.source.text for fi, pf in out_files.items()}
+            got = transient_oracle.verify_states(plan, solved, keys, texts, out_files,
+                                                 state_solvers)
+            seen.append(got)
+            return got
+    else:
+        real = F.verify_states
+
+        def states(*args):
+            got = real(*args)
+            seen.append(got)
+            return got
+    monkeypatch.setattr(F, "verify_states", states)
+    solver, state_solvers = solvers
+    result = F.fix(task, solver, mode, transient=(Transient(45.0, 45.0, 2.0), state_solvers))
+    monkeypatch.undo()
+    return result, seen
+
+
+@pytest.mark.parametrize("mode", ["auto", "absj"])
+@pytest.mark.parametrize("name", ["cubes.mod", "paper_front.mod", "rapid/robotstudio_crlf.mod",
+                                  "rapid/robodk.mod", "rapid/cam_confoff.mod", "loops", "cam"])
+def test_states_read_once_give_what_the_materialized_program_gives(name, mode, solvers,
+                                                                  monkeypatch):
+    task = _task(name)
+    fast, fast_seen = _fix(task, solvers, mode, monkeypatch, False)
+    slow, slow_seen = _fix(task, solvers, mode, monkeypatch, True)
+    assert len(fast_seen) == len(slow_seen) >= 1
+    for a, b in zip(fast_seen, slow_seen):
+        assert list(a) == list(b)
+        for s in a:
+            assert a[s].keys() == b[s].keys() and len(a[s]) > 0
+            assert all(a[s][k] == b[s][k] for k in a[s]), s       # (floats: bit for bit)
+    assert [m.text for m in fast.modules] == [m.text for m in slow.modules]
+    assert fast.rows == slow.rows and fast.notes == slow.notes
+    meta = {"mode": mode}
+    assert report.markdown(fast, meta) == report.markdown(slow, meta)
+
+
+def test_the_loops_program_is_written_with_every_kind_of_call(solvers, monkeypatch):
+    """What the comparison above reads: the loop program's output holds
+    rcTcJ on declared and inline jointtargets, rcTcR on an array element
+    in a FOR loop (with and without Offs), inline robtargets and MoveC."""
+    result, _ = _fix(_task("loops"), solvers, "auto", monkeypatch, False)
+    text = result.modules[0].text
+    assert result.failed == 0
+    for piece in ("MoveAbsJ rcTcJ(jStart, jStart_dq)", "MoveAbsJ rcTcJ([[30,", "rcTcR(pArr{i}",
+                  "Offs(rcTcR(pArr{i}", "MoveL rcTcR([[420,", "MoveC rcTcR([[430,",
+                  "MoveAbsJ rcTcJ(jt_pOne, jt_pOne_dq)"):
+        assert piece in text, piece
+
+
+def test_state_values_are_those_of_one_state_at_a_time():
+    """state_values of several states at once: each row is the row of that
+    state alone (float32 arithmetic elementwise; the quaternion's norm a
+    vector's own, as np.linalg.norm computes it), on random values."""
+    rng = np.random.default_rng(7)
+    states = (0.0, 0.25, 0.5, 0.75, 1.0)
+    for _ in range(200):
+        cold = np.concatenate([rng.uniform(-900, 900, 3), rng.normal(size=4)])
+        dq = np.concatenate([rng.normal(scale=0.1, size=3), rng.normal(scale=1e-4, size=4)])
+        for joint, c, d in ((True, cold[:6], dq[:6]), (False, cold, dq)):
+            many = state_values(c, d, states, joint)
+            for n, s in enumerate(states):
+                assert np.array_equal(many[n], state_values(c, d, (s,), joint)[0])
+        q = state_values(cold, dq, states, False)[:, 3:].astype(float)
+        assert np.allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-6)
+    # The quaternion normalized as np.linalg.norm of the one vector does it.
+    one = state_values(cold, dq, (0.5,), False)[0]
+    raw = (np.float32(cold[3:]) + np.float32(np.float32(0.5) * np.float32(dq[3:]))).astype(float)
+    assert np.array_equal(one[3:], np.float32(raw / np.linalg.norm(raw)))
