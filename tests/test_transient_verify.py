@@ -143,3 +143,27 @@ def test_state_values_are_those_of_one_state_at_a_time():
     one = state_values(cold, dq, (0.5,), False)[0]
     raw = (np.float32(cold[3:]) + np.float32(np.float32(0.5) * np.float32(dq[3:]))).astype(float)
     assert np.array_equal(one[3:], np.float32(raw / np.linalg.norm(raw)))
+
+
+@pytest.mark.parametrize("name, mode, everyone", [("cam", "absj", True), ("cam", "auto", True),
+                                                  ("loops", "auto", False)])
+def test_states_after_the_first_take_the_calls_values_as_arrays(name, mode, everyone, solvers,
+                                                               monkeypatch):
+    """Past the first state, every use whose target is a call takes its
+    values as arrays (Resolver.state_many): all of a CAM program's (rcTcJ
+    of MoveAbsJ, rcTcR of MoveL); of the loop program's all but the MoveL
+    to an Offs around an rcTcR (resolved again)."""
+    from rapidcomp.compensate.targets import Resolver
+    taken = []
+    real = Resolver.state_many
+
+    def spy(self, uses):
+        got = real(self, uses)
+        taken.append((len(got[0]) + len(got[4]), len(uses)))
+        return got
+    monkeypatch.setattr(Resolver, "state_many", spy)
+    solver, state_solvers = solvers
+    F.fix(_task(name), solver, mode, transient=(Transient(45.0, 45.0, 2.0), state_solvers))
+    assert len(taken) == len(state_solvers) - 1
+    for n, total in taken:
+        assert n == total if everyone else 0 < n < total, (n, total)

@@ -75,16 +75,27 @@ class Values:
         minus the written one, (trans mm, quaternion components, RAPID
         order, the warm one's sign nearest the written one), and the
         confdata the warm robot needs; zero for an element no move reaches."""
+        key = ("pose dq", id(g), k)
+        got = self._values.get(key)
+        if got is not None:           # (asked for its confdata, then for its literal)
+            return got
         record = self.source(g, k).record
         q0 = np.asarray(record.quat_wxyz, float)
         if k in g.slots or k not in g.rows:
             return np.zeros(3), np.zeros(4), np.array(record.conf)
-        R, p, conf = self.robtarget_value(g, k)
-        q = matrix_to_quat_wxyz(R)
+        (R, p, conf), j = self._stacked(g, k)
+        # (The quaternions of a stack's rotations at once: the same
+        # arithmetic row by row, not a call per target.)
+        quats = self._values.get(("quats", id(R)))
+        if quats is None:
+            quats = self._values[("quats", id(R))] = (R, matrix_to_quat_wxyz(R))
+        q = quats[1][j]
         q0n = q0 / np.linalg.norm(q0)
         if float(q @ q0n) < 0:
             q = -q
-        return p - np.asarray(record.values[:3], float), q - q0n, np.asarray(conf)
+        got = self._values[key] = (p[j] - np.asarray(record.values[:3], float), q - q0n,
+                                   np.asarray(conf[j]))
+        return got
 
     def robtarget_value(self, g: Group, k):
         """(R, p, conf) of the literal the ideal controller must be given:

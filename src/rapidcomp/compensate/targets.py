@@ -1172,6 +1172,52 @@ class Resolver:
         return ([done[k] for k in keep.tolist()], Rf[keep], pf[keep],
                 conf[keep].astype(int))
 
+    def state_many(self, uses: list[TargetUse]):
+        """A transient output's uses, resolved at one of self.states before,
+        at self.state, as arrays: (indices of `uses` done as robtargets, R
+        (m, 3, 3), p (m, 3), conf (m, 4); index -> joints of those done as
+        jointtargets). A use whose target is rcTcJ/rcTcR(cold, dq) takes its
+        values at self.state from what _at_state read of the call; the
+        others (Offs/RelTool, --track, a value a check would stop or note)
+        are resolve()'s again. Bit for bit _complete's and poses()'
+        arithmetic, as again_many's."""
+        if self.track or not self.float32 or not self.states:
+            return [], None, None, None, {}
+        at = self.states.index(self.state)
+        done, values, tools, wobjs = [], [], [], []
+        joints: dict = {}
+        for n, u in enumerate(uses):
+            src = u.source
+            if src is None or src.call is not None or type(src.expr) is not A.Call:
+                continue
+            got = self._at_states.get((id(src.expr), u.env))
+            if got is None or type(got) is Unresolved:
+                continue
+            cold, by_state = got
+            new = by_state[at]
+            if u.kind == "jointtarget":
+                # (Float32 values already: _num keeps them.)
+                if all(abs(v) <= MAX_JOINT_DEG for v in new):
+                    joints[n] = new
+                continue
+            tool, wobj = self._tool_wobj(u.motion, u.module)
+            if type(tool) is Unresolved or type(wobj) is Unresolved:
+                continue
+            done.append(n)
+            values.append(new + cold.record.values[len(new):])
+            tools.append(tool[1])
+            wobjs.append(wobj[1])
+        if not done:
+            return [], None, None, None, joints
+        m = len(done)
+        q, p, conf, ok = self._unit_parts(np.array(values, float).reshape(m, 17))
+        R = unit_quat_matrices(q)
+        Rf, pf = flange_poses(stacked_poses([self.base] * m), stacked_poses(wobjs), (R, p),
+                              stacked_poses(tools))
+        keep = np.flatnonzero(ok)
+        return ([done[k] for k in keep.tolist()], Rf[keep], pf[keep], conf[keep].astype(int),
+                joints)
+
     def _complete(self, pf, module, motion, role, kind, label, line, envt, key,
                   src: Source | Unresolved) -> TargetUse:
         """The use of a source: its values checked, its tool, work object and

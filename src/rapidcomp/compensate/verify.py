@@ -637,11 +637,28 @@ def verify_states(plan: Plan, solved: Solved, keys: list, out_files: dict[int, P
     for every state: each call's cold value and correction are read once,
     and its values at every state computed at once."""
     res = _resolver(plan, out_files, None, tuple(solvers))
+    rows = sorted(solved.row[k] for k in keys)
     out = {}
+    uses: list = []
     for s, solver in solvers.items():
         res.state = s
-        out[s] = _residuals(solved, solver, sorted((solved.row[k] for k in keys)), [], [],
-                            _resolved(plan, res, keys))
+        if not uses:
+            # The first state: every use resolved on the output (what it
+            # reads, its checks), kept for the others.
+            out[s] = _residuals(solved, solver, rows, [], [], _resolved(plan, res, keys, uses))
+            continue
+        # The others: each call's values at s into the same arrays (its
+        # cold value, tool and work object as the first state read them);
+        # a use they do not take is resolved again.
+        done, R, p, conf, joints = res.state_many(uses)
+        found = {uses[n].key: _Written("jointtarget", None, None, None, q, None)
+                 for n, q in joints.items()}
+        taken = set(done) | set(joints)
+        again = [u.key for n, u in enumerate(uses) if n not in taken]
+        if again:
+            found.update(_resolved(plan, res, again))
+        out[s] = _residuals(solved, solver, rows, [solved.row[uses[n].key] for n in done],
+                            [(R, p, conf)] if done else [], found)
     return out
 
 
@@ -658,9 +675,10 @@ def _resolver(plan: Plan, out_files: dict, written: Written | None,
                     like=plan.resolver, states=states)
 
 
-def _resolved(plan: Plan, res: Resolver, keys: list) -> dict:
+def _resolved(plan: Plan, res: Resolver, keys: list, uses: list | None = None) -> dict:
     """Each use of `keys` resolved on the output res reads (parsed again),
-    as what the check needs of it (use key -> _Written)."""
+    as what the check needs of it (use key -> _Written); `uses`, when
+    given, receives the uses themselves."""
     wanted = set(keys)
     motions = {k[:2] for k in keys}
     found: dict = {}
@@ -671,6 +689,8 @@ def _resolved(plan: Plan, res: Resolver, keys: list) -> dict:
         res.poses()
         for o in batch:
             found[o.key] = _Written.of(o)
+        if uses is not None:
+            uses.extend(batch)
         batch.clear()
     for fi, pf in enumerate(res.files[:plan.n_written]):
         mi = 0
