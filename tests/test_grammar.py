@@ -181,17 +181,22 @@ def test_one_token_calls_give_the_general_grammars_tree(monkeypatch):
     from rapidcomp.rapid.grammar import engine
     rnd = random.Random(11)
     agg = "[[1.5,-2,3E+2],[1,0,0,0],[0,-1,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
-    firsts = [agg, "p1", "pLong_2", "[0,1.25]"]
+    # (Functions of names and aggregates too: fix --transient writes
+    # rcTcR(p10, p10_dq) and rcTcR([[...]], [[...],[...]]).)
+    funcs = ["rcTcR(p10, p10_dq)", "rcTcJ(jt_p1,jt_p1_dq)", f"f({agg},\t[[0.1,2],[0,1,0,0]])",
+             "g( a ,b , c )", "h([0,1.25])"]
+    firsts = [agg, "p1", "pLong_2", *funcs, "[0,1.25]"]
     tails = [",v100,z1,tool1\\WObj:=wobj1;", ",v1000,fine,tool0;", "\\Conc,v10,z5,t;",
              ",v5\\V:=100,z1,t\\WObj:=w;", ",a\\T:=1.5,b\\Opt;", ",v100,z1,tool1\\WObj:=wobj1;"]
     lines = []
     for _ in range(300):
         name = rnd.choice(["MoveL", "MoveJ", "Foo"])
-        first = rnd.choice(firsts if name == "Foo" else firsts[:3])
+        first = rnd.choice(firsts if name == "Foo" else firsts[:-1])
         lines.append(f"    {name}{rnd.choice([' ', '  ', chr(9)])}{first}{rnd.choice(tails)}")
     text = "MODULE m\n  PROC p()\n" + "\n".join(lines) + "\n  ENDPROC\nENDMODULE\n"
     fast = parse_text(text)
     eng = engine()
+    assert sum(t.type == "FAST_CALL" for t in eng.tokens(text, runs=True)) == 300
     monkeypatch.setattr(type(eng), "_keyword_in", lambda self, call: True)
     general = parse_text(text)
     assert repr(fast.modules) == repr(general.modules)

@@ -47,10 +47,17 @@ def test_fast_call_refused_exactly_when_a_word_is_reserved():
     seen_no_comma = set()
     for _ in range(6000):
         name = word()
-        first = rnd.choice([word(), agg])
+        first = rnd.choice([word(), agg, "func"])
+        used = [name] + ([] if first == agg else [first])
+        if first == "func":
+            # A function of names and aggregates (rcTcR(p10, p10_dq)): its
+            # name and names count too.
+            parts = [rnd.choice([word(), agg]) for _ in range(rnd.randint(1, 3))]
+            func = word()
+            first = f"{func}({rnd.choice(['', ' ']).join(p + ',' for p in parts)[:-1]})"
+            used = [name, func] + [p for p in parts if p != agg]
         # After the first argument: names after commas and options, in any
         # order (a call without a comma too), spaces or tabs before them.
-        used = [name] + ([] if first == agg else [first])
         after = ""
         for _ in range(rnd.randint(1, 4)):
             pad = rnd.choice(["", "", " ", "\t"])

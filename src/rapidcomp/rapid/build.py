@@ -34,8 +34,8 @@ _INF = float("inf")
 # The nodes of one-token statements and declarations, made as their classes
 # make them (construct.py; a CAM program's 1e5 moves have ~15 each).
 _span = partial(tuple.__new__, Span)
-_arg, _ref, _num, _call, _decl, _numagg = (maker(c) for c in (A.Arg, A.Ref, A.Num, A.ProcCall,
-                                                               A.DataDecl, A.NumAgg))
+_arg, _ref, _num, _call, _decl, _numagg, _func = (
+    maker(c) for c in (A.Arg, A.Ref, A.Num, A.ProcCall, A.DataDecl, A.NumAgg, A.Call))
 
 # The arguments after a FAST_CALL's first, by their text: a CAM program
 # repeats ",v100,z1,tool1\\WObj:=wobj1;" 1e5 times. Lexed once; the names'
@@ -88,6 +88,42 @@ class _Tail:
                 value = _num(num, val, vspan) if is_num else _ref(val, (), vspan)
                 args.append(_arg("optval", opt, value, _span((at + s0, at + e0))))
         return tuple(args)
+
+
+def _fast_func(text: str, base: int, start: int, name_end: int) -> tuple:
+    """The function call a FAST_CALL's first argument is (its name at
+    text[start:name_end], then '(' arguments ')': names and numeric
+    aggregates, blanks around commas; the grammar's _FAST_FUNC), as
+    func_call makes it; and where it ends in text."""
+    args = []
+    pos = name_end + 1
+    while True:
+        while text[pos] in " \t":
+            pos += 1
+        if text[pos] == "[":
+            # (A numeric aggregate holds no parenthesis: it ends at the last
+            # ']' before the next ',' or ')' outside it.)
+            depth, end = 0, pos
+            while True:
+                c = text[end]
+                depth += (c == "[") - (c == "]")
+                end += 1
+                if depth == 0:
+                    break
+            span = _span((base + pos, base + end))
+            node = _numagg(text[pos:end], span)
+        else:
+            end = _FAST_ITEM.match(text, pos).end()
+            span = _span((base + pos, base + end))
+            node = _ref(text[pos:end], (), span)
+        args.append(_arg("pos", None, node, span))
+        pos = end
+        while text[pos] in " \t":
+            pos += 1
+        if text[pos] == ")":
+            return _func(text[start:name_end], tuple(args), _span((base + start, base + pos + 1))), \
+                pos + 1
+        pos += 1                                         # (a comma)
 
 
 def _fast_tail(tail: str) -> _Tail:
@@ -356,6 +392,13 @@ class NodeBuilder:
         else:
             first = _FAST_ITEM.match(text, pos)      # a name
             end = first.end()
+            if text[end] == "(":
+                # A function of names and numeric aggregates (rcTcR(p, p_dq)).
+                func, end = _fast_func(text, base, pos, end)
+                args = [_arg("pos", None, func, func.span)]
+                pos = end
+                every = (*args, *_fast_tail(text[pos:]).nodes(base + pos))
+                return _call(name, every, _span((base, base + len(text))), plain_args(every))
             span = _span((base + pos, base + end))
             args = [_arg("pos", None, _ref(first.group(3), (), span), span)]
             pos = end

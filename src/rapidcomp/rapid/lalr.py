@@ -250,6 +250,10 @@ class Engine:
             after = first.rindex("]") + 1
         else:
             after = _IDENT.match(first, at).end()
+            if first[after] == "(":
+                # A function (rcTcR(p10, p10_dq)): each statement's own
+                # arguments; lexed one by one.
+                return iter(())
         key = (head.group(1), first[after:])
         return self._run("FAST_CALL", key, lambda: (
             f"{re.escape(key[0])}[ \t]+(?:{self._numagg}|([A-Za-z][A-Za-z0-9_]*))"
@@ -304,13 +308,19 @@ class Engine:
         """A FAST_CALL holds a reserved word (as a whole identifier, in any
         letter case). Its numeric aggregate, if any, holds none (the E of
         9E+09 follows a digit): only the name before it and the arguments
-        after it are looked at, upper-cased at once (the text is ASCII).
+        after it are looked at, upper-cased at once (the text is ASCII); a
+        function's arguments (its first argument rcTcR(..)), all of it.
         The arguments after the first (`,v100,z1,tool1\\WObj:=wobj1;`, the
         same on 1e5 lines of a CAM program) are looked at once per text:
         they begin at a comma, where no word begins either way."""
         cut = call.rfind("]")
         if cut >= 0:
             head, tail = call[:call.index("[")], call[cut + 1:]
+            if "(" in head:
+                # A function's arguments (rcTcR([[...]], p_dq)): words may
+                # lie between its aggregates too; every word is looked at
+                # (no word begins inside an aggregate: see _WORD).
+                return not self.reserved.isdisjoint(_WORD.findall(call.upper()))
         else:
             comma = call.find(",")
             head, tail = (call, "") if comma < 0 else (call[:comma], call[comma:])
