@@ -167,3 +167,45 @@ def test_states_after_the_first_take_the_calls_values_as_arrays(name, mode, ever
     assert len(taken) == len(state_solvers) - 1
     for n, total in taken:
         assert n == total if everyone else 0 < n < total, (n, total)
+
+
+RT = "[0.707107,0,0.707107,0],[0,0,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+
+
+def _module(name: str, body: str) -> str:
+    return f"MODULE {name}\n{body}ENDMODULE\n"
+
+
+@pytest.mark.parametrize("case", ["with", "local", "const index"])
+def test_calls_are_read_as_the_controller_scopes_their_names(case, solvers, monkeypatch):
+    """The resolver looks the calls' arguments up as the controller does:
+    data of a --with module, LOCAL data of one name in two modules, an
+    index that is a CONST num. The oracle looks names up bare among the
+    written modules (it refused or misread these): it verifies the same
+    program written so that it can read it (the data in the written module,
+    the names made unique, the index written out); every residual at every
+    state is the same, bit for bit, and every use is compensated."""
+    data = "  CONST robtarget pG:=[[600,100,300]," + RT + ";\n"
+    if case == "with":
+        main = _module("Main", "  PROC main()\n    MoveL pG,v100,fine,tool0;\n  ENDPROC\n")
+        task = Task("t", (parse_text(main, "Main.mod"),),
+                    context=(parse_text(_module("Data", data), "Data.mod"),))
+        same = Task("t", (parse_text(main.replace("MODULE Main\n", "MODULE Main\n" + data),
+                                     "Main.mod"),))
+    elif case == "local":
+        def two(a: str, b: str) -> Task:
+            return Task("t", tuple(parse_text(_module(
+                m, f"  LOCAL CONST robtarget {n}:=[[{x},100,300]," + RT + ";\n"
+                f"  PROC go{m}()\n    MoveL {n},v100,fine,tool0;\n  ENDPROC\n"), f"{m}.mod")
+                for m, n, x in (("A", a, 600), ("B", b, 560))))
+        task, same = two("pX", "pX"), two("pXa", "pXb")
+    else:
+        arr = ("  CONST num N:=2;\n  CONST robtarget pA{3}:=[" + ",".join(
+            f"[[{x},100,300]," + RT for x in (600, 580, 560)) + "];\n")
+        prog = arr + "  PROC main()\n    MoveL pA{N},v100,fine,tool0;\n  ENDPROC\n"
+        task = Task("t", (parse_text(_module("M", prog), "M.mod"),))
+        same = Task("t", (parse_text(_module("M", prog.replace("pA{N}", "pA{2}")), "M.mod"),))
+    fast, fast_seen = _fix(task, solvers, "auto", monkeypatch, False)
+    _, slow_seen = _fix(same, solvers, "auto", monkeypatch, True)
+    assert fast.failed == 0 and len(fast.rows) >= 1
+    assert fast_seen == slow_seen and len(fast_seen[0]) == 5

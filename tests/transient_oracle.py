@@ -1,13 +1,21 @@
 """The transient output's verification as it was first made, kept as the
 oracle of verify.verify_states: every rcTcJ/rcTcR(cold, dq) of the written
-program replaced by its value at state s (the same arithmetic:
-transient.state_values), the text parsed again and verified as any output
-is. The state's values come out of the text (9 significant digits: a
-float32 exactly), not out of the resolver's evaluation of the calls."""
+program replaced by its value at state s (the controller's float32
+arithmetic written out one state and one target at a time: state_joints,
+state_pose), the text parsed again and verified as any output is. The
+state's values come out of the text (9 significant digits: a float32
+exactly), not out of the resolver's evaluation of the calls.
+
+Its own lookup of the calls' arguments is by bare name among the written
+modules' declarations (module data, then routine data): programs whose
+names are all distinct and declared in the written modules, indices
+literal numbers."""
 
 from __future__ import annotations
 
-from rapidcomp.compensate.transient import FUNC_J, FUNC_R, state_values
+import numpy as np
+
+from rapidcomp.compensate.transient import FUNC_J, FUNC_R
 from rapidcomp.compensate.verify import reparse, verify
 from rapidcomp.edits import BY_SPAN, SpanEdit, apply_edits
 from rapidcomp.errors import InternalError
@@ -15,6 +23,26 @@ from rapidcomp.rapid import ast as A
 from rapidcomp.rapid.refs import nodes
 from rapidcomp.rapid.values import DecodeIssue, decode_array
 from rapidcomp.rewrite.names import NameAllocator
+
+
+def f32(x) -> np.ndarray:
+    return np.asarray(x, dtype=np.float32)
+
+
+def state_joints(cold, dq, s: float) -> np.ndarray:
+    """rcTcJ as the controller computes it: float32 numbers, float32
+    arithmetic (cold + s * dq)."""
+    return (f32(cold) + f32(f32(s) * f32(dq))).astype(np.float32)
+
+
+def state_pose(trans, rot, d_trans, d_rot, s: float):
+    """rcTcR as the controller computes it: translation and quaternion
+    components cold + s * dq in float32, the quaternion normalized
+    (NOrient)."""
+    t = state_joints(trans, d_trans, s)
+    q = state_joints(rot, d_rot, s).astype(float)
+    norm = np.linalg.norm(q)
+    return t, f32(q / norm if norm > 0 else q)
 
 
 def verify_states(plan, solved, keys, texts, parsed, solvers) -> dict:
@@ -42,10 +70,10 @@ def _state_text(text: str, cold, dq, func: str, s: float, dims=()) -> str:
     edits = []
     for cv, dv in zip(c, d):
         if joint:
-            fields, new = cv.robax, state_values(cv.joints, dv.joints, (s,), True)[0]
+            fields, new = cv.robax, state_joints(cv.joints, dv.joints, s)
         else:
-            fields = cv.trans + cv.rot
-            new = state_values(cv.xyz + cv.quat_wxyz, dv.xyz + dv.quat_wxyz, (s,), False)[0]
+            t, q = state_pose(cv.xyz, cv.quat_wxyz, dv.xyz, dv.quat_wxyz, s)
+            fields, new = cv.trans + cv.rot, np.concatenate([t, q])
         edits += [SpanEdit(f.span.start - base, f.span.end - base, _text(v), "state value")
                   for f, v in zip(fields, new)]
     return apply_edits(text[cold.span.start:cold.span.end],

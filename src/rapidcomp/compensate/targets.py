@@ -1179,8 +1179,8 @@ class Resolver:
         jointtargets). A use whose target is rcTcJ/rcTcR(cold, dq) takes its
         values at self.state from what _at_state read of the call; the
         others (Offs/RelTool, --track, a value a check would stop or note)
-        are resolve()'s again. Bit for bit _complete's and poses()'
-        arithmetic, as again_many's."""
+        are left for the caller to resolve() again. Bit for bit
+        _complete's and poses()' arithmetic, as again_many's."""
         if self.track or not self.float32 or not self.states:
             return [], None, None, None, {}
         at = self.states.index(self.state)

@@ -685,7 +685,8 @@ def _resolved(plan: Plan, res: Resolver, keys: list, uses: list | None = None) -
     batch: list = []
 
     def keep():
-        # Only what the check needs, a block at a time (not 1e5 TargetUse).
+        # Only what the check needs, a block at a time (not 1e5 TargetUse;
+        # verify_states keeps the first state's uses, for the others).
         res.poses()
         for o in batch:
             found[o.key] = _Written.of(o)
