@@ -590,8 +590,8 @@ ENDMODULE""")
     assert reason("", "robtarget") == ": a MoveAbsJ can (--emit absj)"
     off = reason("        ConfL\\Off;\n", "absj")
     # (main runs again: the move follows itself, from an unknown start.)
-    assert off == (": a MoveAbsJ can, but not here: follows line 5, whose configuration is "
-                   "assumed: kept a robtarget move")
+    assert off == (": a MoveAbsJ can, but not here: follows itself (its run before), whose "
+                   "configuration is assumed: kept a robtarget move")
     disp = reason("        PDispOn \\ExeP:=pHome, pHome, tool0;\n", "absj")
     assert disp == (": a MoveAbsJ can, but not here: program displacement may be active here "
                     "(a MoveAbsJ would ignore it): kept a robtarget move")

@@ -121,6 +121,15 @@ class Pick(NamedTuple):
 _pick = functools.partial(tuple.__new__, Pick)
 
 
+
+def _follows(line: int, itself: bool) -> str:
+    """The caution of a move whose solution follows one assumed (line: the
+    move before it; itself: that move is this one, run before, as a loop or
+    main runs again)."""
+    before = "itself (its run before)" if itself else f"line {line}"
+    return f"follows {before}, whose configuration is assumed: kept a robtarget move"
+
+
 def _fail(why: str) -> Pick:
     return Pick(None, None, why)
 
@@ -476,8 +485,7 @@ class _Chooser:
                 if p.q is None:
                     return [], p.failure
                 if s.caution is not None:
-                    p = p._replace(caution=f"follows line {self.uses[j].line}, whose "
-                                           "configuration is assumed: kept a robtarget move")
+                    p = p._replace(caution=_follows(self.uses[j].line, j == i))
                 picks.append(p)
         if pending and not (picks or unknown or start):
             start = True              # a loop entered from nowhere else: provisional
@@ -633,9 +641,7 @@ class _Chooser:
                         hit = s.q is not None and s.q.tolist() == spec_l[j]
                     if hit:
                         line = uses[j].line
-                        caution = None if s.caution is None else (
-                            f"follows line {line}, whose configuration is assumed: kept a "
-                            "robtarget move")
+                        caution = None if s.caution is None else _follows(line, j == i)
                         flag = "ConfJ" if uses[i].motion.spec.interpolation == "joint" \
                             else "ConfL"
                         if how == 1:
