@@ -202,3 +202,38 @@ def test_one_token_calls_give_the_general_grammars_tree(monkeypatch):
     assert repr(fast.modules) == repr(general.modules)
     calls = fast.module.routines[0].node.body
     assert len(calls) == 300 and all(type(c) is A.ProcCall for c in calls)
+
+
+@pytest.mark.parametrize("stmt", [
+    "IF bFlag MoveL(p10),v100,z1,tool0;", "IF bDebug TPWrite(sMsg)\\Num:=nVal;",
+    "IF a f([1,2]),c;", "IF x MoveL\\Conc,p,v,z,t;", "x := a f(b),c;",
+    "Move L rcTcR(p10,p10_dq),v100,z1,tool1;", "Move L p10,v100,z1,tool1;",
+    "MoveL rcTcR(p10, p10_dq),v100,z1,tool1;"])
+def test_a_one_token_statement_where_none_fits_is_read_as_its_own_tokens(stmt, monkeypatch):
+    """Text lexed as one FAST_CALL where the table has no place for a
+    statement (its first word ends an IF's condition or an expression) is
+    read as the general lexer reads it: the same tree, or the same error
+    at the same place, as with the one-token path off."""
+    from rapidcomp.errors import RapidcompError
+    from rapidcomp.rapid.grammar import engine
+    text = f"MODULE m\n  PROC p()\n    {stmt}\n  ENDPROC\nENDMODULE\n"
+
+    def read():
+        try:
+            return repr(parse_text(text).modules)
+        except RapidcompError as exc:
+            return str(exc)
+    fast = read()
+    monkeypatch.setattr(type(engine()), "_keyword_in", lambda self, call: True)
+    assert fast == read()
+
+
+def test_numbers_split_one_way_only():
+    """A statement that fails after its aggregates (continued on the next
+    line: still RAPID) is not tried again at every split of each number's
+    digits (two jointtargets of 4-digit integers took 40 s): it parses."""
+    jt = "[[1000,2000,3000,4000,5000,6000],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+    text = (f"MODULE m\n  PROC p()\n    MoveAbsJ rcTcJ({jt}, {jt}),\n        v100,z1,tool0;\n"
+            "  ENDPROC\nENDMODULE\n")
+    call = parse_text(text).module.routines[0].node.body[0]
+    assert call.name == "MoveAbsJ" and call.args[0].value.name == "rcTcJ"

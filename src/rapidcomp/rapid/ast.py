@@ -44,7 +44,9 @@ class Agg:
     span: Span
 
 
-NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+# (The grammar's _N: a number's digits split one way only, so a pattern
+# that fails after many numbers is not tried again at every split.)
+NUMBER_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
 _TOKEN_RE = re.compile(r"\[|\]|" + NUMBER_RE.pattern)
 
 

@@ -101,8 +101,7 @@ def _fast_func(text: str, base: int, start: int, name_end: int) -> tuple:
         while text[pos] in " \t":
             pos += 1
         if text[pos] == "[":
-            # (A numeric aggregate holds no parenthesis: it ends at the last
-            # ']' before the next ',' or ')' outside it.)
+            # (A numeric aggregate: it ends where its brackets close.)
             depth, end = 0, pos
             while True:
                 c = text[end]

@@ -313,14 +313,16 @@ class Engine:
         The arguments after the first (`,v100,z1,tool1\\WObj:=wobj1;`, the
         same on 1e5 lines of a CAM program) are looked at once per text:
         they begin at a comma, where no word begins either way."""
+        if "(" in call:
+            # A function's arguments (rcTcR(p, p_dq), rcTcR([[...]], p_dq)):
+            # words may lie between its aggregates, and the text after the
+            # first comma is each line's own (not for the cache of argument
+            # lists): every word is looked at (no word begins inside an
+            # aggregate: see _WORD).
+            return not self.reserved.isdisjoint(_WORD.findall(call.upper()))
         cut = call.rfind("]")
         if cut >= 0:
             head, tail = call[:call.index("[")], call[cut + 1:]
-            if "(" in head:
-                # A function's arguments (rcTcR([[...]], p_dq)): words may
-                # lie between its aggregates too; every word is looked at
-                # (no word begins inside an aggregate: see _WORD).
-                return not self.reserved.isdisjoint(_WORD.findall(call.upper()))
         else:
             comma = call.find(",")
             head, tail = (call, "") if comma < 0 else (call[:comma], call[comma:])
@@ -331,6 +333,51 @@ class Engine:
                 tails.clear()
             hit = tails[tail] = not self.reserved.isdisjoint(_WORD.findall(tail.upper()))
         return hit or not self.reserved.isdisjoint(_WORD.findall(head.upper()))
+
+    def _shifts(self, state_stack: list, term: str) -> bool:
+        """Whether `term` is shifted from this stack, after the reductions
+        the table makes on it (simulated on a copy of the states)."""
+        states = self._states
+        action = states[state_stack[-1]].get(term)
+        if action is None or action[0]:
+            return action is not None
+        stack = list(state_stack)
+        while True:
+            action = states[stack[-1]].get(term)
+            if action is None:
+                return False
+            is_shift, arg = action
+            if is_shift:
+                return True
+            size, origin = arg[0], arg[1]
+            if size:
+                del stack[-size:]
+            goto = states[stack[-1]].get(origin)
+            if goto is None:
+                return False
+            stack.append(goto[1])
+
+    def _plain(self, text: str, tok: Tok) -> list[Tok]:
+        """The tokens of a FAST_CALL/FAST_DECL token's text, lexed as the
+        lexer lexes text without those two (its text ends at ';': no token
+        of the general lexer crosses its ends)."""
+        out = []
+        match = self._master_plain.match
+        keywords = self._keywords
+        ignore = self._ignore
+        pos, end = tok.start_pos, tok.end_pos
+        while pos < end:
+            m = match(text, pos, end)
+            if m is None:
+                raise LexFailure(pos)
+            kind, stop = m.lastgroup, m.end()
+            if kind not in ignore:
+                value = m.group()
+                if kind == "NAME":
+                    kind = keywords.get(value.upper(), "NAME")
+                out.append(Tok(kind, value, pos, stop))
+            pos = stop
+        return out
 
     # ------------------------------------------------------------------ parser
     def _viable(self, state_stack: list) -> frozenset[str]:
@@ -374,7 +421,14 @@ class Engine:
         state_stack = [self._start]
         value_stack: list = []
         previous = None
-        for tok in self.tokens(text, runs=True):
+        stream = self.tokens(text, runs=True)
+        # A one-token statement (declaration) where the table has no action
+        # for it (its first word ends something else: `IF bFlag MoveL(p10),
+        # v100,z1,tool0;`): its text's own tokens, as the general lexer makes
+        # them, go in its place (reversed: popped from the end).
+        again: list = []
+        while True:
+            tok = again.pop() if again else next(stream)
             ttype = tok.type
             check = None
             if (ttype in _LISTED and previous is not None and previous.type == ttype
@@ -396,6 +450,11 @@ class Engine:
                     check = (key, len(state_stack), below,
                              len(below) if type(below) is _Splice else -1)
                     lowest = len(state_stack)
+            if ttype in _LISTED and not self._shifts(state_stack, ttype):
+                # (Decided before any reduction: the table may reduce on
+                # this lookahead and only then find no action.)
+                again = self._plain(text, tok)[::-1]
+                continue
             while True:
                 try:
                     is_shift, arg = states[state_stack[-1]][ttype]
