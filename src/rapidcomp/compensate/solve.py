@@ -121,7 +121,6 @@ class Pick(NamedTuple):
 _pick = functools.partial(tuple.__new__, Pick)
 
 
-
 def _follows(line: int, itself: bool) -> str:
     """The caution of a move whose solution follows one assumed (line: the
     move before it; itself: that move is this one, run before, as a loop or

@@ -1164,10 +1164,17 @@ class Resolver:
         v[np.setdiff1d(np.arange(m), at)] = np.array(recs, float).reshape(-1, 17)
         # What again() would refuse or note (not ok) goes to again(): it
         # says why.
+        return self._flanges(done, v, tools, wobjs)
+
+    def _flanges(self, done: list, v: np.ndarray, tools: list, wobjs: list):
+        """(the entries of `done` kept, R, p, conf) of robtargets' values v
+        (one row per entry) through their tools and work objects, as poses()
+        composes them; a row a check would stop or note (not ok) is left
+        out."""
         q, p, conf, ok = self._unit_parts(v)
         R = unit_quat_matrices(q)
-        Rf, pf = flange_poses(stacked_poses([self.base] * m), stacked_poses(wobjs), (R, p),
-                              stacked_poses(tools))
+        Rf, pf = flange_poses(stacked_poses([self.base] * len(done)), stacked_poses(wobjs),
+                              (R, p), stacked_poses(tools))
         keep = np.flatnonzero(ok)
         return ([done[k] for k in keep.tolist()], Rf[keep], pf[keep],
                 conf[keep].astype(int))
@@ -1209,14 +1216,8 @@ class Resolver:
             wobjs.append(wobj[1])
         if not done:
             return [], None, None, None, joints
-        m = len(done)
-        q, p, conf, ok = self._unit_parts(np.array(values, float).reshape(m, 17))
-        R = unit_quat_matrices(q)
-        Rf, pf = flange_poses(stacked_poses([self.base] * m), stacked_poses(wobjs), (R, p),
-                              stacked_poses(tools))
-        keep = np.flatnonzero(ok)
-        return ([done[k] for k in keep.tolist()], Rf[keep], pf[keep], conf[keep].astype(int),
-                joints)
+        return (*self._flanges(done, np.array(values, float).reshape(len(done), 17), tools,
+                               wobjs), joints)
 
     def _complete(self, pf, module, motion, role, kind, label, line, envt, key,
                   src: Source | Unresolved) -> TargetUse:

@@ -335,8 +335,9 @@ class Engine:
         return hit or not self.reserved.isdisjoint(_WORD.findall(head.upper()))
 
     def _shifts(self, state_stack: list, term: str) -> bool:
-        """Whether `term` is shifted from this stack, after the reductions
-        the table makes on it (simulated on a copy of the states)."""
+        """Whether `term` is taken from this stack (shifted, or $END
+        accepted), after the reductions the table makes on it (simulated on
+        a copy of the states)."""
         states = self._states
         action = states[state_stack[-1]].get(term)
         if action is None or action[0]:
@@ -356,6 +357,8 @@ class Engine:
             if goto is None:
                 return False
             stack.append(goto[1])
+            if term == "$END" and stack[-1] == self._end:
+                return True
 
     def _plain(self, text: str, tok: Tok) -> list[Tok]:
         """The tokens of a FAST_CALL/FAST_DECL token's text, lexed as the
@@ -388,31 +391,8 @@ class Engine:
         there elsewhere). Simulating the reductions for each candidate keeps
         only those that lead to a shift, so messages say what fits here.
         """
-        states = self._states
-        out = set()
-        for term in states[state_stack[-1]]:
-            if not term.isupper() and term != "$END":
-                continue
-            stack = list(state_stack)
-            while True:
-                action = states[stack[-1]].get(term)
-                if action is None:
-                    break
-                is_shift, arg = action
-                if is_shift:
-                    out.add(term)
-                    break
-                size, origin = arg[0], arg[1]
-                if size:
-                    del stack[-size:]
-                goto = states[stack[-1]].get(origin)
-                if goto is None:
-                    break
-                stack.append(goto[1])
-                if term == "$END" and stack[-1] == self._end:
-                    out.add(term)
-                    break
-        return frozenset(out)
+        return frozenset(term for term in self._states[state_stack[-1]]
+                         if (term.isupper() or term == "$END") and self._shifts(state_stack, term))
 
     def parse(self, text: str):
         states = self._states
