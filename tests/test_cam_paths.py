@@ -574,11 +574,11 @@ def test_plain_declarations_read_as_the_lexer_reads_them():
     good = [f"\n  CONST jointtarget jt_p{i}:={jointtarget(x)};" for i, x in enumerate(t)]
     got, joints = V._plain_declared(eng, ["".join(good), good[0] + "\r\n\tLOCAL CONST jointtarget a := "
                                   + jointtarget(t[1]) + " ;"])
-    assert [[(s, ty, n) for s, ty, n, _, _ in piece] for piece in got] == [
-        [("CONST", "jointtarget", f"jt_p{i}") for i in range(3)],
-        [("CONST", "jointtarget", "jt_p0"), ("CONST", "jointtarget", "a")]]
+    assert [[(s, ty, n, local) for s, ty, n, _, _, local in piece] for piece in got] == [
+        [("CONST", "jointtarget", f"jt_p{i}", None) for i in range(3)],
+        [("CONST", "jointtarget", "jt_p0", None), ("CONST", "jointtarget", "a", "LOCAL")]]
     piece = "".join(good)
-    x, y = got[0][1][3:]
+    x, y = got[0][1][3:5]
     assert piece[x:y] == jointtarget(t[1])
     # The joints of each declaration, in order: as decoding each reads them.
     want = [t[0], t[1], t[2], t[0], t[1]]
@@ -597,7 +597,7 @@ def _slow(monkeypatch):
     _token_by_token(monkeypatch)
     monkeypatch.setattr(T.Resolver, "_plain_moves", lambda self: False)
     monkeypatch.setattr(S._Chooser, "QUICK", False)
-    monkeypatch.setattr(V, "_plain_declared", lambda eng, pieces: None)
+    monkeypatch.setattr(V, "_plain_declared", lambda eng, pieces, *how: None)
     monkeypatch.setattr(V, "_plain_numaggs", lambda lits: False)
 
 

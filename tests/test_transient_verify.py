@@ -66,10 +66,30 @@ def _task(name: str) -> Task:
     return Task(name, (pf,))
 
 
-def _fix(task, solvers, mode, monkeypatch, oracle: bool):
-    """fix --transient, its states verified by verify_states or by the
-    oracle; also what each gave at every state."""
+def _fix(task, solvers, mode, monkeypatch, oracle: bool, relexed: bool = False):
+    """fix --transient, its states verified by verify_states (the output
+    parsed again) or by the oracle; also what each gave at every state.
+    relexed: as the command runs it, the output read again where
+    relex_transient can (what verify_states_relexed gave)."""
     seen = []
+    if relexed:
+        real = F.verify_states_relexed
+
+        def states(*args):
+            got = real(*args)
+            if got is not None:
+                # (As verify_states gives them: state -> use key -> residual.)
+                keys, um, deg = got
+                seen.append({s: dict(zip(keys, zip(um[n].tolist(), deg[n].tolist())))
+                             for n, s in enumerate(args[-1])})
+            return got
+        monkeypatch.setattr(F, "verify_states_relexed", states)
+        solver, state_solvers = solvers
+        result = F.fix(task, solver, mode,
+                       transient=(Transient(45.0, 45.0, 2.0), state_solvers))
+        monkeypatch.undo()
+        return result, seen
+    monkeypatch.setattr(F, "relex_transient", lambda *args: None)
     if oracle:
         def states(plan, solved, keys, out_files, state_solvers):
             texts = {fi: pf.source.text for fi, pf in out_files.items()}
@@ -162,6 +182,9 @@ def test_states_after_the_first_take_the_calls_values_as_arrays(name, mode, ever
         taken.append((len(got[0]) + len(got[4]), len(uses)))
         return got
     monkeypatch.setattr(Resolver, "state_many", spy)
+    # (The output parsed again: what the command does where relex_transient
+    # does not read it.)
+    monkeypatch.setattr(F, "relex_transient", lambda *args: None)
     solver, state_solvers = solvers
     F.fix(_task(name), solver, mode, transient=(Transient(45.0, 45.0, 2.0), state_solvers))
     assert len(taken) == len(state_solvers) - 1
@@ -209,3 +232,133 @@ def test_calls_are_read_as_the_controller_scopes_their_names(case, solvers, monk
     _, slow_seen = _fix(same, solvers, "auto", monkeypatch, True)
     assert fast.failed == 0 and len(fast.rows) >= 1
     assert fast_seen == slow_seen and len(fast_seen[0]) == 5
+
+
+# Every target an rcTcR of a robtarget as written: declared in a routine and
+# in the module, inline, a MoveC's two, a move in a second module and a
+# FOR loop's move of one target, in CRLF.
+PLAIN = f"""MODULE Plain
+  CONST robtarget pA:=[[600,100,300],{RT};
+  CONST robtarget pB:=[[560,50,320],{RT};
+  PROC main()
+    CONST robtarget pR:=[[580,20,280],{RT};
+    MoveL pA,v100,z1,tool0;
+    MoveL pR,v100,z1,tool0;
+    MoveL [[590,60,310],{RT},v100,fine,tool0;
+    MoveC [[570,40,300],{RT},pB,v100,z1,tool0;
+    FOR i FROM 1 TO 2 DO
+      MoveL pB,v100,z1,tool0;
+    ENDFOR
+  ENDPROC
+ENDMODULE
+""".replace("\n", "\r\n")
+OTHER = f"""MODULE Other
+  PROC side()
+    MoveL pA,v100,z1,tool0;
+    MoveL [[610,80,290],{RT},v100,z1,tool0;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def _plain_task() -> Task:
+    return Task("t", (parse_text(PLAIN, "Plain.mod"), parse_text(OTHER, "Other.mod")))
+
+
+@pytest.mark.parametrize("mode", ["auto", "absj"])
+@pytest.mark.parametrize("name", ["cubes.mod", "paper_front.mod", "rapid/robotstudio_crlf.mod",
+                                  "rapid/robodk.mod", "rapid/cam_confoff.mod", "loops", "cam",
+                                  "plain"])
+def test_the_output_read_again_gives_what_it_parsed_again_gives(name, mode, solvers,
+                                                                monkeypatch):
+    """Where relex_transient reads the output (every target an rcTcR of
+    the robtarget as written), each use's residual at every state is what
+    verify_states gives on the output parsed again, bit for bit; and so the
+    same output and report. It reads the CAM program, auto, and the plain
+    one, in both modes (auto keeps their MoveL)."""
+    task = _plain_task() if name == "plain" else _task(name)
+    fast, fast_seen = _fix(task, solvers, mode, monkeypatch, False, relexed=True)
+    slow, slow_seen = _fix(task, solvers, mode, monkeypatch, False)
+    if (name, mode) in (("cam", "auto"), ("plain", "auto")):
+        assert len(fast_seen) == 1
+    if fast_seen:
+        assert len(slow_seen) == 1
+        a, b = fast_seen[0], slow_seen[0]
+        assert list(a) == list(b)
+        for s in a:
+            assert a[s].keys() == b[s].keys() and len(a[s]) > 0
+            assert all(a[s][k] == b[s][k] for k in a[s]), s       # (floats: bit for bit)
+    assert [m.text for m in fast.modules] == [m.text for m in slow.modules]
+    assert fast.rows == slow.rows and fast.notes == slow.notes
+    meta = {"mode": mode}
+    assert report.markdown(fast, meta) == report.markdown(slow, meta)
+
+
+def test_the_plain_program_is_written_with_every_kind_of_rctcr(solvers, monkeypatch):
+    """What the comparison above reads of the plain program: rcTcR on
+    declared targets (in the routine, in the module, from another module),
+    inline ones, both of a MoveC, a FOR loop's, in CRLF; every one of its 8 uses
+    compensated."""
+    result, seen = _fix(_plain_task(), solvers, "auto", monkeypatch, False, relexed=True)
+    text = result.modules[0].text + result.modules[1].text
+    assert result.failed == 0 and len(seen) == 1 and len(seen[0][1.0]) == 8
+    for piece in ("    MoveL rcTcR(pA, pA_dq)", "MoveL rcTcR(pR, pR_dq)",
+                  "MoveL rcTcR([[590,", "MoveC rcTcR([[570,", "]]),rcTcR(pB, pB_dq),v100",
+                  "    CONST pose pR_dq:=", "  CONST pose pA_dq:=", "LOCAL CONST pose pB_dq:=",
+                  "      MoveL rcTcR(pB, pB_dq)", "MoveL rcTcR([[610,"):
+        assert piece in text, piece
+    assert "\r\n" in result.modules[0].text and "\n" not in result.modules[0].text.replace(
+        "\r\n", "")
+
+
+def _captured(solvers, monkeypatch):
+    """The arguments relex_transient was called with on the plain program,
+    and what it returned."""
+    got = []
+    real = F.relex_transient
+
+    def spy(*args):
+        got.append((args, real(*args)))
+        return got[-1][1]
+    monkeypatch.setattr(F, "relex_transient", spy)
+    solver, state_solvers = solvers
+    F.fix(_plain_task(), solver, "auto", transient=(Transient(45.0, 45.0, 2.0), state_solvers))
+    monkeypatch.undo()
+    assert len(got) == 1 and got[0][1] is not None
+    return got[0][0]
+
+
+@pytest.mark.parametrize("old, new", [
+    ("CONST pose pA_dq:=[[", "CONST pose pA_dq:=[[1"),              # another number
+    ("pose pA_dq:=", "robtarget pA_dq:="),                           # another type
+    ("CONST pose pR_dq:=", "VAR pose pR_dq:="),                      # not CONST
+    ("MoveL rcTcR(pA, pA_dq)", "MoveL rcTcJ(pA, pA_dq)"),            # another function
+    ("MoveL rcTcR(pA, pA_dq)", "MoveL rcTcR(pB, pA_dq)"),            # another cold value
+    ("MoveL rcTcR([[590,", "MoveL rcTcR([[591,"),                   # another inline target
+    ("]]),rcTcR(pB, pB_dq)", "]] ),rcTcR(pB, pB_dq)"),               # not written plainly
+    ("tool0;\r\n    MoveC", "tool0;\r\n    MoveL pA,v100,z1,tool0;\r\n    MoveC"),  # a move more
+])
+def test_an_output_not_as_meant_is_not_read_again(old, new, solvers, monkeypatch):
+    """relex_transient reads nothing of an output that differs from what
+    the editor meant (the command then parses it again): each change here
+    to the plain program's written text."""
+    plan, calls, file_edits, texts = _captured(solvers, monkeypatch)
+    fi = 0 if old in texts[0] else 1
+    assert texts[fi].count(old) >= 1, old
+    changed = dict(texts)
+    changed[fi] = texts[fi].replace(old, new, 1)
+    assert F.relex_transient(plan, calls, file_edits, texts) is not None
+    assert F.relex_transient(plan, calls, file_edits, changed) is None
+
+
+@pytest.mark.parametrize("name", ["plain", "cam"])
+def test_declarations_lexed_one_by_one_are_read_alike(name, solvers, monkeypatch):
+    """relex_transient with the plain reading of the new declarations off
+    (each lexed as the parser lexes it, each literal read alone) reads the
+    same numbers: the same residuals at every state, bit for bit."""
+    from rapidcomp.compensate import verify as V
+    task = _plain_task() if name == "plain" else _task(name)
+    _, fast_seen = _fix(task, solvers, "auto", monkeypatch, False, relexed=True)
+    monkeypatch.setattr(V, "_plain_declared", lambda eng, pieces, *how: None)
+    _, slow_seen = _fix(task, solvers, "auto", monkeypatch, False, relexed=True)
+    assert len(fast_seen) == len(slow_seen) == 1 and fast_seen == slow_seen

@@ -17,7 +17,7 @@ from .. import side
 from ..edits import (BY_SPAN, EditColumns, EditRun, SpanEdit, columns_of, sorted_columns,
                      span_edit)
 from ..kinematics.conf import quadrant_miss
-from ..kinematics.frames import matrix_to_quat_wxyz
+from ..kinematics.frames import matrix_to_quat_wxyz, row_dots
 from ..errors import InternalError
 from ..rapid import ast as A
 from ..rapid.values import RobTarget
@@ -27,6 +27,7 @@ from .place import Group, element_label, multi_index
 from .plan import Plan
 from .solve import Solved
 from .targets import Source, base_pose, stacked_poses, wobj_targets
+from .transient import FUNC_J, FUNC_R
 
 
 # A file's edits from this many on are kept as EditColumns (file_edits).
@@ -78,7 +79,9 @@ class Values:
         key = ("pose dq", id(g), k)
         got = self._values.get(key)
         if got is not None:           # (asked for its confdata, then for its literal)
-            return got
+            # (Rows of the stacks made for a batch: no three arrays per element.)
+            (d, dq, conf, _), j = got[:2]
+            return d[j], dq[j], conf[j]
         record = self.source(g, k).record
         q0 = np.asarray(record.quat_wxyz, float)
         if k in g.slots or k not in g.rows:
@@ -93,9 +96,60 @@ class Values:
         q0n = q0 / np.linalg.norm(q0)
         if float(q @ q0n) < 0:
             q = -q
-        got = self._values[key] = (p[j] - np.asarray(record.values[:3], float), q - q0n,
-                                   np.asarray(conf[j]))
+        got = (p[j] - np.asarray(record.values[:3], float), q - q0n, np.asarray(conf[j]))
+        self._values[key] = (tuple(a[None] for a in got)
+                             + (np.array([np.array_equal(got[2], record.conf)]),), 0)
         return got
+
+    def _pose_dqs(self, items: list, values) -> None:
+        """pose_dq and pose_literal of each (group, element) of `items`
+        (reached elements; values: their robtarget values' stacks, as
+        _robtarget_values makes them), as arrays: the same arithmetic
+        elementwise (a norm as np.linalg.norm takes one vector's, row_dots;
+        a sign decided near 0 by the one product itself), each literal's
+        numbers formatted in one batch."""
+        R, p, conf = values
+        recs = [self.source(g, k).record for g, k in items]
+        n = len(items)
+        q = matrix_to_quat_wxyz(R)
+        q0 = np.array([r.quat_wxyz for r in recs], float).reshape(n, 4)
+        q0n = q0 / np.sqrt(row_dots(q0))[:, None]
+        dots = np.matmul(q[:, None, :], q0n[:, :, None])[:, 0, 0]
+        flip = dots < 0
+        for j in np.flatnonzero(np.abs(dots) < 1e-9).tolist():
+            flip[j] = float(q[j] @ q0n[j]) < 0
+        q = np.where(flip[:, None], -q, q)
+        d = p - np.array([r.values[:3] for r in recs], float).reshape(n, 3)
+        dq = q - q0n
+        # (Whether each keeps its written confdata: RobTarget.conf's ints.)
+        kept = (conf == np.array([r.values[7:11] for r in recs], float).reshape(n, 4).astype(
+            int)).all(axis=1)
+        stacks = (d, dq, conf, kept)
+        mm = numbers.fmt_many(d.ravel().tolist(), numbers.MM_DECIMALS)
+        qs = numbers.fmt_many(dq.ravel().tolist(), numbers.QUAT_DECIMALS)
+        # (One entry per element: its row of the stacks and its literal.)
+        for j, (g, k) in enumerate(items):
+            self._values[("pose dq", id(g), k)] = (
+                stacks, j, "[[" + ",".join(mm[3 * j:3 * j + 3]) + "],["
+                + ",".join(qs[4 * j:4 * j + 4]) + "]]")
+
+    def conf_kept(self, g: Group, k) -> bool:
+        """Transient: pose_dq(g, k)'s confdata is the written one."""
+        _, _, conf = self.pose_dq(g, k)
+        got = self._values.get(("pose dq", id(g), k))
+        if got is None:                  # (an element no move reaches)
+            return np.array_equal(conf, self.source(g, k).record.conf)
+        stacks, j = got[:2]
+        return bool(stacks[3][j])
+
+    def pose_literal(self, g: Group, k) -> str:
+        """Transient: the literal of pose_dq(g, k)'s correction."""
+        got = self._values.get(("pose dq", id(g), k))
+        if got is not None and len(got) == 3:
+            return got[2]
+        d, dq, _ = self.pose_dq(g, k)
+        return ("[[" + ",".join(numbers.mm(float(v)) for v in d) + "],["
+                + ",".join(numbers.fmt(float(v), numbers.QUAT_DECIMALS) for v in dq) + "]]")
 
     def robtarget_value(self, g: Group, k):
         """(R, p, conf) of the literal the ideal controller must be given:
@@ -152,11 +206,23 @@ class Values:
             out.append(v)
         return out
 
-    def prepare(self, gs: list[Group]) -> None:
+    def prepare(self, gs: list[Group], transient: bool = False) -> None:
         """Every robtarget value and field texts of the groups, in batches: a
         CAM program has 1e5, and one batch of rotations costs what a few
         single ones do; PREPARE_BLOCK at a time, the batch's intermediate
-        numbers and texts are alive for one block, not for all."""
+        numbers and texts are alive for one block, not for all. transient:
+        the values and each one's pose correction and its literal instead
+        of texts (the robtarget stays as written: the cold value)."""
+        if transient:
+            items = [(g, k) for g in gs if g.failure is None and g.mode == "rob"
+                     for k in g.elements if (id(g), k) not in self._values]
+            for at in range(0, len(items), PREPARE_BLOCK):
+                block = items[at:at + PREPARE_BLOCK]
+                values = self._robtarget_values(block)
+                for j, (g, k) in enumerate(block):
+                    self._values[(id(g), k)] = (values, j)
+                self._pose_dqs(block, values)
+            return
         items = [(g, k) for g in gs if g.failure is None and g.mode == "rob"
                  for k in g.elements if ("texts", id(g), k) not in self._values]
         # Every other block's texts made by the job's helper (side.py) while
@@ -378,6 +444,15 @@ class Editor:
         # kind (the output is parsed again).
         self.converted: dict = {}
         self.others = False
+        # Transient: each robtarget move whose target became rcTcR(<cold as
+        # written>, <dq>): use key -> (the use, the cold value's text as
+        # written, the correction's new name or None, its literal); the
+        # output is checked on them by reading those statements and
+        # declarations again (verify.relex_transient). calls_other: a
+        # transient edit of another kind (rcTcJ, arrays, Offs, a cold copy
+        # with other confdata: the output is parsed again).
+        self.calls: dict = {}
+        self.calls_other = False
         self._per_module: dict = {}
         self._renamed: dict = {}             # instruction -> (MoveAbsJ as it, why) (_to_absj)
 
@@ -605,9 +680,7 @@ class Editor:
         return "[" + nl + inner + ("," + nl + inner).join(parts) + "]"
 
     def _pose_literal(self, g: Group, k) -> str:
-        d, dq, _ = self.values.pose_dq(g, k)
-        return ("[[" + ",".join(numbers.mm(float(v)) for v in d) + "],["
-                + ",".join(numbers.fmt(float(v), numbers.QUAT_DECIMALS) for v in dq) + "]]")
+        return self.values.pose_literal(g, k)
 
     def _apply_transient(self, g: Group) -> None:
         """The cold value and the steady-state correction as named
@@ -615,7 +688,6 @@ class Editor:
         or rcTcR (robtarget moves). A jointtarget of the program stays as
         written (it is the cold value) and gets its <name>_dq; a robtarget
         of a move that becomes MoveAbsJ becomes jt_<name> and jt_<name>_dq."""
-        from .transient import FUNC_J, FUNC_R
         if g.mode == "rob":
             # One confdata serves every state: the written one, or the warm
             # robot's where the cold joints are within the quadrant
@@ -623,10 +695,10 @@ class Editor:
             # at -0.02 deg); then the cold value is a copy with that confdata.
             confs = {}
             for k in g.elements:
+                if self.values.conf_kept(g, k):
+                    continue
                 _, _, conf = self.values.pose_dq(g, k)
                 written = np.asarray(self.values.source(g, k).record.conf)
-                if np.array_equal(conf, written):
-                    continue
                 q = self.values.cold(g, k)
                 if all(quadrant_miss(q[col], conf[cf]) <= self.values.tol
                        for col, cf in ((0, 0), (3, 1), (5, 2))):
@@ -640,6 +712,7 @@ class Editor:
                 return
             self._apply_transient_rob(g, FUNC_R, confs)
             return
+        self.calls_other = True
         if g.placement == "inline" or g.decl is None:
             for u in g.uses:
                 k = u.source.element
@@ -661,11 +734,13 @@ class Editor:
         self._use_transient(g, names, FUNC_J, absj)
 
     def _declare_transient(self, g: Group, cold_type: str, cold_name, cold_literal,
-                           dq_type: str, dq_literal, dq_after_cold: bool) -> dict:
+                           dq_type: str, dq_literal, dq_after_cold: bool,
+                           literals: dict | None = None) -> dict:
         """The named constants of a declared group: per element (or
         "array") the cold value's name (None: the program's own data is
         the cold value; cold_name(stem, element) says) and the
-        correction's, <cold>_dq or <stem>_dq."""
+        correction's, <cold>_dq or <stem>_dq. literals, when given,
+        receives each element's correction literal (not of an array)."""
         _, _, nl, indent, _ = self._anchor(g)
         names: dict = {}
         items = [("array", None)] if g.array else [(k, k) for k in g.elements]
@@ -683,13 +758,19 @@ class Editor:
             else:
                 if cold is not None:
                     self.declare(g, cold_type, cold, "", cold_literal(g, k))
-                self.declare(g, dq_type, dq, "", dq_literal(g, k))
+                literal = dq_literal(g, k)
+                self.declare(g, dq_type, dq, "", literal)
+                if literals is not None:
+                    literals[k] = literal
             names[key] = (cold, dq)
             g.names[key] = cold or g.decl.name
         return names
 
-    def _use_transient(self, g: Group, names: dict, func: str, absj: bool) -> None:
-        """Each use's target becomes func(<cold>, <dq>) (with its index)."""
+    def _use_transient(self, g: Group, names: dict, func: str, absj: bool,
+                       literals: dict | None = None) -> None:
+        """Each use's target becomes func(<cold>, <dq>) (with its index).
+        literals: each element's correction literal, for self.calls (a
+        robtarget move whose cold value is its target as written)."""
         for u in g.uses:
             src = u.source
             ref_text = u.file.text(src.ref)
@@ -703,6 +784,8 @@ class Editor:
             else:
                 self.edit(u.key[0], src.ref.span, target, f"{u.label} -> {func}")
                 self.actions[u.key] = f"{ref_text} -> {target}"
+                if literals is not None:
+                    self.calls[u.key] = (u, cold_ref, dq, literals[src.element])
 
     def _apply_transient_rob(self, g: Group, func: str, confs: dict) -> None:
         """A robtarget move keeps its kind (a MoveL its straight line): its
@@ -716,19 +799,28 @@ class Editor:
                 texts[7:11] = [str(int(c)) for c in confs[k]]
             return records.robtarget_literal(texts)
 
+        # (Its cold value its target as written, a name or a literal, and no
+        # Offs/RelTool around it: self.calls, read again as such.)
+        plain = not confs and not g.array and g.src.call is None
+        self.calls_other = self.calls_other or not plain
         if g.placement == "inline" or g.decl is None:
             for u in g.uses:
                 k = u.source.element
                 cold = cold_literal(g, k) if k in confs else u.file.text(u.source.ref)
-                target = f"{func}({cold}, {self._pose_literal(g, k)})"
+                dq = self._pose_literal(g, k)
+                target = f"{func}({cold}, {dq})"
                 self.edit(u.key[0], u.source.ref.span, target, f"{u.label} -> {func}")
-                self.actions[u.key] = f"inline robtarget -> {func}(written, correction)"
+                self.actions[u.key] = self._said(
+                    f"inline robtarget -> {func}(written, correction)")
+                if plain:
+                    self.calls[u.key] = (u, cold, None, dq)
             return
+        literals: dict | None = {} if plain else None
         names = self._declare_transient(
             g, "robtarget",
             lambda s, k: s[:27] + "_cold" if (confs if k == "array" else k in confs) else None,
-            cold_literal, "pose", self._pose_literal, dq_after_cold=False)
-        self._use_transient(g, names, func, False)
+            cold_literal, "pose", self._pose_literal, dq_after_cold=False, literals=literals)
+        self._use_transient(g, names, func, False, literals)
 
     def _said(self, text: str) -> str:
         """`text` as the one equal string this editor keeps (a CAM

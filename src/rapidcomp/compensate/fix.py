@@ -21,6 +21,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from .. import side
 from ..collector import paused
 from ..edits import EditColumns, SpanEdit, apply_edits
@@ -35,8 +37,8 @@ from .plan import Plan, Task, line_ranges
 from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, UseRow, summary, use_rows
 from .solve import Solving, nominal_ahead
 from .takeback import take_back
-from .verify import (VERIFY_DEG, VERIFY_UM, relex, relex_absj, reparse, verify,
-                     verify_states)
+from .verify import (VERIFY_DEG, VERIFY_UM, relex, relex_absj, relex_transient, reparse,
+                     verify, verify_states, verify_states_relexed)
 
 MODES = P.MODES
 
@@ -129,7 +131,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # taken back (takeback.py), or the rest is placed, written and verified
     # again without it.
     for _ in range(4):
-        values.prepare(gs)
+        values.prepare(gs, transient is not None)
         if cells is None and side.helps():
             # The report's number cells of every target, made beside the
             # job while it places, edits and splices (side.py; without a
@@ -153,28 +155,35 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         written_conf = {u.key: next(confs) if g.mode == "rob" else None for g, u in done}
         values.forget()
         editor.edits = editor.field_lists = None
+        if transient is not None:
+            release()
         texts = {fi: apply_edits(plan.files[fi].source.text, es)
                  for fi, es in file_edits.items()}
         clock("print")
         # Numbers edited, and moves turned into MoveAbsJ on jointtargets of
         # their own: what was written is read again where the output holds
         # it; any other structural edit: the output is parsed again.
-        written = converted = None
+        written = converted = calls = None
         if transient is None and not editor.others:
             written = relex(plan, editor.fields, file_edits, texts)
             if written is not None and editor.converted:
                 converted = relex_absj(plan, editor.converted, file_edits, texts)
                 written = None if converted is None else written
-        editor.fields = editor.converted = None
-        out_files = reparse(plan, texts) if written is None else {}
-        clock("re-parse" if written is None else "re-lex")
+        elif transient is not None and not editor.calls_other and editor.calls:
+            # (Every target an rcTcR of the robtarget as written: those
+            # statements and declarations read again.)
+            calls = relex_transient(plan, editor.calls, file_edits, texts)
+        editor.fields = editor.converted = editor.calls = None
+        lexed = written is not None or calls is not None
+        out_files = reparse(plan, texts) if not lexed else {}
+        clock("re-lex" if lexed else "re-parse")
         keys = [u.key for g in gs if g.failure is None for u in g.uses]
         if transient is None:
             verified = verify(plan, solved, keys, out_files, solver,
                               written, converted) if keys else {}
         else:
             verified, state_errors = _verify_states(plan, solved, keys, out_files,
-                                                    transient[1])
+                                                    transient[1], calls, texts)
         clock("verify")
         missed = _missed(solved, gs, verified)
         if not missed:
@@ -218,7 +227,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # hundreds of MB): the edited literals as written, the output parsed
     # again; of the editor the rows read what it did per use only.
     actions = editor.actions
-    values = written = converted = out_files = done = confs = editor = None
+    values = written = converted = calls = out_files = done = confs = editor = None
     # The rows read the plan's uses and track only: the resolver's caches
     # go before the rows are made (a later use of them fails loudly).
     plan.resolver = None
@@ -255,14 +264,22 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     return FixResult(mode, task.name, tuple(modules), tuple(rows), tuple(notes), cells)
 
 
-def _verify_states(plan, solved, keys, out_files, solvers) -> tuple[dict, dict]:
-    """Transient: the written program (out_files: parsed again) at every
-    thermal state s, each rcTcJ/rcTcR(cold, dq) evaluated as the controller
-    does, verified on the robot deformed by s . profile. Per use the worst
-    state's residual; per state the worst use's."""
+def _verify_states(plan, solved, keys, out_files, solvers, calls=None,
+                   texts=None) -> tuple[dict, dict]:
+    """Transient: the written program (out_files: parsed again; or calls,
+    what relex_transient read of it) at every thermal state s, each
+    rcTcJ/rcTcR(cold, dq) evaluated as the controller does, verified on the
+    robot deformed by s . profile. Per use the worst state's residual; per
+    state the worst use's."""
+    if keys and calls is not None:
+        got = verify_states_relexed(plan, solved, keys, calls, solvers)
+        if got is not None:
+            return _worst(solved, solvers, *got)
+        # (A use the numbers read do not serve: the output parsed again.)
+        out_files = reparse(plan, texts)
+    states = verify_states(plan, solved, keys, out_files, solvers) if keys else {}
     worst: dict = {}
     by_state: dict = {}
-    states = verify_states(plan, solved, keys, out_files, solvers) if keys else {}
     for s in solvers:
         got = states.get(s, {})
         # A wrist-singular target's orientation is what the wrist can hold
@@ -274,6 +291,23 @@ def _verify_states(plan, solved, keys, out_files, solvers) -> tuple[dict, dict]:
             a, b = worst.get(k, (0.0, 0.0))
             worst[k] = (max(a, um), max(b, deg))
     return worst, by_state
+
+
+def _worst(solved, solvers, keys: list, um: np.ndarray, deg: np.ndarray) -> tuple[dict, dict]:
+    """_verify_states' figures of residuals as arrays (row n: state n's of
+    every use of keys), as it makes them of one dict per state: the same
+    comparisons (Python's max(a, b) is b where b > a, else a), each use's
+    wrist verdict once."""
+    left = solved.deformed.residual_rad.tolist()
+    row = solved.row
+    held = np.array([left[row[k]] / DEG <= VERIFY_DEG for k in keys], bool).reshape(-1)
+    by_state = {s: (max(um[n].tolist() or [0.0]), max(deg[n][held].tolist() or [0.0]))
+                for n, s in enumerate(solvers)}
+    worst_um, worst_deg = np.zeros(len(keys)), np.zeros(len(keys))
+    for n in range(len(solvers)):
+        worst_um = np.where(um[n] > worst_um, um[n], worst_um)
+        worst_deg = np.where(deg[n] > worst_deg, deg[n], worst_deg)
+    return dict(zip(keys, zip(worst_um.tolist(), worst_deg.tolist()))), by_state
 
 
 def _transient_notes(tr, state_errors: dict) -> list[str]:

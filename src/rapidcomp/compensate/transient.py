@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RapidcompError
+from ..kinematics.frames import row_dots
 from ..rapid.parse import parse_text
 from ..rewrite import numbers
 from ..rewrite.names import NameAllocator
@@ -330,13 +331,21 @@ def state_values(cold, dq, states, joint: bool) -> np.ndarray:
     computes them: float32 numbers and float32 arithmetic, cold + s * dq;
     rcTcR's quaternion normalized (NOrient; a spare slot no move reaches
     may hold [0,0,0,0]: left as it is)."""
-    s = f32(states).reshape(-1, 1)
-    out = (f32(cold) + f32(s * f32(dq))).astype(np.float32)
+    return states_values(np.reshape(cold, (1, -1)), np.reshape(dq, (1, -1)), states,
+                         joint)[:, 0]
+
+
+def states_values(cold, dq, states, joint: bool) -> np.ndarray:
+    """state_values of each row of cold and dq (n, 6 or 7) at each state:
+    (states, n, 6 or 7), the same arithmetic elementwise (a CAM program's
+    1e5 calls at once)."""
+    s = f32(states).reshape(-1, 1, 1)
+    out = (f32(cold)[None] + f32(s * f32(dq)[None])).astype(np.float32)
     if joint:
         return out
-    q = out[:, 3:].astype(float)
+    q = out[..., 3:].astype(float)
     # (Each row's norm as np.linalg.norm takes one vector's: its dot
-    # product, which a row-wise sum does not round alike.)
-    norm = np.array([math.sqrt(r.dot(r)) for r in q]).reshape(-1, 1)
-    out[:, 3:] = f32(np.divide(q, norm, out=q.copy(), where=norm > 0))
+    # product, which a row-wise sum does not round alike: row_dots.)
+    norm = np.sqrt(row_dots(q.reshape(-1, 4))).reshape(q.shape[:-1] + (1,))
+    out[..., 3:] = f32(np.divide(q, norm, out=q.copy(), where=norm > 0))
     return out

@@ -35,7 +35,8 @@ from ..rapid.values import (JOINTTARGET_FRAME, NUM_MAX, ROBTARGET_FRAME, DecodeI
 from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
-from .targets import MAX_JOINT_DEG, Resolver, Written
+from .targets import MAX_JOINT_DEG, Resolver, Unresolved, Written
+from .transient import FUNC_R, states_values
 
 # Literals decoded at once by relex (their field texts alive together).
 RELEX_BLOCK = 8192
@@ -259,6 +260,186 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                      np.concatenate(rows) if rows else np.empty((0, 6)))
 
 
+def relex_transient(plan: Plan, calls: dict, file_edits: dict,
+                    texts: dict[int, str]) -> "Calls | None":
+    """relex_absj for a transient output whose every edit turns a
+    robtarget move's target into rcTcR(<its target as written>, <dq>)
+    (Editor.calls: use key -> (use, the target's text, the new pose
+    declaration's name or None, the pose literal)): each such statement
+    must be the input's with its targets so replaced, character for
+    character, after no letter, digit or '_' (a call for a name or an
+    aggregate, nothing joined to a word before it); each new declaration a
+    one-line CONST pose, of the literal meant, that the move sees: in its
+    routine or module, or in any module when neither LOCAL nor in a
+    routine; each inline pose literal an aggregate of decimal numbers.
+    Returns each use's cold value (its robtarget's numbers, as the output
+    holds them: its text is the input's) and correction (the pose literal
+    as the parser decodes it), a Calls, or None where anything differs
+    (the output is then parsed again)."""
+    eng, build = engine(), NodeBuilder()
+    by_file: dict = {}
+    for key in calls:
+        by_file.setdefault(key[0], []).append(key)
+    # The new declarations of every edited file, by name (a move may name
+    # one of another module's: its target's home).
+    found: dict = {}
+    decls: dict = {}
+    for fi in file_edits:
+        es, shift = _shifts(file_edits[fi])
+        wide: set = set()
+        declared = _declared(eng, build, es, shift, texts[fi], plan.files[fi], "pose",
+                             _pose_rows, 7, wide)
+        if declared is None:
+            return None
+        names, scopes, aggs, rows = declared
+        if fi not in by_file and (es.starts != es.ends).any():
+            return None                   # (an edit of no statement read here)
+        decls[fi] = (scopes.tolist(), aggs.tolist(), rows, wide)
+        for name, k in names.items():
+            if found.setdefault(name, (fi, k)) != (fi, k):
+                return None               # (one name in two files: not as meant)
+    keys: list = []
+    colds: list = []
+    dqs: list = []
+    for fi, file_keys in by_file.items():
+        es, shift = _shifts(file_edits.get(fi, []))
+        text, src = texts[fi], plan.files[fi].source.text
+        # Each statement as meant: the input's, each of its targets replaced
+        # (a MoveC has two; a move in a loop is one statement of several
+        # uses: the same replacement).
+        items = []
+        for n, key in enumerate(file_keys):
+            u = calls[key][0]
+            if u.kind != "robtarget" or type(u.source.record) is not RobTarget:
+                return None
+            ref = u.source.ref.span
+            before = src[ref.start - 1:ref.start]
+            if before.isalnum() or before == "_":
+                return None
+            items.append((u.motion.span.start, u.motion.span.end, ref.start, ref.end, n))
+        items.sort()
+        # (Statement by statement: its span and its targets' (start, end, the
+        # use whose replacement goes there).)
+        statements: list = []
+        edited = 0
+        for a, b, x, y, n in items:
+            if not statements or statements[-1][0] != (a, b):
+                statements.append(((a, b), []))
+            targets = statements[-1][1]
+            if targets and targets[-1][:2] == (x, y):
+                if _call_text(calls[file_keys[n]]) != _call_text(calls[file_keys[targets[-1][2]]]):
+                    return None               # (one target, two replacements)
+                continue
+            if x < (targets[-1][1] if targets else a) or y > b:
+                return None
+            targets.append((x, y, n))
+            edited += 1
+        items = None
+        # (Every other edit is an insert: the declarations read above.)
+        if np.count_nonzero(es.starts != es.ends) != edited:
+            return None
+        # The output's texts compared with those meant a block at a time
+        # (not 1e5 of each alive at once).
+        for first in range(0, len(statements), RELEX_BLOCK):
+            block = statements[first:first + RELEX_BLOCK]
+            spans = np.array([span for span, _ in block], np.int64).reshape(-1, 2)
+            moved = (spans + shift[np.searchsorted(es.ends, spans, "right")]).tolist()
+            want = []
+            for (a, b), targets in block:
+                parts, at = [], a
+                for x, y, n in targets:
+                    parts += [src[at:x], _call_text(calls[file_keys[n]])]
+                    at = y
+                parts.append(src[at:b])
+                want.append("".join(parts))
+            if [text[a:b] for a, b in moved] != want:
+                return None
+        statements = None
+        # Each correction: a new declaration's the move sees, of the literal
+        # meant, or an inline literal.
+        rows = np.empty((len(file_keys), 7))
+        inline = []
+        for n, key in enumerate(file_keys):
+            u, _, name, literal = calls[key]
+            if name is None:
+                inline.append(n)
+                continue
+            hit = found.get(name.lower())
+            if hit is None:
+                return None
+            dfi, k = hit
+            scope, agg, declared_rows, wide = decls[dfi]
+            if not (k in wide or (dfi == fi and scope[2 * k] <= u.motion.span.start
+                                  and u.motion.span.end <= scope[2 * k + 1])):
+                return None
+            x = agg[2 * k]
+            if agg[2 * k + 1] - x != len(literal) or not texts[dfi].startswith(literal, x):
+                return None
+            if declared_rows is None:
+                got = _pose_rows([literal])
+                if got is None or not _plain_numaggs([literal]):
+                    return None
+                rows[n] = got[0]
+            else:
+                rows[n] = declared_rows[k]
+        if inline:
+            lits = [calls[file_keys[n]][3] for n in inline]
+            got = _pose_rows(lits)
+            if got is None or not _plain_numaggs(lits):
+                return None
+            rows[inline] = got
+        keys += file_keys
+        colds.append(np.array([calls[key][0].source.record.values for key in file_keys],
+                              float).reshape(-1, 17))
+        dqs.append(rows)
+    if not keys:
+        return None
+    return Calls(dict(zip(keys, range(len(keys)))), np.concatenate(colds), np.concatenate(dqs))
+
+
+def _call_text(call: tuple) -> str:
+    """rcTcR(<cold>, <dq>) of an Editor.calls entry, as the editor wrote it."""
+    _, cold, name, literal = call
+    return f"{FUNC_R}({cold}, {name if name is not None else literal})"
+
+
+class Calls:
+    """What relex_transient read of each rcTcR(cold, dq), by use key: rows
+    of two arrays, the cold robtarget's 17 numbers and the correction's 7
+    (position, quaternion RAPID order)."""
+
+    def __init__(self, rows: dict, cold: np.ndarray, dq: np.ndarray):
+        self.rows, self.cold, self.dq = rows, cold, dq
+
+
+# A pose literal written plainly (Editor._pose_literal).
+_POSE_FRAME = "[[%s,%s,%s],[%s,%s,%s,%s]]"
+
+
+def _pose_rows(lits: list[str]) -> np.ndarray | None:
+    """decode("pose", literal)'s position and quaternion of each literal,
+    as rows (n, 7), when every one is written in its plain frame (no
+    whitespace) with numbers float() reads within a num's range (as
+    _joint_rows reads jointtargets); else None."""
+    n = len(lits)
+    if not n:
+        return None
+    joined = ",".join(lits)
+    fields = frame_fields(joined)
+    if (len(fields) != 7 * n or joined != ",".join([_POSE_FRAME] * n) % tuple(fields)
+            or not np.array_equal(
+                np.fromiter(map(len, fields), np.int64, 7 * n).reshape(n, 7).sum(axis=1)
+                + len(_POSE_FRAME % (("",) * 7)), np.fromiter(map(len, lits), np.int64, n))):
+        return None
+    try:
+        values = np.fromiter(map(float, fields), float, 7 * n)
+    except ValueError:
+        return None
+    if not (np.abs(values) <= NUM_MAX).all():
+        return None
+    return values.reshape(n, 7)
+
+
 class Converted:
     """The joints of each move turned into MoveAbsJ as relex_absj read them,
     by use key: rows of one array (a CAM program has 1e5; no tuple of six
@@ -345,14 +526,16 @@ _PLAIN_DECL = re.compile(r"[ \t\f\r\n\ufeff]*(?:" + DECL_HEAD.pattern + r")(\[[^
                          re.IGNORECASE)
 
 
-def _plain_declared(eng, pieces: list[str]) -> tuple[list, np.ndarray] | None:
+def _plain_declared(eng, pieces: list[str], rows_of=None,
+                    width: int = 6) -> tuple[list, np.ndarray] | None:
     """What _declared's lexing reads in each inserted text, when every one
     is one-line declarations written plainly (_PLAIN_DECL, their words no
     reserved ones, their aggregates plain jointtargets of decimal numbers):
     per text, (storage, type, name, start and end of its aggregate in the
-    text) of each declaration; and the joints of every declaration, in
-    that order, as _joint_rows reads them. None: the texts are lexed one
-    by one."""
+    text, LOCAL or None) of each declaration; and the joints of every declaration, in
+    that order, as _joint_rows reads them (rows_of: another such reader,
+    of `width` numbers). None: the texts are lexed one by one."""
+    rows_of = rows_of or _joint_rows
     out = []
     aggs = []
     reserved = eng.reserved
@@ -363,16 +546,17 @@ def _plain_declared(eng, pieces: list[str]) -> tuple[list, np.ndarray] | None:
             m = _PLAIN_DECL.match(piece, pos)
             if m is None or m.group(3).upper() in reserved or m.group(4).upper() in reserved:
                 return None
-            found.append((m.group(2).upper(), m.group(3), m.group(4), m.start(5), m.end(5)))
+            found.append((m.group(2).upper(), m.group(3), m.group(4), m.start(5), m.end(5),
+                          m.group(1)))
             aggs.append(m.group(5))
             pos = m.end()
         out.append(found)
     # (A block at a time: their field texts are not all alive at once;
     # every other block's read by the job's helper, side.py.)
-    joints = np.empty((len(aggs), 6))
+    joints = np.empty((len(aggs), width))
     ats = range(0, len(aggs), RELEX_BLOCK)
-    for at, rows in zip(ats, side.alternate(_joint_rows, ((aggs[at:at + RELEX_BLOCK],)
-                                                          for at in ats))):
+    for at, rows in zip(ats, side.alternate(rows_of, ((aggs[at:at + RELEX_BLOCK],)
+                                                      for at in ats))):
         block = aggs[at:at + RELEX_BLOCK]
         if not (rows is not None and _plain_numaggs(block)):
             return None
@@ -381,7 +565,9 @@ def _plain_declared(eng, pieces: list[str]) -> tuple[list, np.ndarray] | None:
 
 
 def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
-              pf: ParsedFile) -> tuple[dict, array, array, np.ndarray | None] | None:
+              pf: ParsedFile, type_name: str = "jointtarget", rows_of=None,
+              width: int = 6, wide: set | None = None
+              ) -> tuple[dict, array, array, np.ndarray | None] | None:
     """The new declarations of a file read again where the output holds
     them: (lower-case name -> k; the (start, end) in the input of its scope
     (its routine's, else its module's) at [2k, 2k + 1]; the (start, end) of
@@ -389,11 +575,13 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     in arrays, not a node and a tuple each; where every one is written
     plainly (_plain_declared), the joints of each at row k, else None).
     None where an inserted text
-    is not CONST jointtarget declarations each a one-line statement, or is
+    is not CONST `type_name` declarations (jointtarget; a transient output's
+    pose, rows_of _pose_rows of width 7) each a one-line statement, or is
     not where a declaration may follow: right after a declaration, or at
     the end of a line that ends with one (and a comment), as the editor
     puts them (Editor._anchor; after a line that goes on with a statement,
-    the output would not parse)."""
+    the output would not parse). wide, when given, receives the k of
+    each declaration other modules see (not LOCAL, not in a routine)."""
     out: dict = {}
     scopes, aggs = array("q"), array("q")
     inserts = np.flatnonzero(es.starts == es.ends)
@@ -420,10 +608,11 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     in_scope = _scopes(pf, at_in)
     if in_scope is None:
         return None
+    modules = {(m.node.span.start, m.node.span.end) for m in pf.modules}
     places = list(zip(in_scope, at_out.tolist(),
                       [text[a:a + n] for a, n in zip(at_out.tolist(),
                                                      es.lengths()[inserts].tolist())]))
-    plain = _plain_declared(eng, [piece for _, _, piece in places])
+    plain = _plain_declared(eng, [piece for _, _, piece in places], rows_of, width)
     joints = None
     if plain is not None:
         plain, joints = plain
@@ -431,14 +620,17 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
         # One declaration per insert (a CAM program's 5e4): as the loop
         # below reads them, at once.
         decls = [decls[0] for decls in plain]
-        if not all(storage == "CONST" and type_name.lower() == "jointtarget"
-                   for storage, type_name, _, _, _ in decls):
+        if not all(storage == "CONST" and declared.lower() == type_name
+                   for storage, declared, _, _, _, _ in decls):
             return None
         # (A later one of the same name wins, as a dict's last value.)
-        out = {name.lower(): k for k, (_, _, name, _, _) in enumerate(decls)}
+        out = {name.lower(): k for k, (_, _, name, _, _, _) in enumerate(decls)}
         scopes.extend([x for scope, _, _ in places for x in scope])
-        aggs.extend([x for (_, a, _), (_, _, _, x0, y0) in zip(places, decls)
+        aggs.extend([x for (_, a, _), (_, _, _, x0, y0, _) in zip(places, decls)
                      for x in (a + x0, a + y0)])
+        if wide is not None:
+            wide.update(k for k, ((scope, _, _), decl) in enumerate(zip(places, decls))
+                        if decl[5] is None and scope in modules)
         return out, scopes, aggs, joints
     for n, (scope, a, piece) in enumerate(places):
         if plain is not None:
@@ -454,11 +646,13 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
                 if node.dims or type(node.init) is not A.NumAgg:
                     return None
                 decls.append((node.storage, node.type_name, node.name,
-                              node.init.span.start, node.init.span.end))
-        for storage, type_name, name, x, y in decls:
-            if not (storage == "CONST" and type_name.lower() == "jointtarget"):
+                              node.init.span.start, node.init.span.end, node.scope))
+        for storage, declared, name, x, y, local in decls:
+            if not (storage == "CONST" and declared.lower() == type_name):
                 return None
             # (A later one of the same name wins, as a dict's last value.)
+            if wide is not None and local is None and scope in modules:
+                wide.add(len(scopes) // 2)
             out[name.lower()] = len(scopes) // 2
             scopes.extend(scope)
             aggs.extend((a + x, a + y))
@@ -662,6 +856,59 @@ def verify_states(plan: Plan, solved: Solved, keys: list, out_files: dict[int, P
     return out
 
 
+def verify_states_relexed(plan: Plan, solved: Solved, keys: list, calls: Calls,
+                          solvers: dict) -> tuple[list, np.ndarray, np.ndarray] | None:
+    """verify_states of a transient output relex_transient read (calls):
+    each use's rcTcR(cold, dq) at every state from those numbers, as
+    arrays (Resolver.state_many's arithmetic: the same as resolving each
+    call on the output parsed again, bit for bit), through the tool and
+    work object the input's move names (the output's: the input's text).
+    Returns (the use keys, um and deg (states, uses)): row n of each is
+    state n's residuals, as verify_states gives them for those keys. None
+    where a use is not one of calls, its tool or work object does not
+    resolve, a value would be stopped or noted by a check, or with a track
+    (the caller parses the output again and verifies it so)."""
+    res = _resolver(plan, {}, None, tuple(solvers))
+    if res.track:
+        return None
+    rows = sorted(solved.row[k] for k in keys)
+    uses = [solved.uses[i] for i in rows]
+    at = [calls.rows.get(u.key) for u in uses]
+    if None in at:
+        return None
+    tools, wobjs = [], []
+    for u in uses:
+        tool, wobj = res._tool_wobj(u.motion, u.module)
+        if type(tool) is Unresolved or type(wobj) is Unresolved:
+            return None
+        tools.append(tool[1])
+        wobjs.append(wobj[1])
+    um, deg = np.empty((len(solvers), len(rows))), np.empty((len(solvers), len(rows)))
+    # (VERIFY_BLOCK uses at a time, as verify() checks them: their arrays
+    # alive for one block.)
+    for first in range(0, len(rows), VERIFY_BLOCK):
+        sl = slice(first, first + VERIFY_BLOCK)
+        block, picked = rows[sl], at[sl]
+        cold = calls.cold[picked]
+        by_state = states_values(cold[:, :7], calls.dq[picked], tuple(solvers), False)
+        values = np.empty((len(block), 17))
+        values[:, 7:] = cold[:, 7:]
+        everyone = list(range(len(block)))
+        # (What every state's check shares, as _residuals makes it of all
+        # robtargets.)
+        closest = _closest(solved, block)
+        R_want, p_want, tcp = solved.R[block], solved.p[block], tcp_of(uses[sl])
+        for n, solver in enumerate(solvers.values()):
+            values[:, :7] = by_state[n]
+            done, R, p, conf = res._flanges(everyone, values, tools[sl], wobjs[sl])
+            if len(done) != len(block):
+                return None
+            q = _ideal_joints(solved, solver, block, R, p, conf, *closest)
+            err_p, err_r = solver.deformed_pose_error(q * DEG, R_want, p_want, tcp)
+            um[n, sl], deg[n, sl] = err_p * 1000, err_r / DEG
+    return [u.key for u in uses], um, deg
+
+
 def _resolver(plan: Plan, out_files: dict, written: Written | None,
               states: tuple = ()) -> Resolver:
     """The resolver of the output (float32, as the controller stores
@@ -737,24 +984,8 @@ def _residuals(solved: Solved, solver: Solver, rows: list, many_rows: list, many
     if rob:
         R_all, p_all, conf_all = (np.concatenate([b[n] for b in many]) for n in range(3))
         order = [at[i] for i in rob]
-        R, p, conf = R_all[order], p_all[order], conf_all[order]
-        by_conf = solver.solve_nominal(R, p, conf).q_deg
-        # Supervision off (and circle points): the solution closest to the
-        # joints the previous move's nominal solution has (its compensated
-        # joints are within the joint-change bound of them: no other
-        # solution is that close).
-        closest = [n for n, i in enumerate(rob) if solved.picks[i].kind == "closest"]
-        got = by_conf
-        if closest:
-            sel = [rob[n] for n in closest]
-            prev = np.array([solved.picks[i].prev for i in sel])
-            got = by_conf.copy()
-            got[closest] = solver.closest(solver.candidates(R[closest], p[closest]), prev)
-        for n in np.flatnonzero(np.isnan(got).any(axis=1))[:1].tolist():
-            u = solved.uses[rob[n]]
-            raise InternalError(f"{u.file.source.display_path}:{u.line}: the ideal "
-                                "controller finds no solution for the written target of "
-                                f"{u.label}")
+        got = _ideal_joints(solved, solver, rob, R_all[order], p_all[order], conf_all[order],
+                            *_closest(solved, rob))
         qa = np.empty((len(rows), 6))
         place = {i: n for n, i in enumerate(rows)}
         qa[[place[i] for i in rob]] = got
@@ -764,9 +995,35 @@ def _residuals(solved: Solved, solver: Solver, rows: list, many_rows: list, many
         qa = np.array([q[i] for i in rows]).reshape(-1, 6)
     err_p, err_r = solver.deformed_pose_error(qa * DEG, solved.R[rows], solved.p[rows],
                                               tcp_of([solved.uses[i] for i in rows]))
-    out = {}
-    for n, i in enumerate(rows):
-        out[solved.uses[i].key] = (float(err_p[n]) * 1000, float(err_r[n]) / DEG)
-    return out
+    return dict(zip([solved.uses[i].key for i in rows],
+                    zip((err_p * 1000).tolist(), (err_r / DEG).tolist())))
+
+
+def _closest(solved: Solved, rob: list) -> tuple[list, np.ndarray | None]:
+    """Which of the robtargets of solved rows `rob` the controller moves to
+    by the solution closest to the previous move's (supervision off, and
+    circle points), by their place in rob, and those joints: the
+    previous move's nominal solution (its compensated joints are within
+    the joint-change bound of them: no other solution is that close)."""
+    picks = solved.picks
+    closest = [n for n, i in enumerate(rob) if picks[i].kind == "closest"]
+    return closest, (np.array([picks[rob[n]].prev for n in closest]) if closest else None)
+
+
+def _ideal_joints(solved: Solved, solver: Solver, rob: list, R, p, conf, closest: list,
+                  prev) -> np.ndarray:
+    """The joints the ideal controller gives the written robtargets (R, p,
+    conf) of solved rows `rob`: by their confdata, or (closest, prev:
+    _closest) the solution closest to the previous move's."""
+    got = solver.solve_nominal(R, p, conf).q_deg
+    if closest:
+        got = got.copy()
+        got[closest] = solver.closest(solver.candidates(R[closest], p[closest]), prev)
+    for n in np.flatnonzero(np.isnan(got).any(axis=1))[:1].tolist():
+        u = solved.uses[rob[n]]
+        raise InternalError(f"{u.file.source.display_path}:{u.line}: the ideal "
+                            "controller finds no solution for the written target of "
+                            f"{u.label}")
+    return got
 
 
