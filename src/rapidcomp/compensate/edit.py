@@ -538,10 +538,11 @@ class Editor:
             node, end = b, b.span.end
 
     def declare(self, g: Group, type_name: str, name: str, dims: str, value: str,
-                converted: bool = False) -> None:
-        """converted: the jointtarget of moves turned into MoveAbsJ."""
+                converted: bool = False, anchor: tuple | None = None) -> None:
+        """converted: the jointtarget of moves turned into MoveAbsJ; anchor:
+        _anchor(g), when the caller has it."""
         self.others = self.others or not converted
-        fi, end, nl, indent, in_routine = self._anchor(g)
+        fi, end, nl, indent, in_routine = anchor or self._anchor(g)
         scope = "" if in_routine or not g.local else "LOCAL "
         decl = f"{scope}CONST {type_name} {name}{dims}{self._assign(g, fi)}{value};"
         self.inserts.setdefault((fi, end), []).append(decl)
@@ -741,7 +742,9 @@ class Editor:
         the cold value; cold_name(stem, element) says) and the
         correction's, <cold>_dq or <stem>_dq. literals, when given,
         receives each element's correction literal (not of an array)."""
-        _, _, nl, indent, _ = self._anchor(g)
+        # (Where its declarations go, found once for all of them.)
+        anchor = self._anchor(g)
+        _, _, nl, indent, _ = anchor
         names: dict = {}
         items = [("array", None)] if g.array else [(k, k) for k in g.elements]
         for key, k in items:
@@ -752,14 +755,15 @@ class Editor:
             if g.array:
                 if cold is not None:
                     self.declare(g, cold_type, cold, _dims(g),
-                                 self._array_literal(g, nl, indent, cold_literal))
+                                 self._array_literal(g, nl, indent, cold_literal),
+                                 anchor=anchor)
                 self.declare(g, dq_type, dq, _dims(g),
-                             self._array_literal(g, nl, indent, dq_literal))
+                             self._array_literal(g, nl, indent, dq_literal), anchor=anchor)
             else:
                 if cold is not None:
-                    self.declare(g, cold_type, cold, "", cold_literal(g, k))
+                    self.declare(g, cold_type, cold, "", cold_literal(g, k), anchor=anchor)
                 literal = dq_literal(g, k)
-                self.declare(g, dq_type, dq, "", literal)
+                self.declare(g, dq_type, dq, "", literal, anchor=anchor)
                 if literals is not None:
                     literals[k] = literal
             names[key] = (cold, dq)
