@@ -786,7 +786,9 @@ class Editor:
                 self._to_absj(u, target)
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {target}"
             else:
-                self.edit(u.key[0], src.ref.span, target, f"{u.label} -> {func}")
+                # (One why for 1e5 edits: it names an edit only in an
+                # internal error.)
+                self.edit(u.key[0], src.ref.span, target, self._said(f"target -> {func}"))
                 self.actions[u.key] = f"{ref_text} -> {target}"
                 if literals is not None:
                     self.calls[u.key] = (u, cold_ref, dq, literals[src.element])
@@ -813,7 +815,7 @@ class Editor:
                 cold = cold_literal(g, k) if k in confs else u.file.text(u.source.ref)
                 dq = self._pose_literal(g, k)
                 target = f"{func}({cold}, {dq})"
-                self.edit(u.key[0], u.source.ref.span, target, f"{u.label} -> {func}")
+                self.edit(u.key[0], u.source.ref.span, target, self._said(f"target -> {func}"))
                 self.actions[u.key] = self._said(
                     f"inline robtarget -> {func}(written, correction)")
                 if plain:

@@ -227,7 +227,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # hundreds of MB): the edited literals as written, the output parsed
     # again; of the editor the rows read what it did per use only.
     actions = editor.actions
-    values = written = converted = calls = out_files = done = confs = editor = None
+    values = written = converted = calls = out_files = done = confs = editor = keys = None
     # The rows read the plan's uses and track only: the resolver's caches
     # go before the rows are made (a later use of them fails loudly).
     plan.resolver = None

@@ -272,10 +272,10 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
     one-line CONST pose, of the literal meant, that the move sees: in its
     routine or module, or in any module when neither LOCAL nor in a
     routine; each inline pose literal an aggregate of decimal numbers.
-    Returns each use's cold value (its robtarget's numbers, as the output
-    holds them: its text is the input's) and correction (the pose literal
-    as the parser decodes it), a Calls, or None where anything differs
-    (the output is then parsed again)."""
+    Returns each use's correction (the pose literal as the parser decodes
+    it; its cold value is its robtarget as the input holds it, which the
+    output holds as it was), a Calls, or None where anything differs (the
+    output is then parsed again)."""
     eng, build = engine(), NodeBuilder()
     by_file: dict = {}
     for key in calls:
@@ -299,62 +299,37 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
             if found.setdefault(name, (fi, k)) != (fi, k):
                 return None               # (one name in two files: not as meant)
     keys: list = []
-    colds: list = []
     dqs: list = []
     for fi, file_keys in by_file.items():
         es, shift = _shifts(file_edits.get(fi, []))
         text, src = texts[fi], plan.files[fi].source.text
         # Each statement as meant: the input's, each of its targets replaced
         # (a MoveC has two; a move in a loop is one statement of several
-        # uses: the same replacement).
-        items = []
-        for n, key in enumerate(file_keys):
-            u = calls[key][0]
+        # uses: the same replacement). Its uses' spans as the rows of one
+        # array (statement, target, use), sorted: read a block at a time.
+        uses = [calls[key][0] for key in file_keys]
+        for u in uses:
             if u.kind != "robtarget" or type(u.source.record) is not RobTarget:
                 return None
             ref = u.source.ref.span
             before = src[ref.start - 1:ref.start]
             if before.isalnum() or before == "_":
                 return None
-            items.append((u.motion.span.start, u.motion.span.end, ref.start, ref.end, n))
-        items.sort()
-        # (Statement by statement: its span and its targets' (start, end, the
-        # use whose replacement goes there).)
-        statements: list = []
-        edited = 0
-        for a, b, x, y, n in items:
-            if not statements or statements[-1][0] != (a, b):
-                statements.append(((a, b), []))
-            targets = statements[-1][1]
-            if targets and targets[-1][:2] == (x, y):
-                if _call_text(calls[file_keys[n]]) != _call_text(calls[file_keys[targets[-1][2]]]):
-                    return None               # (one target, two replacements)
-                continue
-            if x < (targets[-1][1] if targets else a) or y > b:
-                return None
-            targets.append((x, y, n))
-            edited += 1
-        items = None
+        # (Made as an array from the start: no list of 5e5 ints.)
+        cols = np.fromiter((v for n, u in enumerate(uses) for v in (
+            u.motion.span.start, u.motion.span.end, u.source.ref.span.start,
+            u.source.ref.span.end, n)), np.int64, 5 * len(uses)).reshape(-1, 5)
+        uses = None
+        cols = cols[np.lexsort(cols.T[::-1])]
+        checked = _Statements(text, src, es, shift)
+        for first in range(0, len(cols), RELEX_BLOCK):
+            for a, b, x, y, n in cols[first:first + RELEX_BLOCK].tolist():
+                if not checked.add(a, b, x, y, _call_text(calls[file_keys[n]])):
+                    return None
         # (Every other edit is an insert: the declarations read above.)
-        if np.count_nonzero(es.starts != es.ends) != edited:
+        if not checked.done() or np.count_nonzero(es.starts != es.ends) != checked.edited:
             return None
-        # The output's texts compared with those meant a block at a time
-        # (not 1e5 of each alive at once).
-        for first in range(0, len(statements), RELEX_BLOCK):
-            block = statements[first:first + RELEX_BLOCK]
-            spans = np.array([span for span, _ in block], np.int64).reshape(-1, 2)
-            moved = (spans + shift[np.searchsorted(es.ends, spans, "right")]).tolist()
-            want = []
-            for (a, b), targets in block:
-                parts, at = [], a
-                for x, y, n in targets:
-                    parts += [src[at:x], _call_text(calls[file_keys[n]])]
-                    at = y
-                parts.append(src[at:b])
-                want.append("".join(parts))
-            if [text[a:b] for a, b in moved] != want:
-                return None
-        statements = None
+        cols = checked = None
         # Each correction: a new declaration's the move sees, of the literal
         # meant, or an inline literal.
         rows = np.empty((len(file_keys), 7))
@@ -389,12 +364,63 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
                 return None
             rows[inline] = got
         keys += file_keys
-        colds.append(np.array([calls[key][0].source.record.values for key in file_keys],
-                              float).reshape(-1, 17))
         dqs.append(rows)
     if not keys:
         return None
-    return Calls(dict(zip(keys, range(len(keys)))), np.concatenate(colds), np.concatenate(dqs))
+    return Calls(dict(zip(keys, range(len(keys)))), np.concatenate(dqs))
+
+
+class _Statements:
+    """Edited statements of a file, checked against the output a block at
+    a time (not 1e5 texts of each alive at once): add() each target's
+    replacement in order of statement and target, then done(). Each
+    statement is the input's text with its targets replaced; a target met
+    again (a statement of several uses) must have the same replacement.
+    False where anything differs. edited: the targets replaced."""
+
+    def __init__(self, text: str, src: str, es: EditColumns, shift: np.ndarray):
+        self.text, self.src, self.es, self.shift = text, src, es, shift
+        self.spans: list = []
+        self.want: list = []
+        self.edited = 0
+        self._at = None              # (start, end) of the statement being built
+        self._parts: list = []
+        self._from = 0               # where the input's text goes on in it
+        self._last = None            # its last target's span
+
+    def add(self, a: int, b: int, x: int, y: int, rep: str) -> bool:
+        if self._at != (a, b):
+            if self._at is not None and not self._close():
+                return False
+            self._at, self._parts, self._from, self._last = (a, b), [], a, None
+        if (x, y) == self._last:
+            return rep == self._parts[-1]          # (one target, one replacement)
+        if x < self._from or y > b:
+            return False
+        self._parts += [self.src[self._from:x], rep]
+        self._from, self._last = y, (x, y)
+        self.edited += 1
+        return True
+
+    def _close(self) -> bool:
+        a, b = self._at
+        self._parts.append(self.src[self._from:b])
+        self.spans.append((a, b))
+        self.want.append("".join(self._parts))
+        return len(self.spans) < RELEX_BLOCK or self._compare()
+
+    def _compare(self) -> bool:
+        moved = np.array(self.spans, np.int64).reshape(-1, 2)
+        moved = (moved + self.shift[np.searchsorted(self.es.ends, moved, "right")]).tolist()
+        same = [self.text[x:y] for x, y in moved] == self.want
+        self.spans, self.want = [], []
+        return same
+
+    def done(self) -> bool:
+        if self._at is not None and not self._close():
+            return False
+        self._at = None
+        return self._compare() if self.spans else True
 
 
 def _call_text(call: tuple) -> str:
@@ -404,12 +430,13 @@ def _call_text(call: tuple) -> str:
 
 
 class Calls:
-    """What relex_transient read of each rcTcR(cold, dq), by use key: rows
-    of two arrays, the cold robtarget's 17 numbers and the correction's 7
-    (position, quaternion RAPID order)."""
+    """What relex_transient read of each rcTcR(cold, dq), by use key: its
+    row of one array, the correction's 7 numbers (position, quaternion
+    RAPID order). The cold value is the use's robtarget (its text is the
+    input's)."""
 
-    def __init__(self, rows: dict, cold: np.ndarray, dq: np.ndarray):
-        self.rows, self.cold, self.dq = rows, cold, dq
+    def __init__(self, rows: dict, dq: np.ndarray):
+        self.rows, self.dq = rows, dq
 
 
 # A pose literal written plainly (Editor._pose_literal).
@@ -889,7 +916,7 @@ def verify_states_relexed(plan: Plan, solved: Solved, keys: list, calls: Calls,
     for first in range(0, len(rows), VERIFY_BLOCK):
         sl = slice(first, first + VERIFY_BLOCK)
         block, picked = rows[sl], at[sl]
-        cold = calls.cold[picked]
+        cold = np.array([u.source.record.values for u in uses[sl]], float).reshape(-1, 17)
         by_state = states_values(cold[:, :7], calls.dq[picked], tuple(solvers), False)
         values = np.empty((len(block), 17))
         values[:, 7:] = cold[:, 7:]
