@@ -58,6 +58,34 @@ def test_declarations_and_a_comment_on_the_line_new_ones_after_it(solver, tail):
     assert {d.name for d in module.declarations if d.routine is None} >= {"jt_a1", "jt_a2"}
 
 
+@pytest.mark.parametrize("tail", ["", " ! both"])
+@pytest.mark.parametrize("transient", [False, True])
+def test_a_declaration_of_the_line_going_on_onto_the_next(solver, tail, transient):
+    """The line's last declaration goes on onto the next line: the new ones
+    go after the line where it ends (not at the end of the first line,
+    inside its literal: the output did not parse)."""
+    a1, a2 = _lits(2)
+    head, rest = a2.split("],", 1)
+    line = (f"  CONST robtarget a1:={a1}; CONST robtarget a2:={head}],\n"
+            f"    {rest};{tail}\n")
+    text = HEAD + line + "  PROC main()\n" + MOVES + "  ENDPROC\nENDMODULE\n"
+    if transient:
+        from rapidcomp.compensate.load import load_state_solvers
+        from rapidcomp.compensate.transient import Transient
+        warm = str(ROOT / "fixtures" / "warm.csv")
+        r = F.fix(Task("m.mod", (parse_text(text, "m.mod"),)), solver, "auto",
+                  transient=(Transient(45.0, 45.0, 2.0), load_state_solvers(warm, None, False)))
+        assert r.failed == 0
+        out, kind = r.modules[0].text, "pose"
+        names = ("a1_dq", "a2_dq")
+    else:
+        out, _ = _out(solver, text)
+        kind, names = "jointtarget", ("jt_a1", "jt_a2")
+    assert line + f"  LOCAL CONST {kind} {names[0]}:=" in out
+    module = parse_text(out, "out.mod").modules[0]
+    assert {d.name for d in module.declarations if d.routine is None} >= set(names)
+
+
 def test_a_line_going_on_with_a_routine(solver):
     a1, a2 = _lits(2)
     text = (HEAD + f"  CONST robtarget a2:={a2};\n  LOCAL CONST robtarget a1:={a1}; PROC main()\n"

@@ -513,6 +513,10 @@ class Editor:
             # in a routine; right after the line's declarations, the rest of
             # the line follows the new one.)
             after = self._line_decls_end(fi, module, node)
+            if after > end:
+                # (A declaration of the line goes on onto the next lines: the
+                # line that matters is the one where the last of them ends.)
+                end, nl = _line_end(text, after)
             rest = text[after:end].lstrip(" \t")
             if rest and not rest.startswith("!"):
                 end = after
