@@ -278,14 +278,16 @@ def _plain_task() -> Task:
 def test_the_output_read_again_gives_what_it_parsed_again_gives(name, mode, solvers,
                                                                 monkeypatch):
     """Where relex_transient reads the output (every target an rcTcR of
-    the robtarget as written), each use's residual at every state is what
+    the robtarget as written, an rcTcJ of a MoveAbsJ's jointtarget or of a
+    move turned into MoveAbsJ), each use's residual at every state is what
     verify_states gives on the output parsed again, bit for bit; and so the
-    same output and report. It reads the CAM program, auto, and the plain
-    one, in both modes (auto keeps their MoveL)."""
+    same output and report. It reads the CAM programs, the RoboDK one and
+    the plain one in both modes; the others hold arrays in FOR loops or a
+    target whose cold value needs other confdata."""
     task = _plain_task() if name == "plain" else _task(name)
     fast, fast_seen = _fix(task, solvers, mode, monkeypatch, False, relexed=True)
     slow, slow_seen = _fix(task, solvers, mode, monkeypatch, False)
-    if (name, mode) in (("cam", "auto"), ("plain", "auto")):
+    if name in ("cam", "plain", "rapid/robodk.mod", "rapid/cam_confoff.mod"):
         assert len(fast_seen) == 1
     if fast_seen:
         assert len(slow_seen) == 1
@@ -309,7 +311,7 @@ def test_the_plain_program_is_written_with_every_kind_of_rctcr(solvers, monkeypa
         "\r\n", "")
 
 
-def _captured(solvers, monkeypatch):
+def _captured(solvers, monkeypatch, mode: str = "auto"):
     """The arguments relex_transient was called with on the plain program,
     and what it returned."""
     got = []
@@ -320,7 +322,7 @@ def _captured(solvers, monkeypatch):
         return got[-1][1]
     monkeypatch.setattr(F, "relex_transient", spy)
     solver, state_solvers = solvers
-    F.fix(_plain_task(), solver, "auto", transient=(Transient(45.0, 45.0, 2.0), state_solvers))
+    F.fix(_plain_task(), solver, mode, transient=(Transient(45.0, 45.0, 2.0), state_solvers))
     monkeypatch.undo()
     assert len(got) == 1 and got[0][1] is not None
     return got[0][0]
@@ -340,7 +342,27 @@ def test_an_output_not_as_meant_is_not_read_again(old, new, solvers, monkeypatch
     """relex_transient reads nothing of an output that differs from what
     the editor meant (the command then parses it again): each change here
     to the plain program's written text."""
-    plan, calls, file_edits, texts = _captured(solvers, monkeypatch)
+    _not_read(old, new, solvers, monkeypatch, "auto")
+
+
+@pytest.mark.parametrize("old, new", [
+    ("MoveAbsJ rcTcJ(jt_pA, jt_pA_dq)", "MoveJ rcTcJ(jt_pA, jt_pA_dq)"),   # another instruction
+    ("CONST jointtarget jt_pR:=[[", "CONST jointtarget jt_pR:=[[1"),    # another cold value
+    ("jointtarget jt_pA_dq:=", "pose jt_pA_dq:="),                     # another type
+    ("MoveAbsJ rcTcJ([[6", "MoveAbsJ rcTcJ([[7"),                      # another inline cold
+    ("jt_pR_dq:=[[-0.", "jt_pR_dq:=[[+0."),                            # another correction
+    ("MoveAbsJ rcTcJ(jt_pA, jt_pA_dq)", "MoveAbsJ rcTcR(jt_pA, jt_pA_dq)"),  # another function
+])
+def test_a_move_turned_into_moveabsj_not_as_meant_is_not_read_again(old, new, solvers,
+                                                                     monkeypatch):
+    """The same of the plain program written with --emit absj (its moves
+    but the other module's turned into MoveAbsJ on rcTcJ of new cold
+    values, declared and inline)."""
+    _not_read(old, new, solvers, monkeypatch, "absj")
+
+
+def _not_read(old: str, new: str, solvers, monkeypatch, mode: str) -> None:
+    plan, calls, file_edits, texts = _captured(solvers, monkeypatch, mode)
     fi = 0 if old in texts[0] else 1
     assert texts[fi].count(old) >= 1, old
     changed = dict(texts)

@@ -444,12 +444,14 @@ class Editor:
         # kind (the output is parsed again).
         self.converted: dict = {}
         self.others = False
-        # Transient: each robtarget move whose target became rcTcR(<cold as
-        # written>, <dq>): use key -> (the use, the cold value's text as
-        # written, the correction's new name or None, its literal); the
+        # Transient: each move whose target became rcTcR/rcTcJ(<cold>, <dq>):
+        # use key -> (the use, the cold value's text as written, the
+        # correction's new name or None, its literal, the function, the
+        # span replaced, the move's new instruction name (MoveAbsJ) or None,
+        # the cold value's new literal or None (its target as written)); the
         # output is checked on them by reading those statements and
         # declarations again (verify.relex_transient). calls_other: a
-        # transient edit of another kind (rcTcJ, arrays, Offs, a cold copy
+        # transient edit of another kind (arrays, Offs/RelTool, a cold copy
         # with other confdata: the output is parsed again).
         self.calls: dict = {}
         self.calls_other = False
@@ -717,26 +719,38 @@ class Editor:
                 return
             self._apply_transient_rob(g, FUNC_R, confs)
             return
-        self.calls_other = True
+        # (A MoveAbsJ's jointtarget as written, or a move turned into one,
+        # not an array nor an Offs/RelTool: self.calls.)
+        plain = not g.array and g.src.call is None
+        self.calls_other = self.calls_other or not plain
         if g.placement == "inline" or g.decl is None:
             for u in g.uses:
                 k = u.source.element
                 cold = (u.file.text(u.source.expr) if g.mode == "joint"
                         else self._cold_literal(g, k))
-                target = f"{FUNC_J}({cold}, {self._dq_literal(g, k)})"
+                dq = self._dq_literal(g, k)
+                target = f"{FUNC_J}({cold}, {dq})"
                 if g.mode == "joint":
                     self.edit(u.key[0], u.source.expr.span, target, f"{u.label} -> {FUNC_J}")
                     self.actions[u.key] = f"inline jointtarget -> {FUNC_J}(cold, correction)"
+                    if plain:
+                        self.calls[u.key] = (u, cold, None, dq, FUNC_J, u.source.expr.span,
+                                             None, None)
                 else:
-                    self._to_absj(u, target)
+                    called = self._to_absj(u, target)
                     self.actions[u.key] = (f"{u.motion.instruction} -> MoveAbsJ "
                                            f"{FUNC_J}(cold, correction)")
+                    if plain:
+                        self.calls[u.key] = (u, cold, None, dq, FUNC_J, u.source.expr.span,
+                                             called, cold)
             return
         absj = g.mode == "absj"
+        literals: dict | None = {} if plain else None
         names = self._declare_transient(
             g, "jointtarget", (lambda s, k: "jt_" + s) if absj else (lambda s, k: None),
-            self._cold_literal, "jointtarget", self._dq_literal, dq_after_cold=True)
-        self._use_transient(g, names, FUNC_J, absj)
+            self._cold_literal, "jointtarget", self._dq_literal, dq_after_cold=True,
+            literals=literals)
+        self._use_transient(g, names, FUNC_J, absj, literals)
 
     def _declare_transient(self, g: Group, cold_type: str, cold_name, cold_literal,
                            dq_type: str, dq_literal, dq_after_cold: bool,
@@ -745,7 +759,8 @@ class Editor:
         "array") the cold value's name (None: the program's own data is
         the cold value; cold_name(stem, element) says) and the
         correction's, <cold>_dq or <stem>_dq. literals, when given,
-        receives each element's correction literal (not of an array)."""
+        receives each element's correction literal and its new cold value's
+        (or None) (not of an array)."""
         # (Where its declarations go, found once for all of them.)
         anchor = self._anchor(g)
         _, _, nl, indent, _ = anchor
@@ -764,12 +779,14 @@ class Editor:
                 self.declare(g, dq_type, dq, _dims(g),
                              self._array_literal(g, nl, indent, dq_literal), anchor=anchor)
             else:
+                cold_text = None
                 if cold is not None:
-                    self.declare(g, cold_type, cold, "", cold_literal(g, k), anchor=anchor)
+                    cold_text = cold_literal(g, k)
+                    self.declare(g, cold_type, cold, "", cold_text, anchor=anchor)
                 literal = dq_literal(g, k)
                 self.declare(g, dq_type, dq, "", literal, anchor=anchor)
                 if literals is not None:
-                    literals[k] = literal
+                    literals[k] = (literal, cold_text)
             names[key] = (cold, dq)
             g.names[key] = cold or g.decl.name
         return names
@@ -777,8 +794,8 @@ class Editor:
     def _use_transient(self, g: Group, names: dict, func: str, absj: bool,
                        literals: dict | None = None) -> None:
         """Each use's target becomes func(<cold>, <dq>) (with its index).
-        literals: each element's correction literal, for self.calls (a
-        robtarget move whose cold value is its target as written)."""
+        literals: each element's correction literal and new cold value's,
+        for self.calls."""
         for u in g.uses:
             src = u.source
             ref_text = u.file.text(src.ref)
@@ -787,15 +804,21 @@ class Editor:
             cold_ref = (cold + index) if cold is not None else ref_text
             target = f"{func}({cold_ref}, {dq}{index})"
             if absj:
-                self._to_absj(u, target)
+                called = self._to_absj(u, target)
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {target}"
+                if literals is not None:
+                    dq_lit, cold_lit = literals[src.element]
+                    self.calls[u.key] = (u, cold_ref, dq, dq_lit, func, src.expr.span, called,
+                                         cold_lit)
             else:
                 # (One why for 1e5 edits: it names an edit only in an
                 # internal error.)
                 self.edit(u.key[0], src.ref.span, target, self._said(f"target -> {func}"))
                 self.actions[u.key] = f"{ref_text} -> {target}"
                 if literals is not None:
-                    self.calls[u.key] = (u, cold_ref, dq, literals[src.element])
+                    dq_lit, cold_lit = literals[src.element]
+                    self.calls[u.key] = (u, cold_ref, dq, dq_lit, func, src.ref.span, None,
+                                         cold_lit)
 
     def _apply_transient_rob(self, g: Group, func: str, confs: dict) -> None:
         """A robtarget move keeps its kind (a MoveL its straight line): its
@@ -823,7 +846,8 @@ class Editor:
                 self.actions[u.key] = self._said(
                     f"inline robtarget -> {func}(written, correction)")
                 if plain:
-                    self.calls[u.key] = (u, cold, None, dq)
+                    self.calls[u.key] = (u, cold, None, dq, func, u.source.ref.span, None,
+                                         None)
             return
         literals: dict | None = {} if plain else None
         names = self._declare_transient(

@@ -30,13 +30,14 @@ from ..rapid.build import DECL_HEAD, NodeBuilder
 from ..rapid.grammar import engine
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
-from ..rapid.values import (JOINTTARGET_FRAME, NUM_MAX, ROBTARGET_FRAME, DecodeIssue, RobTarget,
-                             decimal_chars, decode, frame_fields, plain_bounds)
+from ..rapid.values import (JOINTTARGET_FRAME, NUM_MAX, ROBTARGET_FRAME, DecodeIssue,
+                             JointTarget, RobTarget, decimal_chars, decode, frame_fields,
+                             plain_bounds)
 from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
 from .targets import MAX_JOINT_DEG, Resolver, Unresolved, Written
-from .transient import FUNC_R, states_values
+from .transient import FUNC_J, FUNC_R, states_values
 
 # Literals decoded at once by relex (their field texts alive together).
 RELEX_BLOCK = 8192
@@ -262,20 +263,21 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
 
 def relex_transient(plan: Plan, calls: dict, file_edits: dict,
                     texts: dict[int, str]) -> "Calls | None":
-    """relex_absj for a transient output whose every edit turns a
-    robtarget move's target into rcTcR(<its target as written>, <dq>)
-    (Editor.calls: use key -> (use, the target's text, the new pose
-    declaration's name or None, the pose literal)): each such statement
-    must be the input's with its targets so replaced, character for
-    character, after no letter, digit or '_' (a call for a name or an
-    aggregate, nothing joined to a word before it); each new declaration a
-    one-line CONST pose, of the literal meant, that the move sees: in its
-    routine or module, or in any module when neither LOCAL nor in a
-    routine; each inline pose literal an aggregate of decimal numbers.
-    Returns each use's correction (the pose literal as the parser decodes
-    it; its cold value is its robtarget as the input holds it, which the
-    output holds as it was), a Calls, or None where anything differs (the
-    output is then parsed again)."""
+    """relex_absj for a transient output whose every edit turns a move's
+    target into rcTcR/rcTcJ(<its target as written>, <dq>) (Editor.calls:
+    use key -> (use, the target's text, the new declaration's name or None,
+    the correction's literal, the function, the span replaced): a
+    robtarget move's rcTcR with a pose, a MoveAbsJ's rcTcJ with a
+    jointtarget): each such statement must be the input's with its targets
+    so replaced, character for character, after no letter, digit or '_' (a
+    call for a name or an aggregate, nothing joined to a word before it);
+    each new declaration a one-line CONST of its function's type, of the
+    literal meant, that the move sees: in its routine or module, or in any
+    module when neither LOCAL nor in a routine; each inline literal an
+    aggregate of decimal numbers. Returns each use's correction (the
+    literal as the parser decodes it; its cold value is its target as the
+    input holds it, which the output holds as it was), a Calls, or None
+    where anything differs (the output is then parsed again)."""
     eng, build = engine(), NodeBuilder()
     by_file: dict = {}
     for key in calls:
@@ -287,87 +289,129 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
     for fi in file_edits:
         es, shift = _shifts(file_edits[fi])
         wide: set = set()
-        declared = _declared(eng, build, es, shift, texts[fi], plan.files[fi], "pose",
-                             _pose_rows, 7, wide)
+        kinds: list = []
+        declared = _declared(eng, build, es, shift, texts[fi], plan.files[fi],
+                             ("pose", "jointtarget"), _dq_rows, 7, wide, kinds)
         if declared is None:
             return None
         names, scopes, aggs, rows = declared
         if fi not in by_file and (es.starts != es.ends).any():
             return None                   # (an edit of no statement read here)
-        decls[fi] = (scopes.tolist(), aggs.tolist(), rows, wide)
+        decls[fi] = (scopes.tolist(), aggs.tolist(), rows, wide, kinds)
         for name, k in names.items():
             if found.setdefault(name, (fi, k)) != (fi, k):
                 return None               # (one name in two files: not as meant)
+    def declared_row(name: str, literal: str, kind: str, u, fi: int):
+        """The numbers of the new declaration `name` a move of file fi
+        names, if it is one of `kind`, it sees, of `literal`; else None."""
+        hit = found.get(name.lower())
+        if hit is None:
+            return None
+        dfi, k = hit
+        scope, agg, declared_rows, wide, kinds = decls[dfi]
+        if kinds[k] != kind:
+            return None
+        if not (k in wide or (dfi == fi and scope[2 * k] <= u.motion.span.start
+                              and u.motion.span.end <= scope[2 * k + 1])):
+            return None
+        x = agg[2 * k]
+        if agg[2 * k + 1] - x != len(literal) or not texts[dfi].startswith(literal, x):
+            return None
+        if declared_rows is not None:
+            return declared_rows[k]
+        got = _dq_rows([literal])
+        return None if got is None or not _plain_numaggs([literal]) else got[0]
+
     keys: list = []
     dqs: list = []
+    colds: list = []
     for fi, file_keys in by_file.items():
         es, shift = _shifts(file_edits.get(fi, []))
         text, src = texts[fi], plan.files[fi].source.text
         # Each statement as meant: the input's, each of its targets replaced
         # (a MoveC has two; a move in a loop is one statement of several
-        # uses: the same replacement). Its uses' spans as the rows of one
-        # array (statement, target, use), sorted: read a block at a time.
-        uses = [calls[key][0] for key in file_keys]
-        for u in uses:
-            if u.kind != "robtarget" or type(u.source.record) is not RobTarget:
+        # uses: the same replacement), and the name of a move turned into
+        # MoveAbsJ. Its uses' spans as the rows of one array (statement,
+        # span replaced, use, what), sorted: read a block at a time.
+        for key in file_keys:
+            u, func, span, called = calls[key][0], calls[key][4], calls[key][5], calls[key][6]
+            if (u.kind, type(u.source.record), func, called is not None) not in _CALLED:
                 return None
-            ref = u.source.ref.span
-            before = src[ref.start - 1:ref.start]
+            before = src[span.start - 1:span.start]
             if before.isalnum() or before == "_":
                 return None
-        # (Made as an array from the start: no list of 5e5 ints.)
-        cols = np.fromiter((v for n, u in enumerate(uses) for v in (
-            u.motion.span.start, u.motion.span.end, u.source.ref.span.start,
-            u.source.ref.span.end, n)), np.int64, 5 * len(uses)).reshape(-1, 5)
-        uses = None
+
+        def spans(n, key):
+            u, span, called = calls[key][0], calls[key][5], calls[key][6]
+            m = u.motion.span
+            yield from (m.start, m.end, span.start, span.end, n, 0)
+            if called is not None:
+                yield from (m.start, m.end, m.start, m.start + len(u.motion.instruction), n, 1)
+        # (Made as an array from the start: no list of 6e5 ints.)
+        cols = np.fromiter((v for n, key in enumerate(file_keys) for v in spans(n, key)),
+                           np.int64).reshape(-1, 6)
         cols = cols[np.lexsort(cols.T[::-1])]
         checked = _Statements(text, src, es, shift)
         for first in range(0, len(cols), RELEX_BLOCK):
-            for a, b, x, y, n in cols[first:first + RELEX_BLOCK].tolist():
-                if not checked.add(a, b, x, y, _call_text(calls[file_keys[n]])):
+            for a, b, x, y, n, what in cols[first:first + RELEX_BLOCK].tolist():
+                call = calls[file_keys[n]]
+                if not checked.add(a, b, x, y, call[6] if what else _call_text(call)):
                     return None
         # (Every other edit is an insert: the declarations read above.)
         if not checked.done() or np.count_nonzero(es.starts != es.ends) != checked.edited:
             return None
         cols = checked = None
-        # Each correction: a new declaration's the move sees, of the literal
-        # meant, or an inline literal.
+        # Each correction, and each new cold value: a new declaration's the
+        # move sees, of its type and the literal meant, or an inline literal.
         rows = np.empty((len(file_keys), 7))
+        cold = np.full((len(file_keys), 6), np.nan)
         inline = []
         for n, key in enumerate(file_keys):
-            u, _, name, literal = calls[key]
+            u, cold_text, name, literal, func, _, _, cold_literal = calls[key]
             if name is None:
                 inline.append(n)
-                continue
-            hit = found.get(name.lower())
-            if hit is None:
-                return None
-            dfi, k = hit
-            scope, agg, declared_rows, wide = decls[dfi]
-            if not (k in wide or (dfi == fi and scope[2 * k] <= u.motion.span.start
-                                  and u.motion.span.end <= scope[2 * k + 1])):
-                return None
-            x = agg[2 * k]
-            if agg[2 * k + 1] - x != len(literal) or not texts[dfi].startswith(literal, x):
-                return None
-            if declared_rows is None:
-                got = _pose_rows([literal])
-                if got is None or not _plain_numaggs([literal]):
-                    return None
-                rows[n] = got[0]
             else:
-                rows[n] = declared_rows[k]
+                got = declared_row(name, literal, _CORRECTION[func], u, fi)
+                if got is None:
+                    return None
+                rows[n] = got
+            if cold_literal is None:
+                continue                  # (the input's target: as it was)
+            if cold_text == cold_literal:
+                got = _dq_rows([cold_literal])
+                got = None if got is None or not _plain_numaggs([cold_literal]) else got[0]
+            else:
+                got = declared_row(cold_text, cold_literal, "jointtarget", u, fi)
+            if got is None or not np.isnan(got[6]):
+                return None
+            cold[n] = got[:6]
         if inline:
             lits = [calls[file_keys[n]][3] for n in inline]
-            got = _pose_rows(lits)
+            got = _dq_rows(lits)
             if got is None or not _plain_numaggs(lits):
+                return None
+            # (An inline literal is of its function's type: its count of
+            # numbers, which _dq_rows reads, says which.)
+            if any((np.isnan(row[6]) != (calls[file_keys[n]][4] == FUNC_J))
+                   for n, row in zip(inline, got.tolist())):
                 return None
             rows[inline] = got
         keys += file_keys
         dqs.append(rows)
+        colds.append(cold)
     if not keys:
         return None
-    return Calls(dict(zip(keys, range(len(keys)))), np.concatenate(dqs))
+    return Calls(dict(zip(keys, range(len(keys)))), np.concatenate(dqs), np.concatenate(colds),
+                 np.fromiter((calls[key][4] == FUNC_J for key in keys), bool, len(keys)))
+
+
+# What each function is called on (the use's kind, its value's class, the
+# function, whether the move became MoveAbsJ), and the type of its
+# correction.
+_CALLED = frozenset({("robtarget", RobTarget, FUNC_R, False),
+                     ("jointtarget", JointTarget, FUNC_J, False),
+                     ("robtarget", RobTarget, FUNC_J, True)})     # (turned into MoveAbsJ)
+_CORRECTION = {FUNC_R: "pose", FUNC_J: "jointtarget"}
 
 
 class _Statements:
@@ -424,23 +468,42 @@ class _Statements:
 
 
 def _call_text(call: tuple) -> str:
-    """rcTcR(<cold>, <dq>) of an Editor.calls entry, as the editor wrote it."""
-    _, cold, name, literal = call
-    return f"{FUNC_R}({cold}, {name if name is not None else literal})"
+    """rcTcR/rcTcJ(<cold>, <dq>) of an Editor.calls entry, as the editor
+    wrote it."""
+    _, cold, name, literal, func = call[:5]
+    return f"{func}({cold}, {name if name is not None else literal})"
 
 
 class Calls:
-    """What relex_transient read of each rcTcR(cold, dq), by use key: its
-    row of one array, the correction's 7 numbers (position, quaternion
-    RAPID order). The cold value is the use's robtarget (its text is the
-    input's)."""
+    """What relex_transient read of each rcTcR/rcTcJ(cold, dq), by use key:
+    its row of arrays: the correction's numbers (rcTcR's pose: position,
+    quaternion RAPID order; rcTcJ's jointtarget: its 6 joints, then NaN);
+    a new cold value's joints (NaN: the cold value is the use's target, its
+    text the input's); whether it is rcTcJ."""
 
-    def __init__(self, rows: dict, dq: np.ndarray):
-        self.rows, self.dq = rows, dq
+    def __init__(self, rows: dict, dq: np.ndarray, cold: np.ndarray, joint: np.ndarray):
+        self.rows, self.dq, self.cold, self.joint = rows, dq, cold, joint
 
 
 # A pose literal written plainly (Editor._pose_literal).
 _POSE_FRAME = "[[%s,%s,%s],[%s,%s,%s,%s]]"
+
+
+def _dq_rows(lits: list[str]) -> np.ndarray | None:
+    """The corrections of a transient output, each a pose literal (7
+    numbers) or a jointtarget (12: _joint_rows's 6 joints, then NaN), as
+    rows (n, 7), each read as its kind is (_pose_rows, _joint_rows); None
+    where one is not."""
+    joint = np.fromiter((lit.count(",") == 11 for lit in lits), bool, len(lits))
+    out = np.full((len(lits), 7), np.nan)
+    for pick, read, width in ((~joint, _pose_rows, 7), (joint, _joint_rows, 6)):
+        at = np.flatnonzero(pick).tolist()
+        if at:
+            got = read([lits[n] for n in at])
+            if got is None:
+                return None
+            out[at, :width] = got
+    return out
 
 
 def _pose_rows(lits: list[str]) -> np.ndarray | None:
@@ -592,8 +655,8 @@ def _plain_declared(eng, pieces: list[str], rows_of=None,
 
 
 def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
-              pf: ParsedFile, type_name: str = "jointtarget", rows_of=None,
-              width: int = 6, wide: set | None = None
+              pf: ParsedFile, types: tuple = ("jointtarget",), rows_of=None,
+              width: int = 6, wide: set | None = None, kinds: list | None = None
               ) -> tuple[dict, array, array, np.ndarray | None] | None:
     """The new declarations of a file read again where the output holds
     them: (lower-case name -> k; the (start, end) in the input of its scope
@@ -602,13 +665,15 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     in arrays, not a node and a tuple each; where every one is written
     plainly (_plain_declared), the joints of each at row k, else None).
     None where an inserted text
-    is not CONST `type_name` declarations (jointtarget; a transient output's
-    pose, rows_of _pose_rows of width 7) each a one-line statement, or is
+    is not CONST declarations of `types` (jointtarget; a transient output's
+    pose and jointtarget, rows_of _dq_rows of width 7) each a one-line
+    statement, or is
     not where a declaration may follow: right after a declaration, or at
     the end of a line that ends with one (and a comment), as the editor
     puts them (Editor._anchor; after a line that goes on with a statement,
     the output would not parse). wide, when given, receives the k of
-    each declaration other modules see (not LOCAL, not in a routine)."""
+    each declaration other modules see (not LOCAL, not in a routine);
+    kinds, each one's type (lower case), at k."""
     out: dict = {}
     scopes, aggs = array("q"), array("q")
     inserts = np.flatnonzero(es.starts == es.ends)
@@ -647,9 +712,11 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
         # One declaration per insert (a CAM program's 5e4): as the loop
         # below reads them, at once.
         decls = [decls[0] for decls in plain]
-        if not all(storage == "CONST" and declared.lower() == type_name
+        if not all(storage == "CONST" and declared.lower() in types
                    for storage, declared, _, _, _, _ in decls):
             return None
+        if kinds is not None:
+            kinds.extend(declared.lower() for _, declared, _, _, _, _ in decls)
         # (A later one of the same name wins, as a dict's last value.)
         out = {name.lower(): k for k, (_, _, name, _, _, _) in enumerate(decls)}
         scopes.extend([x for scope, _, _ in places for x in scope])
@@ -675,8 +742,10 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
                 decls.append((node.storage, node.type_name, node.name,
                               node.init.span.start, node.init.span.end, node.scope))
         for storage, declared, name, x, y, local in decls:
-            if not (storage == "CONST" and declared.lower() == type_name):
+            if not (storage == "CONST" and declared.lower() in types):
                 return None
+            if kinds is not None:
+                kinds.append(declared.lower())
             # (A later one of the same name wins, as a dict's last value.)
             if wide is not None and local is None and scope in modules:
                 wide.add(len(scopes) // 2)
@@ -886,15 +955,15 @@ def verify_states(plan: Plan, solved: Solved, keys: list, out_files: dict[int, P
 def verify_states_relexed(plan: Plan, solved: Solved, keys: list, calls: Calls,
                           solvers: dict) -> tuple[list, np.ndarray, np.ndarray] | None:
     """verify_states of a transient output relex_transient read (calls):
-    each use's rcTcR(cold, dq) at every state from those numbers, as
+    each use's rcTcR/rcTcJ(cold, dq) at every state from those numbers, as
     arrays (Resolver.state_many's arithmetic: the same as resolving each
-    call on the output parsed again, bit for bit), through the tool and
-    work object the input's move names (the output's: the input's text).
-    Returns (the use keys, um and deg (states, uses)): row n of each is
-    state n's residuals, as verify_states gives them for those keys. None
-    where a use is not one of calls, its tool or work object does not
-    resolve, a value would be stopped or noted by a check, or with a track
-    (the caller parses the output again and verifies it so)."""
+    call on the output parsed again, bit for bit), a robtarget through the
+    tool and work object the input's move names (the output's: the input's
+    text). Returns (the use keys, um and deg (states, uses)): row n of each
+    is state n's residuals, as verify_states gives them for those keys.
+    None where a use is not one of calls, a robtarget's tool or work object
+    does not resolve, a value would be stopped or noted by a check, or with
+    a track (the caller parses the output again and verifies it so)."""
     res = _resolver(plan, {}, None, tuple(solvers))
     if res.track:
         return None
@@ -903,34 +972,61 @@ def verify_states_relexed(plan: Plan, solved: Solved, keys: list, calls: Calls,
     at = [calls.rows.get(u.key) for u in uses]
     if None in at:
         return None
-    tools, wobjs = [], []
-    for u in uses:
-        tool, wobj = res._tool_wobj(u.motion, u.module)
+    joint = calls.joint[at]
+    tools, wobjs = [None] * len(uses), [None] * len(uses)
+    for n in np.flatnonzero(~joint).tolist():
+        tool, wobj = res._tool_wobj(uses[n].motion, uses[n].module)
         if type(tool) is Unresolved or type(wobj) is Unresolved:
             return None
-        tools.append(tool[1])
-        wobjs.append(wobj[1])
+        tools[n], wobjs[n] = tool[1], wobj[1]
+    states = tuple(solvers)
     um, deg = np.empty((len(solvers), len(rows))), np.empty((len(solvers), len(rows)))
     # (VERIFY_BLOCK uses at a time, as verify() checks them: their arrays
     # alive for one block.)
     for first in range(0, len(rows), VERIFY_BLOCK):
         sl = slice(first, first + VERIFY_BLOCK)
-        block, picked = rows[sl], at[sl]
-        cold = np.array([u.source.record.values for u in uses[sl]], float).reshape(-1, 17)
-        by_state = states_values(cold[:, :7], calls.dq[picked], tuple(solvers), False)
-        values = np.empty((len(block), 17))
-        values[:, 7:] = cold[:, 7:]
-        everyone = list(range(len(block)))
-        # (What every state's check shares, as _residuals makes it of all
-        # robtargets.)
-        closest = _closest(solved, block)
-        R_want, p_want, tcp = solved.R[block], solved.p[block], tcp_of(uses[sl])
-        for n, solver in enumerate(solvers.values()):
-            values[:, :7] = by_state[n]
-            done, R, p, conf = res._flanges(everyone, values, tools[sl], wobjs[sl])
-            if len(done) != len(block):
+        block, picked, block_uses = rows[sl], np.array(at[sl], np.int64), uses[sl]
+        js = joint[sl]
+        rob = np.flatnonzero(~js).tolist()
+        jts = np.flatnonzero(js).tolist()
+        q = np.empty((len(block), 6))
+        # A MoveAbsJ's joints at each state, as the controller stores them
+        # (a value beyond a joint's bound: the output parsed again says so).
+        q_joint = None
+        if jts:
+            # (A move turned into MoveAbsJ: its new cold value's; else its
+            # jointtarget's.)
+            cold = calls.cold[picked[jts]]
+            for m, n in enumerate(jts):
+                if np.isnan(cold[m, 0]):
+                    cold[m] = block_uses[n].source.record.values[:6]
+            q_joint = states_values(cold, calls.dq[picked[jts], :6], states, True).astype(float)
+            if not (np.abs(q_joint) <= MAX_JOINT_DEG).all():
                 return None
-            q = _ideal_joints(solved, solver, block, R, p, conf, *closest)
+        # A robtarget's pose at each state, through its tool and work object,
+        # and the joints the ideal controller gives it.
+        by_state = None
+        if rob:
+            cold = np.array([block_uses[n].source.record.values for n in rob],
+                            float).reshape(-1, 17)
+            by_state = states_values(cold[:, :7], calls.dq[picked[rob]], states, False)
+            values = np.empty((len(rob), 17))
+            values[:, 7:] = cold[:, 7:]
+            rob_rows = [block[n] for n in rob]
+            # (What every state's check shares, as _residuals makes it.)
+            closest = _closest(solved, rob_rows)
+        R_want, p_want, tcp = solved.R[block], solved.p[block], tcp_of(block_uses)
+        for n, solver in enumerate(solvers.values()):
+            if jts:
+                q[jts] = q_joint[n]
+            if rob:
+                values[:, :7] = by_state[n]
+                done, R, p, conf = res._flanges(list(range(len(rob))), values,
+                                                [tools[first + m] for m in rob],
+                                                [wobjs[first + m] for m in rob])
+                if len(done) != len(rob):
+                    return None
+                q[rob] = _ideal_joints(solved, solver, rob_rows, R, p, conf, *closest)
             err_p, err_r = solver.deformed_pose_error(q * DEG, R_want, p_want, tcp)
             um[n, sl], deg[n, sl] = err_p * 1000, err_r / DEG
     return [u.key for u in uses], um, deg
