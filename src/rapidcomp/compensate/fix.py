@@ -169,9 +169,12 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
             if written is not None and editor.converted:
                 converted = relex_absj(plan, editor.converted, file_edits, texts)
                 written = None if converted is None else written
-        elif transient is not None and not editor.calls_other and editor.calls:
-            # (Every target an rcTcR of the robtarget as written: those
-            # statements and declarations read again.)
+        elif (transient is not None and not editor.calls_other and editor.calls
+              and not plan.track):
+            # (Every target an rcTcR/rcTcJ of a value read again: those
+            # statements and declarations read again. A track moves the
+            # base with each target's own axes: verify_states_relexed does
+            # not take one.)
             calls = relex_transient(plan, editor.calls, file_edits, texts)
         editor.fields = editor.converted = editor.calls = None
         lexed = written is not None or calls is not None
