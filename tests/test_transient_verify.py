@@ -382,3 +382,23 @@ def test_declarations_lexed_one_by_one_are_read_alike(name, solvers, monkeypatch
     monkeypatch.setattr(V, "_plain_declared", lambda eng, pieces, *how: None)
     _, slow_seen = _fix(task, solvers, "auto", monkeypatch, False, relexed=True)
     assert len(fast_seen) == len(slow_seen) == 1 and fast_seen == slow_seen
+
+
+@pytest.mark.parametrize("head", ["MODULE B", "MODULE B(SYSMODULE) ! the path", "MODULE B ! x"])
+def test_declarations_after_the_module_line_are_read_again(head, solvers, monkeypatch):
+    """A module with no declaration before its routines (its targets in a
+    --with module) gets its corrections after its MODULE line: read again
+    there too (attributes and a comment on the line), with the same
+    residuals as the output parsed again."""
+    data = (f"MODULE D\n  CONST jointtarget jHome:=[[0,20,10,0,50,0],{EXT}];\n"
+            f"  CONST robtarget pX:=[[600,100,300],{RT};\nENDMODULE\n")
+    main = (f"{head}\n  PROC main()\n    MoveAbsJ jHome, v100, fine, tool0;\n"
+            "    MoveL pX,v100,z1,tool0;\n  ENDPROC\nENDMODULE\n")
+
+    def task():
+        return Task("t", (parse_text(main, "B.mod"),), context=(parse_text(data, "D.mod"),))
+    fast, fast_seen = _fix(task(), solvers, "auto", monkeypatch, False, relexed=True)
+    slow, slow_seen = _fix(task(), solvers, "auto", monkeypatch, False)
+    assert len(fast_seen) == len(slow_seen) == 1 and fast.failed == 0
+    assert fast.modules[0].text.startswith(head + "\n    LOCAL CONST jointtarget jHome_dq")
+    _same(fast, fast_seen, slow, slow_seen, "auto")

@@ -687,12 +687,18 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     ends = np.array(sorted(d.node.span.end for m in pf.modules for d in m.declarations),
                     np.int64)
     # The declaration each insert follows: right after it (a CAM program's
-    # every one), or with blanks and a comment between on its line.
+    # every one), or with blanks and a comment between on its line; or, in
+    # a module with no declaration before its routines, the end of its
+    # MODULE line (its attributes and a comment before it).
+    heads = np.array(sorted(line.end() if line is not None else -1
+                            for line in (_MODULE_LINE.match(src, m.node.name_span.end)
+                                         for m in pf.modules)), np.int64)
+    head = np.isin(at_in, heads)
     last = np.searchsorted(ends, at_in, "right") - 1
-    if (last < 0).any():
+    if (last[~head] < 0).any():
         return None
-    after = ends[last]
-    away = after != at_in
+    after = ends[np.maximum(last, 0)] if len(ends) else at_in
+    away = (after != at_in) & ~head
     for at, end in zip(at_in[away].tolist(), after[away].tolist()):
         rest = src[end:at].lstrip(" \t")
         if "\n" in rest or "\r" in rest or rest[:1] not in ("", "!"):
@@ -753,6 +759,12 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
             scopes.extend(scope)
             aggs.extend((a + x, a + y))
     return out, scopes, aggs, joints
+
+
+# The rest of a MODULE line after the module's name: its attributes and a
+# comment, up to the line's end (where Editor._anchor puts a declaration in a
+# module with none before its routines).
+_MODULE_LINE = re.compile(r"[ \t]*(?:\([^()\r\n]*\))?[ \t]*(?:![^\r\n]*)?(?=\r|\n|$)")
 
 
 def _scopes(pf: ParsedFile, ats: np.ndarray) -> list[tuple[int, int]] | None:
