@@ -387,15 +387,21 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
             cold[n] = got[:6]
         if inline:
             lits = [calls[file_keys[n]][3] for n in inline]
-            got = _dq_rows(lits)
-            if got is None or not _plain_numaggs(lits):
+            if not _plain_numaggs(lits):
                 return None
+            # (A block at a time, every other one read by the job's helper:
+            # side.py.)
+            ats = range(0, len(lits), RELEX_BLOCK)
+            for at, got in zip(ats, side.alternate(_dq_rows, ((lits[at:at + RELEX_BLOCK],)
+                                                              for at in ats))):
+                if got is None:
+                    return None
+                rows[inline[at:at + RELEX_BLOCK]] = got
             # (An inline literal is of its function's type: its count of
             # numbers, which _dq_rows reads, says which.)
-            if any((np.isnan(row[6]) != (calls[file_keys[n]][4] == FUNC_J))
-                   for n, row in zip(inline, got.tolist())):
+            if (np.isnan(rows[inline, 6]) != np.fromiter(
+                    (calls[file_keys[n]][4] == FUNC_J for n in inline), bool, len(inline))).any():
                 return None
-            rows[inline] = got
         keys += file_keys
         dqs.append(rows)
         colds.append(cold)
