@@ -264,20 +264,21 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
 def relex_transient(plan: Plan, calls: dict, file_edits: dict,
                     texts: dict[int, str]) -> "Calls | None":
     """relex_absj for a transient output whose every edit turns a move's
-    target into rcTcR/rcTcJ(<its target as written>, <dq>) (Editor.calls:
-    use key -> (use, the target's text, the new declaration's name or None,
-    the correction's literal, the function, the span replaced): a
-    robtarget move's rcTcR with a pose, a MoveAbsJ's rcTcJ with a
-    jointtarget): each such statement must be the input's with its targets
-    so replaced, character for character, after no letter, digit or '_' (a
+    target into rcTcR/rcTcJ(<cold>, <dq>) (Editor.calls): a robtarget
+    move's rcTcR of its robtarget as written and a pose; a MoveAbsJ's rcTcJ
+    of its jointtarget as written and a jointtarget; a move turned into
+    MoveAbsJ, its name too, on rcTcJ of a new cold jointtarget. Each such
+    statement must be the input's with its targets and name so replaced,
+    character for character, a target after no letter, digit or '_' (a
     call for a name or an aggregate, nothing joined to a word before it);
-    each new declaration a one-line CONST of its function's type, of the
-    literal meant, that the move sees: in its routine or module, or in any
-    module when neither LOCAL nor in a routine; each inline literal an
-    aggregate of decimal numbers. Returns each use's correction (the
-    literal as the parser decodes it; its cold value is its target as the
-    input holds it, which the output holds as it was), a Calls, or None
-    where anything differs (the output is then parsed again)."""
+    each new declaration a one-line CONST of the type meant, of the literal
+    meant, that the move sees: in its routine or module, or in any module
+    when neither LOCAL nor in a routine; each inline literal an aggregate
+    of decimal numbers. Returns each use's correction and new cold value
+    (as the parser decodes their literals; any other cold value is the
+    use's target as the input holds it, which the output holds as it
+    was), a Calls, or None where anything differs (the output is then
+    parsed again)."""
     eng, build = engine(), NodeBuilder()
     by_file: dict = {}
     for key in calls:
@@ -301,6 +302,7 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
         for name, k in names.items():
             if found.setdefault(name, (fi, k)) != (fi, k):
                 return None               # (one name in two files: not as meant)
+
     def declared_row(name: str, literal: str, kind: str, u, fi: int):
         """The numbers of the new declaration `name` a move of file fi
         names, if it is one of `kind`, it sees, of `literal`; else None."""
@@ -426,7 +428,7 @@ class _Statements:
     replacement in order of statement and target, then done(). Each
     statement is the input's text with its targets replaced; a target met
     again (a statement of several uses) must have the same replacement.
-    False where anything differs. edited: the targets replaced."""
+    False where anything differs. edited: the spans replaced."""
 
     def __init__(self, text: str, src: str, es: EditColumns, shift: np.ndarray):
         self.text, self.src, self.es, self.shift = text, src, es, shift
@@ -628,9 +630,10 @@ def _plain_declared(eng, pieces: list[str], rows_of=None,
     is one-line declarations written plainly (_PLAIN_DECL, their words no
     reserved ones, their aggregates plain jointtargets of decimal numbers):
     per text, (storage, type, name, start and end of its aggregate in the
-    text, LOCAL or None) of each declaration; and the joints of every declaration, in
-    that order, as _joint_rows reads them (rows_of: another such reader,
-    of `width` numbers). None: the texts are lexed one by one."""
+    text, LOCAL or None) of each declaration; and the joints of every
+    declaration, in that order, as _joint_rows reads them (rows_of:
+    another such reader, of `width` numbers). None: the texts are lexed
+    one by one."""
     rows_of = rows_of or _joint_rows
     out = []
     aggs = []
@@ -669,7 +672,7 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     (its routine's, else its module's) at [2k, 2k + 1]; the (start, end) of
     its value, an aggregate of numbers, in the output, likewise: offsets
     in arrays, not a node and a tuple each; where every one is written
-    plainly (_plain_declared), the joints of each at row k, else None).
+    plainly (_plain_declared), the numbers of each at row k, else None).
     None where an inserted text
     is not CONST declarations of `types` (jointtarget; a transient output's
     pose and jointtarget, rows_of _dq_rows of width 7) each a one-line
