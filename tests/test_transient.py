@@ -410,3 +410,24 @@ def test_two_programs_in_one_folder_share_the_support_module(tmp_path):
         assert r.returncode in (0, 1) and "exists" not in r.stderr, r.stderr
         assert (out / name).is_file()
     assert b"\r\n" not in (out / "rcThermal.sys").read_bytes()
+
+
+def test_a_support_module_of_another_program_is_refused_before_the_work(tmp_path, monkeypatch):
+    """Where rcThermal.sys of other settings is in the way, the command says
+    so before it compensates anything (a CAM program's work is not done
+    only to be refused): exit 2, the message, nothing written."""
+    from click.testing import CliRunner
+
+    from rapidcomp.cli import main
+    from rapidcomp.compensate import job
+
+    (tmp_path / "rcThermal.sys").write_text("MODULE rcThermal(SYSMODULE)\nENDMODULE\n")
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("compensated before the refusal")
+    monkeypatch.setattr(job, "fix", no_work)
+    r = CliRunner().invoke(main, ["fix", str(FIXTURES / "cubes.mod"), "--profile",
+                                  str(FIXTURES / "warm.csv"), "--transient", "--tau-heat", "40",
+                                  "-o", str(tmp_path / "out.mod")])
+    assert r.exit_code == 2 and "exists and is not this support module" in r.output, r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rcThermal.sys"]

@@ -161,10 +161,13 @@ def _run_helped(spec: JobSpec, src: TaskSource, progress: Progress) -> JobOutcom
     progress.stage("compensating")
     names = {} if src.is_folder else {src.modules[0]: Path(spec.output).name}
     base, base_text = robot_base(src, spec.base)
-    transient = None
+    transient = support = None
     if spec.transient is not None:
         from .transient import check_names
         check_names(task)
+        # (The support module, and whether one of another program is where
+        # it goes, known before the work: not refused after it.)
+        support = _support_files(spec, task)
         transient = (spec.transient, load_state_solvers(spec.profile, spec.robot, spec.force,
                                                         spec.limits))
     result = fix(task, solver, spec.mode, track=parse_track(spec.track), output_names=names,
@@ -192,18 +195,16 @@ def _run_helped(spec: JobSpec, src: TaskSource, progress: Progress) -> JobOutcom
                                                            else ""),
                 "modules": len(src.modules), **meta}
     # Past the result the parsed task is not needed, but for each module's
-    # encoding and the transient support module (1e5 targets: ~300 MB; in
-    # the command's own process kept to its end instead of freed object by
-    # object, process.py).
+    # encoding (1e5 targets: ~300 MB; in the command's own process kept to
+    # its end instead of freed object by object, process.py).
     sources = [pf.source for pf in task.files]
-    if spec.transient is None:
-        let_go(task)
-        task = None
+    let_go(task)
+    task = None
     out = []
     for source, m in zip(sources, result.modules):
         out.append((str(output_path(spec, m.path)), source.encode(m.text)))
-    if spec.transient is not None:
-        out += _support_files(spec, task)
+    if support is not None:
+        out += support
     if spec.report:
         out.append((spec.report, Report("markdown", result, meta, progress)))
     if spec.json:
