@@ -281,26 +281,19 @@ def _verify_states(plan, solved, keys, out_files, solvers, calls=None,
         # (A use the numbers read do not serve: the output parsed again.)
         out_files = reparse(plan, texts)
     states = verify_states(plan, solved, keys, out_files, solvers) if keys else {}
-    worst: dict = {}
-    by_state: dict = {}
-    for s in solvers:
-        got = states.get(s, {})
-        # A wrist-singular target's orientation is what the wrist can hold
-        # (its row says what is left): not the figure of the rest.
-        held = [deg for k, (_, deg) in got.items()
-                if float(solved.deformed.residual_rad[solved.row[k]]) / DEG <= VERIFY_DEG]
-        by_state[s] = (max([um for um, _ in got.values()] or [0.0]), max(held or [0.0]))
-        for k, (um, deg) in got.items():
-            a, b = worst.get(k, (0.0, 0.0))
-            worst[k] = (max(a, um), max(b, deg))
-    return worst, by_state
+    # (Every state's residuals of the same uses: as the arrays _worst takes.)
+    order = list(states[next(iter(solvers))]) if states else []
+    um, deg = (np.array([[states[s][k][n] for k in order] for s in solvers],
+                        float).reshape(len(solvers), len(order)) for n in (0, 1))
+    return _worst(solved, solvers, order, um, deg)
 
 
 def _worst(solved, solvers, keys: list, um: np.ndarray, deg: np.ndarray) -> tuple[dict, dict]:
-    """_verify_states' figures of residuals as arrays (row n: state n's of
-    every use of keys), as it makes them of one dict per state: the same
-    comparisons (Python's max(a, b) is b where b > a, else a), each use's
-    wrist verdict once."""
+    """_verify_states' figures of residuals (row n of um, deg: state n's of
+    every use of keys): per use the worst state's (Python's max(a, b): b
+    where b > a, else a), per state the worst use's, a wrist-singular
+    target's orientation left out (what the wrist can hold: its row says
+    what is left)."""
     left = solved.deformed.residual_rad.tolist()
     row = solved.row
     held = np.array([left[row[k]] / DEG <= VERIFY_DEG for k in keys], bool).reshape(-1)
