@@ -181,10 +181,14 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str) -> list[Group]:
     by_key: dict = {}
     out: list[Group] = []
     loop_first = sorted(solved.uses, key=lambda u: not u.source.by_loop)
-    # Each use's solution, rounded, as a key (all rows at once: 1e5 uses).
+    # Each use's solution, rounded, as a key (all rows at once: 1e5 uses):
+    # the bytes of its six rounded doubles, equal where the numbers are
+    # (+ 0.0 makes a -0.0 the 0.0 it equals; a row with a NaN has none).
     q_all = solved.nominal.q_deg
-    q_keys = [None if bad else tuple(q) for bad, q in zip(
-        np.isnan(q_all).any(axis=1).tolist(), np.round(q_all, 3).tolist())]
+    rounded = np.ascontiguousarray(np.round(q_all, 3) + 0.0, dtype=float)
+    q_keys = [None if bad else q for bad, q in zip(
+        np.isnan(q_all).any(axis=1).tolist(),
+        rounded.view(np.dtype((np.void, rounded.itemsize * 6))).ravel().tolist())]
     rows = [solved.row[u.key] for u in loop_first]
     modes = [mode_of(u, mode, plan, solved, row) for u, row in zip(loop_first, rows)]
     kept = _one_statement(loop_first, modes)
