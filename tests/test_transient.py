@@ -287,6 +287,28 @@ def test_the_support_module_goes_where_the_task_loads_it(tmp_path):
     parse_text(main, "MainModule.mod")
 
 
+@pytest.mark.parametrize("encoding, nl", [("latin-1", "\r\n"), ("utf-16", "\r\n"),
+                                         ("latin-1", "\r")])
+def test_a_program_file_gets_one_line_and_keeps_every_byte(tmp_path, encoding, nl):
+    """The program file's text is the input's with one line added after its
+    last module, in its own line breaks and encoding (a RobotStudio .pgf is
+    CRLF; read as text, every CRLF became LF)."""
+    glue = tmp_path / "glue"
+    glue.mkdir()
+    for f in ("GlueData.mod", "GlueMain.mod"):
+        (glue / f).write_bytes((FIXTURES / "tasks" / "glue" / f).read_bytes())
+    declared = "UTF-16" if encoding == "utf-16" else "ISO-8859-1"
+    lines = [f'<?xml version="1.0" encoding="{declared}" ?>', "<!-- cell 4, not edited -->",
+             "<Program>", "\t<Module>GlueData.mod</Module>", "\t<Module>GlueMain.mod</Module>",
+             "</Program>", ""]
+    (glue / "Glue.pgf").write_bytes(nl.join(lines).encode(encoding))
+    r = _rapidcomp("fix", glue / "Glue.pgf", "--profile", FIXTURES / "warm.csv", "--transient",
+                   "--tau-heat", "30", "-o", tmp_path / "out", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    want = lines[:5] + ["\t<Module>rcThermal.sys</Module>"] + lines[5:]
+    assert (tmp_path / "out" / "Glue.pgf").read_bytes() == nl.join(want).encode(encoding)
+
+
 def _nominal_ik(robot, R, p, q0):
     """Damped Newton on Pinocchio's model (mm) from q0 (deg): an IK of the
     test's own, not rapidcomp's closed form."""

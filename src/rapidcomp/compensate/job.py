@@ -246,18 +246,24 @@ def _support_files(spec: JobSpec, task) -> list[tuple[str, bytes]]:
     if not src.is_folder:
         return out
     if src.kind == "pgf":
-        pgf = src.input.read_text(encoding="latin-1")
+        # Its bytes as they are (read_text would turn CRLF into LF): ASCII
+        # is the same in every encoding but UTF-16's, which keeps its BOM.
+        raw = src.input.read_bytes()
+        codec = ("utf-16-le" if raw.startswith(b"\xff\xfe") else
+                 "utf-16-be" if raw.startswith(b"\xfe\xff") else "latin-1")
+        pgf = raw.decode(codec)
         end = pgf.rfind("</Module>")
         if end < 0:
             raise InputError(str(src.input), "lists no <Module>: cannot add the transient "
                                              f"support module {MODULE_FILE}")
-        line = pgf[pgf.rfind("\n", 0, end) + 1:end]
+        line = pgf[max(pgf.rfind("\n", 0, end), pgf.rfind("\r", 0, end)) + 1:end]
         indent = line[:len(line) - len(line.lstrip(" \t"))]
         entry = (rel / MODULE_FILE).as_posix()
         cut = end + len("</Module>")
-        pgf_nl = "\r\n" if "\r\n" in pgf else "\n"
+        pgf_nl = ("\r\n" if "\r\n" in pgf else
+                  "\r" if "\r" in pgf and "\n" not in pgf else "\n")
         pgf = pgf[:cut] + pgf_nl + indent + f"<Module>{entry}</Module>" + pgf[cut:]
-        out.append((str(Path(spec.output) / src.input.name), pgf.encode("latin-1")))
+        out.append((str(Path(spec.output) / src.input.name), pgf.encode(codec)))
     return out
 
 
