@@ -10,6 +10,7 @@ from __future__ import annotations
 import shutil
 
 import numpy as np
+import pytest
 
 from rapidcomp.compensate.fix import fix
 from rapidcomp.compensate.flow import PROGRAM_START, RESUME
@@ -334,16 +335,25 @@ def test_a_pers_target_another_task_reads_is_not_edited_in_place(tmp_path):
     assert decl not in written and "MoveL pSt1_2," in written
 
 
-def test_backup_base_frame_follows_task_group_robot(tmp_path):
+# The task's group and the group's robot, as a RobotWare 6 MultiMove backup
+# writes them: both in SYS.cfg (the controller's topic).
+_GROUPS = ('#\nMECHANICAL_UNIT_GROUP:\n\n      -Name "rob1" -Robot "ROB_1" -MechanicalUnit_1 '
+           '"TRACK_1"\\\n      -UseMotionPlanner "motion_planner_1"\n\n'
+           '      -Name "rob2" -Robot "ROB_2" -UseMotionPlanner "motion_planner_2"\n')
+
+
+@pytest.mark.parametrize("groups_in", ["SYS.cfg", "MOC.cfg"])
+def test_backup_base_frame_follows_task_group_robot(tmp_path, groups_in):
     """Two robots with different base frames: each task's comes from its
-    mechanical unit group's robot; the identity is a real value too."""
+    mechanical unit group's robot (the groups in SYS.cfg, as a controller
+    writes them; in MOC.cfg read too); the identity is a real value too."""
     bk = tmp_path / "bk"
     shutil.copytree(TASKS / "backup_irbt", bk)
     sys_cfg = bk / "SYSPAR" / "SYS.cfg"
     sys_cfg.write_text(sys_cfg.read_text().replace('-UseMechanicalUnitGroup "rob1"',
-                                                   '-UseMechanicalUnitGroup "rob2"'))
-    moc = ("MOC:CFG_1.0:6:0::\n#\nMECHANICAL_UNIT_GROUP:\n\n"
-           "      -name \"rob1\" -robot \"ROB_1\"\n\n      -name \"rob2\" -robot \"ROB_2\"\n#\n"
+                                                   '-UseMechanicalUnitGroup "rob2"')
+                       + (_GROUPS if groups_in == "SYS.cfg" else ""))
+    moc = ("MOC:CFG_1.0:6:0::\n" + (_GROUPS if groups_in == "MOC.cfg" else "") + "#\n"
            "ROBOT:\n\n      -name \"ROB_1\" -use_robot_type \"ROB1_140\" -base_frame_pos_x 1.5\n\n"
            "      -name \"ROB_2\" -use_robot_type \"ROB2_140\"\\\n"
            "      -base_frame_pos_x -0.25 -base_frame_orient_u0 0.707107"

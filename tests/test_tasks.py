@@ -176,16 +176,18 @@ def test_with_a_module_of_the_task_is_read_once():
     assert r.exit_code == 0 and "more than once" not in r.output
 
 
-def test_a_backup_whose_base_rides_on_a_track_needs_track(tmp_path):
-    """MOC.cfg: ROB_1 -base_frame_moved_by "TRACK_1". Without --track the
-    base position of a robtarget is not known: not compensated, naming the
-    option (no positioner assumption, no MoveAbsJ frozen at the wrong
-    place); with it, everything compensates."""
+@pytest.mark.parametrize("attribute", ["base_frame_coordinated", "base_frame_moved_by"])
+def test_a_backup_whose_base_rides_on_a_track_needs_track(tmp_path, attribute):
+    """MOC.cfg: ROB_1 -base_frame_coordinated "TRACK_1" (RobotWare 6; older
+    systems: -base_frame_moved_by). Without --track the base position of a
+    robtarget is not known: not compensated, naming the option (no
+    positioner assumption, no MoveAbsJ frozen at the wrong place); with
+    it, everything compensates."""
     bk = tmp_path / "bk"
     shutil.copytree(TASKS / "backup_irbt", bk)
     (bk / "SYSPAR" / "MOC.cfg").write_text(
         "MOC:CFG_1.0:6:0::\n#\nROBOT:\n\n      -name \"ROB_1\" -use_robot_type \"ROB1_140\"\\\n"
-        "      -base_frame_moved_by \"TRACK_1\"\n")
+        f"      -{attribute} \"TRACK_1\" -base_mass 55.1\n")
     r = run("check", bk, "--profile", WARM, "--json")
     doc = json.loads(r.output)
     assert r.exit_code == 1

@@ -1064,8 +1064,8 @@ class Resolver:
                                    "stays where it is"))
         if kind == "robtarget" and self.moved_by and not self.track:
             return fail(Unresolved(
-                f"SYSPAR/MOC.cfg says {self.moved_by} moves the robot's base "
-                "(-base_frame_moved_by): where the base is depends on its axis; say which "
+                f"SYSPAR/MOC.cfg says {self.moved_by} moves the robot's base: where the "
+                "base is depends on its axis; say which "
                 "external axis it is and along which base axis it moves with --track "
                 "AXIS:x|y|z", True))
         if t.value is not None:

@@ -49,7 +49,8 @@ class TaskSource:
     # unless --base says it.
     base_problem: str | None = None
     # The mechanical unit that moves the robot's base (MOC.cfg ROBOT
-    # -base_frame_moved_by, a track): robtargets need --track.
+    # -base_frame_coordinated or -base_frame_moved_by, a track): robtargets
+    # need --track.
     base_moved_by: str | None = None
 
     @property
@@ -197,7 +198,7 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
         raise RapidcompError(f"{shown}: a controller backup without a motion task holding "
                              "modules under RAPID/")
     groups = motion if motion is not None else {t.task.upper(): None for t in tasks}
-    frames = _base_frames(root, shown, groups)
+    frames = _base_frames(root, shown, groups, _group_robots(root, shown))
     out = []
     for n, t in enumerate(tasks):
         frame, problem, mover = frames.get(t.task.upper(), (None, None, None))
@@ -274,15 +275,29 @@ _IDENTITY = (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
 MAX_BASE_M = 100.0
 
 
-def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None]) -> dict:
+def _group_robots(root: Path, shown: str) -> dict[str, str]:
+    """Mechanical unit group -> its robot (lower case): MECHANICAL_UNIT_GROUP
+    -Robot, a type of the controller's topic, SYSPAR/SYS.cfg (a RobotWare 6
+    MultiMove backup has it there); one that MOC.cfg holds is read too."""
+    out: dict[str, str] = {}
+    for cfg in ("SYS.cfg", "MOC.cfg"):
+        for inst in _cfg_instances(_read_text(root / "SYSPAR" / cfg, shown),
+                                   "MECHANICAL_UNIT_GROUP"):
+            if inst.get("name"):
+                out.setdefault(inst["name"].lower(), (inst.get("robot") or "").lower())
+    return out
+
+
+def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None],
+                 robot_of: dict[str, str]) -> dict:
     """Each motion task's robot base frame in the world from SYSPAR/MOC.cfg:
-    the task's mechanical unit group (SYS.cfg) names its ROBOT
-    (MECHANICAL_UNIT_GROUP -robot), whose -base_frame_pos_x/y/z (metres)
-    and -base_frame_orient_u0..u3 (quaternion w, x, y, z) place it. Task
-    name (upper case) -> (frame: ((x, y, z) mm, (q1..q4)) or None for the
-    world frame; the reason it cannot be told (several robots, no link to
-    one) or None; the unit that moves the base (-base_frame_moved_by) or
-    None). Values no robot cell has are bad input."""
+    the task's mechanical unit group (SYS.cfg) names its ROBOT (robot_of:
+    _group_robots), whose -base_frame_pos_x/y/z (metres) and
+    -base_frame_orient_u0..u3 (quaternion w, x, y, z) place it. Task name
+    (upper case) -> (frame: ((x, y, z) mm, (q1..q4)) or None for the world
+    frame; the reason it cannot be told (several robots, no link to one) or
+    None; the unit that moves the base or None). Values no robot cell has
+    are bad input."""
     text = _read_text(root / "SYSPAR" / "MOC.cfg", shown)
     robots = {}
     movers = {}
@@ -309,9 +324,11 @@ def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None]) -> di
                              "quaternion")
         robots[inst["name"].lower()] = None if tuple(vals) == _IDENTITY else (
             (vals[0] * MM_PER_M, vals[1] * MM_PER_M, vals[2] * MM_PER_M), tuple(vals[3:]))
-        movers[inst["name"].lower()] = inst.get("base_frame_moved_by")
-    robot_of = {inst["name"].lower(): (inst.get("robot") or "").lower()
-                for inst in _cfg_instances(text, "MECHANICAL_UNIT_GROUP") if inst.get("name")}
+        # The unit that moves its base (a track): -base_frame_coordinated,
+        # as RobotWare 6 writes it, or -base_frame_moved_by, as older
+        # systems do.
+        movers[inst["name"].lower()] = (inst.get("base_frame_coordinated")
+                                        or inst.get("base_frame_moved_by"))
     out: dict = {}
     for task, group in groups_of.items():
         robot = robot_of.get(group or "")
@@ -325,8 +342,9 @@ def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None]) -> di
             out[task] = (next(iter(robots.values()), None), None, mover)
         else:
             out[task] = (None, f"{where}: several robots with different base frames and nothing "
-                               f"links task {task} to one (SYS.cfg -UseMechanicalUnitGroup, "
-                               "MOC.cfg MECHANICAL_UNIT_GROUP -robot); say where this task's "
+                               f"links task {task} to one (SYS.cfg CAB_TASKS "
+                               "-UseMechanicalUnitGroup, MECHANICAL_UNIT_GROUP -Robot); say "
+                               "where this task's "
                                "robot stands with --base X,Y,Z,Q1,Q2,Q3,Q4",
                          next((m for m in movers.values() if m), None))
     return out
