@@ -317,6 +317,58 @@ def test_urdf_errors():
         load_urdf(FIXTURES / "robots" / "missing.urdf")
 
 
+_J = '<joint name="{}" type="revolute">'
+
+
+@pytest.mark.parametrize("old, new, says", [
+    (_J.format("J3"), '<joint name="J3" type="prismatic">', "joint J3 is prismatic"),
+    ('<origin xyz="0.38 0 0" rpy="0 0 0"/>', '<origin xyz="0 0 0" rpy="0 0 0"/>',
+     "J3 to J5 has no length"),
+    ('<origin xyz="0 0 0.36" rpy="0 0 0"/>', '<origin xyz="0 0 1e39" rpy="0 0 0"/>',
+     "is not within 100 m"),
+    ('lower="-1.5707963268" upper="1.9198621772"', 'lower="1.9" upper="-1.5"',
+     "J2: its lower limit 108.862 deg is not below its upper limit"),
+    ('<mass value="1.0"/>', '<mass value="-1.0"/>', "mass -1 kg is not a mass"),
+    # urdfdom goes on past an inertial it cannot read (the link weighs 0):
+    # its own message, refused.
+    ('<mass value="1.0"/>', '<mass value="nan"/>', "mass [nan] is not a float"),
+    ('<parent link="link_6"/><child link="tool0"/>', '<parent link="link_5"/><child link="tool0"/>',
+     "does not hang on the last joint J6"),
+    ("</robot>", "</robot", "not a URDF (XML: "),
+])
+def test_a_urdf_no_arm_has_is_bad_input(tmp_path, old, new, says):
+    """Numbers and joints a 6-axis arm cannot have: exit 2 naming them,
+    for every command that loads a robot, and no traceback; urdfdom's own
+    messages (with its source paths) not on the terminal."""
+    from click.testing import CliRunner
+    from rapidcomp.cli import main
+    text = (FIXTURES / "robots" / "irb140.urdf").read_text()
+    assert old in text
+    path = tmp_path / "arm.urdf"
+    path.write_text(text.replace(old, new, 1))
+    for args in (["check", FIXTURES / "cubes.mod", "--profile", FIXTURES / "warm.csv"],
+                 ["simulate", "-o", tmp_path / "m.csv", "--points", "random:20"]):
+        r = CliRunner().invoke(main, [str(a) for a in args] + ["--robot", str(path)])
+        assert r.exit_code == 2 and says in r.output, r.output
+        assert "Traceback" not in r.output and "urdfdom" not in r.output
+        assert not (tmp_path / "m.csv").exists()
+
+
+def test_a_urdf_in_latin1_loads(tmp_path):
+    """A URDF is XML: one that declares ISO-8859-1 and names the robot in it
+    is the same arm (Pinocchio read its bytes as UTF-8)."""
+    from rapidcomp.kinematics.robot import load_urdf
+    text = (FIXTURES / "robots" / "irb140.urdf").read_text()
+    text = text.replace('<?xml version="1.0"?>', '<?xml version="1.0" encoding="ISO-8859-1"?>')
+    path = tmp_path / "arm.urdf"
+    path.write_bytes(text.replace("irb140_urdf", "irb140_\u00e9").encode("latin-1"))
+    robot = load_urdf(path)
+    assert robot.name == "irb140_\u00e9"
+    q = np.array([10.0, 20.0, -30.0, 40.0, 50.0, 60.0])
+    a, b = robot.base_M_flange(q), ROBOT.base_M_flange(q)
+    assert np.allclose(a.translation, b.translation, atol=1e-9)
+
+
 def test_quaternion_matrix_round_trip_rapid_order():
     from rapidcomp.kinematics.frames import matrix_to_quat_wxyz, quat_wxyz_to_matrix
     # RAPID's [0.707107,0,0.707107,0] is +90 deg about y.

@@ -13,13 +13,22 @@ from .plan import Task
 
 
 def load_robot(robot: str | None, limits=()):
+    from ..kinematics.analytic import ArmGeometry, UnsupportedGeometry
+    from ..kinematics.chain import Chain
     from ..kinematics.robot import irb140, load_urdf, override_limits
     if robot is None or robot.lower() == "irb140":
         return override_limits(irb140(), limits)
     if not os.path.isfile(robot):
         raise RapidcompError(f"--robot {robot}: not a built-in robot (irb140) and no such URDF "
                              "file")
-    return override_limits(load_urdf(robot), limits)
+    model = load_urdf(robot)
+    # Every command solves the arm in closed form (fix, check) or places
+    # points by it (simulate): one it cannot is refused here, for all.
+    try:
+        ArmGeometry.from_chain(Chain.from_robot(model))
+    except UnsupportedGeometry as exc:
+        raise InputError(robot, str(exc)) from None
+    return override_limits(model, limits)
 
 
 def load_solver(profile: str, robot: str | None, force: bool, limits=()):

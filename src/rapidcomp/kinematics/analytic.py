@@ -64,6 +64,14 @@ class ArmGeometry:
                                           "through J5's origin")
         A = np.array([origins[2, 0] - origins[1, 0], origins[2, 2] - origins[1, 2]])
         B = np.array([w[0] - origins[2, 0], w[2] - origins[2, 2]])
+        # (Lengths in mm: an arm whose lower arm or forearm is shorter than a
+        # millimetre is not one; its elbow's IK would divide by zero.)
+        if np.hypot(*A) < 1.0:
+            raise UnsupportedGeometry("axis 3 lies on axis 2 (J2 to J3 has no length): not an "
+                                      "arm")
+        if np.hypot(*B) < 1.0:
+            raise UnsupportedGeometry("the wrist centre lies on axis 3 (J3 to J5 has no "
+                                      "length): not an arm")
         # Offset of J6's origin from the wrist centre along axis 6 is part of
         # the flange offset seen from the wrist centre.
         t6 = np.array([origins[5, 0] - w[0], 0.0, 0.0])

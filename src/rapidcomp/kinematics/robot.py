@@ -10,6 +10,11 @@ in rapidcomp mutates a RobotModel's pin.Model; a deformed model is a copy
 from __future__ import annotations
 
 import math
+import os
+import re
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -113,16 +118,97 @@ def irb140() -> RobotModel:
     return RobotModel("IRB140", model, fid, IRB140_LOWER, IRB140_UPPER)
 
 
-def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
-    """A 6-axis arm from URDF (metres), converted to millimetres here."""
-    path = Path(path)
+# A link of a robot arm is shorter than this (m): a larger number is not one.
+MAX_LINK_M = 100.0
+_REVOLUTE = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"}
+
+
+def _urdf_xml(path: Path) -> str:
+    """The URDF's XML as text, in whatever encoding it declares (Pinocchio
+    reads bytes as UTF-8: a Latin-1 name failed as Python decoded it); its
+    XML errors with their line and column."""
     try:
-        model = pin.buildModelFromUrdf(str(path))
-    except Exception as exc:  # pinocchio raises ValueError/RuntimeError variants
-        raise InputError(str(path), f"cannot load URDF: {exc}") from None
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InputError(str(path), f"cannot load URDF: {exc.strerror or exc}") from None
+    try:
+        root = ET.fromstring(data)
+    except ET.ParseError as exc:
+        line, col = exc.position
+        what = re.sub(r": line \d+, column \d+$", "", str(exc))
+        raise InputError(str(path), f"not a URDF (XML: {what})", line, col + 1) from None
+    if root.tag != "robot":
+        raise InputError(str(path), f"not a URDF: expected a <robot> element, found <{root.tag}>",
+                         1)
+    return ET.tostring(root, encoding="unicode")
+
+
+def _heard(fn, *args) -> tuple:
+    """(fn(*args) or the exception it raised, the errors urdfdom printed
+    meanwhile): what the C++ parser prints on the process's stderr (each
+    message with a line of its own source paths) is kept off the terminal
+    and read, so that rapidcomp says what went wrong itself. urdfdom goes
+    on past some errors (an inertial it cannot read: the link weighs
+    nothing), so they are read where it succeeds too."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as heard:
+        try:
+            os.dup2(heard.fileno(), 2)
+            try:
+                out = fn(*args)
+            except Exception as exc:  # pinocchio raises ValueError/RuntimeError variants
+                out = exc
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        heard.seek(0)
+        text = heard.read().decode("utf-8", "replace")
+    errors = [line.split(":", 1)[1].strip() for line in text.splitlines()
+              if line.startswith("Error:")]
+    return out, errors
+
+
+def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
+    """A 6-axis arm from URDF (metres), converted to millimetres here: a
+    serial chain of 6 revolute joints whose numbers a robot arm can have
+    (links within 100 m, each joint's lower limit below its upper one, no
+    negative mass), else bad input."""
+    path = Path(path)
+    xml = _urdf_xml(path)
+    model, errors = _heard(pin.buildModelFromXML, xml)
+    if errors:
+        raise InputError(str(path), "cannot load URDF: " + "; ".join(errors))
+    if isinstance(model, Exception):
+        raise InputError(str(path), f"cannot load URDF: {model}")
     if model.nq != 6 or model.njoints != 7 or any(j.nq != 1 for j in model.joints[1:]):
         raise InputError(str(path), f"expected a serial arm of 6 revolute joints, "
                                     f"found {model.njoints - 1} joints with nq={model.nq}")
+    for i in range(1, model.njoints):
+        kind = model.joints[i].shortname()
+        if kind not in _REVOLUTE:
+            what = ("prismatic" if "Prismatic" in kind or kind[-2:] in ("PX", "PY", "PZ")
+                    else kind)
+            raise InputError(str(path), f"joint {model.names[i]} is {what}: expected a serial "
+                                        "arm of 6 revolute joints")
+        if model.parents[i] != i - 1:
+            raise InputError(str(path), f"joint {model.names[i]} does not follow "
+                                        f"{model.names[i - 1]}: expected a serial arm of 6 "
+                                        "revolute joints")
+        t = np.asarray(model.jointPlacements[i].translation, float)
+        if not (np.isfinite(t).all() and np.abs(t).max() <= MAX_LINK_M):
+            raise InputError(str(path), f"joint {model.names[i]}: its origin "
+                                        f"[{', '.join(f'{v:g}' for v in t)}] m is not within "
+                                        f"{MAX_LINK_M:g} m of the joint before it")
+        lo, hi = float(model.lowerPositionLimit[i - 1]), float(model.upperPositionLimit[i - 1])
+        if not lo < hi:
+            raise InputError(str(path), f"joint {model.names[i]}: its lower limit "
+                                        f"{lo / DEG:g} deg is not below its upper limit "
+                                        f"{hi / DEG:g} deg")
+        mass = float(model.inertias[i].mass)
+        if not (math.isfinite(mass) and mass >= 0):
+            raise InputError(str(path), f"joint {model.names[i]}: its link's mass {mass:g} kg "
+                                        "is not a mass")
     for i in range(1, model.njoints):
         p = model.jointPlacements[i]
         model.jointPlacements[i] = pin.SE3(p.rotation, p.translation * MM_PER_M)
@@ -136,6 +222,9 @@ def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
     fid = next((model.getFrameId(n) for n in names if model.existFrame(n)), None)
     if fid is None:
         raise InputError(str(path), f"no flange frame: expected one named {', '.join(names)}")
+    if model.frames[fid].parentJoint != model.njoints - 1:
+        raise InputError(str(path), f"the flange frame {model.frames[fid].name} does not hang "
+                                    f"on the last joint {model.names[model.njoints - 1]}")
     lower = tuple(float(x) / DEG for x in model.lowerPositionLimit)
     upper = tuple(float(x) / DEG for x in model.upperPositionLimit)
     return RobotModel(model.name or path.stem, model, fid, lower, upper)
