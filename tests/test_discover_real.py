@@ -297,3 +297,40 @@ def test_a_cyclic_error_over_part_of_a_turn_is_not_guessed():
     d = discover(*_case(q, xyz, names), CAT, SIGMA)
     assert "cyclic:J1:3" not in [s.effect.id for s in d.steps]
     assert any("cyclic:J1:3 needs a cyclic error of" in b for b in d.implausible)
+
+
+def test_noise_free_data_are_tested_against_the_least_noise_an_instrument_has():
+    """Data without noise (a simulation's): estimated from the catalogue's
+    fit, sigma would be ~1e-9 mm and every rounding error of the fit an
+    effect. It is taken as noise.MIN_SIGMA_MM, said so, and the one hidden
+    effect is named, nothing else."""
+    from rapidcomp.cli import MIN_SIGMA_MM as SIGMA_OPTION_FLOOR
+    from rapidcomp.discover.noise import MIN_SIGMA_MM
+    assert SIGMA_OPTION_FLOOR == MIN_SIGMA_MM         # --sigma's bound, the same floor
+    _, q = random_points(ROBOT, 60, 5)
+    values = parse_effect_values(CAT, ["joint_offset:J3=0.01"])
+    model, data = _case(q, simulate_positions(ROBOT, WARM, values, q, TOOL))
+    d = discover(model, data, CAT)
+    assert d.sigma_mm == MIN_SIGMA_MM and d.sigma_source.startswith("taken as 0.1 um")
+    assert [s.effect.id for s in d.steps] == ["joint_offset:J3"] and d.verdict == "explained"
+
+
+def test_replicates_copied_cannot_tell_the_noise(tmp_path):
+    """Every pose twice with the very same numbers (copied rows): no noise
+    can be told from them; exit 2 saying so, nothing written; with --sigma
+    the same file is read."""
+    m = tmp_path / "m.csv"
+    assert _cli("simulate", "-o", m, "--tool", "0,0,150", "--points", "random:20",
+                "--effect", "joint_offset:J3=0.01", "-q").exit_code == 0
+    lines = m.read_text().splitlines(keepends=True)
+    head = next(i for i, line in enumerate(lines) if not line.startswith("#")) + 1
+    again = [line.replace(",", "_again,", 1) for line in lines[head:]]
+    m.write_text("".join(lines[:head] + [x for pair in zip(lines[head:], again) for x in pair]))
+    out = tmp_path / "p.csv"
+    r = _cli("discover", m, "--tool", "0,0,150", "--out-profile", out)
+    assert r.exit_code == 2 and "the very same coordinates each time" in r.output, r.output
+    assert not out.exists()
+    r = _cli("discover", m, "--tool", "0,0,150", "--sigma", "0.005", "--out-profile", out)
+    assert r.exit_code == 0 and out.exists(), r.output
+    r = _cli("discover", m, "--sigma", "1e-300")
+    assert r.exit_code == 2 and "expected a standard deviation in mm >= 0.0001" in r.output

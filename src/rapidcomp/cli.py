@@ -101,6 +101,11 @@ def _floats(count: int, what: str, limits=None):
     return parse
 
 
+# discover/noise.py's MIN_SIGMA_MM (the least noise a measurement of a
+# robot's TCP has), written here so that the CLI starts without numpy.
+MIN_SIGMA_MM = 1e-4
+
+
 def _number(lo: float, hi: float, what: str, open_low: bool = False):
     """A click callback: one finite number in lo..hi (lo excluded when
     open_low)."""
@@ -540,9 +545,9 @@ def _write_outcome(outcome, quiet: bool) -> None:
 @click.argument("measured", type=click.Path(dir_okay=False))
 @_campaign_options
 @click.option("--sigma", type=float, default=None,
-              callback=_number(0.0, 10.0, "a standard deviation in mm", open_low=True),
-              help="Measurement noise, standard deviation per axis in mm, > 0 and <= 10 "
-                   "(default: estimated).")
+              callback=_number(MIN_SIGMA_MM, 10.0, "a standard deviation in mm"),
+              help=f"Measurement noise, standard deviation per axis in mm, {MIN_SIGMA_MM:g} to "
+                   "10 (default: estimated).")
 @click.option("--report", "report_path", default=None, type=click.Path(dir_okay=False),
               help="Markdown report: residual analysis and one table per step.")
 @click.option("--json", "json_path", default=None, type=click.Path(dir_okay=False),

@@ -26,6 +26,12 @@ from ..errors import RapidcompError
 from .fit import CatalogueFit
 
 MIN_NOISE_DOF = 10
+# The least noise a measurement of a robot's TCP has (mm): no instrument
+# that measures one resolves 0.1 um. A scatter below it is the digits' (a
+# pose written to the same last digit each time) or a simulation's without
+# noise; tested against a smaller sigma, every rounding error of the fit
+# would count as an effect (--sigma has the same floor).
+MIN_SIGMA_MM = 1e-4
 # Joint vectors closer than this (deg, every joint) are the same pose.
 SAME_POSE_DEG = 1e-6
 HARMONICS = 8
@@ -68,9 +74,15 @@ def noise(sigma_mm: float | None, q_deg: np.ndarray, xyz_mm: np.ndarray,
     dof = 3 * sum(len(g) - 1 for g in groups)
     if dof >= MIN_NOISE_DOF:
         ss = sum(float(np.sum((xyz_mm[g] - xyz_mm[g].mean(axis=0)) ** 2)) for g in groups)
-        return Noise(max(math.sqrt(ss / dof), 1e-9),
-                     f"from {len(groups)} poses measured more than once (pure error, {dof} "
-                     "degrees of freedom)", "replicates")
+        if ss == 0:
+            raise RapidcompError(
+                f"the {len(groups)} poses measured more than once have the very same "
+                "coordinates each time: copied rows, or an instrument whose noise the digits "
+                "written do not show; they cannot tell the noise. Give --sigma (the measuring "
+                "system's standard deviation per axis, mm) or leave the copies out")
+        return floored(math.sqrt(ss / dof),
+                       f"from {len(groups)} poses measured more than once (pure error, {dof} "
+                       "degrees of freedom)", "replicates")
     n = 3 * len(q_deg)
     dof = n - full.rank
     if dof < MIN_NOISE_DOF:
@@ -79,9 +91,18 @@ def noise(sigma_mm: float | None, q_deg: np.ndarray, xyz_mm: np.ndarray,
             f"({full.rank} identifiable parameters): too few to estimate the noise; give "
             "--sigma (the measuring system's standard deviation per axis, mm), measure some "
             "poses more than once, or measure more points")
-    return Noise(max(math.sqrt(full.rss / dof), 1e-9),
-                 f"estimated from the fit of the whole catalogue ({full.rank} identifiable "
-                 f"parameters, {dof} degrees of freedom)", "estimated")
+    return floored(math.sqrt(full.rss / dof),
+                   f"estimated from the fit of the whole catalogue ({full.rank} identifiable "
+                   f"parameters, {dof} degrees of freedom)", "estimated")
+
+
+def floored(sigma_mm: float, source: str, kind: str) -> Noise:
+    """The noise estimated, at least MIN_SIGMA_MM, which the source then says."""
+    if sigma_mm >= MIN_SIGMA_MM:
+        return Noise(sigma_mm, source, kind)
+    return Noise(MIN_SIGMA_MM, f"taken as {MIN_SIGMA_MM * 1000:g} um, the least any instrument "
+                 f"measuring a robot has (estimated {sigma_mm * 1000:.2g} um {source}: data "
+                 "without noise, as a simulation makes them?)", kind)
 
 
 def structure(q_deg: np.ndarray, residuals: np.ndarray, joint_names,

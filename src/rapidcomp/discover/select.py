@@ -35,7 +35,7 @@ from .effects import THERMAL_PREFIX, Effect, thermal_variants
 from .fit import LEVERAGE_TOL, RANK_TOL, Fit, fit
 from .measured import Measurements
 from .model import ZERO_COLUMN, ParamModel
-from .noise import Noise, Structure, noise, structure
+from .noise import Structure, floored, noise, structure
 from .outliers import Outlier, screen
 from .points import random_points
 from .plausible import bounds, implausible
@@ -658,9 +658,9 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     if warm is not None and sigma_mm is None:
         # The same pose at other times is no replicate (it moved): the
         # scatter about each pose's own warm-up curve is the pure error.
-        nz = Noise(warm.sigma_mm, f"from the warm-up fit of {warm.poses} poses measured at "
-                   f"{warm.times} times (each pose's scatter about its own curve a + s(t) b, "
-                   f"{warm.dof} degrees of freedom)", "replicates")
+        nz = floored(warm.sigma_mm, f"from the warm-up fit of {warm.poses} poses measured "
+                     f"at {warm.times} times (each pose's scatter about its own curve a + s(t) "
+                     f"b, {warm.dof} degrees of freedom)", "replicates")
     else:
         nz = noise(sigma_mm, data.q_deg, meas, screened.full, model.tool)
     sigma, source = nz.sigma_mm, nz.source

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RapidcompError
-from .noise import replicate_groups
+from .noise import MIN_SIGMA_MM, replicate_groups
 from .stats import chi2_ppf, chi2_sf
 
 TAU_RANGE_MIN = (1.0, 10_000.0)
@@ -183,13 +183,16 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
         lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, GRID - 1)]
         tau = _golden(lambda x: _rss(groups, t, xyz, x), lo, hi)
     best = _rss(groups, t, xyz, tau, stood, tau_cool)
-    sigma = sigma_mm if sigma_mm is not None else math.sqrt(best / dof)
+    # (Tested against no less than the noise any measurement has:
+    # noise.MIN_SIGMA_MM; the estimate itself kept, select.py floors it.)
+    estimated = math.sqrt(best / dof)
+    sigma = sigma_mm if sigma_mm is not None else max(estimated, MIN_SIGMA_MM)
     static = sum(float(np.sum((xyz[g] - xyz[g].mean(axis=0)) ** 2)) for g in groups)
     chi = (static - best) / max(sigma, 1e-12) ** 2
     p = chi2_sf(max(chi, 0.0), 3 * len(groups) + 1)
     span = (float(t.min()), float(t.max()))
     if p >= ALPHA:
-        return Warmup(len(groups), times, None, None, None, p, sigma, dof,
+        return Warmup(len(groups), times, None, None, None, p, sigma_mm or estimated, dof,
                       f"nothing changes over time (chi-square p = {p:.3g} over {len(groups)} "
                       f"poses at {times} times, {span[0]:g}-{span[1]:g} min): every effect is "
                       "static")
@@ -237,8 +240,8 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
     state_from = min(better, key=lambda x: x.chi_vs_time).name if better else None
     if state_from is not None:
         text += f"; the thermal state comes from {state_from}, which the points follow better"
-    return Warmup(len(groups), times, float(tau), low, high, p, sigma, dof, text, sensors,
-                  state_from, tau_cool)
+    return Warmup(len(groups), times, float(tau), low, high, p, sigma_mm or estimated, dof,
+                  text, sensors, state_from, tau_cool)
 
 
 def _crossing(f, outside: float, inside: float, iterations: int = 40) -> float:
