@@ -288,6 +288,10 @@ def test_detectability_predicts_what_discover_names():
      "duplicate point 'A' (first on line 2)"),
     ("# c\npoint,j1,j2,j3,j4,j5,j6,x,y,z\nA,0,0,0,0,30,0,515,0\n", 3, "9 values, expected 10"),
     ("point,j1,j2,j3,j4,j5,j6,x,y,z\nA,0,0,0,0,30,0,515,0,600\n", 2, "expected at least 3"),
+    ("point,j1,j2,j3,j4,j5,j6,x,y,z\nA,0,0,0,0,30,0,515,0,600,9,9\n", 2,
+     "12 values, expected 10"),
+    ("point,j1,j2,j3,j4,j5,j6,x,y,z,x\nA,0,0,0,0,30,0,515,0,600,9\n", 1,
+     "column x is named twice (columns 8 and 11)"),
 ])
 def test_measured_file_errors(body, line, phrase):
     from rapidcomp.discover.measured import parse_measured

@@ -73,6 +73,18 @@ def test_profile_errors_name_file_and_line(body, line, phrase):
     assert phrase in exc.value.format()
 
 
+@pytest.mark.parametrize("head, phrase", [
+    # A misspelt offset_deg was read as no offset at all.
+    ("joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg,ofset_deg\n", "unknown column ofset_deg"),
+    ("joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg,dx_mm\n",
+     "column dx_mm is named twice (columns 2 and 8)"),
+])
+def test_a_column_the_profile_cannot_mean_is_refused(head, phrase):
+    with pytest.raises(InputError) as exc:
+        parse_profile(head + "J1,0,0,0,0,0,0,0.5\n", "w.csv")
+    assert exc.value.format().startswith(f"w.csv:1: {phrase}")
+
+
 def test_missing_column():
     with pytest.raises(InputError) as exc:
         parse_profile("joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg\nJ1,0,0,0,0,0\n", "w.csv")

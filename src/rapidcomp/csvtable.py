@@ -24,8 +24,9 @@ def _delimiter(text: str) -> str:
     return ","
 
 
-def header_and_rows(text: str, source: str, required, what: str = "file"):
-    """(header names lower-cased, [(line, row), ...] after the header).
+def header_and_rows(text: str, source: str, required, what: str = "file", known=None):
+    """(header names lower-cased, [(line, row), ...] after the header);
+    known: the only columns the file may have, when given.
 
     A file saved by a spreadsheet with ';' between cells and decimal commas
     (1,5 for 1.5) is read as such: the commas become points."""
@@ -39,6 +40,16 @@ def header_and_rows(text: str, source: str, required, what: str = "file"):
         raise InputError(source, f"empty {what}; expected the header " + ",".join(required), 1)
     head_line, header = numbered[0]
     header = [h.strip().lower() for h in header]
+    # A column named twice: which one is meant cannot be told (one would
+    # be read and the other silently not).
+    for k, h in enumerate(header):
+        if h and h in header[:k]:
+            raise InputError(source, f"column {h} is named twice (columns {header.index(h) + 1} "
+                             f"and {k + 1}): which one is meant cannot be told", head_line)
+    unknown = [h for h in header if h and known is not None and h not in known]
+    if unknown:
+        raise InputError(source, f"unknown column {', '.join(unknown)}; a {what}'s columns are "
+                         + ", ".join(known), head_line)
     missing = [c for c in required if c not in header]
     if missing:
         found = ", ".join(h for h in header if h) or "nothing"

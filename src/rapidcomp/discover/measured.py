@@ -77,7 +77,8 @@ def parse_table(text: str, source: str, columns, numeric, min_rows: int):
     names, values, lines = [], [], []
     seen: dict[str, int] = {}
     for line, row in body:
-        if len(row) < len(header):
+        # (Empty cells past the header's are a spreadsheet's trailing commas.)
+        if len(row) < len(header) or any(c.strip() for c in row[len(header):]):
             raise InputError(source, f"{len(row)} values, expected {len(header)}", line)
         name = row[index["point"]].strip() if "point" in index else str(len(names) + 1)
         if not name:

@@ -146,7 +146,10 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
     allowed = {f"j{i + 1}": n for i, n in enumerate(joint_names)}
     allowed |= {n.lower(): n for n in joint_names} | {
         "flange": "flange", "base": "base", "payload": "payload"}
-    header, body = header_and_rows(text, source, COLUMNS, "profile")
+    # (Every number of a profile moves the compensation: a column it does
+    # not know, a misspelt offset_deg, is not passed over in silence.)
+    header, body = header_and_rows(text, source, COLUMNS, "profile",
+                                   known=COLUMNS + EXTRA_COLUMNS)
     columns = COLUMNS + tuple(c for c in EXTRA_COLUMNS if c in header)
     index = {c: header.index(c) for c in columns}
     seen: dict[str, tuple[int, str]] = {}
