@@ -211,6 +211,28 @@ def test_moc_values_no_cell_has_are_bad_input(tmp_path):
         assert r.exit_code == 2 and "SYSPAR/MOC.cfg" in r.output and says in r.output, r.output
 
 
+def test_a_moc_cfg_is_read_as_a_controller_writes_it_or_refused(tmp_path):
+    """A comment line is no instance (`# old: -name "ROB_OLD" ...` made a
+    second robot and the backup was refused); a file an editor saved as
+    UTF-16 is the same file; one that is not a configuration file at all
+    is bad input (read as one, the robot was taken at the world origin
+    without a word)."""
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    moc = bk / "SYSPAR" / "MOC.cfg"
+    text = ("MOC:CFG_1.0:6:0::\n#\nROBOT:\n\n      -name \"ROB_1\" -base_frame_pos_x 0.1\n"
+            "# old: -name \"ROB_OLD\" -base_frame_pos_x 5\n")
+    moc.write_text(text)
+    (b,) = tasks_of(bk)
+    assert b.base == ((100.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)) and b.base_problem is None
+    moc.write_bytes(text.encode("utf-16"))
+    (b,) = tasks_of(bk)
+    assert b.base == ((100.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+    moc.write_bytes(bytes(range(256)) * 4)
+    r = run("check", bk, "--profile", WARM, "--track", "a:x")
+    assert r.exit_code == 2 and "MOC.cfg:1: not a controller configuration file" in r.output
+
+
 def test_a_compensated_program_is_recognised(tmp_path):
     """Compensating rapidcomp's own output adds the correction twice: the
     names it gives its values (jt_..., ..._c) are recognised and said."""

@@ -215,8 +215,35 @@ def _read_text(path: Path, shown: str | None = None) -> str | None:
     try:
         return path.read_bytes().decode("latin-1")
     except OSError as exc:
-        raise InputError(f"{shown}/{path.parent.name}/{path.name}" if shown else str(path),
-                         f"cannot read: {exc.strerror or exc}") from None
+        raise InputError(_shown_cfg(path, shown), f"cannot read: {exc.strerror or exc}") from None
+
+
+def _shown_cfg(path: Path, shown: str | None) -> str:
+    return f"{shown}/{path.parent.name}/{path.name}" if shown else str(path)
+
+
+_CFG_HEAD = re.compile(r"[A-Z_]+:CFG_")
+
+
+def _read_cfg(path: Path, shown: str) -> str | None:
+    """A controller configuration file's text (SYSPAR/*.cfg), None when it
+    does not exist. It begins `TOPIC:CFG_...` (MOC:CFG_1.0:6:0::), in the
+    controller's ASCII (one an editor saved as UTF-16, with its BOM, is
+    read too); a file that does not is not one, and bad input: read as
+    one, nothing in it would be found, and the backup's robot would be
+    taken as standing at the world origin without a word."""
+    raw = None if not path.exists() else path.read_bytes() if path.is_file() else b""
+    if raw is None:
+        return None
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        text = raw.decode("utf-16")
+    else:
+        text = _read_text(path, shown)
+    text = text.lstrip("\ufeff")
+    if not _CFG_HEAD.match(text.lstrip()):
+        raise InputError(_shown_cfg(path, shown), "not a controller configuration file: "
+                         f"expected a first line such as {path.stem.upper()}:CFG_1.0:6:0::", 1)
+    return text
 
 
 def _backinfo_names(root: Path, shown: str) -> dict[str, str]:
@@ -242,6 +269,8 @@ def _cfg_instances(text: str | None, type_name: str) -> list[dict[str, str | Non
         section = section[:end.start()]
     out = []
     for line in re.sub(r"\\[ \t]*\r?\n", " ", section).splitlines():
+        if line.lstrip().startswith("#"):
+            continue                  # (a comment: `# old: -name "ROB_OLD" ...`)
         pairs = re.findall(r'(?:^|\s)-(\w+)(?:[ \t]+("[^"]*"|[^\s"-]\S*|-[\d.]\S*))?', line)
         if pairs:
             out.append({k.lower(): (v.strip('"') if v else None) for k, v in pairs})
@@ -253,7 +282,7 @@ def _motion_tasks(root: Path, shown: str) -> dict[str, str | None] | None:
     instances with -MotionTask) -> their mechanical unit group (lower
     case, None when not given), or None when the file says nothing about
     tasks."""
-    text = _read_text(root / "SYSPAR" / "SYS.cfg", shown)
+    text = _read_cfg(root / "SYSPAR" / "SYS.cfg", shown)
     instances = _cfg_instances(text, "CAB_TASKS")
     if not instances:
         return None
@@ -281,7 +310,7 @@ def _group_robots(root: Path, shown: str) -> dict[str, str]:
     MultiMove backup has it there); one that MOC.cfg holds is read too."""
     out: dict[str, str] = {}
     for cfg in ("SYS.cfg", "MOC.cfg"):
-        for inst in _cfg_instances(_read_text(root / "SYSPAR" / cfg, shown),
+        for inst in _cfg_instances(_read_cfg(root / "SYSPAR" / cfg, shown),
                                    "MECHANICAL_UNIT_GROUP"):
             if inst.get("name"):
                 out.setdefault(inst["name"].lower(), (inst.get("robot") or "").lower())
@@ -298,7 +327,7 @@ def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None],
     frame; the reason it cannot be told (several robots, no link to one) or
     None; the unit that moves the base or None). Values no robot cell has
     are bad input."""
-    text = _read_text(root / "SYSPAR" / "MOC.cfg", shown)
+    text = _read_cfg(root / "SYSPAR" / "MOC.cfg", shown)
     robots = {}
     movers = {}
     where = f"{shown}/SYSPAR/MOC.cfg"
