@@ -404,3 +404,39 @@ def test_a_loops_move_that_must_stay_a_robtarget_move_stays_one_in_every_iterati
     assert [r.target for r in kept] == (["arr{i} [i=1]"] if mode == "absj" else [])
     assert all(r.action == "robtarget arr rewritten in place" for r in rows)
     parse_text(result.modules[0].text, "out.mod")
+
+
+ALIASED = """MODULE M
+    ALIAS robtarget myrt;
+    CONST myrt p1:=[[400,0,250],[0.707107,0,0.707107,0],[0,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]];
+    PROC main()
+        MoveL p1,v100,fine,tool0;
+    ENDPROC
+ENDMODULE
+"""
+
+
+@pytest.mark.parametrize("mode", ["robtarget", "absj"])
+def test_a_target_of_an_alias_type_is_the_type_it_names(mode):
+    """`ALIAS robtarget myrt; CONST myrt p1` is robtarget data (the controller
+    runs the move): compensated as a robtarget (it was refused, "p1 is a
+    myrt, not a target"); a declaration edited in place keeps its type's
+    name as written."""
+    pf = parse_text(ALIASED, "m.mod")
+    assert pf.modules[0].declarations[0].type == "robtarget"
+    result = fix(Task("m", (pf,)), Solver(irb140(), irb140()), mode)
+    assert [r.status for r in result.rows] == ["compensated"]
+    after = apply_edits(ALIASED, result.modules[0].edits)
+    assert "CONST myrt p1:=" in after
+    assert ("MoveAbsJ jt_p1," in after) == (mode == "absj")
+
+
+def test_an_output_named_with_a_slash_is_a_folder(tmp_path, monkeypatch):
+    """-o out/ of one module: the folder out (made), the module in it; it
+    was a file named out."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "paper_front.mod").write_bytes((FIXTURES / "paper_front.mod").read_bytes())
+    r = _run(["fix", "paper_front.mod", "--profile", str(FIXTURES / "warm.csv"), "-o", "out/"])
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["paper_front.md",
+                                                                    "paper_front.mod"]

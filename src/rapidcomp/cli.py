@@ -390,7 +390,10 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
             stem = Path(name).stem if src.kind == "pgf" else name
             out = str(Path(output) / stem) if several else (output or default_output(
                 program.rstrip("/\\"), folder=True))
-        elif several or (output is not None and os.path.isdir(output)):
+        elif several or (output is not None and (os.path.isdir(output) or output.endswith(
+                ("/", os.sep)))):
+            # (-o out/ names a folder, made if it is not there: not a file
+            # named out.)
             out = str(Path(output) / name)
         else:
             out = output or default_output(program)

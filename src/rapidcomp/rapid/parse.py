@@ -88,8 +88,10 @@ def _dims(dims, consts) -> tuple[int | None, ...]:
 
 
 def _declaration(source: SourceText, decl: A.DataDecl, routine: str | None,
-                 consts, known=None) -> Declaration:
+                 consts, known=None, aliases=None) -> Declaration:
     type_ = decl.type_name.lower()
+    if aliases:
+        type_ = aliases.get(type_, type_)
     dims = _dims(decl.dims, consts)
     value = None
     issue = None
@@ -197,8 +199,23 @@ def _walk(source, stmts, routine: str, loops: list, out: list, cond: int = 0,
                 _walk(source, s.default, routine, loops, out, len(loops), known)
 
 
+def _aliases(node: A.ModuleNode) -> dict[str, str]:
+    """The module's ALIAS types (lower case) -> the type each names: data
+    of an alias of robtarget is robtarget data (an alias of an alias,
+    which RAPID does not allow, is followed as far as it goes)."""
+    out = {a.name.lower(): a.type_name.lower() for a in node.items
+           if isinstance(a, A.AliasDecl)}
+    for name in out:
+        seen = {name}
+        while out[name] in out and out[name] not in seen:
+            seen.add(out[name])
+            out[name] = out[out[name]]
+    return out
+
+
 def _build_module(source: SourceText, node: A.ModuleNode, known=None) -> Module:
     consts = _const_ints(node)
+    alias_of = _aliases(node)
     decls = []
     routines = []
     motions: list[Motion] = []
@@ -206,11 +223,11 @@ def _build_module(source: SourceText, node: A.ModuleNode, known=None) -> Module:
     aliases = []
     for item in node.items:
         if isinstance(item, A.DataDecl):
-            decls.append(_declaration(source, item, None, consts, known))
+            decls.append(_declaration(source, item, None, consts, known, alias_of))
         elif isinstance(item, A.Routine):
             routines.append(RoutineInfo(item))
             for d in item.decls:
-                decls.append(_declaration(source, d, item.name, consts, known))
+                decls.append(_declaration(source, d, item.name, consts, known, alias_of))
             _walk(source, item.body, item.name, [], motions, known=known)
             for h in item.handlers:
                 _walk(source, h.body, item.name, [], motions, known=known)
