@@ -94,3 +94,31 @@ def test_a_const_defined_through_itself_is_bad_input(tmp_path, consts, where, ch
     first = result.stderr.splitlines()[0]
     assert first.startswith(f"cyc.mod:{where}") and f"({chain}): it has no value" in first
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cyc.mod"]
+
+
+def _nested_ifs(n: int) -> str:
+    return "\n".join(["MODULE Deep", "  CONST robtarget p1:=[[400,0,250],[0.707107,0,0.707107,0],"
+                      "[0,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]];", "  PROC main()"]
+                     + ["    IF TRUE THEN"] * n + ["      MoveL p1,v100,fine,tool0;"]
+                     + ["    ENDIF"] * n + ["  ENDPROC", "ENDMODULE", ""])
+
+
+def test_blocks_nested_thousands_deep(tmp_path):
+    """10,000 nested IFs: followed as a flow too large (the safe choice for
+    every move, said), not refused for Python's frames with a message
+    naming no place; 30,000, past what the parse follows: file:line:col of
+    the deepest statement, exit 2, nothing written (run in a process of
+    its own: the command sets its own frame limit)."""
+    path = tmp_path / "deep.mod"
+    path.write_text(_nested_ifs(10_000))
+    proc = subprocess.run([sys.executable, "-m", "rapidcomp", "check", str(path), "--profile",
+                           str(FIXTURES / "warm.csv")], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "1 of 1 target uses compensable" in proc.stdout
+    assert "blocks or calls nested thousands of levels deep" in proc.stdout
+    path.write_text(_nested_ifs(30_000))
+    proc = subprocess.run([sys.executable, "-m", "rapidcomp", "fix", str(path), "--profile",
+                           str(FIXTURES / "warm.csv")], capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert proc.stderr.startswith("deep.mod:30004:7: blocks nest 30000 levels deep here")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["deep.mod"]

@@ -244,11 +244,14 @@ class _Walker:
                 self.main(main)
             for rt in others:
                 self.routine(rt, entry, (), None)
-        except _TooLarge:
-            self.flow = Flow(notes=[f"the task's control flow is too large to follow (more than "
-                                    f"{MAX_VISITS} statement visits): configuration supervision, "
-                                    "program displacement and the previous position of every "
-                                    "move are treated as unknown"])
+        except (_TooLarge, RecursionError) as exc:
+            # (Blocks or calls nested thousands deep, past the frames Python
+            # has: as a flow too large, the safe choice for every move.)
+            what = (f"more than {MAX_VISITS} statement visits" if isinstance(exc, _TooLarge)
+                    else "blocks or calls nested thousands of levels deep")
+            self.flow = Flow(notes=[f"the task's control flow is too large to follow ({what}): "
+                                    "configuration supervision, program displacement and the "
+                                    "previous position of every move are treated as unknown"])
             return self.flow
         self.interrupts(others)
         self.notes(others, has_pdisp)

@@ -57,7 +57,14 @@ def parse_source(source: SourceText) -> ParsedFile:
         finally:
             for child in children:
                 child.close()
-        modules = tuple(_build_module(source, node, known) for node in nodes)
+        try:
+            modules = tuple(_build_module(source, node, known) for node in nodes)
+        except RecursionError:
+            # (Blocks nested deeper than Python's frames go: generated code
+            # no controller runs either; said where, not only that.)
+            depth, at = _deepest(nodes)
+            raise source.error(at, f"blocks nest {depth} levels deep here (IF, FOR, WHILE, "
+                               "TEST): more than rapidcomp follows") from None
     return ParsedFile(source, header.value if header else None, modules,
                       known.words if known is not None else None)
 
@@ -240,6 +247,37 @@ def _build_module(source: SourceText, node: A.ModuleNode, known=None) -> Module:
 
 
 # ---------------------------------------------------------------- error messages
+
+def _bodies(s) -> tuple:
+    """The statement lists a statement holds."""
+    t = type(s)
+    if t is A.If:
+        return tuple(b for _, b in s.branches) + (s.orelse,)
+    if t is A.For or t is A.While:
+        return (s.body,)
+    if t is A.CompactIf:
+        return ((s.stmt,),)
+    if t is A.Test:
+        return tuple(b for _, b in s.cases) + ((s.default,) if s.default else ())
+    return ()
+
+
+def _deepest(nodes) -> tuple[int, int]:
+    """(how many blocks deep, where it begins) the most deeply nested
+    statement is (found without recursion)."""
+    best = (0, nodes[0].span.start if nodes else 0)
+    for node in nodes:
+        for item in node.items:
+            if not isinstance(item, A.Routine):
+                continue
+            stack = [(s, 0) for s in item.body]
+            while stack:
+                s, depth = stack.pop()
+                if depth > best[0]:
+                    best = (depth, s.span.start)
+                for body in _bodies(s):
+                    stack.extend((x, depth + 1) for x in body)
+    return best
 
 _STATEMENT_STARTS = {"NAME", "FAST_CALL", "IF", "FOR", "WHILE", "TEST", "GOTO", "RETURN",
                      "RAISE", "RETRY", "TRYNEXT", "EXIT", "CONNECT", "LATE", "PLACEHOLDER"}
