@@ -122,3 +122,19 @@ def test_blocks_nested_thousands_deep(tmp_path):
     assert proc.returncode == 2
     assert proc.stderr.startswith("deep.mod:30004:7: blocks nest 30000 levels deep here")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["deep.mod"]
+
+
+def test_a_line_of_a_megabyte_is_shown_around_its_column(tmp_path):
+    """A generated line of 1e6 characters with a number out of range at its
+    end: the message shows the number by its start and length and the line
+    around the column, the caret under the number (it was 2 MB of stderr)."""
+    path = tmp_path / "long.mod"
+    path.write_text("MODULE L\n  PROC main()\n    " + "WaitTime 0.1; " * 70_000
+                    + "WaitTime 1" + "0" * 400 + ";\n  ENDPROC\nENDMODULE\n")
+    r = CliRunner().invoke(main, ["inspect", str(path)])
+    assert r.exit_code == 2 and len(r.stderr) < 1000, len(r.stderr)
+    first, line, caret = r.stderr.splitlines()[:3]
+    assert first == (f"{path}:3:980014: number 10000000000000000000... (401 characters) is "
+                     "out of range (a num holds +-3.4E38, a dnum +-1.8E308)")
+    assert line.startswith("    ...") and line.endswith("...")
+    assert line[caret.index("^"):].startswith("1000")

@@ -33,13 +33,35 @@ class InputError(RapidcompError):
             where += f":{self.line}"
             if self.col is not None:
                 where += f":{self.col}"
-        text = f"{where}: {self.message}"
+        text = f"{where}: {_short(self.message, MESSAGE_CHARS)}"
         if self.source_line is not None:
             shown = self.source_line.rstrip("\r\n").replace("\t", " ")
+            caret = self.col - 1 if self.col is not None else None
+            if len(shown) > LINE_CHARS:
+                # (A line of a megabyte, a generated one: the part around
+                # the column, not all of it.)
+                start = max(0, min(caret or 0, len(shown)) - LINE_CHARS // 2)
+                cut = shown[start:start + LINE_CHARS]
+                shown = ("..." if start else "") + cut + (
+                    "..." if start + LINE_CHARS < len(shown) else "")
+                if caret is not None:
+                    caret = caret - start + (3 if start else 0)
             text += f"\n    {shown}"
-            if self.col is not None:
-                text += "\n    " + " " * (self.col - 1) + "^"
+            if caret is not None:
+                text += "\n    " + " " * caret + "^"
         return text
+
+
+# What a message and its source line show at most (characters): a number or
+# a name of a megabyte is shown by its ends.
+MESSAGE_CHARS = 2000
+LINE_CHARS = 200
+
+
+def _short(text: str, most: int) -> str:
+    if len(text) <= most:
+        return text
+    return f"{text[:most // 2]}...({len(text) - most} characters)...{text[-most // 2:]}"
 
 
 class InternalError(RapidcompError):

@@ -48,7 +48,9 @@ def parse_source(source: SourceText) -> ParsedFile:
             except ParseFailure as exc:
                 raise _syntax_error(source, exc) from None
             except NumberOutOfRange as exc:
-                raise source.error(exc.pos, f"number {exc.text} is out of range (a num holds "
+                shown = (exc.text if len(exc.text) <= 40 else
+                         f"{exc.text[:20]}... ({len(exc.text)} characters)")
+                raise source.error(exc.pos, f"number {shown} is out of range (a num holds "
                                    "+-3.4E38, a dnum +-1.8E308)") from None
             # (The child's work is a fraction of the parse's: it is waited
             # for as long as the parse took, and a second more, at most.)
