@@ -138,3 +138,22 @@ def test_a_line_of_a_megabyte_is_shown_around_its_column(tmp_path):
                      "out of range (a num holds +-3.4E38, a dnum +-1.8E308)")
     assert line.startswith("    ...") and line.endswith("...")
     assert line[caret.index("^"):].startswith("1000")
+
+
+def test_messages_that_say_what_is_wrong(tmp_path):
+    """A string not closed on its line says so (it said "unexpected
+    character '\"'"); --profile '' names the option (it said ". : Is a
+    directory"); a measured file with fewer rows than discover's 6 poses
+    says 6 (it said 3)."""
+    bad = tmp_path / "s.mod"
+    bad.write_text('MODULE M\n  PROC main()\n    TPWrite "hello;\n  ENDPROC\nENDMODULE\n')
+    r = CliRunner().invoke(main, ["inspect", str(bad)])
+    assert r.exit_code == 2
+    assert r.stderr.startswith(f"{bad}:3:13: a string not closed on its line: expected a "
+                               "closing '\"' before the end of the line")
+    r = CliRunner().invoke(main, ["check", str(FIXTURES / "cubes.mod"), "--profile", ""])
+    assert r.exit_code == 2 and r.stderr.startswith("--profile: no file named"), r.stderr
+    m = tmp_path / "m.csv"
+    m.write_text("point,j1,j2,j3,j4,j5,j6,x,y,z\nA,0,0,0,0,30,0,515,0,600\n")
+    r = CliRunner().invoke(main, ["discover", str(m)])
+    assert r.exit_code == 2 and "1 point(s), expected at least 6" in r.stderr, r.stderr

@@ -233,6 +233,27 @@ def test_a_moc_cfg_is_read_as_a_controller_writes_it_or_refused(tmp_path):
     assert r.exit_code == 2 and "MOC.cfg:1: not a controller configuration file" in r.output
 
 
+def test_a_backup_without_backinfo_says_so(tmp_path):
+    """Without BACKINFO/backinfo.txt the folders TASK1, TASK2 cannot be
+    matched to SYS.cfg's tasks: said (it said the backup has no motion
+    task holding modules)."""
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    shutil.rmtree(bk / "BACKINFO")
+    r = run("check", bk, "--profile", WARM, "--track", "a:x")
+    assert r.exit_code == 2 and "BACKINFO/backinfo.txt is missing" in r.output, r.output
+    assert "(TASK1, TASK2) cannot be matched to the motion tasks" in r.output
+
+
+def test_a_program_file_error_names_its_modules_line(tmp_path):
+    """A module named "." is on line 3 (the name is also in the XML
+    declaration, on line 1)."""
+    (tmp_path / "P.pgf").write_text('<?xml version="1.0" encoding="ISO-8859-1" ?>\n'
+                                    "<Program>\n    <Module>.</Module>\n</Program>\n")
+    r = run("check", tmp_path / "P.pgf", "--profile", WARM)
+    assert r.exit_code == 2 and "P.pgf:3: module . listed here" in r.output, r.output
+
+
 def test_a_compensated_program_is_recognised(tmp_path):
     """Compensating rapidcomp's own output adds the correction twice: the
     names it gives its values (jt_..., ..._c) are recognised and said."""

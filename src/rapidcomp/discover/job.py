@@ -77,7 +77,8 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
     if sigma is not None and not sigma > 0:
         raise RapidcompError(f"--sigma {sigma}: expected a positive standard deviation in mm")
     nominal, prof = _load(robot, profile, force, payload)
-    data = read_measured(measured)
+    # (Fewer rows than the poses it needs: said as that rule, not a smaller.)
+    data = read_measured(measured, min_points=MIN_DISTINCT_POSES)
     distinct = len(np.unique(np.round(data.q_deg, 6), axis=0))
     if distinct < MIN_DISTINCT_POSES:
         raise RapidcompError(f"{measured}: {len(data)} rows but {distinct} distinct pose(s); "

@@ -276,6 +276,8 @@ def _check_size(source, line, key, d, r, extra) -> None:
 
 
 def read_profile(path: str | Path, force: bool = False, joint_names=None) -> ThermalProfile:
+    if not str(path):
+        raise InputError("--profile", "no file named: expected a profile CSV")
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8-sig")

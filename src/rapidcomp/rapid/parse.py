@@ -43,6 +43,11 @@ def parse_source(source: SourceText) -> ParsedFile:
                 header, nodes = engine().parse(source.text)
             except LexFailure as exc:
                 ch = source.text[exc.pos]
+                if ch == '"':
+                    # (A string's closing quote is on its own line: RAPID's
+                    # strings do not go on past it.)
+                    raise source.error(exc.pos, "a string not closed on its line: expected a "
+                                       "closing '\"' before the end of the line") from None
                 raise source.error(exc.pos,
                                    f"unexpected character {ch!r}: not part of RAPID") from None
             except ParseFailure as exc:

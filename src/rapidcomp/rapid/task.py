@@ -129,9 +129,15 @@ def _pgf(p: Path, shown: str) -> TaskSource:
         raise InputError(shown, f"expected a <Program> element, found <{root.tag}>", 1)
     text = data.decode("utf-8", "replace")
     mods = []
+    at = 0
     for el in root.iter("Module"):
-        rel = (el.text or "").strip().replace("\\", "/")
-        line = _line_of(text, rel)
+        raw = (el.text or "").strip()
+        rel = raw.replace("\\", "/")
+        # (Its own element's line: a name such as "." is in the XML
+        # declaration too.)
+        m = re.compile(r"<Module>\s*" + re.escape(raw) + r"\s*</Module>").search(text, at)
+        line = text.count("\n", 0, m.start()) + 1 if m else _line_of(text, rel)
+        at = m.end() if m else at
         if not rel or Path(rel).is_absolute() or ".." in Path(rel).parts:
             raise InputError(shown, f"module path {rel!r}: expected a file name relative to "
                              "the program file", line)
@@ -161,6 +167,14 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
     folders = sorted(d for d in (root / "RAPID").iterdir() if d.is_dir())
     names = _backinfo_names(root, shown)
     motion = _motion_tasks(root, shown)
+    if (motion and not names and not (root / "BACKINFO" / "backinfo.txt").exists()
+            and not any(d.name.upper() in motion for d in folders)):
+        # The folders are TASK1, TASK2...; which is which task only
+        # backinfo.txt says.
+        raise RapidcompError(
+            f"{shown}: BACKINFO/backinfo.txt is missing, so the task folders "
+            f"({', '.join(d.name for d in folders)}) cannot be matched to the motion "
+            f"tasks SYSPAR/SYS.cfg names ({', '.join(sorted(motion))}); copy it from the backup")
     tasks, skipped, other = [], [], []
     for d in folders:
         name = names.get(d.name.upper(), d.name)
