@@ -65,6 +65,8 @@ def test_nominal_model_is_untouched():
     ("J1,6,0,0,0,0,0\n", 2, "shift of 6.000 mm exceeds 5.0 mm"),
     ("J1,0,0,0,0,1.5,0\n", 2, "rotation of 1.5 deg exceeds 1.0 deg"),
     ("J1,0,0,0,0,0\n", 2, "6 values, expected 7"),
+    # (Ten to Python's float(), no number in a file.)
+    ("J1,0,1_0,0,0,0,0\n", 2, "dy_mm is '1_0', expected a number"),
 ])
 def test_profile_errors_name_file_and_line(body, line, phrase):
     with pytest.raises(InputError) as exc:

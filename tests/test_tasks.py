@@ -233,6 +233,24 @@ def test_a_moc_cfg_is_read_as_a_controller_writes_it_or_refused(tmp_path):
     assert r.exit_code == 2 and "MOC.cfg:1: not a controller configuration file" in r.output
 
 
+@pytest.mark.parametrize("robot, says", [
+    ('-name "ROB_1" -base_frame_pos_x 0.1 -base_frame_pos_x 0.2', "-base_frame_pos_x is given twice"),
+    ('-name "ROB_1" -base_frame_pos_x 0.1\n\n      -name "ROB_1" -base_frame_pos_x 0.2',
+     "ROBOT ROB_1 is defined twice"),
+    ('-name "ROB_1" -base_frame_pos_x 1_0', "-base_frame_pos_x 1_0 is not a number"),
+    ('-name "ROB_1" -base_frame_pos_x', "-base_frame_pos_x (no value) is not a number"),
+])
+def test_a_moc_value_a_controller_cannot_have_taken_is_bad_input(tmp_path, robot, says):
+    """Which of two values the controller took cannot be told; 1_0 is ten
+    to Python, no number to a controller; an attribute without its value
+    was read as 0."""
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    (bk / "SYSPAR" / "MOC.cfg").write_text(f"MOC:CFG_1.0:6:0::\n#\nROBOT:\n\n      {robot}\n")
+    r = run("check", bk, "--profile", WARM, "--track", "a:x")
+    assert r.exit_code == 2 and "SYSPAR/MOC.cfg" in r.output and says in r.output, r.output
+
+
 def test_a_backup_without_backinfo_says_so(tmp_path):
     """Without BACKINFO/backinfo.txt the folders TASK1, TASK2 cannot be
     matched to SYS.cfg's tasks: said (it said the backup has no motion
@@ -243,6 +261,10 @@ def test_a_backup_without_backinfo_says_so(tmp_path):
     r = run("check", bk, "--profile", WARM, "--track", "a:x")
     assert r.exit_code == 2 and "BACKINFO/backinfo.txt is missing" in r.output, r.output
     assert "(TASK1, TASK2) cannot be matched to the motion tasks" in r.output
+    (bk / "BACKINFO").mkdir()
+    (bk / "BACKINFO" / "backinfo.txt").write_bytes(bytes(range(256)))
+    r = run("check", bk, "--profile", WARM, "--track", "a:x")
+    assert r.exit_code == 2 and "backinfo.txt names no task" in r.output, r.output
 
 
 def test_a_program_file_error_names_its_modules_line(tmp_path):

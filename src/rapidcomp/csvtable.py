@@ -7,8 +7,22 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 
 from .errors import InputError
+
+# A number as a file writes one: Python's float() also takes "1_0" (ten)
+# and " 1 ", which no spreadsheet or controller writes. nan and inf pass,
+# for the callers' message about finite numbers.
+_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf|infinity)",
+                     re.IGNORECASE)
+
+
+def number(text: str) -> float:
+    """The number a file's cell or value writes; ValueError if it is none."""
+    if _NUMBER.fullmatch(text) is None:
+        raise ValueError(text)
+    return float(text)
 
 
 def _delimiter(text: str) -> str:

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..csvtable import header_and_rows
+from ..csvtable import header_and_rows, number
 from ..errors import InputError
 
 JOINT_COLUMNS = ("j1", "j2", "j3", "j4", "j5", "j6")
@@ -90,7 +90,7 @@ def parse_table(text: str, source: str, columns, numeric, min_rows: int):
         for col in numeric:
             cell = row[index[col]].strip()
             try:
-                v = float(cell)
+                v = number(cell)
             except ValueError:
                 raise InputError(source, f"{col} is {cell!r}, expected a number", line) from None
             if not math.isfinite(v):

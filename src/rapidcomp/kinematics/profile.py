@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..csvtable import header_and_rows
+from ..csvtable import header_and_rows, number
 from ..errors import InputError
 from .frames import DEG, rpy_angles, rpy_matrix
 from .gravity import NO_PAYLOAD, GravityModel, Payload
@@ -179,7 +179,7 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
         for col in columns[1:]:
             cell = row[index[col]].strip()
             try:
-                v[col] = float(cell) if cell else 0.0
+                v[col] = number(cell) if cell else 0.0
             except ValueError:
                 raise InputError(source, f"{col} is {cell!r}, expected a number", line) from None
             if not math.isfinite(v[col]):

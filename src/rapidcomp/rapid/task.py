@@ -23,6 +23,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from ..csvtable import number
 from ..errors import InputError, RapidcompError
 from ..kinematics.frames import MM_PER_M
 
@@ -167,12 +168,13 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
     folders = sorted(d for d in (root / "RAPID").iterdir() if d.is_dir())
     names = _backinfo_names(root, shown)
     motion = _motion_tasks(root, shown)
-    if (motion and not names and not (root / "BACKINFO" / "backinfo.txt").exists()
-            and not any(d.name.upper() in motion for d in folders)):
+    if motion and not names and not any(d.name.upper() in motion for d in folders):
         # The folders are TASK1, TASK2...; which is which task only
         # backinfo.txt says.
+        why = ("is missing" if not (root / "BACKINFO" / "backinfo.txt").exists()
+               else "names no task (no >>TASK1: line)")
         raise RapidcompError(
-            f"{shown}: BACKINFO/backinfo.txt is missing, so the task folders "
+            f"{shown}: BACKINFO/backinfo.txt {why}, so the task folders "
             f"({', '.join(d.name for d in folders)}) cannot be matched to the motion "
             f"tasks SYSPAR/SYS.cfg names ({', '.join(sorted(motion))}); copy it from the backup")
     tasks, skipped, other = [], [], []
@@ -267,10 +269,13 @@ def _backinfo_names(root: Path, shown: str) -> dict[str, str]:
             for m in _TASK_LINE.finditer(text)}
 
 
-def _cfg_instances(text: str | None, type_name: str) -> list[dict[str, str | None]]:
+def _cfg_instances(text: str | None, type_name: str,
+                   where: str = "") -> list[dict[str, str | None]]:
     """The instances of one type of a controller configuration file
     (`TYPE:` then lines of `-attribute value`, continued with a backslash):
-    lower-case attribute -> value (None for a flag without one)."""
+    lower-case attribute -> value (None for a flag without one). An
+    attribute given twice in an instance, or two instances of one name, is
+    bad input (in `where`): which one the controller took cannot be told."""
     if text is None:
         return []
     start = re.search(rf"^{type_name}:", text, re.MULTILINE)
@@ -286,8 +291,16 @@ def _cfg_instances(text: str | None, type_name: str) -> list[dict[str, str | Non
         if line.lstrip().startswith("#"):
             continue                  # (a comment: `# old: -name "ROB_OLD" ...`)
         pairs = re.findall(r'(?:^|\s)-(\w+)(?:[ \t]+("[^"]*"|[^\s"-]\S*|-[\d.]\S*))?', line)
-        if pairs:
-            out.append({k.lower(): (v.strip('"') if v else None) for k, v in pairs})
+        if not pairs:
+            continue
+        inst = {k.lower(): (v.strip('"') if v else None) for k, v in pairs}
+        name = inst.get("name")
+        if len(inst) < len(pairs):
+            twice = next(k for k in inst if [p[0].lower() for p in pairs].count(k) > 1)
+            raise InputError(where, f"{type_name} {name or ''}: -{twice} is given twice")
+        if name is not None and any((o.get("name") or "").lower() == name.lower() for o in out):
+            raise InputError(where, f"{type_name} {name} is defined twice")
+        out.append(inst)
     return out
 
 
@@ -297,7 +310,7 @@ def _motion_tasks(root: Path, shown: str) -> dict[str, str | None] | None:
     case, None when not given), or None when the file says nothing about
     tasks."""
     text = _read_cfg(root / "SYSPAR" / "SYS.cfg", shown)
-    instances = _cfg_instances(text, "CAB_TASKS")
+    instances = _cfg_instances(text, "CAB_TASKS", f"{shown}/SYSPAR/SYS.cfg")
     if not instances:
         return None
     out = {}
@@ -325,7 +338,7 @@ def _group_robots(root: Path, shown: str) -> dict[str, str]:
     out: dict[str, str] = {}
     for cfg in ("SYS.cfg", "MOC.cfg"):
         for inst in _cfg_instances(_read_cfg(root / "SYSPAR" / cfg, shown),
-                                   "MECHANICAL_UNIT_GROUP"):
+                                   "MECHANICAL_UNIT_GROUP", f"{shown}/SYSPAR/{cfg}"):
             if inst.get("name"):
                 out.setdefault(inst["name"].lower(), (inst.get("robot") or "").lower())
     return out
@@ -345,16 +358,16 @@ def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None],
     robots = {}
     movers = {}
     where = f"{shown}/SYSPAR/MOC.cfg"
-    for inst in _cfg_instances(text, "ROBOT"):
+    for inst in _cfg_instances(text, "ROBOT", where):
         if inst.get("name") is None:
             continue
         vals = []
         for k, default in zip(_MOC_KEYS, _IDENTITY):
             try:
-                v = float(inst.get(k) or default)
+                v = number(inst[k] or "") if k in inst else default
             except ValueError:
-                raise InputError(where, f"ROBOT {inst['name']}: -{k} {inst.get(k)} is not a "
-                                 "number") from None
+                raise InputError(where, f"ROBOT {inst['name']}: -{k} "
+                                 f"{inst.get(k) or '(no value)'} is not a number") from None
             if not (abs(v) <= MAX_BASE_M if k.startswith("base_frame_pos") else abs(v) <= 1.0):
                 raise InputError(where, f"ROBOT {inst['name']}: -{k} {v:g} is not "
                                  + ("a position in metres within 100 m of the world origin"
