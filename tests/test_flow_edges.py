@@ -418,3 +418,24 @@ ENDMODULE""")
                        "value" in w for w in row.warnings), row.warnings
         else:
             assert row.status == "untouched" and "rdkTool is assigned at run time" in row.reason
+
+
+def test_a_move_after_one_not_compensated_says_so():
+    """ConfL\\Off, no jointtarget, every confdata naming no solution: the
+    first move cannot start (say --start); each one after it cannot follow
+    the move before, which is not compensated: said so (it said "after a
+    call, search or error", of a program with none)."""
+    bad = "[[60.1,556,162.5],[0,0,1,0],[0,-1,-1,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+    t = task(f"""MODULE A
+  PROC main()
+    ConfL \\Off;
+    MoveL {bad},v150,z20,tool0;
+    MoveL {bad},v150,z20,tool0;
+  ENDPROC
+ENDMODULE
+""")
+    rows = rows_of(t, "robtarget")
+    assert [r.status for r in rows.values()] == ["not compensated"] * 2
+    assert rows[4].reason.endswith("(say where the robot starts with --start)")
+    assert rows[5].reason.endswith("(the move before it, line 4, is not compensated: where the "
+                                   "robot is after it is not known)")

@@ -432,12 +432,13 @@ class _Chooser:
             return _fail("nominal: no solution within the joint limits")
         return Pick(q, rule, None, "closest", prev, line)
 
-    def _unknown_start(self, i: int, flag: str, at_start: bool) -> Pick:
+    def _unknown_start(self, i: int, flag: str, at_start: bool, why: str | None = None) -> Pick:
         """The first move after an unknown position, supervision off: at
         program start, the solution closest to --start when it is given;
         else its confdata where that names a valid solution, else the
         solution closest to the program's first jointtarget, both assumed
-        (with a caution)."""
+        (with a caution). why: why the position is not known (a move before
+        it that is not compensated), None where the flow cannot follow."""
         u = self.uses[i]
         c = _conf_text(u.conf)
         if at_start and self.start is not None:
@@ -452,6 +453,7 @@ class _Chooser:
         j = self.first_joint
         if j is None:
             hint = (" (say where the robot starts with --start)" if at_start else
+                    f" ({why})" if why else
                     " (after a call, search or error the flow cannot follow)")
             return _fail(f"{flag}\\Off and the position before it is unknown: its confdata {c} "
                          f"names no solution ({pick.failure}) and the program has no "
@@ -468,6 +470,7 @@ class _Chooser:
         chosen yet (later in a loop) adds nothing now: it is chosen, and
         this one again, until nothing changes."""
         picks, unknown, start, pending = [], preds is None, False, False
+        why = None
         for pk in _in_text_order(preds or ()):
             if pk == PROGRAM_START:
                 start = True
@@ -475,6 +478,9 @@ class _Chooser:
             j = self.rows.get(pk)
             if j is None or (j in self.chosen and not self.sols[j]):
                 unknown = True        # not resolved, failed, or where an error stopped it
+                if j is not None and why is None and preds is not None and len(preds) == 1:
+                    why = (f"the move before it, line {self.uses[j].line}, is not compensated: "
+                           "where the robot is after it is not known")
                 continue
             if j not in self.chosen:
                 pending = True
@@ -490,7 +496,7 @@ class _Chooser:
             start = True              # a loop entered from nowhere else: provisional
         for at_start, flag_on in ((True, start), (False, unknown)):
             if flag_on:
-                p = self._unknown_start(i, flag, at_start)
+                p = self._unknown_start(i, flag, at_start, why)
                 if p.q is None:
                     return [], p.failure
                 picks.append(p)
