@@ -439,3 +439,24 @@ ENDMODULE
     assert rows[4].reason.endswith("(say where the robot starts with --start)")
     assert rows[5].reason.endswith("(the move before it, line 4, is not compensated: where the "
                                    "robot is after it is not known)")
+
+
+def test_a_circle_point_after_an_unknown_position_names_no_supervision():
+    """A MoveC after a move that is not compensated, supervision never
+    switched off: its circle point's rule and caution say circle point, not
+    ConfL\\Off (which the program never wrote)."""
+    t = task(f"""MODULE Circ
+    CONST jointtarget jHome:=[[0,0,0,0,30,0],{EXT}];
+    CONST robtarget pBad:=[[528.052,330.107,394.049],[0.109616,0.097797,0.948198,0.281675],[0,0,-1,1],{EXT}];
+    CONST robtarget pCir:=[[501.340,363.638,388.294],[0.103144,0.074606,0.957319,0.259490],[0,0,0,0],{EXT}];
+    CONST robtarget pEnd:=[[481.415,405.857,367.621],[0.063427,0.044437,0.972710,0.218716],[0,0,0,0],{EXT}];
+    PROC main()
+        MoveAbsJ jHome,v500,fine,tool0;
+        MoveL pBad,v100,fine,tool0;
+        MoveC pCir,pEnd,v50,z1,tool0;
+    ENDPROC
+ENDMODULE
+""")
+    cir = next(r for r in fix(t, SOLVER, "robtarget").rows if r.target == "pCir")
+    assert cir.rule == "confdata; position before unknown (circle point)"
+    assert not any("Off" in w for w in cir.warnings), cir.warnings

@@ -441,13 +441,19 @@ class _Chooser:
         it that is not compensated), None where the flow cannot follow."""
         u = self.uses[i]
         c = _conf_text(u.conf)
+        # (A circle point is passed on the way from the move before, with
+        # supervision on or off: what is not known is where that leaves it.)
+        off = "circle point" if u.role == "cir" else f"{flag}\\Off"
         if at_start and self.start is not None:
-            return self._closest_to(i, self.start, None, f"closest to --start ({flag}\\Off)")
+            return self._closest_to(i, self.start, None, f"closest to --start ({off})")
         where = ("the program starts here and where the robot stands is not known" if at_start
                  else "the robot's position before this move is not known here")
-        assumed = (f"{flag}\\Off and {where}: {{what}} is assumed (the controller takes the "
-                   "solution closest to where the robot is); kept a robtarget move")
-        pick = self._by_conf(i, f"confdata; position before unknown ({flag}\\Off)")
+        assumed = (f"{where}: {{what}} is assumed (the controller passes a circle point on "
+                   "the way from where the robot is, its confdata not read); kept a robtarget "
+                   "move" if u.role == "cir" else
+                   f"{off} and {where}: {{what}} is assumed (the controller takes the solution "
+                   "closest to where the robot is); kept a robtarget move")
+        pick = self._by_conf(i, f"confdata; position before unknown ({off})")
         if pick.q is not None:
             return pick._replace(caution=assumed.format(what="the solution of its confdata"))
         j = self.first_joint
@@ -455,13 +461,15 @@ class _Chooser:
             hint = (" (say where the robot starts with --start)" if at_start else
                     f" ({why})" if why else
                     " (after a call, search or error the flow cannot follow)")
-            return _fail(f"{flag}\\Off and the position before it is unknown: its confdata {c} "
+            return _fail(("the position before this circle point is unknown" if u.role == "cir"
+                          else f"{off} and the position before it is unknown")
+                         + f": its confdata {c} "
                          f"names no solution ({pick.failure}) and the program has no "
                          f"jointtarget to start from{hint}")
         ju = self.uses[j]
         return self._closest_to(
             i, self.q[j], ju.line, f"closest to {ju.label} (line {ju.line}), the first "
-            f"jointtarget: position before unknown ({flag}\\Off)")._replace(
+            f"jointtarget: position before unknown ({off})")._replace(
             caution=assumed.format(what=f"the solution closest to {ju.label}"))
 
     def _follow(self, i: int, preds, flag: str) -> tuple[list[Pick], str | None]:
