@@ -313,6 +313,7 @@ def test_noise_free_data_are_tested_against_the_least_noise_an_instrument_has():
     d = discover(model, data, CAT)
     assert d.sigma_mm == MIN_SIGMA_MM and d.sigma_source.startswith("taken as 0.1 um")
     assert [s.effect.id for s in d.steps] == ["joint_offset:J3"] and d.verdict == "explained"
+    assert "noise of 0.1 um per axis (the least an instrument has)" in d.verdict_text
 
 
 def test_replicates_copied_cannot_tell_the_noise(tmp_path):

@@ -96,9 +96,10 @@ def test_a_const_defined_through_itself_is_bad_input(tmp_path, consts, where, ch
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cyc.mod"]
 
 
-def _nested_ifs(n: int) -> str:
+def _nested_ifs(n: int, handler: bool = False) -> str:
     return "\n".join(["MODULE Deep", "  CONST robtarget p1:=[[400,0,250],[0.707107,0,0.707107,0],"
                       "[0,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]];", "  PROC main()"]
+                     + (["    MoveL p1,v100,fine,tool0;", "  ERROR"] if handler else [])
                      + ["    IF TRUE THEN"] * n + ["      MoveL p1,v100,fine,tool0;"]
                      + ["    ENDIF"] * n + ["  ENDPROC", "ENDMODULE", ""])
 
@@ -116,11 +117,12 @@ def test_blocks_nested_thousands_deep(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "1 of 1 target uses compensable" in proc.stdout
     assert "blocks or calls nested thousands of levels deep" in proc.stdout
-    path.write_text(_nested_ifs(30_000))
+    # (In an ERROR handler: the deepest statement is found there too.)
+    path.write_text(_nested_ifs(30_000, handler=True))
     proc = subprocess.run([sys.executable, "-m", "rapidcomp", "fix", str(path), "--profile",
                            str(FIXTURES / "warm.csv")], capture_output=True, text=True)
     assert proc.returncode == 2
-    assert proc.stderr.startswith("deep.mod:30004:7: blocks nest 30000 levels deep here")
+    assert proc.stderr.startswith("deep.mod:30006:7: blocks nest 30000 levels deep here")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["deep.mod"]
 
 

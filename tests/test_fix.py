@@ -431,6 +431,25 @@ def test_a_target_of_an_alias_type_is_the_type_it_names(mode):
     assert ("MoveAbsJ jt_p1," in after) == (mode == "absj")
 
 
+def test_an_alias_another_module_declares_types_the_data_too(tmp_path):
+    """A task is one namespace: a global ALIAS in one module types the data
+    of another (a folder, and a module with --with); a LOCAL one its own
+    module's only."""
+    task = tmp_path / "task"
+    task.mkdir()
+    (task / "Types.sys").write_text("MODULE Types(SYSMODULE)\n    ALIAS robtarget myrt;\n"
+                                    "ENDMODULE\n")
+    (task / "Main.mod").write_text(ALIASED.replace("    ALIAS robtarget myrt;\n", ""))
+    warm = str(FIXTURES / "warm.csv")
+    for args in ([str(task)], [str(task / "Main.mod"), "--with", str(task / "Types.sys")]):
+        r = _run(["check", *args, "--profile", warm])
+        assert r.exit_code == 0 and "1 of 1 target uses compensable" in r.output, r.output
+    (task / "Types.sys").write_text("MODULE Types(SYSMODULE)\n    LOCAL ALIAS robtarget myrt;\n"
+                                    "ENDMODULE\n")
+    r = _run(["check", str(task), "--profile", warm])
+    assert r.exit_code == 1 and "p1 is a myrt, not a target" in r.output, r.output
+
+
 def test_an_output_named_with_a_slash_is_a_folder(tmp_path, monkeypatch):
     """-o out/ of one module: the folder out (made), the module in it; it
     was a file named out."""
@@ -440,3 +459,6 @@ def test_an_output_named_with_a_slash_is_a_folder(tmp_path, monkeypatch):
     assert r.exit_code == 0, r.output
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["paper_front.md",
                                                                     "paper_front.mod"]
+    (tmp_path / "file").write_text("")
+    r = _run(["fix", "paper_front.mod", "--profile", str(FIXTURES / "warm.csv"), "-o", "file/"])
+    assert r.exit_code == 2 and "-o file/: file is a file, not a folder" in r.output, r.output

@@ -439,6 +439,19 @@ ENDMODULE
     assert rows[4].reason.endswith("(say where the robot starts with --start)")
     assert rows[5].reason.endswith("(the move before it, line 4, is not compensated: where the "
                                    "robot is after it is not known)")
+    # The move before untouched (a VAR without a value): said so too.
+    t = task(f"""MODULE A
+  VAR robtarget pv;
+  PROC main()
+    ConfL \\Off;
+    MoveL pv,v150,z20,tool0;
+    MoveL {bad},v150,z20,tool0;
+  ENDPROC
+ENDMODULE
+""")
+    rows = rows_of(t, "robtarget")
+    assert rows[6].reason.endswith("(the move before it, line 5, is untouched (its target is not "
+                                   "known statically): where the robot is after it is not known)")
 
 
 def test_a_circle_point_after_an_unknown_position_names_no_supervision():

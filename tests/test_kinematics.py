@@ -350,8 +350,32 @@ def test_a_urdf_no_arm_has_is_bad_input(tmp_path, old, new, says):
                  ["simulate", "-o", tmp_path / "m.csv", "--points", "random:20"]):
         r = CliRunner().invoke(main, [str(a) for a in args] + ["--robot", str(path)])
         assert r.exit_code == 2 and says in r.output, r.output
-        assert "Traceback" not in r.output and "urdfdom" not in r.output
+        assert "Traceback" not in r.output
         assert not (tmp_path / "m.csv").exists()
+
+
+def test_urdfdoms_own_messages_are_kept_off_the_terminal(tmp_path):
+    """urdfdom prints its errors on the process's stderr (fd 2, with its
+    source paths): read there and said by rapidcomp, nothing of urdfdom's
+    own text shown; a process started without a stderr (2>&-) is refused
+    the same (exit 2; its capture once closed fd 2 under itself: exit 1)."""
+    import os
+    import subprocess
+    import sys
+    text = (FIXTURES / "robots" / "irb140.urdf").read_text()
+    path = tmp_path / "arm.urdf"
+    path.write_text(text.replace('<mass value="1.0"/>', '<mass value="nan"/>', 1))
+    args = [sys.executable, "-m", "rapidcomp", "check", str(FIXTURES / "cubes.mod"), "--profile",
+            str(FIXTURES / "warm.csv"), "--robot", str(path), "--limit", "J5=-120:120"]
+    r = subprocess.run(args, capture_output=True, text=True)
+    assert r.returncode == 2 and r.stderr.startswith(f"{path}: cannot load URDF: Inertial: mass "
+                                                     "[nan] is not a float"), r.stderr
+    assert "at line" not in r.stderr and "urdf_parser" not in r.stderr
+    r = subprocess.run(args, stdout=subprocess.DEVNULL, preexec_fn=lambda: os.close(2))
+    assert r.returncode == 2
+    path.write_text(text)
+    r = subprocess.run(args, stdout=subprocess.DEVNULL, preexec_fn=lambda: os.close(2))
+    assert r.returncode == 0
 
 
 def test_a_urdf_in_latin1_loads(tmp_path):
@@ -384,3 +408,22 @@ def test_quaternion_matrix_round_trip_rapid_order():
     for i in range(0, 500, 50):  # against Pinocchio's own conversion (x,y,z,w order)
         w, x, y, z = q[i]
         assert np.allclose(pin.Quaternion(w, x, y, z).matrix(), quat_wxyz_to_matrix(q[i]), atol=1e-12)
+
+
+def test_a_urdf_joint_without_limits_takes_them_from_limit(tmp_path):
+    """A revolute joint whose <limit> gives no range has 0..0: refused,
+    naming --limit; with --limit it is the arm it was."""
+    from click.testing import CliRunner
+    from rapidcomp.cli import main
+    text = (FIXTURES / "robots" / "irb140.urdf").read_text()
+    old = 'lower="-3.4906585040" upper="3.4906585040" '
+    assert old in text
+    path = tmp_path / "arm.urdf"
+    path.write_text(text.replace(old, ""))
+    args = ["check", str(FIXTURES / "paper_front.mod"), "--profile", str(FIXTURES / "warm.csv"),
+            "--robot", str(path)]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 2 and "joint J4: its lower limit 0 deg is not below its upper limit 0 " \
+        "deg (give its range with --limit J4=LOWER:UPPER)" in r.output, r.output
+    r = CliRunner().invoke(main, args + ["--limit", "J4=-200:200"])
+    assert r.exit_code == 0, r.output

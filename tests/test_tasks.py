@@ -225,7 +225,12 @@ def test_a_moc_cfg_is_read_as_a_controller_writes_it_or_refused(tmp_path):
     moc.write_text(text)
     (b,) = tasks_of(bk)
     assert b.base == ((100.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)) and b.base_problem is None
-    moc.write_bytes(text.encode("utf-16"))
+    for data in (text.encode("utf-16"), b"\xef\xbb\xbf" + text.encode()):   # (an editor's BOMs)
+        moc.write_bytes(data)
+        (b,) = tasks_of(bk)
+        assert b.base == ((100.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+    # A type named with digits (UCCM0:) ends the section before it.
+    moc.write_text(text + "#\nUCCM0:\n\n      -name \"ROB_1\" -base_frame_pos_x 0.3\n")
     (b,) = tasks_of(bk)
     assert b.base == ((100.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
     moc.write_bytes(bytes(range(256)) * 4)

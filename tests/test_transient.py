@@ -292,7 +292,9 @@ def test_the_support_module_goes_where_the_task_loads_it(tmp_path):
 def test_a_program_file_gets_one_line_and_keeps_every_byte(tmp_path, encoding, nl):
     """The program file's text is the input's with one line added after its
     last module, in its own line breaks and encoding (a RobotStudio .pgf is
-    CRLF; read as text, every CRLF became LF)."""
+    CRLF; read as text, every CRLF became LF); a module commented out is
+    none (the line went into the comment, and the controller did not load
+    the support module)."""
     glue = tmp_path / "glue"
     glue.mkdir()
     for f in ("GlueData.mod", "GlueMain.mod"):
@@ -300,7 +302,7 @@ def test_a_program_file_gets_one_line_and_keeps_every_byte(tmp_path, encoding, n
     declared = "UTF-16" if encoding == "utf-16" else "ISO-8859-1"
     lines = [f'<?xml version="1.0" encoding="{declared}" ?>', "<!-- cell 4, not edited -->",
              "<Program>", "\t<Module>GlueData.mod</Module>", "\t<Module>GlueMain.mod</Module>",
-             "</Program>", ""]
+             "\t<!-- <Module>OldMain.mod</Module> -->", "</Program>", ""]
     (glue / "Glue.pgf").write_bytes(nl.join(lines).encode(encoding))
     r = _rapidcomp("fix", glue / "Glue.pgf", "--profile", FIXTURES / "warm.csv", "--transient",
                    "--tau-heat", "30", "-o", tmp_path / "out", cwd=tmp_path)

@@ -394,6 +394,9 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
                 ("/", os.sep)))):
             # (-o out/ names a folder, made if it is not there: not a file
             # named out.)
+            named = output.rstrip("/" + os.sep) or output
+            if os.path.exists(named) and not os.path.isdir(named):
+                raise RapidcompError(f"-o {output}: {named} is a file, not a folder")
             out = str(Path(output) / name)
         else:
             out = output or default_output(program)

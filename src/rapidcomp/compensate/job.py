@@ -9,6 +9,7 @@ two CPUs (cpus.py), else one after the other.
 
 from __future__ import annotations
 
+import re
 import sys
 
 from collections.abc import Iterator
@@ -252,7 +253,7 @@ def _support_files(spec: JobSpec, task) -> list[tuple[str, bytes]]:
         codec = ("utf-16-le" if raw.startswith(b"\xff\xfe") else
                  "utf-16-be" if raw.startswith(b"\xfe\xff") else "latin-1")
         pgf = raw.decode(codec)
-        end = pgf.rfind("</Module>")
+        end = _last_module_end(pgf)
         if end < 0:
             raise InputError(str(src.input), "lists no <Module>: cannot add the transient "
                                              f"support module {MODULE_FILE}")
@@ -265,6 +266,18 @@ def _support_files(spec: JobSpec, task) -> list[tuple[str, bytes]]:
         pgf = pgf[:cut] + pgf_nl + indent + f"<Module>{entry}</Module>" + pgf[cut:]
         out.append((str(Path(spec.output) / src.input.name), pgf.encode(codec)))
     return out
+
+
+def _last_module_end(pgf: str) -> int:
+    """Where the last `</Module>` of a program file's text begins that is
+    not inside an XML comment (a module listed and commented out is not
+    one the controller loads; -1: none)."""
+    comments = [(m.start(), m.end()) for m in re.finditer(r"<!--.*?-->", pgf, re.DOTALL)]
+    at = len(pgf)
+    while True:
+        at = pgf.rfind("</Module>", 0, at)
+        if at < 0 or not any(a <= at < b for a, b in comments):
+            return at
 
 
 def run_all(specs: list[JobSpec], workers: int | None = None) -> list[JobOutcome]:

@@ -15,7 +15,7 @@ from .plan import Task
 def load_robot(robot: str | None, limits=()):
     from ..kinematics.analytic import ArmGeometry, UnsupportedGeometry
     from ..kinematics.chain import Chain
-    from ..kinematics.robot import irb140, load_urdf, override_limits
+    from ..kinematics.robot import checked_limits, irb140, load_urdf, override_limits
     if robot is None or robot.lower() == "irb140":
         return override_limits(irb140(), limits)
     if not os.path.isfile(robot):
@@ -28,7 +28,7 @@ def load_robot(robot: str | None, limits=()):
         ArmGeometry.from_chain(Chain.from_robot(model))
     except UnsupportedGeometry as exc:
         raise InputError(robot, str(exc)) from None
-    return override_limits(model, limits)
+    return checked_limits(override_limits(model, limits), robot)
 
 
 def load_solver(profile: str, robot: str | None, force: bool, limits=()):
@@ -58,7 +58,7 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
     """Parse the task's modules (named by their path inside the task) and
     the --with modules; a module name twice in a task is refused, as the
     controller refuses to load it."""
-    from ..rapid.parse import parse_file
+    from ..rapid.parse import parse_file, with_task_aliases
     files = [_parse(source, rel) for rel in source.modules]
     seen: dict[str, str] = {}
     for pf in files:
@@ -72,6 +72,9 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
                                  pf.line(m.node.name_span))
     mine = {os.path.realpath(source.root / rel) for rel in source.modules}
     context = [parse_file(m) for m in with_modules if os.path.realpath(m) not in mine]
+    # (An ALIAS of one module types the data of every other.)
+    both = with_task_aliases(files + context)
+    files, context = both[:len(files)], both[len(files):]
     observers = []
     if source.kind == "backup":
         # PERS data are shared between tasks: the other tasks' writes count.

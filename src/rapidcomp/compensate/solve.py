@@ -448,9 +448,9 @@ class _Chooser:
             return self._closest_to(i, self.start, None, f"closest to --start ({off})")
         where = ("the program starts here and where the robot stands is not known" if at_start
                  else "the robot's position before this move is not known here")
-        assumed = (f"{where}: {{what}} is assumed (the controller passes a circle point on "
-                   "the way from where the robot is, its confdata not read); kept a robtarget "
-                   "move" if u.role == "cir" else
+        assumed = (f"{where}: {{what}} is assumed as a stand-in (the controller passes a "
+                   "circle point on the way from where the robot is, whatever its confdata); "
+                   "kept a robtarget move" if u.role == "cir" else
                    f"{off} and {where}: {{what}} is assumed (the controller takes the solution "
                    "closest to where the robot is); kept a robtarget move")
         pick = self._by_conf(i, f"confdata; position before unknown ({off})")
@@ -472,6 +472,18 @@ class _Chooser:
             f"jointtarget: position before unknown ({off})")._replace(
             caution=assumed.format(what=f"the solution closest to {ju.label}"))
 
+    def _unknown_after(self, key, j: int | None) -> str | None:
+        """Why the position after the use `key` (row j, None: not solved)
+        is not known, where it is a move of the program's."""
+        if j is not None:
+            return (f"the move before it, line {self.uses[j].line}, is not compensated: where "
+                    "the robot is after it is not known")
+        u = (self.plan.by_key or {}).get(key)
+        if u is None:
+            return None
+        return (f"the move before it, line {u.line}, is untouched (its target is not known "
+                "statically): where the robot is after it is not known")
+
     def _follow(self, i: int, preds, flag: str) -> tuple[list[Pick], str | None]:
         """The solutions closest to every solution of every move that may
         run before (supervision off, and every circle point). A move not
@@ -486,9 +498,8 @@ class _Chooser:
             j = self.rows.get(pk)
             if j is None or (j in self.chosen and not self.sols[j]):
                 unknown = True        # not resolved, failed, or where an error stopped it
-                if j is not None and why is None and preds is not None and len(preds) == 1:
-                    why = (f"the move before it, line {self.uses[j].line}, is not compensated: "
-                           "where the robot is after it is not known")
+                if why is None and len(preds) == 1:
+                    why = self._unknown_after(pk, j)
                 continue
             if j not in self.chosen:
                 pending = True

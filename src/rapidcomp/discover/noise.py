@@ -47,6 +47,7 @@ class Noise:
     sigma_mm: float
     source: str
     kind: str         # "given", "replicates" or "estimated"
+    floored: bool = False   # the estimate was below MIN_SIGMA_MM, which is taken
 
 
 @dataclass(frozen=True)
@@ -102,7 +103,7 @@ def floored(sigma_mm: float, source: str, kind: str) -> Noise:
         return Noise(sigma_mm, source, kind)
     return Noise(MIN_SIGMA_MM, f"taken as {MIN_SIGMA_MM * 1000:g} um, the least any instrument "
                  f"measuring a robot has (estimated {sigma_mm * 1000:.2g} um {source}: data "
-                 "without noise, as a simulation makes them?)", kind)
+                 "without noise, as a simulation makes them?)", kind, True)
 
 
 def structure(q_deg: np.ndarray, residuals: np.ndarray, joint_names,

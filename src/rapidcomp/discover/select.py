@@ -716,7 +716,9 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
         _, J = model.evaluate(offsets, tuple(np.zeros(1) for _ in offsets))
         found = structure(data.q_deg, current.residuals, model.robot.joint_names,
                           {e.joint: J[:, :, i] for i, e in enumerate(offsets)})
-    verdict, text = _verdict(steps, current, sigma, noise_p, nz.kind == "estimated", blocked,
+    est = (" (the least an instrument has)" if nz.floored else
+           " (estimated)" if nz.kind == "estimated" else "")
+    verdict, text = _verdict(steps, current, sigma, noise_p, est, blocked,
                              far_apart, found)
     notes = ((screened.note,) if screened.note else ()) + tuple(far_notes)
     evidence = _thermal_evidence(sel, current, steps) if warm is not None else {}
@@ -766,11 +768,11 @@ def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:
     return abs(a.rss - b.rss) / sigma ** 2 <= chi2_ppf(EQUIVALENT_QUANTILE, dk)
 
 
-def _verdict(steps, current: Fit, sigma: float, noise_p: float, estimated: bool,
+def _verdict(steps, current: Fit, sigma: float, noise_p: float, est: str,
              blocked=(), far_apart: bool = False, found: Structure | None = None):
+    """est: what the noise's figure is, said after it (" (estimated)")."""
     s_um = sigma * 1000
     at_noise = noise_p >= 1 - NOISE_QUANTILE
-    est = " (estimated)" if estimated else ""
     if at_noise and found is not None:
         named = (f"With {', '.join(s.effect.id for s in steps)} added, the" if steps
                  else "The")

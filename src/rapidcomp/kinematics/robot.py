@@ -150,30 +150,51 @@ def _heard(fn, *args) -> tuple:
     and read, so that rapidcomp says what went wrong itself. urdfdom goes
     on past some errors (an inertial it cannot read: the link weighs
     nothing), so they are read where it succeeds too."""
-    sys.stderr.flush()
+    if sys.stderr is not None:
+        sys.stderr.flush()
+    # A process started without stderr (2>&-) gets one on /dev/null for
+    # the call, closed again after: else the capture's own file would be
+    # opened as fd 2 and closed under it.
+    closed = _closed(2)
+    if closed:
+        fd = os.open(os.devnull, os.O_WRONLY)
+        if fd != 2:
+            os.dup2(fd, 2)
+            os.close(fd)
     saved = os.dup(2)
-    with tempfile.TemporaryFile() as heard:
-        try:
+    try:
+        with tempfile.TemporaryFile() as heard:
             os.dup2(heard.fileno(), 2)
             try:
                 out = fn(*args)
             except Exception as exc:  # pinocchio raises ValueError/RuntimeError variants
                 out = exc
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
-        heard.seek(0)
-        text = heard.read().decode("utf-8", "replace")
+            finally:
+                os.dup2(saved, 2)
+            heard.seek(0)
+            text = heard.read().decode("utf-8", "replace")
+    finally:
+        os.close(saved)
+        if closed:
+            os.close(2)
     errors = [line.split(":", 1)[1].strip() for line in text.splitlines()
               if line.startswith("Error:")]
     return out, errors
 
 
+def _closed(fd: int) -> bool:
+    try:
+        os.fstat(fd)
+    except OSError:
+        return True
+    return False
+
+
 def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
     """A 6-axis arm from URDF (metres), converted to millimetres here: a
     serial chain of 6 revolute joints whose numbers a robot arm can have
-    (links within 100 m, each joint's lower limit below its upper one, no
-    negative mass), else bad input."""
+    (links within 100 m, no negative mass), else bad input (its limits are
+    checked once --limit has had its say: checked_limits)."""
     path = Path(path)
     xml = _urdf_xml(path)
     model, errors = _heard(pin.buildModelFromXML, xml)
@@ -200,11 +221,6 @@ def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
             raise InputError(str(path), f"joint {model.names[i]}: its origin "
                                         f"[{', '.join(f'{v:g}' for v in t)}] m is not within "
                                         f"{MAX_LINK_M:g} m of the joint before it")
-        lo, hi = float(model.lowerPositionLimit[i - 1]), float(model.upperPositionLimit[i - 1])
-        if not lo < hi:
-            raise InputError(str(path), f"joint {model.names[i]}: its lower limit "
-                                        f"{lo / DEG:g} deg is not below its upper limit "
-                                        f"{hi / DEG:g} deg")
         mass = float(model.inertias[i].mass)
         if not (math.isfinite(mass) and mass >= 0):
             raise InputError(str(path), f"joint {model.names[i]}: its link's mass {mass:g} kg "
@@ -228,6 +244,17 @@ def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
     lower = tuple(float(x) / DEG for x in model.lowerPositionLimit)
     upper = tuple(float(x) / DEG for x in model.upperPositionLimit)
     return RobotModel(model.name or path.stem, model, fid, lower, upper)
+
+
+def checked_limits(robot: RobotModel, shown: str) -> RobotModel:
+    """robot, each joint's lower limit below its upper one (a URDF joint
+    without them has 0 and 0: --limit gives them), else bad input."""
+    for name, lo, hi in zip(robot.joint_names, robot.lower_deg, robot.upper_deg):
+        if not lo < hi:
+            raise InputError(shown, f"joint {name}: its lower limit {lo:g} deg is not below its "
+                             f"upper limit {hi:g} deg (give its range with --limit "
+                             f"{name}=LOWER:UPPER)")
+    return robot
 
 
 def override_limits(robot: RobotModel, specs) -> RobotModel:

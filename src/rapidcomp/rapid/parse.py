@@ -213,12 +213,17 @@ def _walk(source, stmts, routine: str, loops: list, out: list, cond: int = 0,
                 _walk(source, s.default, routine, loops, out, len(loops), known)
 
 
-def _aliases(node: A.ModuleNode) -> dict[str, str]:
-    """The module's ALIAS types (lower case) -> the type each names: data
-    of an alias of robtarget is robtarget data (an alias of an alias,
-    which RAPID does not allow, is followed as far as it goes)."""
-    out = {a.name.lower(): a.type_name.lower() for a in node.items
-           if isinstance(a, A.AliasDecl)}
+def _own_aliases(node: A.ModuleNode) -> dict[str, str]:
+    """The module's ALIAS types (lower case) -> the type each names."""
+    return {a.name.lower(): a.type_name.lower() for a in node.items
+            if isinstance(a, A.AliasDecl)}
+
+
+def _followed(alias_of: dict[str, str]) -> dict[str, str]:
+    """Each alias -> the type it comes to: data of an alias of robtarget is
+    robtarget data (an alias of an alias, which RAPID does not allow, is
+    followed as far as it goes)."""
+    out = dict(alias_of)
     for name in out:
         seen = {name}
         while out[name] in out and out[name] not in seen:
@@ -227,9 +232,34 @@ def _aliases(node: A.ModuleNode) -> dict[str, str]:
     return out
 
 
+def with_task_aliases(files: list[ParsedFile]) -> list[ParsedFile]:
+    """The files of one task with the data of a global ALIAS type another
+    module declares as data of the type it names (a task is one namespace:
+    _build_module resolved each module's own aliases only). The files
+    themselves where no module declares a global alias."""
+    aliases = {a.name.lower(): a.type_name.lower() for pf in files for m in pf.modules
+               for a in m.aliases if (a.scope or "").upper() != "LOCAL"}
+    if not aliases:
+        return files
+    out = []
+    for pf in files:
+        modules = []
+        for m in pf.modules:
+            alias_of = _followed({**aliases, **_own_aliases(m.node)})
+            if not any(d.type in alias_of for d in m.declarations):
+                modules.append(m)
+                continue
+            consts = _const_ints(m.node)
+            modules.append(replace(m, declarations=tuple(
+                _declaration(pf.source, d.node, d.routine, consts, None, alias_of)
+                if d.type in alias_of else d for d in m.declarations)))
+        out.append(replace(pf, modules=tuple(modules)))
+    return out
+
+
 def _build_module(source: SourceText, node: A.ModuleNode, known=None) -> Module:
     consts = _const_ints(node)
-    alias_of = _aliases(node)
+    alias_of = _followed(_own_aliases(node))
     decls = []
     routines = []
     motions: list[Motion] = []
@@ -277,7 +307,8 @@ def _deepest(nodes) -> tuple[int, int]:
         for item in node.items:
             if not isinstance(item, A.Routine):
                 continue
-            stack = [(s, 0) for s in item.body]
+            stack = [(s, 0) for body in (item.body, *(h.body for h in item.handlers))
+                     for s in body]
             while stack:
                 s, depth = stack.pop()
                 if depth > best[0]:

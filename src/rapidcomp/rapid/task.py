@@ -248,14 +248,18 @@ def _read_cfg(path: Path, shown: str) -> str | None:
     read too); a file that does not is not one, and bad input: read as
     one, nothing in it would be found, and the backup's robot would be
     taken as standing at the world origin without a word."""
-    raw = None if not path.exists() else path.read_bytes() if path.is_file() else b""
-    if raw is None:
+    if not path.exists():
         return None
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise InputError(_shown_cfg(path, shown), f"cannot read: {exc.strerror or exc}") from None
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
-        text = raw.decode("utf-16")
+        text = raw.decode("utf-16").lstrip("\ufeff")
     else:
-        text = _read_text(path, shown)
-    text = text.lstrip("\ufeff")
+        # (Latin-1, as the controller writes it; an editor's UTF-8 BOM
+        # left out, ASCII as it is.)
+        text = raw.removeprefix(b"\xef\xbb\xbf").decode("latin-1")
     if not _CFG_HEAD.match(text.lstrip()):
         raise InputError(_shown_cfg(path, shown), "not a controller configuration file: "
                          f"expected a first line such as {path.stem.upper()}:CFG_1.0:6:0::", 1)
@@ -282,8 +286,9 @@ def _cfg_instances(text: str | None, type_name: str,
     if start is None:
         return []
     section = text[start.end():]
-    # The section ends at the next type line ("NAME:" at the start of a line).
-    end = re.search(r"^[A-Z_]+:", section, re.MULTILINE)
+    # The section ends at the next type line ("NAME:" at the start of a
+    # line; UCCM0: has digits too).
+    end = re.search(r"^[A-Z][A-Z0-9_]*:", section, re.MULTILINE)
     if end:
         section = section[:end.start()]
     out = []
