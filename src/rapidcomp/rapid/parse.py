@@ -317,6 +317,7 @@ def _deepest(nodes) -> tuple[int, int]:
                     stack.extend((x, depth + 1) for x in body)
     return best
 
+
 _STATEMENT_STARTS = {"NAME", "FAST_CALL", "IF", "FOR", "WHILE", "TEST", "GOTO", "RETURN",
                      "RAISE", "RETRY", "TRYNEXT", "EXIT", "CONNECT", "LATE", "PLACEHOLDER"}
 _EXPR_STARTS = {"NAME", "NUMBER", "STRING", "NUMAGG", "LBRACK", "LPAR", "TRUE", "FALSE",
