@@ -70,11 +70,18 @@ def rounded_rows(a: np.ndarray) -> list[tuple[float, ...] | None]:
         out = np.rint(scaled) / 1e6
         near_half = np.abs(scaled - np.floor(scaled) - 0.5) <= 4 * np.spacing(np.abs(scaled))
         odd = near_half | ~(np.abs(scaled) < 2.0 ** 52)    # NaN, inf, too large
-    rows = out.tolist()
-    for i, j in zip(*np.nonzero(odd)):
-        rows[i][j] = round(float(a[i, j]), 6)
+    # (Each row's tuple made from the columns' floats at once: no list per
+    # row first.)
+    rows = list(zip(*out.T.tolist())) if a.shape[1] else [()] * len(a)
+    for i in np.flatnonzero(odd.any(axis=1)).tolist():
+        r = list(rows[i])
+        for j in np.flatnonzero(odd[i]).tolist():
+            r[j] = round(float(a[i, j]), 6)
+        rows[i] = tuple(r)
     # (A row with a NaN: round keeps NaN a NaN and inf an inf.)
-    return [None if bad else tuple(r) for r, bad in zip(rows, np.isnan(a).any(axis=1).tolist())]
+    for i in np.flatnonzero(np.isnan(a).any(axis=1)).tolist():
+        rows[i] = None
+    return rows
 
 
 def number_columns(qn_deg, qc_deg, err_p, err_r) -> tuple[list, ...]:
