@@ -182,7 +182,7 @@ class Values:
             rows = as_ints.get(id(stacks))
             if rows is None:
                 rows = as_ints[id(stacks)] = [same.setdefault(t, t) for t in
-                                              map(tuple, stacks[2].tolist())]
+                                              zip(*stacks[2].T.tolist())]
             out.append(rows[j])
         return out
 
