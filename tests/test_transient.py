@@ -311,6 +311,24 @@ def test_a_program_file_gets_one_line_and_keeps_every_byte(tmp_path, encoding, n
     assert (tmp_path / "out" / "Glue.pgf").read_bytes() == nl.join(want).encode(encoding)
 
 
+def test_a_task_folders_program_file_lists_the_support_module(tmp_path):
+    """A task folder holding a .pgf: the copy of the .pgf lists rcThermal.sys
+    too (it was copied as it was: the program loaded without the support
+    module, and rcTcR was not defined)."""
+    glue, out = tmp_path / "glue", tmp_path / "out"
+    glue.mkdir()
+    for f in ("Glue.pgf", "GlueData.mod", "GlueMain.mod"):     # (not its stale old/ copy)
+        (glue / f).write_bytes((FIXTURES / "tasks" / "glue" / f).read_bytes())
+    r = _rapidcomp("fix", glue, "--profile", FIXTURES / "warm.csv", "--transient", "--tau-heat",
+                   "30", "-o", out, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    src = (glue / "Glue.pgf").read_bytes()
+    cut = src.rindex(b"</Module>") + len(b"</Module>")
+    assert (out / "Glue.pgf").read_bytes() == (src[:cut] + b"\r\n    <Module>rcThermal.sys"
+                                               b"</Module>" + src[cut:])
+    assert (out / "rcThermal.sys").is_file()
+
+
 def _nominal_ik(robot, R, p, q0):
     """Damped Newton on Pinocchio's model (mm) from q0 (deg): an IK of the
     test's own, not rapidcomp's closed form."""

@@ -9,6 +9,7 @@ two CPUs (cpus.py), else one after the other.
 
 from __future__ import annotations
 
+import os
 import re
 import sys
 
@@ -246,26 +247,49 @@ def _support_files(spec: JobSpec, task) -> list[tuple[str, bytes]]:
         out = []
     if not src.is_folder:
         return out
+    # A program file lists the support module too: the one given, or each
+    # of a task folder's (copied with it; a program loads only what it
+    # lists).
     if src.kind == "pgf":
-        # Its bytes as they are (read_text would turn CRLF into LF): ASCII
-        # is the same in every encoding but UTF-16's, which keeps its BOM.
-        raw = src.input.read_bytes()
-        codec = ("utf-16-le" if raw.startswith(b"\xff\xfe") else
-                 "utf-16-be" if raw.startswith(b"\xfe\xff") else "latin-1")
-        pgf = raw.decode(codec)
-        end = _last_module_end(pgf)
-        if end < 0:
-            raise InputError(str(src.input), "lists no <Module>: cannot add the transient "
-                                             f"support module {MODULE_FILE}")
-        line = pgf[max(pgf.rfind("\n", 0, end), pgf.rfind("\r", 0, end)) + 1:end]
-        indent = line[:len(line) - len(line.lstrip(" \t"))]
-        entry = (rel / MODULE_FILE).as_posix()
-        cut = end + len("</Module>")
-        pgf_nl = ("\r\n" if "\r\n" in pgf else
-                  "\r" if "\r" in pgf and "\n" not in pgf else "\n")
-        pgf = pgf[:cut] + pgf_nl + indent + f"<Module>{entry}</Module>" + pgf[cut:]
-        out.append((str(Path(spec.output) / src.input.name), pgf.encode(codec)))
+        pgfs = [src.input]
+    elif src.kind == "folder":
+        pgfs = sorted(p for p in src.root.rglob("*.pgf") if p.is_file())
+    else:
+        pgfs = []
+    for p in pgfs:
+        try:
+            raw = p.read_bytes()
+        except OSError as exc:
+            raise InputError(str(p), f"cannot read file: {exc.strerror or exc}") from None
+        where = p.parent.relative_to(src.root) if src.kind == "folder" else Path(".")
+        entry = Path(os.path.relpath(rel / MODULE_FILE, where)).as_posix()
+        listed = _listing(raw, entry)
+        if listed is None:
+            raise InputError(str(p), "lists no <Module>: cannot add the transient support "
+                             f"module {MODULE_FILE}")
+        dest = Path(spec.output) / (p.name if src.kind == "pgf" else p.relative_to(src.root))
+        out.append((str(dest), listed))
     return out
+
+
+def _listing(raw: bytes, entry: str) -> bytes | None:
+    """A program file's bytes with `<Module>entry</Module>` on a line of its
+    own after its last module (not one commented out), in its own line
+    breaks, indentation and encoding, every other byte as it was; None
+    where it lists no module. (Read as text, its CRLF became LF: its bytes
+    are taken as they are; ASCII is the same in every encoding but
+    UTF-16's, which keeps its BOM.)"""
+    codec = ("utf-16-le" if raw.startswith(b"\xff\xfe") else
+             "utf-16-be" if raw.startswith(b"\xfe\xff") else "latin-1")
+    pgf = raw.decode(codec)
+    end = _last_module_end(pgf)
+    if end < 0:
+        return None
+    line = pgf[max(pgf.rfind("\n", 0, end), pgf.rfind("\r", 0, end)) + 1:end]
+    indent = line[:len(line) - len(line.lstrip(" \t"))]
+    cut = end + len("</Module>")
+    nl = "\r\n" if "\r\n" in pgf else "\r" if "\r" in pgf and "\n" not in pgf else "\n"
+    return (pgf[:cut] + nl + indent + f"<Module>{entry}</Module>" + pgf[cut:]).encode(codec)
 
 
 def _last_module_end(pgf: str) -> int:
