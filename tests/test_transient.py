@@ -242,12 +242,45 @@ def test_fix_transient_holds_at_every_thermal_state(tmp_path):
     (["--transient"], "needs how the thermal state is known"),
     (["--transient", "--tau-heat", "45", "--emit", "robtarget"], "--emit robtarget is not one"),
     (["--transient", "--temperature", "ai:20"], "SIGNAL:T_COLD:T_WARM"),
+    # (The same num to the controller: its division by their difference
+    # stopped the first move.)
+    (["--transient", "--temperature", "ai:1000:1000.00001"], "the same number to the controller"),
 ])
 def test_bad_transient_options_exit_2_with_nothing_written(tmp_path, args, message):
     r = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", FIXTURES / "warm.csv",
                    "-o", tmp_path / "o.mod", *args, cwd=tmp_path)
     assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("extra, args, message", [
+    # (AInput(aiT) of a num: a type error, the task did not load.)
+    ("  VAR num aiT:=1;\n", ["--temperature", "aiT:20:40"],
+     "extra.mod:2 declares aiT as num data, not an analog input (signalai)"),
+    ("", ["--temperature", "tool0:20:40"], "a predefined data name"),
+    # (A routine hides the predefined one of its name: the support module
+    # would call the task's Exp.)
+    ("  FUNC num Exp(num x)\n    RETURN x;\n  ENDFUNC\n", ["--tau-heat", "30"],
+     "extra.mod:2: a FUNC named Exp hides the predefined Exp"),
+])
+def test_names_the_support_module_calls_are_the_controllers(tmp_path, extra, args, message):
+    """The support module's calls reach what it means: a task routine or
+    data hiding a predefined routine it calls, or a --temperature signal
+    that is the task's data of another type, is refused (exit 2, nothing
+    written); a LOCAL one in another module hides nothing."""
+    (tmp_path / "extra.mod").write_text("MODULE Extra\n" + extra + "ENDMODULE\n")
+    r = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", FIXTURES / "warm.csv", "--with",
+                   tmp_path / "extra.mod", "-o", tmp_path / "out/", "--transient", *args,
+                   cwd=tmp_path)
+    assert r.returncode == 2 and message in r.stderr, r.stderr
+    assert not (tmp_path / "out").exists()
+    if extra:
+        (tmp_path / "extra.mod").write_text("MODULE Extra\n  LOCAL " + extra.lstrip()
+                                            + "ENDMODULE\n")
+        r = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", FIXTURES / "warm.csv",
+                       "--with", tmp_path / "extra.mod", "-o", tmp_path / "out/", "--transient",
+                       "--limit", "J5=-120:120", *args, cwd=tmp_path)
+        assert r.returncode == 0, r.stderr
 
 
 def test_names_of_the_support_module_are_its_own():

@@ -166,7 +166,7 @@ def _run_helped(spec: JobSpec, src: TaskSource, progress: Progress) -> JobOutcom
     transient = support = None
     if spec.transient is not None:
         from .transient import check_names
-        check_names(task)
+        check_names(task, spec.transient)
         # (The support module, and whether one of another program is where
         # it goes, known before the work: not refused after it.)
         support = _support_files(spec, task)

@@ -106,6 +106,12 @@ def make_transient(tau_heat: float | None, tau_cool: float | None, gap: float | 
                 or max(abs(cold), abs(warm)) > 1e6:
             raise RapidcompError(f"--temperature {temperature}: T_COLD and T_WARM must be "
                                  "finite, different numbers")
+        # (The support module divides by their difference as the controller
+        # holds them: the numbers written, as 32-bit floats.)
+        if f32(float(_num(cold))) == f32(float(_num(warm))):
+            raise RapidcompError(f"--temperature {temperature}: T_COLD and T_WARM are the same "
+                                 "number to the controller (a num is a 32-bit float); give "
+                                 "readings further apart")
         return Transient(signal=name, t_cold=cold, t_warm=warm)
     if tau_heat is None:
         raise RapidcompError("--transient needs how the thermal state is known: --tau-heat MIN "
@@ -142,9 +148,20 @@ GLOBAL_NAMES = ("rcS", "rcLastDay", "rcLastMin", "rcTauHeat", "rcTauCool", "rcGa
                 "rcThermalShow", MODULE)
 
 
-def check_names(task) -> None:
+# The predefined routines the support module calls: a global routine or
+# data of the task by one of these names would be called in their place (a
+# routine hides the predefined routines of its name).
+CALLED = ("CDate", "CTime", "StrToVal", "StrPart", "Exp", "NOrient", "TPWrite", "AInput")
+# Predefined data no analog input is named like.
+_PREDEFINED_DATA = ("tool0", "wobj0", "load0")
+
+
+def check_names(task, tr: Transient | None = None) -> None:
     """RapidcompError when the task already declares one of the support
-    module's names."""
+    module's names, or declares globally a routine or data by the name of
+    a predefined routine the module calls; with a temperature sensor (tr),
+    when its signal's name is the task's routine or data of another type
+    than signalai (the module's AInput(signal) would not load)."""
     taken = {n.lower(): n for n in GLOBAL_NAMES}
     for pf in task.files:
         clash = sorted(taken[w] for w in NameAllocator([pf.source.text]).taken & set(taken))
@@ -153,6 +170,30 @@ def check_names(task) -> None:
                 f"{pf.source.display_path}: uses {', '.join(clash)}, a name of the transient "
                 f"support module {MODULE_FILE}: the task cannot load both (compensated with "
                 "--transient already? Compensate the original program)")
+    called = {n.lower(): n for n in CALLED}
+    signal = tr.signal.lower() if tr is not None and tr.signal else None
+    if signal in {n.lower() for n in _PREDEFINED_DATA}:
+        raise RapidcompError(f"--temperature {tr.signal}: a predefined data name (tooldata, "
+                             "wobjdata, loaddata), not an analog input")
+    for pf in task.files + task.context:
+        for m in pf.modules:
+            declared = [(r.node.name, r.node.scope, f"a {r.kind}", r.node.span)
+                        for r in m.routines]
+            declared += [(d.name, d.scope, f"{d.type} data", d.node.span)
+                         for d in m.declarations if d.routine is None]
+            for name, scope, what, span in declared:
+                key = name.lower()
+                if key in called and (scope or "").upper() != "LOCAL":
+                    raise RapidcompError(
+                        f"{pf.source.display_path}:{pf.line(span)}: {what} named {name} hides "
+                        f"the predefined {called[key]} the transient support module "
+                        f"{MODULE_FILE} calls: the module would call it instead")
+                if key == signal and (scope or "").upper() != "LOCAL" and what != \
+                        "signalai data":
+                    raise RapidcompError(
+                        f"--temperature {tr.signal}: {pf.source.display_path}:{pf.line(span)} "
+                        f"declares {name} as {what}, not an analog input (signalai): the "
+                        f"support module's AInput({name}) would not load")
 
 
 # ------------------------------------------------------------- Python twin
