@@ -335,3 +335,76 @@ def test_replicates_copied_cannot_tell_the_noise(tmp_path):
     assert r.exit_code == 0 and out.exists(), r.output
     r = _cli("discover", m, "--sigma", "1e-300")
     assert r.exit_code == 2 and "expected a standard deviation in mm >= 0.0001" in r.output
+
+
+def _joints_file(path, rows):
+    path.write_text("point,j1,j2,j3,j4,j5,j6\n" + "".join(
+        f"P{i},{','.join(f'{v:g}' for v in q)}\n" for i, q in enumerate(rows)))
+    return path
+
+
+def test_a_verdict_the_held_out_poses_refute_is_not_one(tmp_path):
+    """12 poses within 0.011 deg of each other cannot tell a J2 scale from a
+    J2 offset: the fit calls what is left noise, the held-out poses elsewhere
+    are off by ~0.36 mm. The verdict is unexplained, saying why, and the
+    profile is not written (it was "explained", and written)."""
+    joints = _joints_file(tmp_path / "j.csv", [(10 + 0.001 * k, 20, -10, 30, 40, 50)
+                                               for k in range(12)])
+    fit, test, prof = tmp_path / "fit.csv", tmp_path / "test.csv", tmp_path / "p.csv"
+    for path, points, seed in ((fit, str(joints), "2"), (test, "random:30", "9")):
+        assert _cli("simulate", "-o", path, "--points", points, "--effect",
+                    "joint_scale:J2=0.0005", "--noise", "0.01", "--seed", seed,
+                    "-q").exit_code == 0
+    r = _cli("discover", fit, "--test", test, "--out-profile", prof, "--json",
+             tmp_path / "d.json")
+    assert r.exit_code == 0, r.output
+    doc = json.loads((tmp_path / "d.json").read_text())
+    assert doc["verdict"] == "unexplained" and doc["test_holds"] is False
+    assert "the model does not hold where it was not fitted" in r.output
+    assert "p.csv not written: the final model does not hold on the held-out poses" in r.output
+    assert not prof.exists()
+
+
+def test_repeats_that_refute_the_given_sigma_are_bad_input(tmp_path):
+    """20 poses measured 4 times with 10 um noise, --sigma 0.003: the repeats
+    refute it (chi-square), exit 2 (three spurious effects were named, a
+    negative backlash among them); a sigma they allow is taken."""
+    _, q = random_points(ROBOT, 20, 5)
+    joints = _joints_file(tmp_path / "j.csv", np.repeat(q, 4, axis=0))
+    m = tmp_path / "m.csv"
+    assert _cli("simulate", "-o", m, "--points", joints, "--effect", "joint_offset:J2=0.003",
+                "--noise", "0.01", "--seed", "5", "-q").exit_code == 0
+    r = _cli("discover", m, "--sigma", "0.003")
+    assert r.exit_code == 2 and "more than a noise of 0.003 mm allows" in r.output, r.output
+    r = _cli("discover", m, "--sigma", "0.01")
+    assert r.exit_code == 0 and "step 1: joint_offset:J2" in r.output, r.output
+
+
+def test_more_than_a_tenth_far_out_leaves_none_out(tmp_path):
+    """12 poses turning J1 alone: two points stand out, more than a tenth of
+    the data, so none is left out (one left out in a first round stayed
+    out, beside a note saying none was)."""
+    joints = _joints_file(tmp_path / "j.csv", [(-30 + 5 * k, 20, -10, 30, 40, 50)
+                                               for k in range(12)])
+    m = tmp_path / "m.csv"
+    assert _cli("simulate", "-o", m, "--points", joints, "--effect", "joint_offset:J2=0.01",
+                "--noise", "0.01", "--seed", "2", "-q").exit_code == 0
+    r = _cli("discover", m, "--sigma", "0.01", "--json", tmp_path / "d.json")
+    assert r.exit_code == 0, r.output
+    assert json.loads((tmp_path / "d.json").read_text())["outliers"] == []
+    assert "not treated as gross errors (none is left out)" in r.output
+
+
+def test_registered_data_write_no_base_row(tmp_path):
+    """Measured in a frame turned 3 deg, --register: the base frame named
+    after the registration is what it left, not the robot's; not written
+    into the profile (a 45 um correction no robot needs)."""
+    m, prof = tmp_path / "m.csv", tmp_path / "p.csv"
+    assert _cli("simulate", "-o", m, "--points", "random:60", "--effect",
+                "base_frame=0,0,0,0,0,3", "--effect", "joint_offset:J2=0.01", "--noise", "0.01",
+                "--seed", "3", "--force", "-q").exit_code == 0
+    r = _cli("discover", m, "--register", "--out-profile", prof)
+    assert r.exit_code == 0, r.output
+    assert "base_frame is not written into p.csv: --register moved the data" in r.output
+    assert prof.exists() and not any(line.startswith("base,") for line in
+                                     prof.read_text().splitlines())

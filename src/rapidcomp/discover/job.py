@@ -120,7 +120,17 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
             test_model = test_model.with_state(d.warmup.states(test_data.t_min,
                                                                test_data.temperatures,
                                                                test_data.stood_min))
-        heldout = held_out(test_model, test_data, d.final_fit)
+        heldout = held_out(test_model, test_data, d.final_fit, d.sigma_mm)
+        if not heldout.holds and d.verdict != "unexplained":
+            # (Evidence over claims: what the fit called noise is not noise
+            # where it was not fitted.)
+            d = replace(d, verdict="unexplained", verdict_text=(
+                f"{d.verdict_text} But on the {heldout.points} poses of {Path(test).name}, not "
+                f"fitted, the final model is off by RMS {heldout.rms_mm * 1000:.1f} um (max "
+                f"{heldout.max_mm * 1000:.1f} um), not measurement noise of "
+                f"{d.sigma_mm * 1000:.1f} um per axis (chi-square p = {heldout.p:.3g}): the "
+                "model does not hold where it was not fitted (poses too few or too alike to tell "
+                "the effects apart, or an effect outside the catalogue)."))
     notes += _beyond_limits(data, nominal) + list(d.notes)
     if test_data is not None:
         notes += [f"test {n}" for n in _beyond_limits(test_data, nominal)]
@@ -153,12 +163,17 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
         notes.append(f"{Path(out_profile).name} not written: the data and the model are far "
                      "apart (see the verdict); a profile from them would move the robot by what "
                      "the measurement set-up got wrong")
+    elif out_profile and heldout is not None and not heldout.holds:
+        notes.append(f"{Path(out_profile).name} not written: the final model does not hold on "
+                     f"the held-out poses of {Path(test).name} (see the verdict)")
     elif out_profile:
         values = d.named_values()
         warm = d.warmup is not None and d.warmup.tau_min is not None
+        # (With --register the data were moved onto the model: a base frame
+        # named after it is what the registration left, not the robot's.)
         kept = {e: v for e, v in values.items()
                 if writable(e, e.user(v)) and e.kind not in ("backlash", "cyclic")
-                and (e.thermal or not warm)}
+                and (e.thermal or not warm) and not (register and e.kind == "base_frame")}
         for e in values:
             if warm and not e.thermal and e.kind not in ("backlash", "cyclic"):
                 notes.append(f"{e.id} is static (the robot's geometry, not heat): not written "
@@ -171,6 +186,10 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
             elif e.kind == "cyclic":
                 notes.append(f"{e.id} is not written into {Path(out_profile).name}: a profile "
                              "holds no function of a joint's angle")
+            elif register and e.kind == "base_frame":
+                notes.append(f"{e.id} is not written into {Path(out_profile).name}: --register "
+                             "moved the data onto the model, so where the robot's base lies in "
+                             "them is what the registration left over, not the robot's")
             elif e not in kept:
                 notes.append(f"{e.id} is not written into {Path(out_profile).name}: at "
                              f"{', '.join(f'{k}={x:.4g}' for k, x in e.user(values[e]).items())} "

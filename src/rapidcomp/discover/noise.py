@@ -24,8 +24,11 @@ import numpy as np
 
 from ..errors import RapidcompError
 from .fit import CatalogueFit
+from .stats import chi2_sf
 
 MIN_NOISE_DOF = 10
+# The repeats refute a --sigma whose chi-square test they fail at this level.
+GIVEN_QUANTILE = 0.999
 # The least noise a measurement of a robot's TCP has (mm): no instrument
 # that measures one resolves 0.1 um. A scatter below it is the digits' (a
 # pose written to the same last digit each time) or a simulation's without
@@ -68,13 +71,27 @@ def replicate_groups(q_deg: np.ndarray, tool_mm: np.ndarray | None = None) -> li
 
 
 def noise(sigma_mm: float | None, q_deg: np.ndarray, xyz_mm: np.ndarray,
-          full: CatalogueFit, tool_mm: np.ndarray | None = None) -> Noise:
-    if sigma_mm is not None:
-        return Noise(float(sigma_mm), "given (--sigma)", "given")
-    groups = replicate_groups(q_deg, tool_mm)
+          full: CatalogueFit, tool_mm: np.ndarray | None = None,
+          repeats: bool = True) -> Noise:
+    """repeats: poses measured more than once are replicates (not in a
+    warm-up campaign, where the same pose at another time has moved)."""
+    groups = replicate_groups(q_deg, tool_mm) if repeats else []
     dof = 3 * sum(len(g) - 1 for g in groups)
-    if dof >= MIN_NOISE_DOF:
-        ss = sum(float(np.sum((xyz_mm[g] - xyz_mm[g].mean(axis=0)) ** 2)) for g in groups)
+    ss = (sum(float(np.sum((xyz_mm[g] - xyz_mm[g].mean(axis=0)) ** 2)) for g in groups)
+          if dof >= MIN_NOISE_DOF else None)
+    if sigma_mm is not None:
+        # The pure error is evidence the given noise must survive: repeats
+        # that scatter more than it allows would make every systematic
+        # trace of that excess an effect.
+        if ss is not None and chi2_sf(ss / sigma_mm ** 2, dof) < 1 - GIVEN_QUANTILE:
+            raise RapidcompError(
+                f"--sigma {sigma_mm:g}: the {len(groups)} poses measured more than once scatter "
+                f"by {math.sqrt(ss / dof):.3g} mm per axis ({dof} degrees of freedom), more "
+                f"than a noise of {sigma_mm:g} mm allows (chi-square p = "
+                f"{chi2_sf(ss / sigma_mm ** 2, dof):.3g}); give the measuring system's noise, or "
+                "leave --sigma out and the repeats tell it")
+        return Noise(float(sigma_mm), "given (--sigma)", "given")
+    if ss is not None:
         if ss == 0:
             raise RapidcompError(
                 f"the {len(groups)} poses measured more than once have the very same "

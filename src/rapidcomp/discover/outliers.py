@@ -60,7 +60,12 @@ def screen(model, data, effects) -> Screened:
             break
         if len(out) + len(bad) > MAX_SHARE * len(data):
             note = (f"{len(out) + len(bad)} points lie far outside the rest: more than a tenth "
-                    "of the data, so they are not treated as gross errors")
+                    "of the data, so they are not treated as gross errors (none is left out)")
+            # (Those an earlier round left out too: they are of the same
+            # many, not a few gross errors.)
+            if out:
+                rows, out = np.arange(len(data)), []
+                full = catalogue_fit(model, data.xyz_mm, effects)
             break
         for i in bad[np.argsort(-d2[bad], kind="stable")]:
             k = rows[i]

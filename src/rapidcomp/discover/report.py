@@ -47,7 +47,8 @@ def as_json(d: Discovery, test: HeldOut | None = None) -> str:
         doc.update({"test_points": test.points, "test_rms_mm": round(test.rms_mm, 9),
                     "test_max_mm": round(test.max_mm, 9),
                     "test_nominal_rms_mm": round(test.nominal_rms_mm, 9),
-                    "test_nominal_max_mm": round(test.nominal_max_mm, 9)})
+                    "test_nominal_max_mm": round(test.nominal_max_mm, 9),
+                    "test_p": float(f"{test.p:.3g}"), "test_holds": test.holds})
     return json.dumps(doc, indent=2) + "\n"
 
 
@@ -58,7 +59,9 @@ def _held_out(test: HeldOut) -> list[str]:
             "| model | RMS um | max um |", "|---|---:|---:|",
             f"| nominal (no effect named) | {_um(test.nominal_rms_mm)} | "
             f"{_um(test.nominal_max_mm)} |",
-            f"| final model | {_um(test.rms_mm)} | {_um(test.max_mm)} |", ""]
+            f"| final model | {_um(test.rms_mm)} | {_um(test.max_mm)} |", "",
+            f"What the final model leaves there against the noise: chi-square p = {test.p:.3g} "
+            + ("(it holds)." if test.holds else "(it does not hold: see the verdict)."), ""]
 
 
 def _outliers(d: Discovery) -> list[str]:

@@ -662,7 +662,7 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
                      f"at {warm.times} times (each pose's scatter about its own curve a + s(t) "
                      f"b, {warm.dof} degrees of freedom)", "replicates")
     else:
-        nz = noise(sigma_mm, data.q_deg, meas, screened.full, model.tool)
+        nz = noise(sigma_mm, data.q_deg, meas, screened.full, model.tool, repeats=warm is None)
     sigma, source = nz.sigma_mm, nz.source
     sel = _Selector(model, meas, effects, sigma)
     start = sel.fit(())
