@@ -193,7 +193,19 @@ def catalogue_fit(model: ParamModel, measured: np.ndarray, effects) -> Catalogue
     parameters would partly absorb shows at its full size.
     """
     effects = tuple(effects)
-    X, J = model.evaluate(effects, _split(np.zeros(sum(e.size for e in effects)), effects))
+    # Save the base frame, centimetres and degrees off where a tracker's
+    # frame was set by hand (a few degrees leave ~L theta^2, a millimetre,
+    # of its own nonlinearity in a step from zero, taken for noise and for
+    # gross errors). It is fitted alone to convergence first, and the
+    # catalogue linearized there.
+    values = [np.zeros(e.size) for e in effects]
+    base = next((k for k, e in enumerate(effects) if e.kind == "base_frame" and not e.thermal),
+                None)
+    if base is not None:
+        alone = fit(model, measured, (effects[base],))
+        if alone.success:
+            values[base] = alone.values[0]
+    X, J = model.evaluate(effects, tuple(values))
     r = (measured - X).ravel()
     A = J.reshape(len(r), -1)
     scale = np.linalg.norm(A, axis=0)
