@@ -9,7 +9,9 @@ The detectability table asks, for every catalogue effect alone, how large
 it must be for discover to name it with 90 % probability: the fitted RSS
 drop of an effect of size delta is sigma^2 times a non-central chi2(k,
 lambda) with lambda = |J delta|^2 / sigma^2, and discover names it when
-that exceeds the larger of its two thresholds (select.py).
+that exceeds the larger of its two thresholds (select.py); it looks only
+once the residuals fail its noise test, chi2(3N) at NOISE_QUANTILE, which
+the same lambda must make them fail with that probability too.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from ..kinematics.robot import RobotModel
 from .effects import Effect, find, to_profile
 from .model import ZERO_COLUMN, ParamModel
 from .plausible import implausible
-from .select import ALPHA, STRONG_BIC
+from .select import ALPHA, NOISE_QUANTILE, STRONG_BIC
 from .stats import chi2_ppf, ncx2_lambda_for_power
 
 POWER = 0.9
@@ -126,13 +128,17 @@ def detectability(model: ParamModel, effects, sigma_mm: float) -> tuple[Detectab
         cols[e] = J.reshape(n, e.size)
     live = [e for e in effects if np.all(np.linalg.norm(cols[e], axis=0) >= ZERO_COLUMN)]
     m = max(1, len(live))
+    # Discover looks for an effect only once the residuals fail its noise
+    # test (chi-square of 3N degrees of freedom at NOISE_QUANTILE): an effect
+    # that test misses is never named, however its own test would judge it.
+    noise_lam = ncx2_lambda_for_power(chi2_ppf(NOISE_QUANTILE, n), n, POWER)
     rows = []
     for e in effects:
         A = cols[e]
         norms = np.linalg.norm(A, axis=0)
         k = e.size
         threshold = max(chi2_ppf(1 - ALPHA / m, k), STRONG_BIC + k * math.log(n))
-        lam = ncx2_lambda_for_power(threshold, k, POWER)
+        lam = max(ncx2_lambda_for_power(threshold, k, POWER), noise_lam)
         note = _same_as(e, A, cols)
         for j, name in enumerate(e.params):
             if norms[j] < ZERO_COLUMN:
