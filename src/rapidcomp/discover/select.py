@@ -621,6 +621,39 @@ class _Selector:
                 for st in steps], current
 
 
+def _with_time_constants(steps: list[Step], final: Fit, model: ParamModel, data: Measurements,
+                         warm, sigma: float) -> list[Step]:
+    """The steps' standard errors with the time constants' own uncertainty
+    in them: tau (and tau_cool) were estimated from the same data and held
+    while the effects were fitted, so the effects' errors alone come out too
+    small (a thermal amplitude tracks its tau: ~3x in a campaign with
+    stops). The final fit's Jacobian is widened by the positions' derivative
+    with respect to each time constant (central differences of the states),
+    and the errors read from its covariance."""
+    t, stood = data.t_min, data.stood_min
+    taus = [warm.tau_min] + ([warm.tau_cool_min] if warm.tau_cool_min is not None else [])
+    cols = []
+    for k, tau in enumerate(taus):
+        h = 1e-3 * tau
+        X = []
+        for d in (h, -h):
+            heat, cool = (tau + d, warm.tau_cool_min) if k == 0 else (warm.tau_min, tau + d)
+            X.append(model.with_state(warmup.states(t, heat, stood, cool)).evaluate(
+                final.effects, final.values, jacobian=False)[0])
+        cols.append(((X[0] - X[1]) / (2 * h)).ravel())
+    A = np.column_stack([final.jac[:, final.free]] + cols)
+    scale = np.linalg.norm(A, axis=0)
+    scale[scale == 0] = 1.0
+    _, S, Vt = np.linalg.svd(A / scale, full_matrices=False)
+    if S[-1] < RANK_TOL * S[0]:
+        return steps                  # (the time constants not separable: left as they are)
+    err = np.zeros(final.jac.shape[1])
+    err[final.free] = (sigma * np.sqrt(np.sum((Vt.T / S) ** 2, axis=1)) / scale)[:-len(cols)]
+    cuts = np.cumsum([e.size for e in final.effects])[:-1]
+    errors = {e.id: e.user(v) for e, v in zip(final.effects, np.split(err, cuts))}
+    return [replace(st, stderr=errors[st.effect.id]) for st in steps]
+
+
 def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
              sigma_mm: float | None = None, progress=None) -> Discovery:
     """progress: called with a short text at each stage (stderr on a
@@ -707,6 +740,9 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     say("report")
     sel.score(start)   # the not-identifiable list is made on the first scoring (cached)
     steps, current = sel.replay(start, current.effects, swapped)
+    if (warm is not None and warm.tau_min is not None and warm.state_from is None
+            and any(e.thermal for e in current.effects)):
+        steps = _with_time_constants(steps, current, model, data, warm, sigma)
     noise_p = _noise_p(current, sigma, n)
     initial = analyse(data.names, data.q_deg, meas, start.residuals, model.robot.joint_names)
     final = analyse(data.names, data.q_deg, meas, current.residuals, model.robot.joint_names)
