@@ -279,6 +279,11 @@ def test_detectability_predicts_what_discover_names():
         model, data, _ = _data("random", [f"joint_offset:J2={smallest * factor}"], seed=9)
         d = discover(model, data, CAT, SIGMA)
         assert bool(d.steps) == named, factor
+    # A size no real robot has is said undetectable here (a compliance of
+    # the light wrist needs more than the 0.01 deg per N m a robot has).
+    wrist = rows[("gravity_compliance:J5", "c_deg_per_nm")]
+    assert wrist.smallest > 0.01 and wrist.note.startswith("undetectable here: "), wrist
+    assert not rows[("gravity_compliance:J2", "c_deg_per_nm")].note
     # At the table's size, named with the 90 % it claims: 20 noise draws
     # (the table left out discover's noise test, which must fail first:
     # ~1 in 3 were named).

@@ -29,7 +29,7 @@ from ..kinematics.profile import ThermalProfile, deform
 from ..kinematics.robot import RobotModel
 from .effects import Effect, find, to_profile
 from .model import ZERO_COLUMN, ParamModel
-from .plausible import implausible
+from .plausible import FRAMES, implausible
 from .select import ALPHA, NOISE_QUANTILE, STRONG_BIC
 from .stats import chi2_ppf, ncx2_lambda_for_power
 
@@ -147,7 +147,12 @@ def detectability(model: ParamModel, effects, sigma_mm: float) -> tuple[Detectab
                 continue
             size = sigma_mm * math.sqrt(lam) / norms[j]
             shift = float(np.max(np.linalg.norm(A[:, j].reshape(N, 3), axis=1)) * size)
-            rows.append(Detectability(e.id, name, size / e.to_internal[j], shift * 1000, note))
+            # (A size no real robot has: these points and this noise cannot
+            # see the effect at all.)
+            beyond = implausible(e, {name: size / e.to_internal[j]}, first=e.kind in FRAMES)
+            said = note if beyond is None else "; ".join(
+                x for x in (note, f"undetectable here: {beyond}") if x)
+            rows.append(Detectability(e.id, name, size / e.to_internal[j], shift * 1000, said))
     return tuple(rows)
 
 
