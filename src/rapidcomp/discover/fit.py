@@ -60,12 +60,23 @@ class Fit:
         U, S, Vt = np.linalg.svd(A / scale, full_matrices=False)
         return U, S, Vt, scale
 
-    def stderr(self, sigma_mm: float) -> tuple[np.ndarray, ...]:
+    def stderr(self, sigma_mm: float, held: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
         """Standard error of every parameter (internal units) for noise
-        sigma_mm per axis; 0 for a parameter held at its bound."""
+        sigma_mm per axis; 0 for a parameter held at its bound. held:
+        columns (3N, m) of the positions' derivatives by parameters
+        estimated from the same data but held in this fit (a warm-up's time
+        constants): their uncertainty goes into every error, where the
+        data can tell them from the fitted ones (else left out)."""
         out = np.zeros(self.jac.shape[1])
         if self.nparams:
             _, S, Vt, scale = self._basis()
+            if held is not None:
+                A = np.column_stack([self.jac[:, self.free], held])
+                wide = np.linalg.norm(A, axis=0)
+                wide[wide == 0] = 1.0
+                _, S2, Vt2 = np.linalg.svd(A / wide, full_matrices=False)
+                if S2[-1] >= RANK_TOL * S2[0]:
+                    S, Vt, scale = S2, Vt2[:, :self.nparams], wide[:self.nparams]
             out[self.free] = sigma_mm * np.sqrt(np.sum((Vt.T / S) ** 2, axis=1)) / scale
         return _split(out, self.effects)
 

@@ -641,16 +641,8 @@ def _with_time_constants(steps: list[Step], final: Fit, model: ParamModel, data:
             X.append(model.with_state(warmup.states(t, heat, stood, cool)).evaluate(
                 final.effects, final.values, jacobian=False)[0])
         cols.append(((X[0] - X[1]) / (2 * h)).ravel())
-    A = np.column_stack([final.jac[:, final.free]] + cols)
-    scale = np.linalg.norm(A, axis=0)
-    scale[scale == 0] = 1.0
-    _, S, Vt = np.linalg.svd(A / scale, full_matrices=False)
-    if S[-1] < RANK_TOL * S[0]:
-        return steps                  # (the time constants not separable: left as they are)
-    err = np.zeros(final.jac.shape[1])
-    err[final.free] = (sigma * np.sqrt(np.sum((Vt.T / S) ** 2, axis=1)) / scale)[:-len(cols)]
-    cuts = np.cumsum([e.size for e in final.effects])[:-1]
-    errors = {e.id: e.user(v) for e, v in zip(final.effects, np.split(err, cuts))}
+    errors = {e.id: e.user(v) for e, v in zip(final.effects,
+                                              final.stderr(sigma, np.column_stack(cols)))}
     return [replace(st, stderr=errors[st.effect.id]) for st in steps]
 
 
