@@ -223,15 +223,21 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
     return out
 
 
-def _read_text(path: Path, shown: str | None = None) -> str | None:
-    """A configuration file's text; None when it does not exist; a file
-    that exists but cannot be read is bad input."""
+def _read_bytes(path: Path, shown: str | None = None) -> bytes | None:
+    """A backup file's bytes; None when it does not exist; a file that
+    exists but cannot be read is bad input."""
     if not path.exists():
         return None
     try:
-        return path.read_bytes().decode("latin-1")
+        return path.read_bytes()
     except OSError as exc:
         raise InputError(_shown_cfg(path, shown), f"cannot read: {exc.strerror or exc}") from None
+
+
+def _read_text(path: Path, shown: str | None = None) -> str | None:
+    """A backup file's text (the controller's Latin-1), as _read_bytes."""
+    raw = _read_bytes(path, shown)
+    return None if raw is None else raw.decode("latin-1")
 
 
 def _shown_cfg(path: Path, shown: str | None) -> str:
@@ -248,12 +254,9 @@ def _read_cfg(path: Path, shown: str) -> str | None:
     read too); a file that does not is not one, and bad input: read as
     one, nothing in it would be found, and the backup's robot would be
     taken as standing at the world origin without a word."""
-    if not path.exists():
+    raw = _read_bytes(path, shown)
+    if raw is None:
         return None
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise InputError(_shown_cfg(path, shown), f"cannot read: {exc.strerror or exc}") from None
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
         text = raw.decode("utf-16").lstrip("\ufeff")
     else:
