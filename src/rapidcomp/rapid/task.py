@@ -167,7 +167,8 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
             motion_only: bool = True) -> list[TaskSource]:
     folders = sorted(d for d in (root / "RAPID").iterdir() if d.is_dir())
     names = _backinfo_names(root, shown)
-    motion = _motion_tasks(root, shown)
+    sys_cfg = _read_cfg(root / "SYSPAR" / "SYS.cfg", shown)
+    motion = _motion_tasks(sys_cfg, shown)
     if motion and not names and not any(d.name.upper() in motion for d in folders):
         # The folders are TASK1, TASK2...; which is which task only
         # backinfo.txt says.
@@ -214,7 +215,8 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
         raise RapidcompError(f"{shown}: a controller backup without a motion task holding "
                              "modules under RAPID/")
     groups = motion if motion is not None else {t.task.upper(): None for t in tasks}
-    frames = _base_frames(root, shown, groups, _group_robots(root, shown))
+    moc_cfg = _read_cfg(root / "SYSPAR" / "MOC.cfg", shown)
+    frames = _base_frames(moc_cfg, shown, groups, _group_robots(sys_cfg, moc_cfg, shown))
     out = []
     for n, t in enumerate(tasks):
         frame, problem, mover = frames.get(t.task.upper(), (None, None, None))
@@ -312,12 +314,11 @@ def _cfg_instances(text: str | None, type_name: str,
     return out
 
 
-def _motion_tasks(root: Path, shown: str) -> dict[str, str | None] | None:
-    """Upper-case names of the motion tasks in SYSPAR/SYS.cfg (CAB_TASKS
-    instances with -MotionTask) -> their mechanical unit group (lower
-    case, None when not given), or None when the file says nothing about
-    tasks."""
-    text = _read_cfg(root / "SYSPAR" / "SYS.cfg", shown)
+def _motion_tasks(text: str | None, shown: str) -> dict[str, str | None] | None:
+    """Upper-case names of the motion tasks in SYSPAR/SYS.cfg (its text;
+    CAB_TASKS instances with -MotionTask) -> their mechanical unit group
+    (lower case, None when not given), or None when the file says nothing
+    about tasks."""
     instances = _cfg_instances(text, "CAB_TASKS", f"{shown}/SYSPAR/SYS.cfg")
     if not instances:
         return None
@@ -339,22 +340,22 @@ _IDENTITY = (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
 MAX_BASE_M = 100.0
 
 
-def _group_robots(root: Path, shown: str) -> dict[str, str]:
+def _group_robots(sys_cfg: str | None, moc_cfg: str | None, shown: str) -> dict[str, str]:
     """Mechanical unit group -> its robot (lower case): MECHANICAL_UNIT_GROUP
     -Robot, a type of the controller's topic, SYSPAR/SYS.cfg (a RobotWare 6
     MultiMove backup has it there); one that MOC.cfg holds is read too."""
     out: dict[str, str] = {}
-    for cfg in ("SYS.cfg", "MOC.cfg"):
-        for inst in _cfg_instances(_read_cfg(root / "SYSPAR" / cfg, shown),
-                                   "MECHANICAL_UNIT_GROUP", f"{shown}/SYSPAR/{cfg}"):
+    for cfg, text in (("SYS.cfg", sys_cfg), ("MOC.cfg", moc_cfg)):
+        for inst in _cfg_instances(text, "MECHANICAL_UNIT_GROUP", f"{shown}/SYSPAR/{cfg}"):
             if inst.get("name"):
                 out.setdefault(inst["name"].lower(), (inst.get("robot") or "").lower())
     return out
 
 
-def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None],
+def _base_frames(text: str | None, shown: str, groups_of: dict[str, str | None],
                  robot_of: dict[str, str]) -> dict:
-    """Each motion task's robot base frame in the world from SYSPAR/MOC.cfg:
+    """Each motion task's robot base frame in the world from SYSPAR/MOC.cfg
+    (its text):
     the task's mechanical unit group (SYS.cfg) names its ROBOT (robot_of:
     _group_robots), whose -base_frame_pos_x/y/z (metres) and
     -base_frame_orient_u0..u3 (quaternion w, x, y, z) place it. Task name
@@ -362,7 +363,6 @@ def _base_frames(root: Path, shown: str, groups_of: dict[str, str | None],
     frame; the reason it cannot be told (several robots, no link to one) or
     None; the unit that moves the base or None). Values no robot cell has
     are bad input."""
-    text = _read_cfg(root / "SYSPAR" / "MOC.cfg", shown)
     robots = {}
     movers = {}
     where = f"{shown}/SYSPAR/MOC.cfg"
