@@ -74,30 +74,15 @@ def test_cam_program_entered_from_main(monkeypatch, solver, mode, block):
         assert served == []        # (auto keeps MoveL: numbers only)
 
 
-@pytest.mark.parametrize("name", ["cubes.mod", "paper_front.mod", "rapid/robodk.mod",
-                                  "rapid/cam_inline.mod", "rapid/cam_confoff.mod",
-                                  "rapid/robotstudio_crlf.mod", "rapid/handwritten_cp1252.mod"])
-@pytest.mark.parametrize("mode", ["absj", "auto"])
-def test_real_programs(monkeypatch, solver, name, mode):
-    pf = parse_source(read_source(ROOT / "fixtures" / name))
-    task = Task(name, (pf,))
-    try:
-        read, parsed, served = _fix_both(monkeypatch, task, solver, mode)
-    except Exception as exc:            # (refused alike both ways)
-        monkeypatch.setattr(F, "relex_absj", lambda *args: None)
-        with pytest.raises(type(exc)):
-            F.fix(task, solver, mode)
-        return
-    _same(read, parsed)
-
-
 @pytest.mark.parametrize("mode, turned", [("absj", 180), ("auto", 1)])
 def test_a_real_cam_program_is_read_again(monkeypatch, solver, mode, turned):
-    # (The other fixtures write new robtargets too: their output is parsed
-    # again, and the test above compares that with itself.)
+    # (The only fixture whose moves turned into MoveAbsJ are read again:
+    # the others write new robtargets too, and their output is parsed
+    # again. Every fixture's whole fix, shortcuts on and off: test_fast_general.py.)
     pf = parse_source(read_source(ROOT / "fixtures" / "rapid" / "cam_confoff.mod"))
-    _, _, served = _fix_both(monkeypatch, Task("cam_confoff.mod", (pf,)), solver, mode)
+    read, parsed, served = _fix_both(monkeypatch, Task("cam_confoff.mod", (pf,)), solver, mode)
     assert served == [turned]
+    _same(read, parsed)
 
 
 def _converted(solver, text):
