@@ -473,3 +473,87 @@ ENDMODULE
     cir = next(r for r in fix(t, SOLVER, "robtarget").rows if r.target == "pCir")
     assert cir.rule == "confdata; position before unknown (circle point)"
     assert not any("Off" in w for w in cir.warnings), cir.warnings
+
+
+# ---------------------------------------------------------------- displacement set at run time
+
+P2 = f"[[400,150,250],[0.707107,0,0.707107,0],[0,0,-1,1],{EXT}]"
+
+
+def _statuses(body: str, decls: str = "") -> dict:
+    """line -> (status, reason) of fix on a module with p1, p2 and body."""
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    CONST robtarget p2:={P2};
+    CONST jointtarget jHome:=[[0,0,0,0,30,0],{EXT}];
+{decls}    PROC main()
+{body}    ENDPROC
+ENDMODULE""")
+    return {r.line: (r.status, r.reason) for r in fix(t, SOLVER, "auto").rows}
+
+
+def test_a_displacement_the_robot_measures_is_not_counted_twice():
+    """PDispOn without \\ExeP takes the displacement from where the robot
+    is: the move that put it there, compensated, would shift the
+    displacement by its correction, and the moves displaced by it would
+    carry the warm robot's error once in the displacement and again in
+    their compensation. Both are left as written; a MoveAbsJ (never
+    displaced) is compensated, and so is a move after PDispOff."""
+    rows = _statuses("""        MoveJ p1, v500, fine, tool0;
+        PDispOn p1, tool0;
+        MoveL p2, v500, fine, tool0;
+        MoveAbsJ jHome, v500, fine, tool0;
+        PDispOff;
+        MoveL p2, v500, fine, tool0;
+""")
+    assert rows[6][0] == "untouched" and rows[6][1].startswith(
+        "PDispOn without \\ExeP (M0.mod:7) reads where this move leaves the robot")
+    assert rows[8][0] == "untouched" and rows[8][1].startswith(
+        "may run under a program displacement set at run time (M0.mod:7: PDispOn without "
+        "\\ExeP reads where the robot is)")
+    assert rows[9][0] == rows[11][0] == "compensated"
+
+
+def test_a_searched_exep_sets_the_displacement_at_run_time():
+    """\\ExeP:= a search's result: the warm robot found the part with its
+    own error, so the displaced move is left as written; the search's own
+    targets and the moves outside the displacement are compensated. With
+    \\ExeP and ProgPoint both fixed by the program (CONST, a PERS nothing
+    assigns), the displacement is the program's: compensated, as before."""
+    searched = _statuses("""        MoveL p1, v500, fine, tool0;
+        SearchL \\Stop, di1, pFound, p2, v50, tool0;
+        PDispOn \\ExeP:=pFound, p1, tool0;
+        MoveL p2, v200, fine, tool0;
+        PDispOff;
+        MoveL p1, v500, fine, tool0;
+""", "    VAR robtarget pFound;\n")
+    assert searched[10][0] == "untouched"
+    assert "(M0.mod:9: its \\ExeP pFound is not a value the program fixes)" in searched[10][1]
+    assert [searched[k][0] for k in (7, 8, 12)] == ["compensated"] * 3
+    fixed = _statuses("""        MoveL p1, v500, fine, tool0;
+        PDispOn \\ExeP:=pTaught, p1, tool0;
+        MoveL p2, v200, fine, tool0;
+        PDispOff;
+""", f"    PERS robtarget pTaught:={P2};\n")
+    assert {k: s for k, (s, _) in fixed.items()} == {7: "compensated", 9: "compensated"}
+
+
+def test_a_frame_set_at_run_time_reaches_the_routines_it_displaces():
+    """PDispSet of a pose the program computes (DefFrame of points, here a
+    variable assigned by a function no given module declares) may be
+    measured: Work's move, reached both with and without it, is left as
+    written; PDispSet of a CONST frame displaces by a known amount."""
+    rows = _statuses("""        fr := MeasureTray();
+        PDispSet fr;
+        Work;
+        PDispOff;
+        Work;
+        PDispSet frFixed;
+        MoveL p1, v200, fine, tool0;
+        PDispOff;
+    ENDPROC
+    PROC Work()
+        MoveL p2, v200, fine, tool0;
+""", "    VAR pose fr;\n    CONST pose frFixed:=[[0,0,5],[1,0,0,0]];\n")
+    assert rows[18][0] == "untouched" and "PDispSet's frame is not a value" in rows[18][1]
+    assert rows[14][0] == "compensated"

@@ -49,6 +49,11 @@ from ..rapid.refs import calls_in, loop_names
 
 ON, OFF = "on", "off"
 BOTH = frozenset((ON, OFF))
+# Program displacement set at run time (PDispOn without \ExeP reads where
+# the robot is; \ExeP, ProgPoint or PDispSet's frame a value the program
+# does not fix: a search's result, CRobT()): if the robot measured it, its
+# thermal error is in the displacement already (State.pdisp).
+MEASURED = "measured"
 # Not moves, in State.last: the program starts here (the robot is where
 # --start says, else unknown), and: where an error stopped the robot.
 PROGRAM_START = ("program start",)
@@ -91,11 +96,16 @@ class State:
 
     @property
     def may_be_displaced(self) -> bool:
-        return ON in self.pdisp or ON in self.eoffs
+        return ON in self.pdisp or MEASURED in self.pdisp or ON in self.eoffs
+
+    @property
+    def measured(self) -> bool:
+        """Program displacement set at run time may be on (MEASURED)."""
+        return MEASURED in self.pdisp
 
 
 _new_state = maker(State)
-_ON, _OFF = frozenset((ON,)), frozenset((OFF,))
+_ON, _OFF, _MEASURED = frozenset((ON,)), frozenset((OFF,)), frozenset((MEASURED,))
 START = State(_ON, _ON, _OFF, _OFF, frozenset((PROGRAM_START,)))
 UNKNOWN = State(BOTH, BOTH, BOTH, BOTH, None)
 # No flags at all: walked from this, a handler's RETRY state holds only what
@@ -120,6 +130,11 @@ class Flow:
     # The state of a use the walk never reached: as a routine entered from
     # outside (its supervision and position unknown).
     entry: State = UNKNOWN
+    # Where program displacement is set at run time ("file:line"; MEASURED).
+    measured: list = field(default_factory=list)
+    # Use key -> where a PDispOn without \ExeP reads where that move left
+    # the robot ("file:line").
+    read_by: dict = field(default_factory=dict)
 
 
 _NO_NAMES = frozenset()
@@ -174,6 +189,9 @@ class _Walker:
         self.resolver = resolver
         self.track = track
         self.flow = Flow()
+        # What nothing is known of: as UNKNOWN, and where the task sets
+        # program displacement at run time, that too (run()).
+        self.unknown = UNKNOWN
         self.called: dict[int, tuple[str, ...]] = {}   # id(routine node) -> names it calls
         self.visits = 0
         self.memo: dict = {}
@@ -231,10 +249,12 @@ class _Walker:
                     called.add(id(c.node))
         has_pdisp = bool(names & DISPLACEMENT_ON)
         has_eoffs = self.track and bool(names & TRACK_OFFSET_ON)
+        if has_pdisp:
+            self._find_measured()
         # A routine entered from outside: supervision unknown, displacement
         # unknown where something switches it on; the program starts there.
-        entry = State(BOTH, BOTH, BOTH if has_pdisp else _OFF, BOTH if has_eoffs else _OFF,
-                      frozenset((PROGRAM_START,)))
+        entry = State(BOTH, BOTH, self.unknown.pdisp if has_pdisp else _OFF,
+                      BOTH if has_eoffs else _OFF, frozenset((PROGRAM_START,)))
         self.flow.entry = replace(entry, last=None)
         main = next((rt for rt in self.routines if rt.fi < self.n_written
                      and rt.node.kind == "PROC" and rt.node.name.lower() == "main"), None)
@@ -251,7 +271,9 @@ class _Walker:
                     else "blocks or calls nested thousands of levels deep")
             self.flow = Flow(notes=[f"the task's control flow is too large to follow ({what}): "
                                     "configuration supervision, program displacement and the "
-                                    "previous position of every move are treated as unknown"])
+                                    "previous position of every move are treated as unknown"],
+                             entry=self.unknown, measured=self.flow.measured,
+                             read_by=self.flow.read_by)
             return self.flow
         self.interrupts(others)
         self.notes(others, has_pdisp)
@@ -295,7 +317,7 @@ class _Walker:
             switched.discard("eoffs")
         if not switched:
             return
-        widen = {k: BOTH for k in switched}
+        widen = {k: self.unknown.pdisp if k == "pdisp" else BOTH for k in switched}
         for key, st in self.flow.before.items():
             self.flow.before[key] = replace(st, **widen)
         self.flow.entry = replace(self.flow.entry, **widen)
@@ -305,6 +327,45 @@ class _Walker:
                                + ", ".join(what[k] for k in sorted(switched))
                                + " (or calls what may): it may run anywhere, so that state is "
                                  "unknown everywhere")
+
+    def _find_measured(self) -> None:
+        """Each PDispOn/PDispSet whose displacement is set at run time, in
+        flow.measured; if there is one, it may be on wherever nothing is
+        known (self.unknown)."""
+        for rt in self.routines:
+            if not set(self.called_names(rt.node)) & DISPLACEMENT_ON:
+                continue
+            for s in _statements(rt.node):
+                why = (self._set_at_run_time(s, rt) if type(s) is A.ProcCall
+                       and s.name.lower() in DISPLACEMENT_ON else None)
+                if why is not None:
+                    where = f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}: {why}"
+                    if where not in self.flow.measured:
+                        self.flow.measured.append(where)
+        if self.flow.measured:
+            self.unknown = State(BOTH, BOTH, BOTH | {MEASURED}, BOTH, None)
+
+    def _set_at_run_time(self, s: A.ProcCall, rt: _Routine) -> str | None:
+        """Why the displacement PDispOn/PDispSet s sets is known only at
+        run time (PDispOn without \\ExeP reads where the robot is; an
+        \\ExeP, ProgPoint or PDispSet frame not a value the program fixes),
+        or None."""
+        fixed = self.resolver.fixed
+        where = (rt.module, rt.node.name)
+        if s.name.lower() == "pdispset":
+            frame = _arg(s, "dispframe", 0)
+            if frame is None or not fixed(frame, *where, "pose"):
+                return "PDispSet's frame is not a value the program fixes"
+            return None
+        exe, prog = _arg(s, "exep"), _arg(s, "progpoint", 0)
+        if exe is None:
+            return "PDispOn without \\ExeP reads where the robot is"
+        text = rt.pf.source.text
+        for name, value in (("\\ExeP", exe), ("ProgPoint", prog)):
+            if value is None or not fixed(value, *where, "robtarget"):
+                shown = "" if value is None else f" {text[value.span.start:value.span.end]}"
+                return f"its {name}{shown} is not a value the program fixes"
+        return None
 
     def _reachable_calls(self, rt: _Routine) -> set:
         """(routine, name) of every call reachable from rt."""
@@ -359,8 +420,8 @@ class _Walker:
                 # its moves are recorded once more with everything unknown.
                 if id(rt.node) not in self.recursed:
                     self.recursed.add(id(rt.node))
-                    self.routine(rt, UNKNOWN, (), None)
-                hit = (state.join(UNKNOWN), UNKNOWN)
+                    self.routine(rt, self.unknown, (), None)
+                hit = (state.join(self.unknown), self.unknown)
             else:
                 hit = self._body(rt, state, stack + (id(rt.node),))
                 self.memo[key] = hit
@@ -375,7 +436,7 @@ class _Walker:
             if h.kind != "ERROR":
                 # BACKWARD and UNDO run only when stepping backwards or
                 # leaving the routine: their moves in the unknown state.
-                self.walk(h.body, UNKNOWN, {}, _Frame(rt, stack))
+                self.walk(h.body, self.unknown, {}, _Frame(rt, stack))
         handlers = [h for h in rt.node.handlers if h.kind == "ERROR"]
         floor = None
         labels: dict = {}
@@ -390,7 +451,7 @@ class _Walker:
                 if got != labels.get(name):
                     labels[name], grown = got, True
             if attempt == 7 and grown:
-                labels = {name: replace(UNKNOWN, last=None) for name in labels}
+                labels = {name: replace(self.unknown, last=None) for name in labels}
             exit_state = join(out, *frame.returns)
             inside = frame.inside
             retries = []
@@ -422,7 +483,7 @@ class _Walker:
             nxt = replace(retry, last=last)
             nxt = nxt if floor is None else floor.join(nxt)
             if attempt == 7:
-                nxt = replace(UNKNOWN, last=None)
+                nxt = replace(self.unknown, last=None)
             if floor is not None and nxt == floor and not grown:
                 break
             floor = nxt
@@ -499,7 +560,7 @@ class _Walker:
         """The state at a label: what falls through to it and what its
         GOTOs bring (where labels are not followed: unknown)."""
         if frame.labels is None:
-            return replace(UNKNOWN, last=None)
+            return replace(self.unknown, last=None)
         return join(st, frame.labels.get((s.name or "").lower()))
 
     def for_loop(self, s: A.For, st: State, env: dict, frame: _Frame) -> State | None:
@@ -522,15 +583,15 @@ class _Walker:
             if nxt == head:
                 return head
             head = nxt
-        return replace(head.join(UNKNOWN), last=None)
+        return replace(head.join(self.unknown), last=None)
 
     # ------------------------------------------------------------ calls
     def unknown_call(self, name: str, s, frame: _Frame) -> State:
         rt = frame.rt
         self.flow.unknown_calls.setdefault(name, f"{rt.pf.source.display_path}:"
                                                  f"{rt.pf.line(s.span)}")
-        frame.absorb(UNKNOWN)
-        return UNKNOWN
+        frame.absorb(self.unknown)
+        return self.unknown
 
     def function(self, name: str, s, st: State, frame: _Frame) -> State:
         """A function an expression of statement s calls (not a built-in)."""
@@ -555,7 +616,17 @@ class _Walker:
                 return st
             return replace(st, **{name: value})
         if name in DISPLACEMENT_ON:
-            return replace(st, pdisp=_ON)
+            # (Set at run time: MEASURED, found by run().)
+            if self.unknown is UNKNOWN or self._set_at_run_time(s, rt) is None:
+                return replace(st, pdisp=_ON)
+            if name == "pdispon" and _arg(s, "exep") is None and st.last:
+                # It reads where the moves before it left the robot: a
+                # compensated one would change the displacement with it.
+                at = f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}"
+                for key in st.last:
+                    if key is not PROGRAM_START and key is not RESUME:
+                        self.flow.read_by.setdefault(key, at)
+            return replace(st, pdisp=_MEASURED)
         if name in DISPLACEMENT_OFF:
             return replace(st, pdisp=_OFF)
         if name in TRACK_OFFSET_ON:
@@ -687,20 +758,37 @@ def _function_calls(s) -> tuple:
     return tuple(out.values())
 
 
+def _arg(s: A.ProcCall, name: str, k: int = -1):
+    """The value of s's argument `name` (lower case), named or optional,
+    or its k-th positional argument; None if it has none."""
+    for a in s.args:
+        if a.kind in ("named", "optval") and a.name and a.name.lower() == name:
+            return a.value
+    pos = [a.value for a in s.args if a.kind == "pos"]
+    return pos[k] if 0 <= k < len(pos) else None
+
+
 def _called_names(node: A.Routine):
     """Lower-case names of the procedures and functions a routine calls
     (statically; LATE for a late-bound call)."""
+    for s in _statements(node):
+        yield from (name.lower() for name in _function_calls(s))
+        t = type(s)
+        if t is A.ProcCall:
+            yield s.name.lower()
+        elif t is A.LateCall:
+            yield LATE
+
+
+def _statements(node: A.Routine):
+    """Every statement of a routine, those in blocks and handlers too."""
     stack = [node.body] + [h.body for h in node.handlers]
     while stack:
         stmts = stack.pop()
         for s in stmts:
+            yield s
             t = type(s)
-            yield from (name.lower() for name in _function_calls(s))
-            if t is A.ProcCall:
-                yield s.name.lower()
-            elif t is A.LateCall:
-                yield LATE
-            elif t is A.If:
+            if t is A.If:
                 stack.extend(body for _, body in s.branches)
                 stack.append(s.orelse)
             elif t is A.CompactIf:

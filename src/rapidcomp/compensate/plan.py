@@ -10,7 +10,7 @@ moves that may have run just before. `check` stops after solving the plan;
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..rapid.model import ParsedFile
 from .flow import Flow, State, analyse
@@ -58,6 +58,34 @@ class Plan:
         self.by_key = {u.key: u for u in self.uses}
         self.file_index = {id(pf): i for i, pf in enumerate(self.files)}
         self.flow: Flow = analyse(self.files, self.n_written, self.resolver, bool(track))
+        if self.flow.measured:
+            self._leave_measured()
+
+    def _leave_measured(self) -> None:
+        """Robtarget moves that may run under a program displacement set at
+        run time are left as written: if the robot measured it (a search,
+        CRobT, PDispOn reading where the robot is), the warm robot's error
+        is in the displacement already, and a compensated target would
+        count it twice (a MoveAbsJ is not displaced: it is compensated)."""
+        at = self.flow.measured
+        where = "; ".join(at[:3]) + (f"; and {len(at) - 3} more" if len(at) > 3 else "")
+        why = (f"may run under a program displacement set at run time ({where}): if the "
+               "robot measured it, its thermal error is in the displacement already, and "
+               "compensating would count it twice; left as written")
+        before, entry, read_by = self.flow.before, self.flow.entry, self.flow.read_by
+
+        def left(u: TargetUse) -> TargetUse:
+            if u.reason is not None:
+                return u
+            if u.key in read_by:
+                return replace(u, reason=f"PDispOn without \\ExeP ({read_by[u.key]}) reads "
+                               "where this move leaves the robot: compensated, the "
+                               "displacement would change with it; left as written")
+            if u.kind == "robtarget" and before.get(u.key, entry).measured:
+                return replace(u, reason=why)
+            return u
+        self.uses = [left(u) for u in self.uses]
+        self.by_key = {u.key: u for u in self.uses}
 
     def _compensated_before(self) -> list[str]:
         """Declarations named as rapidcomp names its new values (jt_<name> for

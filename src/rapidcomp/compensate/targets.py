@@ -505,6 +505,23 @@ class Resolver:
         self.shared = frozenset(name for name in pers
                                 if any(name in us.refs for us in theirs.values()))
 
+    def fixed(self, expr, module: Module, routine: str | None, type_: str) -> bool:
+        """Whether expr is a value the program fixes: a literal, or data of
+        type_ with a literal value that nothing assigns at run time (other
+        than its own value) — not a search's result, CRobT(), a variable."""
+        if isinstance(expr, (A.Agg, A.NumAgg)):
+            return True
+        if not isinstance(expr, A.Ref) or expr.selectors:
+            return False
+        d = self.lookup(expr.name, module, routine)
+        if not isinstance(d, Declaration) or d.type != type_ or d.value is None or d.dims:
+            return False
+        if d.storage == "CONST":
+            return True
+        if self.writes.why(d.name) is not None and self._assigned_itself(d) is None:
+            return False
+        return not (d.storage == "PERS" and self.pers_anything is not None)
+
     def _written(self, d: Declaration) -> str | None:
         if d.storage == "CONST":
             return None
