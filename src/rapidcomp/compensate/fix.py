@@ -30,6 +30,7 @@ from ..errors import InternalError
 from ..kinematics.frames import DEG
 from ..kinematics.ik import Solver
 from ..process import release
+from ..rapid import ast as A
 from ..rewrite.diff import columns_diff, handed_off, unified_diff
 from . import place as P
 from .edit import Editor, Values
@@ -365,6 +366,24 @@ def _notes(rows: list[UseRow], gs: list[P.Group]) -> list[str]:
         where = "; ".join(f"{f}: lines {line_ranges(sorted(absj[f]))}" for f in sorted(absj))
         notes.append("MoveL -> MoveAbsJ gives up the straight-line path between points "
                      f"({where}); use --emit robtarget to keep MoveL linear.")
+    # A move turned into MoveAbsJ goes to joints computed with its tool and
+    # work object as declared; the robtarget move followed a change to them
+    # (a TCP calibration, a user frame redefined on the FlexPendant).
+    frames: dict[str, None] = {}
+    for g in gs:
+        if g.mode == "absj" and g.failure is None:
+            for u in g.uses:
+                if u.kind == "robtarget":
+                    for ref in (u.motion.tool, u.motion.wobj):
+                        if type(ref) is A.Ref and ref.name.lower() not in ("tool0", "wobj0"):
+                            frames[ref.name] = None
+    if frames:
+        notes.append("the moves turned into MoveAbsJ go to joints computed with "
+                     + ", ".join(sorted(frames, key=str.lower)) + " as the modules declare "
+                     "them: a MoveAbsJ does not follow a later change to a tool or work object "
+                     "(a TCP calibration, a user frame redefined on the FlexPendant) as the "
+                     "robtarget move did; after one, run rapidcomp again, or keep robtarget "
+                     "moves with --emit robtarget.")
     for g in gs:
         if g.slots:
             name = g.names.get("array", "the new jointtarget array")
