@@ -557,3 +557,22 @@ def test_a_frame_set_at_run_time_reaches_the_routines_it_displaces():
 """, "    VAR pose fr;\n    CONST pose frFixed:=[[0,0,5],[1,0,0,0]];\n")
     assert rows[18][0] == "untouched" and "PDispSet's frame is not a value" in rows[18][1]
     assert rows[14][0] == "compensated"
+
+
+def test_ufmec_moves_only_a_movable_user_frame():
+    """wobjdata's ufmec names the unit a movable user frame (ufprog FALSE)
+    moves with; with ufprog TRUE the frame is fixed and ufmec unused: the
+    move is compensated. ufprog FALSE: coordinated, left as written."""
+    def status(ufprog: str) -> str:
+        frame = "[[100,-500,200],[0.965925826,0,0,0.258819045]],[[0,0,0],[1,0,0,0]]"
+        target = ("[[18.30127,-68.30127,100],[0.683012702,0.183012702,0.683012702,"
+                  f"-0.183012702],[-2,0,2,0],{EXT}]")
+        rows = _statuses("        MoveL pW, v200, fine, tProbe\\WObj:=wFix;\n",
+                         f'    TASK PERS wobjdata wFix:=[FALSE,{ufprog},"STN1",{frame}];\n'
+                         "    PERS tooldata tProbe:=[TRUE,[[0,0,150],[1,0,0,0]],[0.5,[0,0,60],"
+                         "[1,0,0,0],0,0,0]];\n"
+                         f"    CONST robtarget pW:={target};\n")
+        (status, reason), = rows.values()
+        return status if reason is None else f"{status}: {reason}"
+    assert status("TRUE") == "compensated"
+    assert status("FALSE") == "untouched: work object wFix is coordinated with a mechanical unit"

@@ -625,7 +625,9 @@ class Resolver:
         if w.robhold.value is not False:
             return Unresolved(f"work object {expr.name} is held by the robot (stationary tool "
                               "set-up)")
-        if w.ufprog.value is not True or w.ufmec.value != "":
+        # (ufprog TRUE: a fixed user frame; ufmec names the unit a movable
+        # one moves with, and is not used then.)
+        if w.ufprog.value is not True:
             return Unresolved(f"work object {expr.name} is coordinated with a mechanical unit")
         pf = self.home[id(d)]
         return expr.name.lower(), compose_pose(self._pose(w.uframe, pf, f"work object {d.name}"),
