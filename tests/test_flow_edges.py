@@ -576,3 +576,19 @@ def test_ufmec_moves_only_a_movable_user_frame():
         return status if reason is None else f"{status}: {reason}"
     assert status("TRUE") == "compensated"
     assert status("FALSE") == "untouched: work object wFix is coordinated with a mechanical unit"
+
+
+def test_a_target_in_a_record_is_left_as_written_not_refused():
+    """A robtarget component of a record of the program's own type is a
+    target the controller moves to: listed as untouched (exit 0), not
+    refused; data of a type that is no target at all is refused."""
+    record = ("    RECORD station\n        robtarget app;\n        num speed;\n    ENDRECORD\n"
+              f"    CONST station st1:=[{P1},100];\n")
+    rows = _statuses("        MoveJ st1.app, v500, fine, tool0;\n        MoveL p2, v500, fine, tool0;\n",
+                     record)
+    assert list(rows.values()) == [
+        ("untouched", "the target is a component of st1, a station: rapidcomp compensates "
+                      "robtarget and jointtarget data, not components of other data; left as "
+                      "written"), ("compensated", None)]
+    rows = _statuses("        MoveJ nSpeed, v500, fine, tool0;\n", "    CONST num nSpeed:=1;\n")
+    assert list(rows.values()) == [("not compensated", "nSpeed is a num, not a target")]

@@ -661,6 +661,12 @@ class Resolver:
                 return Unresolved(f"{expr.name} is not declared in the given modules "
                                   f"({MISSING_HINT})", True)
             if d.type not in types:
+                if expr.selectors and isinstance(expr.selectors[-1], A.Component):
+                    # (A component of a record may well be a target, which
+                    # the controller moves to: only not one rapidcomp edits.)
+                    return Unresolved(f"the target is a component of {expr.name}, a {d.type}: "
+                                      "rapidcomp compensates robtarget and jointtarget data, "
+                                      "not components of other data; left as written")
                 return Unresolved(f"{expr.name} is a {d.type}, not a target", True)
             if d.value is None:
                 return Unresolved(f"{expr.name} has no literal value "
