@@ -73,7 +73,7 @@ def test_check_exit_1_when_some_targets_cannot_be_compensated():
     # off it (main restarts after a late-bound call: ConfL may be either).
     assert "on, the confdata [-1,-1,0,0] names no solution (nominal: out of reach by 45.036 mm)" \
         in result.stdout
-    assert "untouched (1): pCurrent has no literal value (declared without a value)" in result.stdout
+    assert "untouched (1): pCurrent is assigned at run time (robotstudio_crlf.mod:42)" in result.stdout
 
 
 def test_check_bad_profile_is_exit_2(tmp_path):

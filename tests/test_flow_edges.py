@@ -592,3 +592,35 @@ def test_a_target_in_a_record_is_left_as_written_not_refused():
                       "written"), ("compensated", None)]
     rows = _statuses("        MoveJ nSpeed, v500, fine, tool0;\n", "    CONST num nSpeed:=1;\n")
     assert list(rows.values()) == [("not compensated", "nSpeed is a num, not a target")]
+
+
+def test_the_displacement_warning_names_the_offset_where_a_track_carries_the_robot():
+    """With a track, EOffsSet displaces the robot too: the row's warning
+    names both kinds of displacement; without one, program displacement."""
+    from rapidcomp.compensate.rows import displacement_warning
+    on_track = P1.replace(EXT, "[0,9E+09,9E+09,9E+09,9E+09,9E+09]")
+    t = task(f"""MODULE A
+    CONST robtarget p1:={on_track};
+    PROC main()
+        EOffsSet [100,0,0,0,0,0];
+        MoveL p1, v100, fine, tool0;
+        EOffsOff;
+    ENDPROC
+ENDMODULE""")
+    (row,) = fix(t, SOLVER, "auto", track=((0, np.array([1.0, 0, 0])),)).rows
+    (said,) = [w for w in row.warnings if w.startswith("may run under")]
+    assert said.startswith("may run under program displacement (PDispOn/PDispSet) or an "
+                           "external axis offset (EOffsOn/EOffsSet): compensated for the "
+                           "undisplaced pose")
+    assert displacement_warning(0.31).startswith(
+        "may run under program displacement (PDispOn/PDispSet): compensated")
+
+
+def test_long_lists_of_lines_are_cut_with_the_count_left():
+    from rapidcomp.compensate.plan import line_ranges
+    assert line_ranges([1, 2, 3, 5, 7, 8]) == "1-3, 5, 7-8"
+    # Eleven ranges are named whole; from twelve on, ten and the lines left.
+    eleven = [10 * k for k in range(1, 12)]
+    assert line_ranges(eleven) == ", ".join(str(x) for x in eleven)
+    many = [10 * k for k in range(1, 12)] + [200, 201, 202]
+    assert line_ranges(many) == ("10, 20, 30, 40, 50, 60, 70, 80, 90, 100 and 4 more lines")

@@ -173,15 +173,25 @@ class Plan:
         return out
 
 
+# Ranges a list of lines names; past them the count of the lines left (a
+# CAM program's notes would name thousands, on one line of the output).
+LISTED_RANGES = 10
+
+
 def line_ranges(lines: list[int]) -> str:
     out = []
+    counts = []
     start = prev = lines[0]
     for x in lines[1:] + [None]:
         if x is not None and x == prev + 1:
             prev = x
             continue
         out.append(str(start) if start == prev else f"{start}-{prev}")
+        counts.append(prev - start + 1)
         if x is not None:
             start = prev = x
+    if len(out) > LISTED_RANGES + 1:
+        return (", ".join(out[:LISTED_RANGES])
+                + f" and {sum(counts[LISTED_RANGES:])} more lines")
     return ", ".join(out)
 

@@ -110,8 +110,12 @@ class _Columns:
         self.ok = solved.oks()
 
 
-def displacement_warning(um_per_mm: float) -> str:
-    return ("may run under program displacement (PDispOn/PDispSet): compensated for the "
+def displacement_warning(um_per_mm: float, track: bool = False) -> str:
+    """track: a track carries the robot, and an external axis offset
+    (EOffsOn/EOffsSet) displaces it too."""
+    what = ("program displacement (PDispOn/PDispSet) or an external axis offset "
+            "(EOffsOn/EOffsSet)" if track else "program displacement (PDispOn/PDispSet)")
+    return (f"may run under {what}: compensated for the "
             "undisplaced pose and kept a robtarget move (the controller does not displace "
             f"MoveAbsJ); each mm of displacement adds up to {um_per_mm:.2f} um of error")
 
@@ -177,11 +181,13 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
             warnings = warnings + _LINEAR
         elif g.mode == "rob" and mode is not None and u.motion.spec.name.lower() in ABSJ_FROM[mode]:
             extra = ", ".join(["\\" + a.name for a in u.motion.optional
-                               if a.name.lower() not in ABSJ_OPTIONALS]
-                              + (["ToPoint:="] if names_to_point(u.motion) else []))
-            if extra:
-                warnings = warnings + (f"kept as {u.motion.instruction}: {extra} has no "
-                                       "MoveAbsJ equivalent",)
+                               if a.name.lower() not in ABSJ_OPTIONALS])
+            why = [f"{extra} has no MoveAbsJ equivalent"] if extra else []
+            if names_to_point(u.motion):
+                why.append("its target is passed by name (ToPoint:=), which rapidcomp does "
+                           "not rewrite as MoveAbsJ's ToJointPos:=")
+            if why:
+                warnings = warnings + (f"kept as {u.motion.instruction}: " + "; ".join(why),)
         if u.key in g.kept:
             warnings = warnings + (f"kept as {u.motion.instruction}: in another iteration of its "
                                    "loop this statement must stay a robtarget move, and one "
@@ -201,7 +207,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
                                "compensated joints lie in another quadrant",)
     disp = cols.disp[i]
     if disp == disp:                 # not NaN
-        warnings = warnings + (displacement_warning(disp),)
+        warnings = warnings + (displacement_warning(disp, bool(tracked)),)
     if verified is not None:
         res = verified[u.key]
     else:

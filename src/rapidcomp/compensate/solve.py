@@ -446,7 +446,8 @@ class _Chooser:
         off = "circle point" if u.role == "cir" else f"{flag}\\Off"
         if at_start and self.start is not None:
             return self._closest_to(i, self.start, None, f"closest to --start ({off})")
-        where = ("the program starts here and where the robot stands is not known" if at_start
+        where = ("the program starts here and where the robot stands is not known (--start "
+                 "J1,...,J6 says where; so does a MoveAbsJ before it)" if at_start
                  else "the robot's position before this move is not known here")
         assumed = (f"{where}: {{what}} is assumed as a stand-in (the controller passes a "
                    "circle point on the way from where the robot is, whatever its confdata); "

@@ -669,7 +669,11 @@ class Resolver:
                                       "not components of other data; left as written")
                 return Unresolved(f"{expr.name} is a {d.type}, not a target", True)
             if d.value is None:
-                return Unresolved(f"{expr.name} has no literal value "
+                # (A variable declared without a value and assigned by the
+                # program: that is why, not its declaration.)
+                return Unresolved(self.writes.why(d.name) if d.node.init is None
+                                  and self.writes.why(d.name) else
+                                  f"{expr.name} has no literal value "
                                   f"({d.issue or 'run-time data'})")
             written = self._written(d)
             if written:
