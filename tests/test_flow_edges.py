@@ -624,3 +624,30 @@ def test_long_lists_of_lines_are_cut_with_the_count_left():
     assert line_ranges(eleven) == ", ".join(str(x) for x in eleven)
     many = [10 * k for k in range(1, 12)] + [200, 201, 202]
     assert line_ranges(many) == ("10, 20, 30, 40, 50, 60, 70, 80, 90, 100 and 4 more lines")
+
+
+def test_a_for_loop_to_dim_of_a_declared_array_walks_it():
+    """Dim(pts, 1) of a declared array is its size, fixed where it is
+    declared: the loop walks every element (the controller does the same);
+    Dim of a routine's open-array parameter is the caller's: untouched."""
+    rows = _statuses("""        FOR i FROM 1 TO Dim(pts, 1) DO
+            MoveL pts{i}, v100, fine, tool0;
+        ENDFOR
+        Walk pts;
+    ENDPROC
+    PROC Walk(robtarget ps{*})
+        FOR i FROM 1 TO Dim(ps, 1) DO
+            MoveL ps{i}, v100, fine, tool0;
+        ENDFOR
+""", f"    CONST robtarget pts{{3}}:=[{P1},{P2},{P1}];\n")
+    assert [status for status, _ in rows.values()] == ["compensated", "untouched"]
+    fixed = fix(task(f"""MODULE A
+    CONST robtarget pts{{3}}:=[{P1},{P2},{P1}];
+    PROC main()
+        FOR i FROM 1 TO Dim(pts, 1) DO
+            MoveL pts{{i}}, v100, fine, tool0;
+        ENDFOR
+    ENDPROC
+ENDMODULE"""), SOLVER, "auto")
+    assert sorted(r.target for r in fixed.rows) == ["pts{i} [i=1]", "pts{i} [i=2]", "pts{i} [i=3]"]
+    assert fixed.summary()["compensated"] == 3

@@ -905,7 +905,8 @@ class Resolver:
         return q, p
 
     def integer(self, expr, module, routine: str | None) -> int | None:
-        """A literal integer, or a CONST num with a literal integer value."""
+        """A literal integer, a CONST num with a literal integer value, or
+        Dim() of a declared array."""
         if isinstance(expr, A.Num) and float(expr.value).is_integer() and abs(expr.value) < 2**53:
             return int(expr.value)
         if isinstance(expr, A.Unary) and expr.op == "-":
@@ -930,6 +931,15 @@ class Resolver:
                     return self.integer(d.node.init, self.home_module[id(d)], d.routine)
                 finally:
                     self._consts.pop()
+        if (isinstance(expr, A.Call) and expr.name.lower() == "dim" and len(expr.args) == 2
+                and all(a.kind == "pos" for a in expr.args)):
+            # Dim(array, k): an array's sizes are fixed where it is declared
+            # (a parameter's, array{*}, is the caller's: lookup says so).
+            arr, k = expr.args[0].value, self.integer(expr.args[1].value, module, routine)
+            if isinstance(arr, A.Ref) and not arr.selectors and k is not None:
+                d = self.lookup(arr.name, module, routine)
+                if isinstance(d, Declaration) and 1 <= k <= len(d.dims):
+                    return d.dims[k - 1]
         return None
 
     def loop_range(self, loop, module, routine: str, bounded: bool = True) -> range | None:
