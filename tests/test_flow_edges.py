@@ -651,3 +651,31 @@ def test_a_for_loop_to_dim_of_a_declared_array_walks_it():
 ENDMODULE"""), SOLVER, "auto")
     assert sorted(r.target for r in fixed.rows) == ["pts{i} [i=1]", "pts{i} [i=2]", "pts{i} [i=3]"]
     assert fixed.summary()["compensated"] == 3
+
+
+def test_a_trap_that_stores_and_restores_the_path_switches_nothing():
+    """RestoPath moves the robot back onto the interrupted path: a built-in
+    the flow knows, not a call that may switch supervision or displacement.
+    main's MoveJ is turned into MoveAbsJ, and no note says the TRAP
+    switches anything."""
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    CONST robtarget pSafe:={P2};
+    VAR intnum irStop;
+    PROC main()
+        CONNECT irStop WITH tStop;
+        ISignalDI di1, 1, irStop;
+        MoveJ p1, v500, fine, tool0;
+    ENDPROC
+    TRAP tStop
+        StopMove;
+        StorePath;
+        MoveJ pSafe, v500, fine, tool0;
+        RestoPath;
+        StartMove;
+    ENDTRAP
+ENDMODULE""")
+    result = fix(t, SOLVER, "auto")
+    assert "MoveAbsJ jt_p1," in result.modules[0].text
+    assert not any("(TRAP) switches" in n for n in result.notes)
+    assert not any(w.startswith("may run under") for r in result.rows for w in r.warnings)

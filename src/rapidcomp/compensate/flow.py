@@ -226,7 +226,7 @@ class _Walker:
     def known(self, rt: _Routine, name: str) -> bool:
         """A call the flow can follow: a built-in or a given routine."""
         return name != LATE and name not in UNKNOWN_TARGET_CALLS and (
-            name in BUILTIN_INSTRUCTIONS or name in BUILTIN_FUNCTIONS
+            name in BUILTIN_INSTRUCTIONS or name in BUILTIN_FUNCTIONS or name in MOVES_OTHERWISE
             or motion_spec(name) is not None or self.callee(rt.module, name) is not None)
 
     def called_names(self, node: A.Routine) -> tuple[str, ...]:
