@@ -111,16 +111,16 @@ def test_robodk_comma_before_optional_argument(fixtures_dir):
 def test_non_literal_inline_target_is_reported_not_guessed():
     pf = parse_text("MODULE m\nPROC p()\nMoveL [[x,0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tool0;\nENDPROC\nENDMODULE\n")
     (a,) = pf.module.motions
-    assert a.targets[0].value is None and "inline robtarget.1.1 is not a literal" in a.targets[0].issue
+    assert a.targets[0].value is None and "inline robtarget.trans.x is not a literal" in a.targets[0].issue
 
 
 @pytest.mark.parametrize("value, col, message", [
     ("[[0,0,0],[1,0,0,0],[0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", 26,
-     "inline robtarget.3 has 3 components, expected 4 (the robtarget of MoveL)"),
+     "inline robtarget.robconf has 3 components, expected 4 (the robtarget of MoveL)"),
     ("[[0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", 8,
-     "inline robtarget.1 has 2 components, expected 3"),
+     "inline robtarget.trans has 2 components, expected 3"),
     ("[[0,0,0],[1,0,0,0],[0,0,0,\"a\"],[9E9,9E9,9E9,9E9,9E9,9E9]]", 33,
-     "inline robtarget.3.4 is not a number"),
+     "inline robtarget.robconf.cfx is not a number"),
     ("[[0,0,1E999],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", 13,
      "component 1E999 is beyond what a RAPID num holds"),
     ("[[0,0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E40]]", 57,

@@ -212,6 +212,30 @@ SHAPES: dict[str, tuple] = {
     "tooldata": ("b", _POSE, _LOAD),
     "wobjdata": ("b", "b", "s", _POSE, _POSE),
 }
+# The components' names, as RAPID writes them (p1.trans.x, p1.extax.eax_a):
+# per shape, (name, the names inside it) of each component, for messages.
+_POS_N = (("x", None), ("y", None), ("z", None))
+_ORIENT_N = tuple((f"q{i}", None) for i in range(1, 5))
+_POSE_N = (("trans", _POS_N), ("rot", _ORIENT_N))
+_LOAD_N = (("mass", None), ("cog", _POS_N), ("aom", _ORIENT_N), ("ix", None), ("iy", None),
+           ("iz", None))
+_CONF_N = tuple((c, None) for c in ("cf1", "cf4", "cf6", "cfx"))
+_EAX_N = tuple((f"eax_{c}", None) for c in "abcdef")
+_RAX_N = tuple((f"rax_{i}", None) for i in range(1, 7))
+NAMES: dict[str, tuple] = {
+    "pos": _POS_N,
+    "orient": _ORIENT_N,
+    "confdata": _CONF_N,
+    "extjoint": _EAX_N,
+    "robjoint": _RAX_N,
+    "pose": _POSE_N,
+    "robtarget": (("trans", _POS_N), ("rot", _ORIENT_N), ("robconf", _CONF_N), ("extax", _EAX_N)),
+    "jointtarget": (("robax", _RAX_N), ("extax", _EAX_N)),
+    "loaddata": _LOAD_N,
+    "tooldata": (("robhold", None), ("tframe", _POSE_N), ("tload", _LOAD_N)),
+    "wobjdata": (("robhold", None), ("ufprog", None), ("ufmec", None), ("uframe", _POSE_N),
+                 ("oframe", _POSE_N)),
+}
 DECODED_TYPES = frozenset(("robtarget", "jointtarget", "tooldata", "wobjdata", "loaddata", "pose"))
 _LEAF_NAMES = {"n": "a number", "b": "TRUE or FALSE", "s": "a string"}
 
@@ -248,7 +272,8 @@ def _leaf(kind: str, expr, where: str) -> Field:
     raise DecodeIssue(f"{where} is not a literal ({_LEAF_NAMES[kind]} expected)", expr.span)
 
 
-def _walk(shape, expr, where: str):
+def _walk(shape, expr, where: str, names=None):
+    """names: the components' (NAMES), for where a message points."""
     if isinstance(shape, str):
         return _leaf(shape, expr, where)
     items = _items(expr)
@@ -260,7 +285,8 @@ def _walk(shape, expr, where: str):
     if len(items) != len(shape):
         raise DecodeIssue(f"{where} has {len(items)} components, expected {len(shape)}",
                           expr.span, True)
-    return tuple(_walk(s, e, f"{where}.{i + 1}") for i, (s, e) in enumerate(zip(shape, items)))
+    return tuple(_walk(s, e, f"{where}.{names[i][0]}", names[i][1]) if names else
+                 _walk(s, e, f"{where}.{i + 1}") for i, (s, e) in enumerate(zip(shape, items)))
 
 
 def _shape_regex(counts: tuple[int, ...]) -> re.Pattern:
@@ -449,7 +475,7 @@ def _compact(t: str, expr, where: str, known=None) -> Record:
                                   "holds (+-3.4E38)",
                                   Span(expr.span.start + s, expr.span.start + e), True)
             return cls(values, expr.text, expr.span)
-    nested = _walk(SHAPES[t], expr, where)
+    nested = _walk(SHAPES[t], expr, where, NAMES[t])
     fields = [f for group in nested for f in group]
     base = expr.span.start
     return cls(tuple(f.value for f in fields), (
@@ -486,16 +512,16 @@ def decode(type_name: str, expr, where: str | None = None, known=None) -> Record
     if t in _COMPACT:
         return _compact(t, expr, where, known)
     if t == "pose":
-        v = _walk(SHAPES[t], expr, where)
+        v = _walk(SHAPES[t], expr, where, NAMES[t])
         return Pose(v[0], v[1], expr.span)
     if t == "loaddata":
-        return _load(_walk(SHAPES[t], expr, where), expr.span)
+        return _load(_walk(SHAPES[t], expr, where, NAMES[t]), expr.span)
     if t == "tooldata":
-        v = _walk(SHAPES[t], expr, where)
+        v = _walk(SHAPES[t], expr, where, NAMES[t])
         return ToolData(v[0], Pose(v[1][0], v[1][1], expr.items[1].span),
                         _load(v[2], expr.items[2].span), expr.span)
     if t == "wobjdata":
-        v = _walk(SHAPES[t], expr, where)
+        v = _walk(SHAPES[t], expr, where, NAMES[t])
         items = expr.items
         return WobjData(v[0], v[1], v[2], Pose(v[3][0], v[3][1], items[3].span),
                         Pose(v[4][0], v[4][1], items[4].span), expr.span)
