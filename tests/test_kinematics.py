@@ -427,3 +427,14 @@ def test_a_urdf_joint_without_limits_takes_them_from_limit(tmp_path):
         "deg (give its range with --limit J4=LOWER:UPPER)" in r.output, r.output
     r = CliRunner().invoke(main, args + ["--limit", "J4=-200:200"])
     assert r.exit_code == 0, r.output
+
+
+def test_a_target_past_the_edge_by_rounding_says_so():
+    """A miss of a few nanometres is not written as 'by 0.000 mm' (which
+    reads as in reach): its size, and where such a target lies."""
+    from rapidcomp.kinematics.ik import IKBatch
+    res = Solver(ROBOT).solve_nominal(RY90[None], np.array([[2000.0, 0, 712]]), [(0, 0, 0, 0)])
+    tiny = IKBatch(res.q_deg, res.status, np.array([3.2e-6]), res.detail_joint, res.conf,
+                   res.residual_mm, res.residual_rad, res.iterations, res.warnings)
+    assert tiny.reason(0) == ("out of reach by 3.2e-06 mm (on the edge of the workspace: the "
+                              "arm stretched out)")

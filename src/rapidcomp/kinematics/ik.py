@@ -136,6 +136,11 @@ class IKBatch:
         if s == Status.OK:
             return None
         if s == Status.UNREACHABLE:
+            if d < 0.0005:
+                # (0.000 would read as in reach: a target on the edge of the
+                # workspace, the arm stretched out, past it by rounding.)
+                return (f"out of reach by {d:.2g} mm (on the edge of the workspace: the arm "
+                        "stretched out)")
             return f"out of reach by {d:.3f} mm"
         if s == Status.NO_CONFIGURATION:
             if j < 0:
