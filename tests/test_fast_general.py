@@ -32,7 +32,6 @@ PROFILE = FIXTURES / "warm.csv"
 # case that copies a fixture is that fixture), with the options it needs.
 PROGRAMS = {
     "cubes.mod": (FIXTURES / "cubes.mod", ("--limit", "J5=-120:120")),
-    "cubes.mod refused point": (FIXTURES / "cubes.mod", ()),
     "paper_front.mod": (FIXTURES / "paper_front.mod", ()),
     **{f"rapid/{p.name}": (p, ()) for p in sorted((FIXTURES / "rapid").iterdir())},
     "golden refusals": (ROOT / "tests" / "golden" / "fix" / "refusals" / "before.mod", ()),
