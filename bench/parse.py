@@ -5,7 +5,9 @@
 Prints MB/s per size, and in the same run the MB/s of a plain Python regex
 tokenizer on the same text (every RAPID token: names, numbers, strings,
 operators, comments; no tree) and the ratio (issue #14: parse >= 0.2 x the
-tokenizer, >= 0.5 x where the columnar path applies).
+tokenizer, >= 0.5 x where the columnar path applies): for CAM modules, then
+for hand-written ones of as many moves (camgen.hand_module: blanks, changing
+speeds and tools, Offs/RelTool, blocks, comments, CRLF).
 
 The process is set up as the `rapidcomp` command sets up its own (cli.run,
 process.py: no cyclic collector), as bench/fix.py does, and each parse's
@@ -26,7 +28,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from camgen import cam_module  # noqa: E402
+from camgen import cam_module, hand_module  # noqa: E402
 
 from rapidcomp.process import own  # noqa: E402
 from rapidcomp.rapid.grammar import engine  # noqa: E402
@@ -90,6 +92,18 @@ def main() -> None:
         decoded += sum(t.value is not None for mo in m.motions for t in mo.targets)
         assert decoded == n, (decoded, n)
         pf = m = None
+        tok = best_tokenize(text, args.repeat)
+        print(f"{n:>8} {mb:>7.2f} {best:>8.3f} {mb / best:>7.2f} {n / best:>11.0f} "
+              f"{mb / tok:>15.2f} {tok / best:>6.2f}")
+    # The general path: programs as people write them (hand_module), whose
+    # moves the CAM path does not take as runs (goal: >= 0.2 x).
+    print("hand-written programs (no runs of the CAM path):")
+    for n in sizes:
+        text = hand_module(n)
+        mb = len(text.encode()) / 1e6
+        best, pf = best_parse(text, args.repeat)
+        assert len(pf.module.motions) == n, (len(pf.module.motions), n)
+        pf = None
         tok = best_tokenize(text, args.repeat)
         print(f"{n:>8} {mb:>7.2f} {best:>8.3f} {mb / best:>7.2f} {n / best:>11.0f} "
               f"{mb / tok:>15.2f} {tok / best:>6.2f}")
