@@ -492,13 +492,12 @@ ENDMODULE""")
     return {r.line: (r.status, r.reason) for r in fix(t, SOLVER, "auto").rows}
 
 
-def test_a_displacement_the_robot_measures_is_not_counted_twice():
+def test_a_displacement_read_where_the_robot_is_keeps_that_move_as_written():
     """PDispOn without \\ExeP takes the displacement from where the robot
     is: the move that put it there, compensated, would shift the
-    displacement by its correction, and the moves displaced by it would
-    carry the warm robot's error once in the displacement and again in
-    their compensation. Both are left as written; a MoveAbsJ (never
-    displaced) is compensated, and so is a move after PDispOff."""
+    displacement by its correction, so it is left as written; the
+    displacement is then its programmed position's, as in the program, and
+    the displaced move and a MoveAbsJ (never displaced) are compensated."""
     rows = _statuses("""        MoveJ p1, v500, fine, tool0;
         PDispOn p1, tool0;
         MoveL p2, v500, fine, tool0;
@@ -507,11 +506,92 @@ def test_a_displacement_the_robot_measures_is_not_counted_twice():
         MoveL p2, v500, fine, tool0;
 """)
     assert rows[6][0] == "untouched" and rows[6][1].startswith(
-        "PDispOn without \\ExeP (M0.mod:7) reads where this move leaves the robot")
-    assert rows[8][0] == "untouched" and rows[8][1].startswith(
-        "may run under a program displacement set at run time (M0.mod:7: PDispOn without "
-        "\\ExeP reads where the robot is)")
-    assert rows[9][0] == rows[11][0] == "compensated"
+        "a program displacement set at run time (M0.mod:7) may read where this move leaves "
+        "the robot")
+    assert rows[8][0] == rows[9][0] == rows[11][0] == "compensated"
+
+
+def test_crobt_and_a_search_read_what_the_robot_measured():
+    """\\ExeP:=CRobT() reads where the robot is, as a variable CRobT()
+    filled does: the move before is left as written, and so is the move
+    displaced. A fixed PDispOn after a measured one adds to it (PDispOn
+    displacements add up): still measured. After a search, where the robot
+    is comes from the search, not from a move the flow follows: the search's
+    own target is compensated."""
+    rows = _statuses("""        MoveAbsJ jHome, v500, fine, tool0;
+        PDispOn \\ExeP:=CRobT(\\Tool:=tool0), p1, tool0;
+        MoveL p2, v200, fine, tool0;
+        PDispOff;
+        MoveJ p1, v500, fine, tool0;
+        pHere := CRobT(\\Tool:=tool0);
+        PDispOn \\ExeP:=pHere, p1, tool0;
+        MoveL p2, v200, fine, tool0;
+        PDispOff;
+""", "    VAR robtarget pHere;\n")
+    assert [rows[k][0] for k in (7, 9, 11, 14)] == ["untouched"] * 4
+    assert "(M0.mod:8: its \\ExeP CRobT(\\Tool:=tool0) is not a value" in rows[9][1]
+    stacked = _statuses("""        MoveL p1, v500, fine, tool0;
+        SearchL \\Stop, di1, pFound, p2, v50, tool0;
+        PDispOn \\ExeP:=pFound, p2, tool0;
+        PDispOn \\ExeP:=p2, p1, tool0;
+        MoveL p1, v200, fine, tool0;
+        PDispOff;
+""", "    VAR robtarget pFound;\n")
+    assert [stacked[k][0] for k in (7, 8, 11)] == ["compensated", "compensated", "untouched"]
+
+
+def test_a_displacement_read_in_a_handler_may_read_any_move():
+    """An error handler (or a TRAP) runs where an error (an interrupt)
+    stopped the robot: a PDispOn without \\ExeP there may read where any
+    move left it, so none is compensated. A TRAP that only switches
+    displacement off leaves the others as they are."""
+    rows = _statuses("""        MoveAbsJ jHome, v500, fine, tool0;
+        nX := 1 / nZero;
+        MoveL p2, v500, fine, tool0;
+    ERROR
+        PDispOn p1, tool0;
+        MoveL p2, v500, fine, tool0;
+        PDispOff;
+        TRYNEXT;
+""", "    VAR num nZero:=0;\n    VAR num nX;\n")
+    assert {status for status, _ in rows.values()} == {"untouched"}
+    assert "(M0.mod:12, in an interrupt routine or an error handler)" in rows[8][1]
+    off = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    CONST robtarget p2:={P2};
+    VAR robtarget pFound;
+    VAR intnum ir1;
+    PROC main()
+        CONNECT ir1 WITH tReset;
+        ISignalDI di1, 1, ir1;
+        MoveL p1, v500, fine, tool0;
+        SearchL \\Stop, di2, pFound, p2, v50, tool0;
+        PDispOn \\ExeP:=pFound, p2, tool0;
+        MoveL p1, v200, fine, tool0;
+        PDispOff;
+    ENDPROC
+    TRAP tReset
+        PDispOff;
+    ENDTRAP
+ENDMODULE""")
+    got = {r.line: r.status for r in fix(off, SOLVER, "auto").rows}
+    assert got == {9: "compensated", 10: "compensated", 12: "untouched"}
+
+
+def test_a_frame_written_with_variables_is_set_at_run_time():
+    rows = _statuses("""        MoveL p1, v500, fine, tool0;
+        SearchL \\Stop, di1, pFound, p2, v50, tool0;
+        dx := pFound.trans.x - p2.trans.x;
+        PDispSet [[dx,0,0],[1,0,0,0]];
+        MoveL p2, v200, fine, tool0;
+        PDispOff;
+        PDispSet [[0,0,5],[1,0,0,0]];
+        MoveL p2, v200, fine, tool0;
+        PDispOff;
+""", "    VAR robtarget pFound;\n    VAR num dx;\n")
+    assert rows[12][0] == "untouched" and "(M0.mod:11: PDispSet's frame is not a value" in \
+        rows[12][1]
+    assert rows[15][0] == "compensated"
 
 
 def test_a_searched_exep_sets_the_displacement_at_run_time():
@@ -590,8 +670,10 @@ def test_a_target_in_a_record_is_left_as_written_not_refused():
         ("untouched", "the target is a component of st1, a station: rapidcomp compensates "
                       "robtarget and jointtarget data, not components of other data; left as "
                       "written"), ("compensated", None)]
-    rows = _statuses("        MoveJ nSpeed, v500, fine, tool0;\n", "    CONST num nSpeed:=1;\n")
-    assert list(rows.values()) == [("not compensated", "nSpeed is a num, not a target")]
+    rows = _statuses("        MoveJ nSpeed, v500, fine, tool0;\n        MoveJ st1.speed, v500, fine, "
+                     "tool0;\n", record + "    CONST num nSpeed:=1;\n")
+    assert list(rows.values()) == [("not compensated", "nSpeed is a num, not a target"),
+                                   ("not compensated", "st1.speed is a num, not a target")]
 
 
 def test_the_displacement_warning_names_the_offset_where_a_track_carries_the_robot():
@@ -641,6 +723,17 @@ def test_a_for_loop_to_dim_of_a_declared_array_walks_it():
         ENDFOR
 """, f"    CONST robtarget pts{{3}}:=[{P1},{P2},{P1}];\n")
     assert [status for status, _ in rows.values()] == ["compensated", "untouched"]
+    plan = Plan(task(f"""MODULE A
+    CONST robtarget pts{{3}}:=[{P1},{P2},{P1}];
+    PROC Walk(robtarget ps{{*}})
+        FOR i FROM 1 TO Dim(ps, 1) DO
+            MoveL ps{{i}}, v100, fine, tool0;
+        ENDFOR
+    ENDPROC
+ENDMODULE"""))
+    (loop,) = plan.uses[0].motion.loops
+    module = plan.task.files[0].modules[0]
+    assert plan.resolver.loop_range(loop, module, "Walk") is None     # (the caller's size)
     fixed = fix(task(f"""MODULE A
     CONST robtarget pts{{3}}:=[{P1},{P2},{P1}];
     PROC main()
@@ -679,3 +772,33 @@ ENDMODULE""")
     assert "MoveAbsJ jt_p1," in result.modules[0].text
     assert not any("(TRAP) switches" in n for n in result.notes)
     assert not any(w.startswith("may run under") for r in result.rows for w in r.warnings)
+
+
+def test_the_absj_note_names_each_tool_once_and_a_local_variable_keeps_its_reason():
+    """RAPID's names are one whatever their case: tGrip and TGRIP are one
+    tool in the MoveAbsJ note; tool0 and wobj0 cannot change. A routine's
+    own variable without a value says so, not that another routine's
+    variable of its name is assigned."""
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    CONST robtarget p2:={P2};
+    PERS tooldata tGrip:=[TRUE,[[0,0,10],[1,0,0,0]],[0.5,[0,0,6],[1,0,0,0],0,0,0]];
+    PROC main()
+        MoveJ p1, v500, fine, tGrip;
+        MoveJ p2, v500, fine, TGRIP;
+        MoveJ p1, v500, fine, TOOL0 \\WObj:=WOBJ0;
+    ENDPROC
+ENDMODULE""")
+    (note,) = [n for n in fix(t, SOLVER, "auto").notes if "turned into MoveAbsJ go to" in n]
+    assert note.startswith("the moves turned into MoveAbsJ go to joints computed with tGrip as "
+                           "the modules declare them")
+    rows = _statuses("""        VAR robtarget pt;
+        MoveL pt, v100, fine, tool0;
+        Other;
+    ENDPROC
+    PROC Other()
+        VAR robtarget pt;
+        pt := CRobT();
+""")
+    assert list(rows.values()) == [("untouched", "pt has no literal value (declared without a "
+                                                 "value)")]

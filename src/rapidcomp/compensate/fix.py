@@ -369,17 +369,17 @@ def _notes(rows: list[UseRow], gs: list[P.Group]) -> list[str]:
     # A move turned into MoveAbsJ goes to joints computed with its tool and
     # work object as declared; the robtarget move followed a change to them
     # (a TCP calibration, a user frame redefined on the FlexPendant).
-    frames: dict[str, None] = {}
+    frames: dict[str, str] = {}         # (RAPID's names: one whatever their case)
     for g in gs:
         if g.mode == "absj" and g.failure is None:
             for u in g.uses:
                 if u.kind == "robtarget":
                     for ref in (u.motion.tool, u.motion.wobj):
                         if type(ref) is A.Ref and ref.name.lower() not in ("tool0", "wobj0"):
-                            frames[ref.name] = None
+                            frames.setdefault(ref.name.lower(), ref.name)
     if frames:
         notes.append("the moves turned into MoveAbsJ go to joints computed with "
-                     + ", ".join(sorted(frames, key=str.lower)) + " as the modules declare "
+                     + ", ".join(frames[k] for k in sorted(frames)) + " as the modules declare "
                      "them: a MoveAbsJ does not follow a later change to a tool or work object "
                      "(a TCP calibration, a user frame redefined on the FlexPendant) as the "
                      "robtarget move did; after one, run rapidcomp again, or keep robtarget "

@@ -96,16 +96,24 @@ class State:
 
     @property
     def may_be_displaced(self) -> bool:
-        return ON in self.pdisp or MEASURED in self.pdisp or ON in self.eoffs
+        return ON in self.pdisp or self.measured or ON in self.eoffs
 
     @property
     def measured(self) -> bool:
-        """Program displacement set at run time may be on (MEASURED)."""
-        return MEASURED in self.pdisp
+        """Program displacement set at run time may be on: MEASURED (one
+        not known), or (MEASURED, "file:line: why") of the one that set it."""
+        return any(x is MEASURED or type(x) is tuple for x in self.pdisp)
+
+    def measured_at(self) -> list[str] | None:
+        """The "file:line: why" of each displacement set at run time that
+        may be on; None where one not known may be."""
+        if MEASURED in self.pdisp:
+            return None
+        return sorted(x[1] for x in self.pdisp if type(x) is tuple)
 
 
 _new_state = maker(State)
-_ON, _OFF, _MEASURED = frozenset((ON,)), frozenset((OFF,)), frozenset((MEASURED,))
+_ON, _OFF = frozenset((ON,)), frozenset((OFF,))
 START = State(_ON, _ON, _OFF, _OFF, frozenset((PROGRAM_START,)))
 UNKNOWN = State(BOTH, BOTH, BOTH, BOTH, None)
 # No flags at all: walked from this, a handler's RETRY state holds only what
@@ -132,9 +140,12 @@ class Flow:
     entry: State = UNKNOWN
     # Where program displacement is set at run time ("file:line"; MEASURED).
     measured: list = field(default_factory=list)
-    # Use key -> where a PDispOn without \ExeP reads where that move left
-    # the robot ("file:line").
+    # Use key -> where a displacement set at run time may read where that
+    # move left the robot ("file:line"); anywhere: such a one may read
+    # where any move left it (in a TRAP, an error handler, after a position
+    # the flow does not know), or "".
     read_by: dict = field(default_factory=dict)
+    anywhere: str = ""
 
 
 _NO_NAMES = frozenset()
@@ -273,7 +284,7 @@ class _Walker:
                                     "configuration supervision, program displacement and the "
                                     "previous position of every move are treated as unknown"],
                              entry=self.unknown, measured=self.flow.measured,
-                             read_by=self.flow.read_by)
+                             read_by=self.flow.read_by, anywhere=self.flow.anywhere)
             return self.flow
         self.interrupts(others)
         self.notes(others, has_pdisp)
@@ -301,6 +312,7 @@ class _Walker:
         (supervision, displacement) is unknown everywhere; a TRAP that calls
         something not known statically may switch anything."""
         switched: set[str] = set()
+        on = False                   # (displacement may be switched on, not only off)
         for rt in others:
             if rt.node.kind != "TRAP":
                 continue
@@ -309,18 +321,25 @@ class _Walker:
                     switched.add(name)
                 elif name in DISPLACEMENT_ON or name in DISPLACEMENT_OFF:
                     switched.add("pdisp")
+                    on = on or name in DISPLACEMENT_ON
                 elif name in TRACK_OFFSET_ON or name in TRACK_OFFSET_OFF:
                     switched.add("eoffs")
                 elif not self.known(r, name):
                     switched.update(("confj", "confl", "pdisp", "eoffs"))
+                    on = True
         if not self.track:
             switched.discard("eoffs")
         if not switched:
             return
-        widen = {k: self.unknown.pdisp if k == "pdisp" else BOTH for k in switched}
+        # What a state may hold grows by what the TRAP may set (a union:
+        # a displacement set at run time before stays possible).
+        widen = {k: (self.unknown.pdisp if on else _OFF) if k == "pdisp" else BOTH
+                 for k in switched}
         for key, st in self.flow.before.items():
-            self.flow.before[key] = replace(st, **widen)
-        self.flow.entry = replace(self.flow.entry, **widen)
+            self.flow.before[key] = replace(st, **{k: getattr(st, k) | v
+                                                   for k, v in widen.items()})
+        self.flow.entry = replace(self.flow.entry, **{k: getattr(self.flow.entry, k) | v
+                                                      for k, v in widen.items()})
         what = {"confj": "ConfJ", "confl": "ConfL", "pdisp": "program displacement",
                 "eoffs": "the external axis offset"}
         self.flow.notes.append("an interrupt routine (TRAP) switches "
@@ -332,16 +351,24 @@ class _Walker:
         """Each PDispOn/PDispSet whose displacement is set at run time, in
         flow.measured; if there is one, it may be on wherever nothing is
         known (self.unknown)."""
+        # (Routines an interrupt may run: there, as in an error handler,
+        # where the robot is may be where any move left it.)
+        interrupted = {id(r.node) for t in self.routines if t.node.kind == "TRAP"
+                       for r, _ in self._reachable_calls(t)}
         for rt in self.routines:
             if not set(self.called_names(rt.node)) & DISPLACEMENT_ON:
                 continue
+            handlers = {id(s) for s in _statements_in([h.body for h in rt.node.handlers])}
             for s in _statements(rt.node):
                 why = (self._set_at_run_time(s, rt) if type(s) is A.ProcCall
                        and s.name.lower() in DISPLACEMENT_ON else None)
-                if why is not None:
-                    where = f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}: {why}"
-                    if where not in self.flow.measured:
-                        self.flow.measured.append(where)
+                if why is None:
+                    continue
+                at = f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}"
+                if f"{at}: {why}" not in self.flow.measured:
+                    self.flow.measured.append(f"{at}: {why}")
+                if (id(rt.node) in interrupted or id(s) in handlers) and not self.flow.anywhere:
+                    self.flow.anywhere = at
         if self.flow.measured:
             self.unknown = State(BOTH, BOTH, BOTH | {MEASURED}, BOTH, None)
 
@@ -616,17 +643,33 @@ class _Walker:
                 return st
             return replace(st, **{name: value})
         if name in DISPLACEMENT_ON:
-            # (Set at run time: MEASURED, found by run().)
-            if self.unknown is UNKNOWN or self._set_at_run_time(s, rt) is None:
-                return replace(st, pdisp=_ON)
-            if name == "pdispon" and _arg(s, "exep") is None and st.last:
-                # It reads where the moves before it left the robot: a
-                # compensated one would change the displacement with it.
-                at = f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}"
-                for key in st.last:
-                    if key is not PROGRAM_START and key is not RESUME:
-                        self.flow.read_by.setdefault(key, at)
-            return replace(st, pdisp=_MEASURED)
+            # (Set at run time: MEASURED, found by run(). PDispOn adds its
+            # displacement to one active; PDispSet sets its frame.)
+            kept = (frozenset(x for x in st.pdisp if x is MEASURED or type(x) is tuple)
+                    if name == "pdispon" else frozenset())
+            why = None if self.unknown is UNKNOWN else self._set_at_run_time(s, rt)
+            if why is None:
+                return replace(st, pdisp=_ON | kept)
+            # It may read where the moves before it left the robot (PDispOn
+            # without \ExeP does; CRobT() would): a compensated one would
+            # change the displacement with it.
+            # (Where the flow does not know the position, no move it
+            # follows put the robot there: a search, a routine not given;
+            # in an error handler or a TRAP any may have, found by run().)
+            at = f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}"
+            for key in st.last or ():
+                if key is not PROGRAM_START and key is not RESUME:
+                    self.flow.read_by.setdefault(key, at)
+            prog = _arg(s, "progpoint", 0)
+            if (name == "pdispon" and _arg(s, "exep") is None and st.last
+                    and PROGRAM_START not in st.last and RESUME not in st.last
+                    and prog is not None
+                    and self.resolver.fixed(prog, rt.module, rt.node.name, "robtarget")):
+                # Where moves the flow follows left the robot, each left as
+                # written: it reads their programmed positions, nothing
+                # measured.
+                return replace(st, pdisp=_ON | kept)
+            return replace(st, pdisp=frozenset(((MEASURED, f"{at}: {why}"),)))
         if name in DISPLACEMENT_OFF:
             return replace(st, pdisp=_OFF)
         if name in TRACK_OFFSET_ON:
@@ -782,7 +825,12 @@ def _called_names(node: A.Routine):
 
 def _statements(node: A.Routine):
     """Every statement of a routine, those in blocks and handlers too."""
-    stack = [node.body] + [h.body for h in node.handlers]
+    return _statements_in([node.body] + [h.body for h in node.handlers])
+
+
+def _statements_in(bodies: list):
+    """Every statement of these statement lists, those in blocks too."""
+    stack = list(bodies)
     while stack:
         stmts = stack.pop()
         for s in stmts:

@@ -66,23 +66,35 @@ class Plan:
         run time are left as written: if the robot measured it (a search,
         CRobT, PDispOn reading where the robot is), the warm robot's error
         is in the displacement already, and a compensated target would
-        count it twice (a MoveAbsJ is not displaced: it is compensated)."""
-        at = self.flow.measured
-        where = "; ".join(at[:3]) + (f"; and {len(at) - 3} more" if len(at) > 3 else "")
-        why = (f"may run under a program displacement set at run time ({where}): if the "
-               "robot measured it, its thermal error is in the displacement already, and "
-               "compensating would count it twice; left as written")
+        count it twice (a MoveAbsJ is not displaced: it is compensated);
+        and so are the moves whose position such a displacement may read."""
+        def listed(at: list[str]) -> str:
+            return "; ".join(at[:3]) + (f"; and {len(at) - 3} more" if len(at) > 3 else "")
+
         before, entry, read_by = self.flow.before, self.flow.entry, self.flow.read_by
+        anywhere = self.flow.anywhere
 
         def left(u: TargetUse) -> TargetUse:
             if u.reason is not None:
                 return u
+            if anywhere:
+                return replace(u, reason=f"a program displacement set at run time ({anywhere}, "
+                               "in an interrupt routine or an error handler) may read where "
+                               "any move leaves the robot: compensated, the displacement "
+                               "would change with it; left as written")
             if u.key in read_by:
-                return replace(u, reason=f"PDispOn without \\ExeP ({read_by[u.key]}) reads "
-                               "where this move leaves the robot: compensated, the "
-                               "displacement would change with it; left as written")
-            if u.kind == "robtarget" and before.get(u.key, entry).measured:
-                return replace(u, reason=why)
+                return replace(u, reason="a program displacement set at run time "
+                               f"({read_by[u.key]}) may read where this move leaves the "
+                               "robot (PDispOn without \\ExeP does; CRobT() would): "
+                               "compensated, the displacement would change with it; left "
+                               "as written")
+            st = before.get(u.key, entry)
+            if u.kind == "robtarget" and st.measured:
+                at = st.measured_at() or self.flow.measured
+                return replace(u, reason="may run under a program displacement set at run "
+                               f"time ({listed(at)}): if the robot measured it, its thermal "
+                               "error is in the displacement already, and compensating would "
+                               "count it twice; left as written")
             return u
         self.uses = [left(u) for u in self.uses]
         self.by_key = {u.key: u for u in self.uses}

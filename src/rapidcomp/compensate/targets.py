@@ -321,6 +321,7 @@ class Resolver:
         self.written = written if written is not None else Written({}, [], np.empty((0, 17)), [])
         self._memos: dict = {}
         self._pairs: dict = {}                  # _tool_wobj's
+        self._records: dict | None = None       # _component_type's: RECORD name -> components
         # Robtarget uses whose flange pose is composed in one batch (poses()).
         self._pending: list = []
         self.track = tuple(track)
@@ -505,30 +506,54 @@ class Resolver:
         self.shared = frozenset(name for name in pers
                                 if any(name in us.refs for us in theirs.values()))
 
+    def _component_type(self, type_: str, selectors) -> str | None:
+        """The type of data of type_ reached by these selectors, each a
+        component of a record some given module defines; None otherwise."""
+        if not selectors or not all(isinstance(x, A.Component) for x in selectors):
+            return None
+        records = self._records
+        if records is None:
+            records = self._records = {
+                r.name.lower(): {name.lower(): t.lower() for t, name in r.components}
+                for pf in self.files for m in pf.modules for r in m.records}
+        for x in selectors:
+            type_ = records.get(type_, {}).get(x.name.lower())
+            if type_ is None:
+                return None
+        return type_
+
     def fixed(self, expr, module: Module, routine: str | None, type_: str) -> bool:
-        """Whether expr is a value the program fixes: a literal, or data of
-        type_ with a literal value that nothing assigns at run time (other
-        than its own value) — not a search's result, CRobT(), a variable."""
+        """Whether expr is a value the program fixes: a literal of literals,
+        or data of type_ (an element of an array of it, by a constant
+        index) with a literal value nothing changes at run time (as for a
+        move's target: _written) — not a search's result, CRobT(), a
+        variable."""
         if isinstance(expr, (A.Agg, A.NumAgg)):
-            return True
-        if not isinstance(expr, A.Ref) or expr.selectors:
+            return literal_leaves(expr) is not None
+        if not isinstance(expr, A.Ref):
             return False
         d = self.lookup(expr.name, module, routine)
-        if not isinstance(d, Declaration) or d.type != type_ or d.value is None or d.dims:
+        if not isinstance(d, Declaration) or d.type != type_ or d.value is None:
             return False
-        if d.storage == "CONST":
-            return True
-        if self.writes.why(d.name) is not None and self._assigned_itself(d) is None:
-            return False
-        return not (d.storage == "PERS" and self.pers_anything is not None)
+        if expr.selectors or d.dims:
+            # (An element by constant indices: the array's value is fixed.)
+            if (len(expr.selectors) != 1 or not isinstance(expr.selectors[0], A.Index)
+                    or len(expr.selectors[0].indices) != len(d.dims)
+                    or any(self.integer(e, module, routine) is None
+                           for e in expr.selectors[0].indices)):
+                return False
+        return self._written(d, noted=False) is None
 
-    def _written(self, d: Declaration) -> str | None:
+    def _written(self, d: Declaration, noted: bool = True) -> str | None:
+        """Why d may change at run time, or None (noted: the note that it is
+        assigned only its own value, once its value is taken)."""
         if d.storage == "CONST":
             return None
         why = self.writes.why(d.name)
-        same = self._assigned_itself(d)
-        if why is not None and same is not None:
-            self._notes.append(same)
+        same = self._assigned_itself(d) if why is not None else None
+        if same is not None:
+            if noted:
+                self._notes.append(same)
             why = self.writes.why(d.name, literal_ok=True)
         if why is None and d.storage == "PERS" and self.pers_anything is not None:
             why = f"{d.name} {self.pers_anything}"
@@ -661,19 +686,24 @@ class Resolver:
                 return Unresolved(f"{expr.name} is not declared in the given modules "
                                   f"({MISSING_HINT})", True)
             if d.type not in types:
-                if expr.selectors and isinstance(expr.selectors[-1], A.Component):
-                    # (A component of a record may well be a target, which
-                    # the controller moves to: only not one rapidcomp edits.)
+                inner = self._component_type(d.type, expr.selectors)
+                if inner in types:
+                    # (A target inside a record the program defines: the
+                    # controller moves there; only not one rapidcomp edits.)
                     return Unresolved(f"the target is a component of {expr.name}, a {d.type}: "
                                       "rapidcomp compensates robtarget and jointtarget data, "
                                       "not components of other data; left as written")
+                if inner is not None:
+                    return Unresolved(f"{pf.text(expr)} is a {inner}, not a target", True)
                 return Unresolved(f"{expr.name} is a {d.type}, not a target", True)
             if d.value is None:
                 # (A variable declared without a value and assigned by the
                 # program: that is why, not its declaration.)
-                return Unresolved(self.writes.why(d.name) if d.node.init is None
-                                  and self.writes.why(d.name) else
-                                  f"{expr.name} has no literal value "
+                # (Module data only: the writes are known by name, and a
+                # routine's own variable of that name may be another's.)
+                why = (self.writes.why(d.name) if d.node.init is None and d.routine is None
+                       else None)
+                return Unresolved(why or f"{expr.name} has no literal value "
                                   f"({d.issue or 'run-time data'})")
             written = self._written(d)
             if written:
