@@ -141,9 +141,8 @@ class Flow:
     # Where program displacement is set at run time ("file:line"; MEASURED).
     measured: list = field(default_factory=list)
     # Use key -> where a displacement set at run time may read where that
-    # move left the robot ("file:line"); anywhere: such a one may read
-    # where any move left it (in a TRAP, an error handler, after a position
-    # the flow does not know), or "".
+    # move left the robot ("file:line"); anywhere: where such a one may
+    # read where any move left it (in a TRAP or an error handler), or "".
     read_by: dict = field(default_factory=dict)
     anywhere: str = ""
 

@@ -697,10 +697,10 @@ class Resolver:
                     return Unresolved(f"{pf.text(expr)} is a {inner}, not a target", True)
                 return Unresolved(f"{expr.name} is a {d.type}, not a target", True)
             if d.value is None:
-                # (A variable declared without a value and assigned by the
-                # program: that is why, not its declaration.)
-                # (Module data only: the writes are known by name, and a
-                # routine's own variable of that name may be another's.)
+                # (Module data declared without a value that the program
+                # assigns: that is why. Not a routine's own variable: the
+                # writes are known by name, and one of its name may be
+                # another routine's.)
                 why = (self.writes.why(d.name) if d.node.init is None and d.routine is None
                        else None)
                 return Unresolved(why or f"{expr.name} has no literal value "
