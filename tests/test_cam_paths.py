@@ -631,3 +631,40 @@ def test_a_run_pattern_is_compiled_only_for_an_argument_list_met_again():
     same = "MoveL p1,v100,z1,tool_again_run_test;\n" * 5
     assert _tokens(same, True) == _tokens(same, False)
     assert [k for k in eng._runs if k[1][1].endswith("tool_again_run_test;")]
+
+
+def test_a_function_of_numbers_as_first_argument_is_the_call_the_grammar_makes(monkeypatch):
+    """MoveL Offs(p1, 0, 0, -10), ... is one token (FAST_CALL) when its
+    function's arguments are names, numeric aggregates and plain decimal
+    numbers: the nodes are those the grammar's rules make of its tokens
+    (a sign right before a number folded into it); a number the one-token
+    form does not take (an exponent, hex, a sign apart) is lexed as usual."""
+    lines = ["MODULE M", "  PROC p()"]
+    args = ["0, 0, 10", "0,0,-10", "+5, -0, .5", "10., 0.25 , -7.125", "1e3, 0, 0", "0x1F, 0, 0",
+            "- 10, 0, 0", "123456789012345678901234567890, 0, 0", "[1,2,3], -1, 2"]
+    for a in args:
+        lines.append(f"    MoveL Offs(p1, {a}), v100, z1, tool0;")
+        lines.append(f"    MoveL RelTool(p1,{a}),v100,fine,tool0\\WObj:=wobj1;")
+    text = "\n".join(lines + ["  ENDPROC", "ENDMODULE", ""])
+    eng = engine()
+    kinds = [t.type for t in eng.tokens(text)]
+    assert kinds.count("FAST_CALL") == 2 * 6   # (all but the exponent, the hex, the sign apart)
+    fast = _tree(eng.parse(text))
+    monkeypatch.setattr(eng, "_master", eng._master_plain)
+    monkeypatch.setattr(eng, "tokens", lambda t, runs=False, _t=eng.tokens: _t(t, False))
+    assert [t.type for t in eng.tokens(text)].count("FAST_CALL") == 0
+    assert _tree(eng.parse(text)) == fast
+
+
+def test_a_run_pattern_is_compiled_only_where_a_run_may_follow():
+    """Argument lists met again, but never twice in a row (a hand-written
+    program's speeds change from move to move), get no pattern; two in a
+    row do. The tokens are the same either way."""
+    eng = engine()
+    alternating = "".join(f"MoveL p{i},{'v100' if i % 2 else 'v200'},z1,tool_alt_run_test;\n"
+                          for i in range(40))
+    assert _tokens(alternating, True) == _tokens(alternating, False)
+    assert not [k for k in eng._runs if k[1][1].endswith("tool_alt_run_test;")]
+    twice = "MoveL p1,v300,z1,tool_alt_run_test;\n" * 3
+    assert _tokens(twice, True) == _tokens(twice, False)
+    assert [k for k in eng._runs if k[1][1] == ",v300,z1,tool_alt_run_test;"]

@@ -30,6 +30,9 @@ _FAST_ITEM = re.compile(
 
 
 _INF = float("inf")
+# A plain decimal number argument of a FAST_CALL's function (the grammar's
+# _FAST_NUM: at most 30 digits each side, never beyond a num's range).
+_FAST_NUM = re.compile(r"[-+]?(?:\d{1,30}(?:\.\d{0,30})?|\.\d{1,30})(?![\w.])")
 
 # The nodes of one-token statements and declarations, made as their classes
 # make them (construct.py; a CAM program's 1e5 moves have ~15 each).
@@ -90,10 +93,14 @@ class _Tail:
         return tuple(args)
 
 
+_NUMBER_START = frozenset("+-.0123456789")
+
+
 def _fast_func(text: str, base: int, start: int, name_end: int) -> tuple:
     """The function call a FAST_CALL's first argument is (its name at
-    text[start:name_end], then '(' arguments ')': names and numeric
-    aggregates, blanks around commas; the grammar's _FAST_FUNC), as
+    text[start:name_end], then '(' arguments ')': names, numeric
+    aggregates and plain decimal numbers, blanks around commas; the
+    grammar's _FAST_FUNC), as
     func_call makes it; and where it ends in text."""
     args = []
     pos = name_end + 1
@@ -111,6 +118,14 @@ def _fast_func(text: str, base: int, start: int, name_end: int) -> tuple:
                     break
             span = _span((base + pos, base + end))
             node = _numagg(text[pos:end], span)
+        elif text[pos] in _NUMBER_START:
+            # (As the parser makes it: a sign right before the number folded
+            # into it, its span from the sign.)
+            end = _FAST_NUM.match(text, pos).end()
+            span = _span((base + pos, base + end))
+            written = text[pos:end]
+            value = float(written.lstrip("+-"))
+            node = _num(-value if written[0] == "-" else value, written, span)
         else:
             end = _FAST_ITEM.match(text, pos).end()
             span = _span((base + pos, base + end))

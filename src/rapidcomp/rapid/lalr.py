@@ -121,7 +121,8 @@ class Engine:
         # a pattern: one is compiled (~1 ms: NUMAGG is long) only for a part
         # met again, not for each line of a program whose every line has
         # arguments of its own (\ID:=n of a MultiMove program: 2e4 lines
-        # took 23 s).
+        # took 23 s), and only where the next statement may continue the
+        # run (_may_follow).
         self._met: dict[tuple, int] = {}
         self._ws = next(t.pattern.to_regexp() for t in terms if t.name == "WS")
         numagg = next(t.pattern.to_regexp() for t in terms if t.name == "NUMAGG")
@@ -287,7 +288,7 @@ class Engine:
             if len(self._met) >= 4096:       # bounded: many programs in one process
                 self._met.clear()
             met = self._met[kind, key] = self._met.get((kind, key), 0) + 1
-            if met < 2:
+            if met < 2 or not self._may_follow(kind, key, text, pos):
                 return                       # (the next statement is lexed on its own)
             if len(self._runs) >= 4096:
                 self._runs.clear()
@@ -303,6 +304,22 @@ class Engine:
                 return
             yield Tok(kind, m.group(1), m.start(1), m.end())
             pos = m.end()
+
+    def _may_follow(self, kind: str, key, text: str, pos: int) -> bool:
+        """Whether the statement after pos may be one more of the run
+        (kind, key): it begins with the instruction's name (the
+        declaration's words) and, a call, its line holds the text after
+        the target. A part met again elsewhere but never twice in a row (a
+        hand-written program's speeds and tools change from move to move)
+        gets no pattern: each costs ~2 ms to compile."""
+        at = pos + len(text[pos:pos + 256]) - len(text[pos:pos + 256].lstrip())
+        if kind == "FAST_DECL":
+            return text.startswith(key, at)
+        name, tail = key
+        if not text.startswith(name, at):
+            return False
+        end = text.find(tail, at)
+        return end >= 0 and text.find("\n", at, end) < 0
 
     def _keyword_in(self, call: str) -> bool:
         """A FAST_CALL holds a reserved word (as a whole identifier, in any
