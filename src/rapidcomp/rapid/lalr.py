@@ -28,6 +28,9 @@ FAST_NAME = re.compile(r"([A-Za-z][A-Za-z0-9_]*)[ \t]+")
 _WORD = re.compile(r"(?<![\w.])[A-Za-z][A-Za-z0-9_]*")
 
 
+_BLANKS = re.compile(r"\s*")
+
+
 class Tok:
     """A token: terminal name, text and half-open character span."""
 
@@ -312,14 +315,16 @@ class Engine:
         the target. A part met again elsewhere but never twice in a row (a
         hand-written program's speeds and tools change from move to move)
         gets no pattern: each costs ~2 ms to compile."""
-        at = pos + len(text[pos:pos + 256]) - len(text[pos:pos + 256].lstrip())
+        at = _BLANKS.match(text, pos).end()
         if kind == "FAST_DECL":
             return text.startswith(key, at)
         name, tail = key
         if not text.startswith(name, at):
             return False
-        end = text.find(tail, at)
-        return end >= 0 and text.find("\n", at, end) < 0
+        # (Within the next line only: a search to the text's end would make
+        # the lexing of a long program quadratic.)
+        nl = text.find("\n", at)
+        return text.find(tail, at, nl if nl >= 0 else len(text)) >= 0
 
     def _keyword_in(self, call: str) -> bool:
         """A FAST_CALL holds a reserved word (as a whole identifier, in any
