@@ -395,29 +395,55 @@ ENDMODULE""", "M0.mod"),))
     assert "[[0,0,0,0,0,0]," in text.replace(" ", "")
 
 
-def test_data_assigned_its_own_declared_value_is_that_value():
-    """RoboDK assigns the tool and work object their declared literal at the
-    top of the program (digits written differently): that changes nothing,
-    the moves compensate, and the report says so. Assigned another value,
-    the tool is a run-time value: untouched."""
+def test_a_tool_the_routine_assigns_is_the_value_assigned_last_before_the_move():
+    """RoboDK declares a default rdkTool and assigns the real tool (or its
+    declared value again) at the top of its routine, before the moves, and
+    again at a tool change. Each move is solved with the value its routine
+    assigned last before it: the very output of the program that declares
+    that value (the oracle), and the report says where. A move before the
+    first assignment, one in another routine, and any move of data also
+    assigned in a block run with a value not known here: left as written."""
     decl = "[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0.005]]"
     same = "[TRUE,[[0.000,0.000,150.000],[1.0000,0,0,0]],[2.000,[0,0,75],[1,0,0,0],0,0,0.005]]"
     other = "[TRUE,[[0,0,120],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0.005]]"
-    for assigned, ok in ((same, True), (other, False)):
-        t = task(f"""MODULE A
-    PERS tooldata rdkTool:={decl};
+
+    def run(body: str, tool: str = decl) -> tuple:
+        result = fix(task(f"""MODULE A
+    PERS tooldata rdkTool:={tool};
     PROC main()
-        rdkTool := {assigned};
-        MoveL {P1}, v100, fine, rdkTool;
+{body}    ENDPROC
+    PROC Other()
+        MoveL {P2}, v100, fine, rdkTool;
     ENDPROC
-ENDMODULE""")
-        (row,) = rows_of(t, "auto").values()
-        if ok:
-            assert row.status == "compensated"
-            assert any("rdkTool is assigned at run time (M0.mod:4), but only its own declared "
-                       "value" in w for w in row.warnings), row.warnings
-        else:
-            assert row.status == "untouched" and "rdkTool is assigned at run time" in row.reason
+ENDMODULE"""), SOLVER, "auto")
+        lines = result.modules[0].text.splitlines()
+        return ({r.line: (r.status, r.reason) for r in result.rows},
+                [ln for ln in lines if "MoveL" in ln], result.notes)
+
+    rows, moves, notes = run(f"""        MoveL {P1}, v100, fine, rdkTool;
+        rdkTool := {same};
+        MoveL {P1}, v100, fine, rdkTool;
+        rdkTool := {other};
+        MoveL {P1}, v100, fine, rdkTool;
+        Other;
+""")
+    assert rows[4][0] == "untouched" and "rdkTool is assigned at run time (M0.mod:" in rows[4][1]
+    assert rows[6] == rows[8] == ("compensated", None)
+    assert rows[12][0] == "untouched"                     # (Other: not known here)
+    assert ("assigned by the routine that moves with them: rdkTool (M0.mod lines 5, 7); each "
+            "move there is solved with the value assigned last before it") in " ".join(notes)
+    # The oracle: each value declared, nothing assigned.
+    _, with_150, _ = run(f"        MoveL {P1}, v100, fine, rdkTool;\n")
+    _, with_120, _ = run(f"        MoveL {P1}, v100, fine, rdkTool;\n", other)
+    assert moves[1] == with_150[0] and moves[2] == with_120[0] and moves[1] != moves[2]
+    # Also assigned in a block: which value a move runs with is not known.
+    rows, _, _ = run(f"""        rdkTool := {other};
+        MoveL {P1}, v100, fine, rdkTool;
+        IF di1 = 1 THEN
+            rdkTool := {same};
+        ENDIF
+""")
+    assert rows[5][0] == "untouched" and "rdkTool is assigned at run time" in rows[5][1]
 
 
 def test_a_move_after_one_not_compensated_says_so():

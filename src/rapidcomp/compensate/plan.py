@@ -144,6 +144,22 @@ class Plan:
 
     def notes(self) -> list[str]:
         out = list(self.flow.notes)
+        # Tools and work objects a routine assigns (resolver._sites): said
+        # once, with where.
+        taken = sorted({key.split("@")[0] for u in self.uses if u.reason is None
+                        for key in (u.tool[0] if u.tool else "", u.wobj[0] if u.wobj else "")
+                        if "@" in key})
+        if taken:
+            sites = self.resolver.site_map()
+            said = "; ".join(
+                f"{sites[n][2][0][2].target.name} ({sites[n][2][0][1].source.display_path} "
+                + ("line " if len(sites[n][2]) == 1 else "lines ")
+                + line_ranges([pf.line(a.span) for _, pf, a in sites[n][2]]) + ")"
+                for n in taken if n in sites)
+            out.append(f"assigned by the routine that moves with them: {said}; each move "
+                       "there is solved with the value assigned last before it (moves before "
+                       "the first assignment, and in other routines, run with a value not "
+                       "known here: left as written)")
         again = self._compensated_before()
         if again:
             out.append("this program looks compensated already (" + ", ".join(again[:3])

@@ -24,7 +24,8 @@ from __future__ import annotations
 
 import math
 import operator
-from dataclasses import dataclass
+from bisect import bisect_left
+from dataclasses import dataclass, replace
 from itertools import repeat
 from typing import NamedTuple
 
@@ -127,6 +128,13 @@ class TargetUse:
 
 # (A CAM program's 1e5 uses: made as their classes make them, construct.py.)
 _source, _use = maker(Source), maker(TargetUse)
+
+
+def _data_key(expr, site) -> str:
+    """A tool's or work object's key (grouping: one value, one key): its
+    name, and where a routine assigns it, the assignment's place."""
+    name = expr.name.lower()
+    return name if site is None else f"{name}@{site[1].span.start}"
 
 
 class Unresolved(NamedTuple):
@@ -322,6 +330,16 @@ class Resolver:
         self._memos: dict = {}
         self._pairs: dict = {}                  # _tool_wobj's
         self._records: dict | None = None       # _component_type's: RECORD name -> components
+        # Tools and work objects a routine assigns literals to (_sites), and
+        # the declarations given those values (kept: their ids key self.home).
+        self._site_map: dict | None = None
+        # id -> (the declaration given an assigned value, the file of the
+        # assignment): kept, so the id stays its own (self.home, which a
+        # resolver of the same files shares, is not written).
+        self._assigned: dict = {}
+        # The names the plan found so (verify.py: a resolver of the output,
+        # which knows no writes, finds their assignments there).
+        self.site_names: frozenset = frozenset()
         # Robtarget uses whose flange pose is composed in one batch (poses()).
         self._pending: list = []
         self.track = tuple(track)
@@ -461,9 +479,11 @@ class Resolver:
         return d if d is not None else found[0]
 
     # ------------------------------------------------------------ tool / wobj
-    def _data(self, expr, module, routine: str, builtin: str, cls, what: str):
+    def _data(self, expr, module, routine: str, builtin: str, cls, what: str, site=None):
         """The literal value of a tool/work object argument, None for the
-        built-in one, or Unresolved."""
+        built-in one, or Unresolved. site: (ParsedFile, Assign) of the
+        assignment whose value the move uses (_sites), for data the program
+        assigns."""
         if not (isinstance(expr, A.Ref) and not expr.selectors):
             return Unresolved(f"the {what} is not a plain data name")
         if expr.name.lower() == builtin:
@@ -479,8 +499,79 @@ class Resolver:
                 return Unresolved(f"{expr.name} is a {d.type}, not {what} data", True)
             return Unresolved(f"{what} {expr.name} has no literal value "
                               f"({d.issue or 'run-time data'})")
+        if site is not None:
+            pf, assign = site
+            try:
+                value = decode(d.type, assign.value, d.name)
+            except DecodeIssue as exc:
+                return Unresolved(f"{d.name} is assigned a value rapidcomp cannot read "
+                                  f"({pf.source.display_path}:{pf.line(assign.span)}: {exc})")
+            d = replace(d, value=value)
+            self._assigned[id(d)] = (d, pf)
+            return d
         written = self._written(d)
         return Unresolved(written) if written else d
+
+    def site_map(self) -> dict:
+        """Tool and work object names whose every assignment is a whole
+        literal and a statement of one routine's body itself -> ((module id,
+        routine), the assignments' offsets, [(offset, ParsedFile, Assign)]
+        in order). Made once."""
+        sites = self._site_map
+        if sites is None:
+            sites = self._site_map = {}
+            body = {id(st): (id(m), r.name.lower(), pf) for pf in self.files for m in pf.modules
+                    for r in m.routines for st in r.node.body}
+            # (Not where a name computed at run time may be written: any
+            # data may change then.)
+            literal = (self.writes.literal if self.writes.anything is None
+                       and self.pers_anything is None else {})
+            if not literal and self.site_names:
+                # (The output: the plan's names, assigned where they were.)
+                literal = {}
+                for pf in self.files:
+                    for m in pf.modules:
+                        for r in m.routines:
+                            for st in r.node.body:
+                                if (type(st) is A.Assign and not st.target.selectors
+                                        and st.target.name.lower() in self.site_names):
+                                    literal.setdefault(st.target.name.lower(), []).append(
+                                        (pf, st))
+            for name, assigns in literal.items():
+                where = {body.get(id(a), (None,))[:2] for _, a in assigns}
+                if len(where) == 1 and None not in next(iter(where)):
+                    ordered = sorted(((a.span.start, pf, a) for pf, a in assigns),
+                                     key=lambda x: x[0])
+                    sites[name] = (next(iter(where)), [x[0] for x in ordered], ordered)
+        return sites
+
+    def _home_of(self, d: Declaration) -> ParsedFile:
+        """The file of d's value: its declaration's, or the assignment's."""
+        hit = self._assigned.get(id(d))
+        return hit[1] if hit is not None else self.home[id(d)]
+
+    def _sites(self, motion, module) -> tuple | None:
+        """For a move's tool and work object, each the assignment whose
+        value it uses, or None: where all assignments of that data are
+        whole literals, each a statement of one routine's body itself (not
+        in a block, a handler or another routine: RoboDK's `rdkTool :=
+        [...]` before its moves), the move lies in that routine after one
+        of them, and that is the last before it (the routine runs its body
+        in order: whatever ran before it, the move uses that value). None
+        when neither is such data (the common case: memoised lookups)."""
+        sites = self.site_map()
+        if not sites:
+            return None
+        out = []
+        for ref in (motion.tool, motion.wobj):
+            hit = (sites.get(ref.name.lower()) if type(ref) is A.Ref and not ref.selectors
+                   else None)
+            if hit is None or hit[0] != (id(module), (motion.routine or "").lower()):
+                out.append(None)
+                continue
+            k = bisect_left(hit[1], motion.span.start)
+            out.append(hit[2][k - 1][1:] if k else None)
+        return tuple(out) if out[0] is not None or out[1] is not None else None
 
     def _task_writes(self, files, observers) -> None:
         """What the task may change at run time, and what the controller's
@@ -600,6 +691,20 @@ class Resolver:
         a plain name (a CAM program's 1e5 moves name the same two), with
         the notes their resolution gave."""
         t, w, routine = motion.tool, motion.wobj, motion.routine
+        sites = (self._sites(motion, module) if self.writes.literal or self.site_names
+                 else None)
+        if sites is not None:
+            # (Data the routine assigns: once per assignment it takes.)
+            key = (id(module), routine, id(t), id(w), *map(id, sites))
+            hit = self._pairs.get(key)
+            if hit is None:
+                tool = (self._tool(t, module, routine, sites[0]) if sites[0] is not None
+                        else self.tool(t, module, routine))
+                wobj = None if type(tool) is Unresolved else (
+                    self._wobj(w, module, routine, sites[1]) if sites[1] is not None
+                    else self.wobj(w, module, routine))
+                hit = self._pairs[key] = (tool, wobj, ())
+            return hit[0], hit[1]
         if type(t) is not A.Ref or type(w) is not A.Ref or t.selectors or w.selectors:
             tool = self.tool(t, module, routine)
             return tool, (None if type(tool) is Unresolved else self.wobj(w, module, routine))
@@ -625,10 +730,10 @@ class Resolver:
         """(key, uframe . oframe as (R, p)), or Unresolved."""
         return self._memo("wobj", expr, module, routine, self._wobj)
 
-    def _tool(self, expr, module, routine: str):
+    def _tool(self, expr, module, routine: str, site=None):
         if expr is None:
             return Unresolved("no tool argument", True)
-        d = self._data(expr, module, routine, "tool0", ToolData, "tool")
+        d = self._data(expr, module, routine, "tool0", ToolData, "tool", site)
         if isinstance(d, Unresolved):
             return d
         if d is None:
@@ -636,12 +741,12 @@ class Resolver:
         t = d.value
         if t.robhold.value is not True:
             return Unresolved(f"tool {expr.name} is a stationary tool (robhold FALSE)")
-        return expr.name.lower(), self._pose(t.tframe, self.home[id(d)], f"tool {d.name}")
+        return _data_key(expr, site), self._pose(t.tframe, self._home_of(d), f"tool {d.name}")
 
-    def _wobj(self, expr, module, routine: str):
+    def _wobj(self, expr, module, routine: str, site=None):
         if expr is None:
             return "wobj0", IDENTITY_POSE
-        d = self._data(expr, module, routine, "wobj0", WobjData, "work object")
+        d = self._data(expr, module, routine, "wobj0", WobjData, "work object", site)
         if isinstance(d, Unresolved):
             return d
         if d is None:
@@ -654,8 +759,9 @@ class Resolver:
         # one moves with, and is not used then.)
         if w.ufprog.value is not True:
             return Unresolved(f"work object {expr.name} is coordinated with a mechanical unit")
-        pf = self.home[id(d)]
-        return expr.name.lower(), compose_pose(self._pose(w.uframe, pf, f"work object {d.name}"),
+        pf = self._home_of(d)
+        return _data_key(expr, site), compose_pose(self._pose(w.uframe, pf,
+                                                              f"work object {d.name}"),
                                                self._pose(w.oframe, pf, f"work object {d.name}"))
 
     def world_M_base(self, record) -> tuple | Unresolved:
@@ -1317,10 +1423,9 @@ class Resolver:
                              ext=self._one(src.record.ext, True), key=key)
         if not isinstance(src.record, RobTarget):
             return fail(Unresolved("not a robtarget", True))
-        tool = self.tool(motion.tool, module, motion.routine)
+        tool, wobj = self._tool_wobj(motion, module)
         if isinstance(tool, Unresolved):
             return fail(tool)
-        wobj = self.wobj(motion.wobj, module, motion.routine)
         if isinstance(wobj, Unresolved):
             return fail(wobj)
         base = self.world_M_base(src.record)

@@ -1060,10 +1060,13 @@ def _resolver(plan: Plan, out_files: dict, written: Written | None,
     `written`, the records as written)."""
     files = [out_files.get(fi, pf) for fi, pf in enumerate(plan.task.files)]
     files += list(plan.task.context)
-    # Run-time writes were ruled out on the input; the output adds none.
-    return Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
-                    track=plan.track, base=plan.resolver.base, written=written,
-                    like=plan.resolver, states=states)
+    # Run-time writes were ruled out on the input; the output adds none. A
+    # tool or work object a routine assigns is taken where the plan took it.
+    res = Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
+                   track=plan.track, base=plan.resolver.base, written=written,
+                   like=plan.resolver, states=states)
+    res.site_names = frozenset(plan.resolver.site_map())
+    return res
 
 
 def _resolved(plan: Plan, res: Resolver, keys: list, uses: list | None = None) -> dict:
