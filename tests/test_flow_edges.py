@@ -444,6 +444,14 @@ ENDMODULE"""), SOLVER, "auto")
         ENDIF
 """)
     assert rows[5][0] == "untouched" and "rdkTool is assigned at run time" in rows[5][1]
+    # A GOTO may run the body out of order: not known either.
+    rows, _, _ = run(f"""        rdkTool := {other};
+    again:
+        MoveL {P1}, v100, fine, rdkTool;
+        rdkTool := {same};
+        GOTO again;
+""")
+    assert rows[6][0] == "untouched" and "rdkTool is assigned at run time" in rows[6][1]
 
 
 def test_a_move_after_one_not_compensated_says_so():

@@ -37,7 +37,7 @@ from ..kinematics.frames import (DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z,
                                  unit_quat_matrices, unit_wxyz)
 from ..rapid import ast as A
 from ..rapid.model import Declaration, Module, Motion, ParsedFile
-from ..rapid.refs import literal_leaves, loop_names, usage
+from ..rapid.refs import literal_leaves, loop_names, nodes, usage
 from ..rapid.writes import Writes, task_writes
 from ..rapid.values import DecodeIssue, JointTarget, Pose, RobTarget, ToolData, WobjData, decode
 from .transient import FUNC_J, FUNC_R, state_values
@@ -537,9 +537,14 @@ class Resolver:
                                         and st.target.name.lower() in self.site_names):
                                     literal.setdefault(st.target.name.lower(), []).append(
                                         (pf, st))
+            # (A routine with a GOTO may run its body out of order.)
+            jumps = {(id(m), r.name.lower()) for pf in self.files for m in pf.modules
+                     for r in m.routines if literal and any(
+                         type(n) is A.Simple and n.kind == "GOTO" for n in nodes(r.node))}
             for name, assigns in literal.items():
                 where = {body.get(id(a), (None,))[:2] for _, a in assigns}
-                if len(where) == 1 and None not in next(iter(where)):
+                if (len(where) == 1 and None not in next(iter(where))
+                        and next(iter(where)) not in jumps):
                     ordered = sorted(((a.span.start, pf, a) for pf, a in assigns),
                                      key=lambda x: x[0])
                     sites[name] = (next(iter(where)), [x[0] for x in ordered], ordered)
