@@ -452,6 +452,14 @@ ENDMODULE"""), SOLVER, "auto")
         GOTO again;
 """)
     assert rows[6][0] == "untouched" and "rdkTool is assigned at run time" in rows[6][1]
+    # An error handler runs after an error anywhere, before an assignment too.
+    rows, _, _ = run(f"""        rdkTool := {other};
+        MoveL {P1}, v100, fine, rdkTool;
+    ERROR
+        MoveL {P1}, v100, fine, rdkTool;
+        RETRY;
+""")
+    assert rows[5][0] == "compensated" and rows[7][0] == "untouched"
 
 
 def test_a_move_after_one_not_compensated_says_so():

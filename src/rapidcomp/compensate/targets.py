@@ -537,6 +537,10 @@ class Resolver:
                                         and st.target.name.lower() in self.site_names):
                                     literal.setdefault(st.target.name.lower(), []).append(
                                         (pf, st))
+            # Where each routine's body ends: a move in a handler runs after
+            # an error anywhere, before an assignment too.
+            ends = {(id(m), r.name.lower()): r.node.body[-1].span.end if r.node.body else -1
+                    for pf in self.files for m in pf.modules for r in m.routines}
             # (A routine with a GOTO may run its body out of order.)
             jumps = {(id(m), r.name.lower()) for pf in self.files for m in pf.modules
                      for r in m.routines if literal and any(
@@ -547,7 +551,8 @@ class Resolver:
                         and next(iter(where)) not in jumps):
                     ordered = sorted(((a.span.start, pf, a) for pf, a in assigns),
                                      key=lambda x: x[0])
-                    sites[name] = (next(iter(where)), [x[0] for x in ordered], ordered)
+                    sites[name] = (next(iter(where)), [x[0] for x in ordered], ordered,
+                                   ends[next(iter(where))])
         return sites
 
     def _home_of(self, d: Declaration) -> ParsedFile:
@@ -571,7 +576,8 @@ class Resolver:
         for ref in (motion.tool, motion.wobj):
             hit = (sites.get(ref.name.lower()) if type(ref) is A.Ref and not ref.selectors
                    else None)
-            if hit is None or hit[0] != (id(module), (motion.routine or "").lower()):
+            if (hit is None or hit[0] != (id(module), (motion.routine or "").lower())
+                    or motion.span.start > hit[3]):
                 out.append(None)
                 continue
             k = bisect_left(hit[1], motion.span.start)
