@@ -460,6 +460,36 @@ ENDMODULE"""), SOLVER, "auto")
         RETRY;
 """)
     assert rows[5][0] == "compensated" and rows[7][0] == "untouched"
+    # A call that may run the routine again (itself; a routine no given
+    # module declares, which may call anything) may leave the other value:
+    # the moves after it, up to the next assignment, are not known; after
+    # that one they are. A routine an interrupt may run: none is known.
+    rows, _, _ = run(f"""        rdkTool := {other};
+        MoveL {P1}, v100, fine, rdkTool;
+        IF nDepth < 1 THEN
+            Incr nDepth;
+            main;
+        ENDIF
+        MoveL {P1}, v100, fine, rdkTool;
+        VendorProc;
+        rdkTool := {same};
+        MoveL {P1}, v100, fine, rdkTool;
+        VendorProc;
+        MoveL {P1}, v100, fine, rdkTool;
+""")
+    assert [rows[k][0] for k in (5, 10, 13, 15)] == ["compensated", "untouched", "compensated",
+                                                      "untouched"]
+    rows, _, _ = run(f"""        CONNECT irT WITH tr;
+        ITimer 1, irT;
+        rdkTool := {other};
+        MoveL {P1}, v100, fine, rdkTool;
+    ENDPROC
+    TRAP tr
+        main;
+    ENDTRAP
+    PROC Unused()
+""")
+    assert rows[7][0] == "untouched"
 
 
 def test_a_move_after_one_not_compensated_says_so():

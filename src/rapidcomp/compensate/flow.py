@@ -236,8 +236,7 @@ class _Walker:
     def known(self, rt: _Routine, name: str) -> bool:
         """A call the flow can follow: a built-in or a given routine."""
         return name != LATE and name not in UNKNOWN_TARGET_CALLS and (
-            name in BUILTIN_INSTRUCTIONS or name in BUILTIN_FUNCTIONS or name in MOVES_OTHERWISE
-            or motion_spec(name) is not None or self.callee(rt.module, name) is not None)
+            builtin(name) or self.callee(rt.module, name) is not None)
 
     def called_names(self, node: A.Routine) -> tuple[str, ...]:
         """The distinct names a routine calls, once per routine (a CAM
@@ -798,6 +797,30 @@ def _function_calls(s) -> tuple:
         if c.name.lower() not in BUILTIN_FUNCTIONS:
             out.setdefault(c.name.lower(), c.name)
     return tuple(out.values())
+
+
+def builtin(name: str) -> bool:
+    """A RAPID instruction or function (lower case), not a routine of the
+    task."""
+    return (name in BUILTIN_INSTRUCTIONS or name in BUILTIN_FUNCTIONS
+            or name in MOVES_OTHERWISE or motion_spec(name) is not None)
+
+
+def calls_of(node: A.Routine):
+    """(offset of the statement, lower-case name or LATE) of each call a
+    routine makes that is not a built-in, handlers' too."""
+    for s in _statements(node):
+        for name in _function_calls(s):
+            yield s.span.start, name.lower()
+        t = type(s)
+        if t is A.ProcCall:
+            name = s.name.lower()
+            if name in UNKNOWN_TARGET_CALLS:            # (CallByVar)
+                yield s.span.start, LATE
+            elif not builtin(name):
+                yield s.span.start, name
+        elif t is A.LateCall:
+            yield s.span.start, LATE
 
 
 def _arg(s: A.ProcCall, name: str, k: int = -1):

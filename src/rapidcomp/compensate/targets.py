@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 import operator
-from bisect import bisect_left
+from bisect import bisect_left, bisect_right
 from dataclasses import dataclass, replace
 from itertools import repeat
 from typing import NamedTuple
@@ -40,6 +40,7 @@ from ..rapid.model import Declaration, Module, Motion, ParsedFile
 from ..rapid.refs import literal_leaves, loop_names, nodes, usage
 from ..rapid.writes import Writes, task_writes
 from ..rapid.values import DecodeIssue, JointTarget, Pose, RobTarget, ToolData, WobjData, decode
+from .flow import LATE, calls_of
 from .transient import FUNC_J, FUNC_R, state_values
 
 IDENTITY_POSE = (np.eye(3), np.zeros(3))
@@ -128,6 +129,63 @@ class TargetUse:
 
 # (A CAM program's 1e5 uses: made as their classes make them, construct.py.)
 _source, _use = maker(Source), maker(TargetUse)
+
+
+class _Reentry:
+    """Which calls of a routine may run it again before they return
+    (recursion, directly or through others; a late-bound call or a routine
+    no given module declares, which may call anything), and whether an
+    interrupt may run it: where a routine's assignments are not in the
+    order its text has them."""
+
+    def __init__(self, files):
+        self.calls_by: dict = {}          # (module id, name) -> [(offset, callee name)]
+        self.named: dict = {}             # name -> [(module id, name)]
+        self.traps: list = []
+        for pf in files:
+            for m in pf.modules:
+                for r in m.routines:
+                    key = (id(m), r.name.lower())
+                    self.calls_by[key] = list(calls_of(r.node))
+                    self.named.setdefault(key[1], []).append(key)
+                    if r.node.kind == "TRAP":
+                        self.traps.append(key)
+        self._reach: dict = {}
+
+    def _reached(self, name: str) -> tuple[frozenset, bool]:
+        """The routines a call of `name` may run, and whether it may run
+        anything (a late-bound call, a routine not given, on the way)."""
+        hit = self._reach.get(name)
+        if hit is not None:
+            return hit
+        seen: set = set()
+        anything = False
+        todo = [name]
+        while todo:
+            n = todo.pop()
+            if n == LATE or n not in self.named:
+                anything = True
+                continue
+            for key in self.named[n]:
+                if key not in seen:
+                    seen.add(key)
+                    todo.extend(c for _, c in self.calls_by[key])
+        hit = self._reach[name] = (frozenset(seen), anything)
+        return hit
+
+    def calls(self, key: tuple) -> list | None:
+        """The offsets of the calls of routine `key` that may run it again;
+        None when an interrupt may run it (anywhere)."""
+        for trap in self.traps:
+            reached, anything = self._reached(trap[1])
+            if anything or key in reached:
+                return None
+        out = []
+        for at, name in self.calls_by[key]:
+            reached, anything = self._reached(name)
+            if anything or key in reached:
+                out.append(at)
+        return sorted(out)
 
 
 def _data_key(expr, site) -> str:
@@ -545,14 +603,18 @@ class Resolver:
             jumps = {(id(m), r.name.lower()) for pf in self.files for m in pf.modules
                      for r in m.routines if literal and any(
                          type(n) is A.Simple and n.kind == "GOTO" for n in nodes(r.node))}
+            reentry = _Reentry(self.files) if literal else None
             for name, assigns in literal.items():
                 where = {body.get(id(a), (None,))[:2] for _, a in assigns}
                 if (len(where) == 1 and None not in next(iter(where))
                         and next(iter(where)) not in jumps):
+                    risky = reentry.calls(next(iter(where)))
+                    if risky is None:
+                        continue
                     ordered = sorted(((a.span.start, pf, a) for pf, a in assigns),
                                      key=lambda x: x[0])
                     sites[name] = (next(iter(where)), [x[0] for x in ordered], ordered,
-                                   ends[next(iter(where))])
+                                   ends[next(iter(where))], risky)
         return sites
 
     def _home_of(self, d: Declaration) -> ParsedFile:
@@ -581,6 +643,13 @@ class Resolver:
                 out.append(None)
                 continue
             k = bisect_left(hit[1], motion.span.start)
+            # (A call between the assignment and the move that may run the
+            # routine again, its assignments too: the value is not known.)
+            risky = hit[4]
+            if k and risky:
+                r = bisect_right(risky, hit[1][k - 1])
+                if r < len(risky) and risky[r] < motion.span.start:
+                    k = 0
             out.append(hit[2][k - 1][1:] if k else None)
         return tuple(out) if out[0] is not None or out[1] is not None else None
 
