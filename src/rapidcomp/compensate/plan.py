@@ -152,9 +152,10 @@ class Plan:
         if taken:
             sites = self.resolver.site_map()
             said = "; ".join(
-                f"{sites[n][2][0][2].target.name} ({sites[n][2][0][1].source.display_path} "
-                + ("line " if len(sites[n][2]) == 1 else "lines ")
-                + line_ranges([pf.line(a.span) for _, pf, a in sites[n][2]]) + ")"
+                f"{sites[n].assigns[0][1].target.name} "
+                f"({sites[n].assigns[0][0].source.display_path} "
+                + ("line " if len(sites[n].assigns) == 1 else "lines ")
+                + line_ranges([pf.line(a.span) for pf, a in sites[n].assigns]) + ")"
                 for n in taken if n in sites)
             out.append(f"assigned by the routine that moves with them: {said}; each move "
                        "there is solved with the value assigned last before it (moves before "

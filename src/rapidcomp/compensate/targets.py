@@ -188,6 +188,16 @@ class _Reentry:
         return sorted(out)
 
 
+class Sites(NamedTuple):
+    """Where one routine assigns a tool or work object (Resolver.site_map)."""
+
+    routine: tuple          # (module id, lower-case routine name)
+    starts: list            # the assignments' offsets, in order
+    assigns: list           # (ParsedFile, Assign) of each, in that order
+    body_end: int           # where the routine's body ends (its handlers follow)
+    reentries: list         # offsets of its calls that may run it again
+
+
 def _data_key(expr, site) -> str:
     """A tool's or work object's key (grouping: one value, one key): its
     name, and where a routine assigns it, the assignment's place."""
@@ -388,8 +398,7 @@ class Resolver:
         self._memos: dict = {}
         self._pairs: dict = {}                  # _tool_wobj's
         self._records: dict | None = None       # _component_type's: RECORD name -> components
-        # Tools and work objects a routine assigns literals to (_sites), and
-        # the declarations given those values (kept: their ids key self.home).
+        # Tools and work objects a routine assigns literals to (site_map).
         self._site_map: dict | None = None
         # id -> (the declaration given an assigned value, the file of the
         # assignment): kept, so the id stays its own (self.home, which a
@@ -572,49 +581,47 @@ class Resolver:
 
     def site_map(self) -> dict:
         """Tool and work object names whose every assignment is a whole
-        literal and a statement of one routine's body itself -> ((module id,
-        routine), the assignments' offsets, [(offset, ParsedFile, Assign)]
-        in order). Made once."""
+        literal and a statement of one routine's body itself -> Sites; not
+        in a routine with a GOTO (its body may run out of order) or one an
+        interrupt may run. Made once."""
         sites = self._site_map
-        if sites is None:
-            sites = self._site_map = {}
-            body = {id(st): (id(m), r.name.lower(), pf) for pf in self.files for m in pf.modules
-                    for r in m.routines for st in r.node.body}
-            # (Not where a name computed at run time may be written: any
-            # data may change then.)
-            literal = (self.writes.literal if self.writes.anything is None
-                       and self.pers_anything is None else {})
-            if not literal and self.site_names:
-                # (The output: the plan's names, assigned where they were.)
-                literal = {}
-                for pf in self.files:
-                    for m in pf.modules:
-                        for r in m.routines:
-                            for st in r.node.body:
-                                if (type(st) is A.Assign and not st.target.selectors
-                                        and st.target.name.lower() in self.site_names):
-                                    literal.setdefault(st.target.name.lower(), []).append(
-                                        (pf, st))
-            # Where each routine's body ends: a move in a handler runs after
-            # an error anywhere, before an assignment too.
-            ends = {(id(m), r.name.lower()): r.node.body[-1].span.end if r.node.body else -1
-                    for pf in self.files for m in pf.modules for r in m.routines}
-            # (A routine with a GOTO may run its body out of order.)
-            jumps = {(id(m), r.name.lower()) for pf in self.files for m in pf.modules
-                     for r in m.routines if literal and any(
-                         type(n) is A.Simple and n.kind == "GOTO" for n in nodes(r.node))}
-            reentry = _Reentry(self.files) if literal else None
-            for name, assigns in literal.items():
-                where = {body.get(id(a), (None,))[:2] for _, a in assigns}
-                if (len(where) == 1 and None not in next(iter(where))
-                        and next(iter(where)) not in jumps):
-                    risky = reentry.calls(next(iter(where)))
-                    if risky is None:
-                        continue
-                    ordered = sorted(((a.span.start, pf, a) for pf, a in assigns),
-                                     key=lambda x: x[0])
-                    sites[name] = (next(iter(where)), [x[0] for x in ordered], ordered,
-                                   ends[next(iter(where))], risky)
+        if sites is not None:
+            return sites
+        sites = self._site_map = {}
+        # (Not where a name computed at run time may be written: any data
+        # may change then.)
+        literal = (self.writes.literal if self.writes.anything is None
+                   and self.pers_anything is None else {})
+        if not literal and not self.site_names:
+            return sites
+        body, ends, jumps = {}, {}, set()
+        found: dict = {}        # (the output: the plan's names, assigned where they were)
+        for pf in self.files:
+            for m in pf.modules:
+                for r in m.routines:
+                    key = (id(m), r.name.lower())
+                    # Where the body ends: a move in a handler runs after an
+                    # error anywhere, before an assignment too.
+                    ends[key] = r.node.body[-1].span.end if r.node.body else -1
+                    if any(type(n) is A.Simple and n.kind == "GOTO" for n in nodes(r.node)):
+                        jumps.add(key)
+                    for st in r.node.body:
+                        body[id(st)] = key
+                        if (not literal and type(st) is A.Assign and not st.target.selectors
+                                and st.target.name.lower() in self.site_names):
+                            found.setdefault(st.target.name.lower(), []).append((pf, st))
+        reentry = _Reentry(self.files)
+        for name, assigns in (literal or found).items():
+            where = {body.get(id(a)) for _, a in assigns}
+            if len(where) != 1 or None in where:
+                continue
+            (routine,) = where
+            risky = reentry.calls(routine) if routine not in jumps else None
+            if risky is None:
+                continue
+            ordered = sorted(assigns, key=lambda x: x[1].span.start)
+            sites[name] = Sites(routine, [a.span.start for _, a in ordered], ordered,
+                                ends[routine], risky)
         return sites
 
     def _home_of(self, d: Declaration) -> ParsedFile:
@@ -624,13 +631,15 @@ class Resolver:
 
     def _sites(self, motion, module) -> tuple | None:
         """For a move's tool and work object, each the assignment whose
-        value it uses, or None: where all assignments of that data are
-        whole literals, each a statement of one routine's body itself (not
-        in a block, a handler or another routine: RoboDK's `rdkTool :=
-        [...]` before its moves), the move lies in that routine after one
-        of them, and that is the last before it (the routine runs its body
-        in order: whatever ran before it, the move uses that value). None
-        when neither is such data (the common case: memoised lookups)."""
+        value it uses, (ParsedFile, Assign), or None: where all assignments
+        of that data are whole literals, each a statement of one routine's
+        body itself (not in a block, a handler or another routine: RoboDK's
+        `rdkTool := [...]` before its moves), the move lies in that
+        routine's body after one of them, that is the last before it, and
+        no call between them may run the routine again (the routine runs
+        its body in order: whatever ran before it, the move uses that
+        value). None when neither is such data (the common case: memoised
+        lookups)."""
         sites = self.site_map()
         if not sites:
             return None
@@ -638,19 +647,18 @@ class Resolver:
         for ref in (motion.tool, motion.wobj):
             hit = (sites.get(ref.name.lower()) if type(ref) is A.Ref and not ref.selectors
                    else None)
-            if (hit is None or hit[0] != (id(module), (motion.routine or "").lower())
-                    or motion.span.start > hit[3]):
+            if (hit is None or hit.routine != (id(module), (motion.routine or "").lower())
+                    or motion.span.start > hit.body_end):
                 out.append(None)
                 continue
-            k = bisect_left(hit[1], motion.span.start)
+            k = bisect_left(hit.starts, motion.span.start)
             # (A call between the assignment and the move that may run the
             # routine again, its assignments too: the value is not known.)
-            risky = hit[4]
-            if k and risky:
-                r = bisect_right(risky, hit[1][k - 1])
-                if r < len(risky) and risky[r] < motion.span.start:
+            if k and hit.reentries:
+                r = bisect_right(hit.reentries, hit.starts[k - 1])
+                if r < len(hit.reentries) and hit.reentries[r] < motion.span.start:
                     k = 0
-            out.append(hit[2][k - 1][1:] if k else None)
+            out.append(hit.assigns[k - 1] if k else None)
         return tuple(out) if out[0] is not None or out[1] is not None else None
 
     def _task_writes(self, files, observers) -> None:
@@ -775,7 +783,9 @@ class Resolver:
                  else None)
         if sites is not None:
             # (Data the routine assigns: once per assignment it takes.)
-            key = (id(module), routine, id(t), id(w), *map(id, sites))
+            # (Keyed by the assignment nodes, which live as long as the parse.)
+            key = (id(module), routine, id(t), id(w),
+                   *(id(site[1]) if site is not None else None for site in sites))
             hit = self._pairs.get(key)
             if hit is None:
                 tool = (self._tool(t, module, routine, sites[0]) if sites[0] is not None
