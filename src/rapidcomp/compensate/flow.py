@@ -202,6 +202,9 @@ class _Walker:
         # What nothing is known of: as UNKNOWN, and where the task sets
         # program displacement at run time, that too (run()).
         self.unknown = UNKNOWN
+        # id(PDispOn/PDispSet statement) -> why its displacement is set at
+        # run time (_find_measured, which sees every one before the walk).
+        self.run_time: dict = {}
         self.called: dict[int, tuple[str, ...]] = {}   # id(routine node) -> names it calls
         self.visits = 0
         self.memo: dict = {}
@@ -347,8 +350,8 @@ class _Walker:
 
     def _find_measured(self) -> None:
         """Each PDispOn/PDispSet whose displacement is set at run time, in
-        flow.measured; if there is one, it may be on wherever nothing is
-        known (self.unknown)."""
+        flow.measured and self.run_time; if there is one, it may be on
+        wherever nothing is known (self.unknown)."""
         # (Routines an interrupt may run: there, as in an error handler,
         # where the robot is may be where any move left it.)
         interrupted = {id(r.node) for t in self.routines if t.node.kind == "TRAP"
@@ -362,6 +365,7 @@ class _Walker:
                        and s.name.lower() in DISPLACEMENT_ON else None)
                 if why is None:
                     continue
+                self.run_time[id(s)] = why
                 at = f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}"
                 if f"{at}: {why}" not in self.flow.measured:
                     self.flow.measured.append(f"{at}: {why}")
@@ -645,7 +649,7 @@ class _Walker:
             # displacement to one active; PDispSet sets its frame.)
             kept = (frozenset(x for x in st.pdisp if x is MEASURED or type(x) is tuple)
                     if name == "pdispon" else frozenset())
-            why = None if self.unknown is UNKNOWN else self._set_at_run_time(s, rt)
+            why = self.run_time.get(id(s))
             if why is None:
                 return replace(st, pdisp=_ON | kept)
             # It may read where the moves before it left the robot (PDispOn
