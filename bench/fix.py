@@ -15,7 +15,8 @@ command writes it in). Then the
 largest size through the command line end to end (three runs, their median
 and each; also once with --json: the
 reports are written as they are rendered; and with Path called from main,
-every move turned into MoveAbsJ), and the same total with
+every move turned into MoveAbsJ; and once with one target copied for one
+of its uses, the copy read again too), and the same total with
 two modules in one call (`fix a.mod b.mod -o DIR`, one worker process per
 core), and `fix --transient` end to end at 1e4 and the largest size.
 Goal: 100k targets end to end <= 10 s, <= 1 GB. Peaks are printed in MiB
@@ -45,12 +46,15 @@ ROOT = Path(__file__).resolve().parents[1]
 PROFILE = ROOT / "fixtures" / "warm.csv"
 
 
-def cam_module(n: int, seed: int = 1, name: str = "CAM_Fix", main: bool = False) -> str:
+def cam_module(n: int, seed: int = 1, name: str = "CAM_Fix", main: bool = False,
+               offs: bool = False) -> str:
     """n targets, half declared, half inline, in PROC Path. main: Path is
     called from PROC main, so the moves run under the controller's default
     configuration supervision (ConfL\\On) and --emit absj turns each into
     MoveAbsJ on a new jointtarget; else nothing calls Path and supervision
-    is unknown there: each stays a MoveL with a compensated robtarget."""
+    is unknown there: each stays a MoveL with a compensated robtarget.
+    offs: Path starts with a move to Offs(p0, 0, 0, 50) too (p0 is then
+    written for one of its two uses, a copy of it for the other)."""
     from rapidcomp.kinematics.chain import Chain
     from rapidcomp.kinematics.conf import confdata
     from rapidcomp.kinematics.frames import DEG, matrix_to_quat_wxyz
@@ -80,6 +84,8 @@ def cam_module(n: int, seed: int = 1, name: str = "CAM_Fix", main: bool = False)
              "  PERS wobjdata wPart:=[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];"]
     lines += [f"  CONST robtarget p{i}:={rt(i)};" for i in range(half)]
     lines.append("  PROC Path()")
+    if offs:
+        lines.append("    MoveL Offs(p0,0,0,50),v100,z1,tSpindle\\WObj:=wPart;")
     lines += [f"    MoveL p{i},v100,z1,tSpindle\\WObj:=wPart;" for i in range(half)]
     lines += [f"    MoveL {rt(i)},v100,z1,tSpindle\\WObj:=wPart;" for i in range(half, n)]
     lines.append("  ENDPROC")
@@ -209,11 +215,16 @@ def main() -> None:
                 str(Path(tmp) / "cam_comp.json"), env=env)
         path.write_text(cam_module(n, main=True))
         m = [cli(str(path), str(Path(tmp) / "cam_comp.mod"), env=env) for _ in range(RUNS)]
+        path.write_text(cam_module(n, offs=True))
+        c = cli(str(path), str(Path(tmp) / "cam_comp.mod"), env=env)
     print(f"1 module x {n} targets, `rapidcomp fix --emit absj` end to end (start-up with "
           f"its bytecode compiled, as installed; reading, report, writing): {_runs(r)}; "
           f"with --json too: {j['s']:.2f} s, peak {j['peak_MiB']:.0f} MiB")
     print(f"the same with Path called from main (every MoveL -> MoveAbsJ on a jointtarget "
           f"of its own, read again): {_runs(m)}")
+    print(f"the same with one declared target also moved to with Offs (one of its two uses "
+          f"written as a copy of its own, read again): {c['s']:.2f} s, "
+          f"peak {c['peak_MiB']:.0f} MiB")
     # Two modules in one call: the process pool uses both cores.
     n //= 2
     with tempfile.TemporaryDirectory() as tmp:

@@ -101,7 +101,7 @@ def test_fix_with_every_shortcut_gives_what_the_general_paths_give(program, mode
     _slow(monkeypatch)
     monkeypatch.setattr(side, "enabled", False)
     monkeypatch.setattr(PD, "enabled", False)
-    for name in ("relex", "relex_absj", "relex_transient"):
+    for name in ("relex", "relex_absj", "relex_copies", "relex_transient"):
         monkeypatch.setattr(F, name, lambda *args: None)
     reparsed: list = []
     _count(monkeypatch, F, "reparse", reparsed)

@@ -443,6 +443,11 @@ class Editor:
         # (verify.relex_absj). others: some structural edit is of another
         # kind (the output is parsed again).
         self.converted: dict = {}
+        # A declared robtarget or jointtarget that some of its uses read as
+        # a CONST copy <name>_c next to it: use key -> (the use, the copy's
+        # literal, its name, its type); read again likewise
+        # (verify.relex_copies).
+        self.copies: dict = {}
         self.others = False
         # Transient: each move whose target became rcTcR/rcTcJ(<cold>, <dq>):
         # use key -> (the use, the cold value's text as written, the
@@ -545,8 +550,9 @@ class Editor:
 
     def declare(self, g: Group, type_name: str, name: str, dims: str, value: str,
                 converted: bool = False, anchor: tuple | None = None) -> None:
-        """converted: the jointtarget of moves turned into MoveAbsJ; anchor:
-        _anchor(g), when the caller has it."""
+        """converted: a declaration the output is read again on (the
+        jointtarget of moves turned into MoveAbsJ, a copy of a target);
+        anchor: _anchor(g), when the caller has it."""
         self.others = self.others or not converted
         fi, end, nl, indent, in_routine = anchor or self._anchor(g)
         scope = "" if in_routine or not g.local else "LOCAL "
@@ -641,7 +647,10 @@ class Editor:
                 s = _stem(g, k)
                 name = self.names.new(("jt_" + s) if g.mode == "absj" else s + "_c")
                 literals[k] = vals.literal(g, k, texts.get(k))
-                self.declare(g, type_name, name, "", literals[k], converted=g.mode == "absj")
+                # (A copy of a declared target is read again where its uses
+                # name it by a plain name: verify.relex_copies.)
+                self.declare(g, type_name, name, "", literals[k], converted=g.mode == "absj"
+                             or all(_plain_ref(u.source.ref) for u in g.uses))
                 g.names[k] = name
         for u in g.uses:
             src = u.source
@@ -655,6 +664,11 @@ class Editor:
                 if not g.array:
                     self.converted[u.key] = (u, literals[src.element], new_ref, called)
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {new_ref}"
+            elif not g.array and _plain_ref(src.ref):
+                self._edit_at(u.key[0], src.ref.span.start, src.ref.span.end, new_ref,
+                              f"{u.label} -> {new_ref}")
+                self.copies[u.key] = (u, literals[src.element], new_ref, type_name)
+                self.actions[u.key] = f"new {type_name} {new_ref}"
             else:
                 self.edit(u.key[0], src.ref.span, new_ref, f"{u.label} -> {new_ref}")
                 self.actions[u.key] = f"new {type_name} {new_ref.split('{')[0]}"
@@ -912,6 +926,11 @@ class Editor:
 
 def _conf(c) -> str:
     return "[" + ",".join(str(int(x)) for x in c) + "]"
+
+
+def _plain_ref(ref) -> bool:
+    """A reference that is a name alone (no component, no index)."""
+    return type(ref) is A.Ref and not ref.selectors
 
 
 def _stem(g: Group, k=None) -> str:

@@ -38,8 +38,8 @@ from .plan import Plan, Task, line_ranges
 from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, UseRow, summary, use_rows
 from .solve import Solving, nominal_ahead
 from .takeback import take_back
-from .verify import (VERIFY_DEG, VERIFY_UM, relex, relex_absj, relex_transient, reparse,
-                     verify, verify_states, verify_states_relexed)
+from .verify import (VERIFY_DEG, VERIFY_UM, relex, relex_absj, relex_copies, relex_transient,
+                     reparse, verify, verify_states, verify_states_relexed)
 
 MODES = P.MODES
 
@@ -161,15 +161,19 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         texts = {fi: apply_edits(plan.files[fi].source.text, es)
                  for fi, es in file_edits.items()}
         clock("print")
-        # Numbers edited, and moves turned into MoveAbsJ on jointtargets of
-        # their own: what was written is read again where the output holds
-        # it; any other structural edit: the output is parsed again.
+        # Numbers edited, moves turned into MoveAbsJ on jointtargets of
+        # their own, and targets some uses read as copies of their own: what
+        # was written is read again where the output holds it; any other
+        # structural edit: the output is parsed again.
         written = converted = calls = None
         if transient is None and not editor.others:
             written = relex(plan, editor.fields, file_edits, texts)
             if written is not None and editor.converted:
-                converted = relex_absj(plan, editor.converted, file_edits, texts)
+                converted = relex_absj(plan, editor.converted, file_edits, texts,
+                                       bool(editor.copies))
                 written = None if converted is None else written
+            if written is not None and editor.copies:
+                written = relex_copies(plan, editor.copies, file_edits, texts, written)
         elif (transient is not None and not editor.calls_other and editor.calls
               and not plan.track):
             # (Every target an rcTcR/rcTcJ of a value read again: those
@@ -177,7 +181,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
             # base with each target's own axes: verify_states_relexed does
             # not take one.)
             calls = relex_transient(plan, editor.calls, file_edits, texts)
-        editor.fields = editor.converted = editor.calls = None
+        editor.fields = editor.converted = editor.calls = editor.copies = None
         lexed = written is not None or calls is not None
         out_files = reparse(plan, texts) if not lexed else {}
         clock("re-lex" if lexed else "re-parse")

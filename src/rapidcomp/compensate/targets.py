@@ -347,9 +347,13 @@ class Written:
         self.rows = {k: n for n, k in enumerate(keys)}
         self.values = values              # (n, 17), rows in the order of keys
         self.where = where                # per row: (input record, output text, start, end)
+        # Use key -> the record it reads where the output gives that use a
+        # copy of its target (verify.relex_copies), not the literal its
+        # name reads in the input.
+        self.uses: dict = {}
 
     def __bool__(self) -> bool:
-        return bool(self.records) or bool(self.rows)
+        return bool(self.records) or bool(self.rows) or bool(self.uses)
 
     def row(self, key) -> int | None:
         return self.rows.get(key)
@@ -1380,8 +1384,10 @@ class Resolver:
             # plan's source.
             self._guarded = {lp.var.lower() for lp in u.motion.loops if lp.guarded and lp.var}
             src = self._source(u.file, src.expr, u.module, u.motion.routine, dict(u.env))
+        copy = self.written.uses.get(u.key)
+        src = self._as_written(src, u.file) if copy is None else src.with_record(copy)
         return self._complete(u.file, u.module, u.motion, u.role, u.kind, u.label, u.line,
-                              u.env, u.key, self._as_written(src, u.file))
+                              u.env, u.key, src)
 
     def again_many(self, uses: list[TargetUse]):
         """again() of many robtarget uses at once, as arrays: (indices of
@@ -1398,6 +1404,7 @@ class Resolver:
         at, rows = [], []
         written = self.written
         written_row = written.row
+        copies = written.uses
         for n, u in enumerate(uses):
             src = u.source
             if u.kind != "robtarget" or src.call is not None:
@@ -1409,8 +1416,13 @@ class Resolver:
                 continue
             if not isinstance(src.record, RobTarget):
                 continue
-            row = written_row(_written_key(src, u.file))
-            if row is not None:
+            copy = copies.get(u.key) if copies else None
+            row = written_row(_written_key(src, u.file)) if copy is None else None
+            if copy is not None:
+                if not isinstance(copy, RobTarget):
+                    continue
+                recs.append(copy.values)
+            elif row is not None:
                 at.append(len(done))
                 rows.append(row)
             else:

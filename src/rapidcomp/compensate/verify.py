@@ -151,7 +151,7 @@ def _shifts(es) -> tuple[EditColumns, np.ndarray]:
 
 
 def relex_absj(plan: Plan, converted: dict, file_edits: dict,
-               texts: dict[int, str]) -> "Converted | None":
+               texts: dict[int, str], copies: bool = False) -> "Converted | None":
     """When every structural edit turns a move into MoveAbsJ on a jointtarget
     of its own (Editor.converted: use key -> (use, that literal, the new
     declaration's name or None, the instruction's name as written)), each
@@ -165,7 +165,8 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
     meant. Returns use key -> its joints as the controller stores them
     (the literal decoded, float32, as the resolver reads a MoveAbsJ's), a
     Converted, or None where anything differs (the output is then parsed
-    again)."""
+    again). copies: targets copied for some of their uses are read again
+    too (relex_copies): new robtarget declarations are no surprise."""
     eng, build = engine(), NodeBuilder()
     by_file: dict = {}
     for key in converted:
@@ -175,7 +176,9 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
     for fi, file_keys in by_file.items():
         es, shift = _shifts(file_edits.get(fi, []))
         text, src = texts[fi], plan.files[fi].source.text
-        declared = _declared(eng, build, es, shift, text, plan.files[fi])
+        kinds: list | None = [] if copies else None
+        declared = _declared(eng, build, es, shift, text, plan.files[fi],
+                             COPY_TYPES if copies else ("jointtarget",), kinds=kinds)
         if declared is None:
             return None
         names, scopes, aggs, declared_joints = declared
@@ -209,7 +212,8 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
             named = [n for n, it in enumerate(items) if it[2] is not None]
             if named:
                 found = [names.get(items[n][2].lower()) for n in named]
-                if None in found:
+                if None in found or (kinds is not None
+                                     and any(kinds[k] != "jointtarget" for k in found)):
                     return None
                 k2 = 2 * np.array(found, np.int64)
                 at2, scope2 = np.frombuffer(aggs, np.int64), np.frombuffer(scopes, np.int64)
@@ -259,6 +263,73 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
         rows.append(joints)
     return Converted(dict(zip(keys, range(len(keys)))),
                      np.concatenate(rows) if rows else np.empty((0, 6)))
+
+
+# The new declarations relex_absj and relex_copies read together.
+COPY_TYPES = ("jointtarget", "robtarget")
+
+
+def relex_copies(plan: Plan, copies: dict, file_edits: dict, texts: dict[int, str],
+                 written: Written) -> Written | None:
+    """When targets are copied for some of their uses (Editor.copies: use
+    key -> (the use, the copy's literal, its name, its type)), each
+    statement naming a copy and each copy's declaration are read again
+    where the output holds them. The statement must be the input's with
+    each copied name replaced by its copy's, character for character; the
+    copy one one-line CONST declaration (FAST_DECL) of its type, in the
+    move's routine or else its module, of the literal meant. Returns
+    `written` with each such use's record as that literal decodes
+    (Written.uses: the resolver takes it in place of its declaration's),
+    or None where anything differs (the output is then parsed again)."""
+    eng, build = engine(), NodeBuilder()
+    by_file: dict = {}
+    for key, item in copies.items():
+        by_file.setdefault(key[0], []).append(item)
+    records: dict = {}
+    decoded: dict = {}
+    for fi, items in by_file.items():
+        es, shift = _shifts(file_edits.get(fi, []))
+        text, src = texts[fi], plan.files[fi].source.text
+        kinds: list = []
+        declared = _declared(eng, build, es, shift, text, plan.files[fi], COPY_TYPES,
+                             kinds=kinds)
+        if declared is None:
+            return None
+        names, scopes, aggs, _ = declared
+        at2, scope2 = np.frombuffer(aggs, np.int64), np.frombuffer(scopes, np.int64)
+        # Each statement as meant: the input's, its copied names replaced
+        # (MoveC: two targets of one statement).
+        statements: dict = {}
+        for u, _, name, _ in items:
+            statements.setdefault(id(u.motion), (u.motion.span, set()))[1].add(
+                (tuple(u.source.ref.span), name))
+        for (a, b), refs in statements.values():
+            x, y = (int(v + shift[np.searchsorted(es.ends, v, "right")]) for v in (a, b))
+            meant, pos = [], a
+            for (start, end), name in sorted(refs):
+                meant += [src[pos:start], name]
+                pos = end
+            meant.append(src[pos:b])
+            if text[x:y] != "".join(meant):
+                return None
+        for u, literal, name, type_name in items:
+            k = names.get(name.lower())
+            if k is None or kinds[k] != type_name:
+                return None
+            span, x = u.motion.span, int(at2[2 * k])
+            if not (scope2[2 * k] <= span.start and span.end <= scope2[2 * k + 1]
+                    and at2[2 * k + 1] - x == len(literal) and text.startswith(literal, x)):
+                return None
+            record = decoded.get((literal, type_name))
+            if record is None:
+                try:
+                    record = decoded[(literal, type_name)] = decode(
+                        type_name, A.NumAgg(literal, u.source.record.span))
+                except DecodeIssue:
+                    return None
+            records[u.key] = record
+    written.uses = records
+    return written
 
 
 def relex_transient(plan: Plan, calls: dict, file_edits: dict,
