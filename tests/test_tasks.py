@@ -289,3 +289,20 @@ def test_a_compensated_program_is_recognised(tmp_path):
     r = run("check", out, "--profile", WARM)
     assert "looks compensated already (jt_pGlue_1, jt_pPlace_offs are the names" in r.output
     assert "looks compensated" not in run("check", TASKS / "cell", "--profile", WARM).output
+
+
+def test_a_compensated_program_with_inline_targets_only_is_recognised(tmp_path):
+    """RoboDK writes every target inline: its compensated output gives no
+    new name, only its file's (PROGRAM_comp.mod, the default output name)
+    tells; the original's name does not."""
+    shutil.copy(FIXTURES / "rapid" / "robodk.mod", tmp_path / "robodk.mod")
+    first = run("fix", tmp_path / "robodk.mod", "--profile", WARM, "--allow-partial")
+    assert first.exit_code == 1 and "looks compensated" not in first.output
+    again = run("check", tmp_path / "robodk_comp.mod", "--profile", WARM)
+    assert ("looks compensated already (robodk_comp.mod named as rapidcomp names its output)"
+            in again.output), again.output
+    # A task folder written by fix is named so too.
+    out = tmp_path / "cell_comp"
+    assert run("fix", TASKS / "cell", "--profile", WARM, "-o", out, "-q").exit_code == 0
+    assert "cell_comp named as rapidcomp names its output" in run(
+        "check", out, "--profile", WARM).output

@@ -155,7 +155,10 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         confs = iter(values.confs([(g, u.source.element) for g, u in done if g.mode == "rob"]))
         written_conf = {u.key: next(confs) if g.mode == "rob" else None for g, u in done}
         values.forget()
+        # (The new declarations are in the edits now, as texts of their own:
+        # 1e5 MoveL turned into MoveAbsJ, ~18 MB of them twice.)
         editor.edits = editor.field_lists = None
+        editor.inserts = editor.insert_nl = editor.insert_indent = None
         if transient is not None:
             release()
         texts = {fi: apply_edits(plan.files[fi].source.text, es)

@@ -11,6 +11,7 @@ moves that may have run just before. `check` stops after solving the plan;
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from pathlib import Path, PurePath
 
 from ..rapid.model import ParsedFile
 from .flow import Flow, State, analyse
@@ -120,6 +121,13 @@ class Plan:
                 out.append(d.name)
         return sorted(out)
 
+    def _named_as_output(self) -> list[str]:
+        """The task's folder and module files named as `fix` names its
+        output by default (PROGRAM_comp.mod, a folder PROGRAM_comp)."""
+        names = [Path(self.task.name).name] + [
+            part for pf in self.task.files for part in PurePath(pf.source.display_path).parts]
+        return sorted({n for n in names if PurePath(n).stem.lower().endswith("_comp")})
+
     def state(self, u: TargetUse) -> State:
         """The motion state before a use (where the flow never reached it:
         as entered from outside)."""
@@ -162,11 +170,21 @@ class Plan:
                        "the first assignment, and in other routines, run with a value not "
                        "known here: left as written)")
         again = self._compensated_before()
-        if again:
-            out.append("this program looks compensated already (" + ", ".join(again[:3])
-                       + (", ..." if len(again) > 3 else "") + " are the names rapidcomp gives "
-                       "its values): compensating it again adds the correction twice; "
-                       "compensate the original program")
+        named = self._named_as_output()
+        if again or named:
+            why = []
+            if again:
+                why.append(", ".join(again[:3]) + (", ..." if len(again) > 3 else "")
+                           + " are the names rapidcomp gives its values")
+            if named:
+                # (A program whose compensated values are all inline, as
+                # RoboDK writes them, keeps every name: only its file's
+                # name tells.)
+                why.append(", ".join(named[:3]) + (", ..." if len(named) > 3 else "")
+                           + " named as rapidcomp names its output")
+            out.append("this program looks compensated already (" + "; ".join(why) + "): "
+                       "compensating it again adds the correction twice; compensate the "
+                       "original program")
         if self.task.base_moved_by and not self.track:
             out.append(f"SYSPAR/MOC.cfg says {self.task.base_moved_by} moves the robot's base: "
                        "robtarget moves are not compensated until --track AXIS:x|y|z names "
