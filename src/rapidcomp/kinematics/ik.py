@@ -556,60 +556,89 @@ class Solver:
         need = near & ((res_mm > opt.tol_mm) | (res_rad > opt.tol_rad)
                        | (change > opt.max_joint_change_deg))
         bound = 0.95 * opt.max_joint_change_deg * DEG
-        for i in np.flatnonzero(need):
-            got = self._position_exact(R[i], p[i], q_ref[i], bound, tcp[i])
-            if got is None:
-                continue
-            # Holding the TCP exact, the tilt J4/J6 cannot follow may grow a
-            # little over the uncompensated one; beyond the cap it is not a
-            # thermal leftover but a wrong target: not taken.
-            if got[2] <= opt.max_leftover_deg * DEG:
-                q[i], res_mm[i], res_rad[i] = got
-                leftover[i] = res_rad[i] > opt.tol_rad
+        rows = np.flatnonzero(need)
+        if not rows.size:
+            return leftover
+        got, q_got, mm_got, rad_got = self._position_exact(R[rows], p[rows], q_ref[rows], bound,
+                                                           tcp[rows])
+        # Holding the TCP exact, the tilt J4/J6 cannot follow may grow a
+        # little over the uncompensated one; beyond the cap it is not a
+        # thermal leftover but a wrong target: not taken.
+        take = got & (rad_got <= opt.max_leftover_deg * DEG)
+        at = rows[take]
+        q[at], res_mm[at], res_rad[at] = q_got[take], mm_got[take], rad_got[take]
+        leftover[at] = res_rad[at] > opt.tol_rad
         return leftover
 
+    # The orientation's weight against the joints' change, stiff to soft.
+    MUS = (1e2, 1.0, 1e-2, 1e-4, 1e-6, 1e-8)
+
     def _position_exact(self, R, p, q_ref, bound, tcp):
-        """min |orientation error|^2 + mu |q - q_ref|^2 subject to the exact
-        TCP position (tcp in the flange frame; Gauss-Newton on the KKT
-        system), for mu in decades
-        from stiff to soft while the joints stay within `bound` (rad) of
-        q_ref. Of those, the stiffest whose orientation error is within
-        1e-4 deg of the best: a J4/J6 swing that buys less than that is not
-        made. (q, residual mm, residual rad) or None."""
+        """Per row: min |orientation error|^2 + mu |q - q_ref|^2 subject to
+        the exact TCP position (tcp in the flange frame; Gauss-Newton on the
+        KKT system, each row until its step is below 1e-13 rad, at most 40
+        steps), for mu in decades from stiff to soft (MUS) while the
+        joints stay within `bound` (rad) of q_ref. Of those, the stiffest
+        whose orientation error is within 1e-4 deg of the best: a J4/J6
+        swing that buys less than that is not made. Every row at once (a
+        CAM program near J5 = 0 has thousands: ~8 ms each one by one).
+        Returns (found (m,), q (m, n), residual mm (m,), residual rad (m,));
+        a row not found keeps q_ref and NaN residuals."""
         opt = self.options
         chain = self.deformed_chain
-        n = len(q_ref)
-        found = []
-        for mu in (1e2, 1.0, 1e-2, 1e-4, 1e-6, 1e-8):
-            q = q_ref.copy()
-            for _ in range(40):
-                Rc, pc, J = chain.fk_jacobian(q[None])
-                arm = Rc[0] @ tcp
-                e_p = (p + R @ tcp) - (pc[0] + arm)
-                e_w = rotation_log((R @ Rc[0].T)[None])[0]
-                # The TCP moves with the flange and turns about it.
-                Jw = J[0, 3:]
-                Jp = J[0, :3] - _skew(arm) @ Jw
-                K = np.zeros((n + 3, n + 3))
-                K[:n, :n] = Jw.T @ Jw + mu * np.eye(n)
-                K[:n, n:] = Jp.T
-                K[n:, :n] = Jp
-                rhs = np.concatenate([Jw.T @ e_w - mu * (q - q_ref), e_p])
-                dq = np.linalg.solve(K, rhs)[:n]
-                q = q + dq
-                if np.max(np.abs(dq)) < 1e-13:
-                    break
-            Rc, pc = chain.fk(q[None])
-            e_p = float(np.linalg.norm((p + R @ tcp) - (pc[0] + Rc[0] @ tcp)))
-            e_w = float(np.linalg.norm(rotation_log((R @ Rc[0].T)[None])[0]))
-            if np.max(np.abs(q - q_ref)) > bound:
+        m, n = q_ref.shape
+        want = p + np.einsum("mij,mj->mi", R, tcp)
+        qs = np.empty((len(self.MUS), m, n))
+        mm = np.full((len(self.MUS), m), np.nan)
+        rad = np.full((len(self.MUS), m), np.inf)
+        found = np.zeros((len(self.MUS), m), bool)
+        alive = np.ones(m, bool)
+        eye = np.eye(n)
+        for k, mu in enumerate(self.MUS):
+            rows = np.flatnonzero(alive)
+            if not rows.size:
                 break
-            if e_p <= opt.tol_mm:
-                found.append((q, e_p, e_w))
-        if not found:
-            return None
-        best = min(f[2] for f in found)
-        return next(f for f in found if f[2] <= best + 1e-4 * DEG)
+            q = q_ref[rows].copy()
+            go = np.arange(len(rows))
+            for _ in range(40):
+                if not go.size:
+                    break
+                at = rows[go]
+                Rc, pc, J = chain.fk_jacobian(q[go])
+                arm = np.einsum("mij,mj->mi", Rc, tcp[at])
+                e_p = want[at] - (pc + arm)
+                e_w = rotation_log(R[at] @ np.swapaxes(Rc, 1, 2))
+                # The TCP moves with the flange and turns about it.
+                Jw = J[:, 3:]
+                Jp = J[:, :3] - np.cross(arm[:, :, None], Jw, axis=1)
+                Jwt = np.swapaxes(Jw, 1, 2)
+                K = np.zeros((len(go), n + 3, n + 3))
+                K[:, :n, :n] = Jwt @ Jw + mu * eye
+                K[:, :n, n:] = np.swapaxes(Jp, 1, 2)
+                K[:, n:, :n] = Jp
+                rhs = np.concatenate([np.einsum("mij,mj->mi", Jwt, e_w)
+                                      - mu * (q[go] - q_ref[at]), e_p], axis=1)
+                dq = np.linalg.solve(K, rhs[..., None])[:, :n, 0]
+                q[go] += dq
+                go = go[np.abs(dq).max(axis=1) >= 1e-13]
+            Rc, pc = chain.fk(q)
+            e_p = np.linalg.norm(want[rows] - (pc + np.einsum("mij,mj->mi", Rc, tcp[rows])),
+                                 axis=1)
+            e_w = np.linalg.norm(rotation_log(R[rows] @ np.swapaxes(Rc, 1, 2)), axis=1)
+            # A row whose joints leave the bound tries no softer mu.
+            out = np.abs(q - q_ref[rows]).max(axis=1) > bound
+            alive[rows[out]] = False
+            ok = ~out & (e_p <= opt.tol_mm)
+            at = rows[ok]
+            qs[k, at], mm[k, at], rad[k, at], found[k, at] = q[ok], e_p[ok], e_w[ok], True
+        got = found.any(axis=0)
+        best = np.where(found, rad, np.inf).min(axis=0)
+        # (The first mu, stiff to soft, within 1e-4 deg of the best.)
+        pick = np.argmax(found & (rad <= best + 1e-4 * DEG), axis=0)
+        cols = np.arange(m)
+        q_out = np.where(got[:, None], qs[pick, cols], q_ref)
+        return (got, q_out, np.where(got, mm[pick, cols], np.nan),
+                np.where(got, rad[pick, cols], np.nan))
 
     @_chunked
     def candidates(self, R: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -744,8 +773,3 @@ def solve_deformed_pinocchio(robot: RobotModel, R: np.ndarray, p: np.ndarray,
         J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
         q = q + np.linalg.solve(J, np.concatenate([e_p, e_w]))
     return q / DEG, float(np.linalg.norm(e_p)), float(np.linalg.norm(e_w)), it
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    """[v]x: _skew(v) @ w = v x w."""
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
