@@ -15,7 +15,7 @@ from ..collector import paused
 from ..kinematics.ik import Solver
 from .place import groups
 from .plan import Plan, Task
-from .rows import UNTOUCHED, UseRow, summary, use_rows
+from .rows import UNTOUCHED, Rows, summary, use_rows
 from .solve import solve
 
 OK, FAILED = "compensable", "not compensable"
@@ -24,15 +24,15 @@ OK, FAILED = "compensable", "not compensable"
 @dataclass(frozen=True)
 class CheckResult:
     program: str
-    rows: tuple[UseRow, ...]
+    rows: Rows
     notes: tuple[str, ...]
 
     @property
     def failed(self) -> int:
-        return sum(r.status == FAILED for r in self.rows)
+        return self.rows.column("status").count(FAILED)
 
     def summary(self) -> dict:
-        return summary(list(self.rows), OK, FAILED)
+        return summary(self.rows, OK, FAILED)
 
 
 def check(task: Task, solver: Solver, track=(), start=None, base=None) -> CheckResult:
@@ -48,7 +48,7 @@ def _check(task, solver, track, start, base) -> CheckResult:
     gs = groups(plan, solved, "auto")
     group_of = {u.key: g for g in gs for u in g.uses}
     rows = use_rows(plan, solved, group_of=group_of, statuses=(OK, FAILED))
-    return CheckResult(task.name, tuple(rows), tuple(plan.notes()))
+    return CheckResult(task.name, rows, tuple(plan.notes()))
 
 
 def render_text(result: CheckResult) -> str:

@@ -35,7 +35,7 @@ from ..rewrite.diff import columns_diff, handed_off, unified_diff
 from . import place as P
 from .edit import Editor, Values
 from .plan import Plan, Task, line_ranges
-from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, UseRow, summary, use_rows
+from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, Rows, summary, use_rows
 from .solve import Solving, nominal_ahead
 from .takeback import take_back
 from .verify import (VERIFY_DEG, VERIFY_UM, relex, relex_absj, relex_copies, relex_transient,
@@ -61,7 +61,7 @@ class FixResult:
     mode: str
     program: str                     # display name of the task
     modules: tuple[ModuleOutput, ...]
-    rows: tuple[UseRow, ...]
+    rows: Rows
     notes: tuple[str, ...]
     # Each row's number cells as the Markdown report writes them
     # (report.number_cells), made beside the job (side.py); None: made
@@ -70,14 +70,14 @@ class FixResult:
 
     @property
     def failed(self) -> int:
-        return sum(r.status == NOT_COMPENSATED for r in self.rows)
+        return self.rows.column("status").count(NOT_COMPENSATED)
 
     @property
     def edits(self) -> tuple[SpanEdit, ...]:
         return tuple(e for m in self.modules for e in m.edits)
 
     def summary(self) -> dict:
-        out = summary(list(self.rows), COMPENSATED, NOT_COMPENSATED)
+        out = summary(self.rows, COMPENSATED, NOT_COMPENSATED)
         out["edits"] = sum(len(m.edits) for m in self.modules)   # (no tuple of 1e6 edits)
         out["modules_changed"] = sum(1 for m in self.modules if m.edits)
         return out
@@ -272,7 +272,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         modules.append(ModuleOutput(name, texts.get(fi, pf.source.text),
                                     es if type(es) is EditColumns else tuple(es), tuple(diff)))
     clock("report")
-    return FixResult(mode, task.name, tuple(modules), tuple(rows), tuple(notes), cells)
+    return FixResult(mode, task.name, tuple(modules), rows, tuple(notes), cells)
 
 
 def _verify_states(plan, solved, keys, out_files, solvers, calls=None,
@@ -358,17 +358,18 @@ def _missed(solved, gs, verified) -> dict:
     return out
 
 
-def _notes(rows: list[UseRow], gs: list[P.Group]) -> list[str]:
+def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
     notes = []
     # The lines of the moves turned into MoveAbsJ, by file (a set of ints
     # each: 1e5 of a CAM program, no tuple each to sort).
     absj: dict[str, set] = {}
-    for r in rows:
-        if LINEAR_WARNING in r.warnings:
-            lines = absj.get(r.file)
+    for file, line, warnings in zip(rows.column("file"), rows.column("line"),
+                                    rows.column("warnings")):
+        if LINEAR_WARNING in warnings:
+            lines = absj.get(file)
             if lines is None:
-                lines = absj[r.file] = set()
-            lines.add(r.line)
+                lines = absj[file] = set()
+            lines.add(line)
     if absj:
         where = "; ".join(f"{f}: lines {line_ranges(sorted(absj[f]))}" for f in sorted(absj))
         notes.append("MoveL -> MoveAbsJ gives up the straight-line path between points "

@@ -17,7 +17,7 @@ import numpy as np
 
 from .fix import FixResult
 from .plan import line_ranges
-from .rows import FIELDS, UNTOUCHED, UseRow, number_columns
+from .rows import BASE_FIELDS, FIELDS, UNTOUCHED, Rows, UseRow, number_columns
 
 
 def _num(x, fmt: str) -> str:
@@ -62,7 +62,9 @@ def summary_lines(result: FixResult) -> list[str]:
     for reason, n in s["untouched"].items():
         out.append(f"{UNTOUCHED} ({n}): {reason}")
     several = len(result.modules) > 1
-    out += failure_lines([r for r in result.rows if r.status == "not compensated"], several)
+    rows = result.rows
+    out += failure_lines([rows[k] for k, status in enumerate(rows.column("status"))
+                          if status == "not compensated"], several)
     if s["error_before_um"]:
         b, a = s["error_before_um"], s["residual_after_um"]
         of = ("" if s["compensated"] == s["target_uses"]
@@ -140,12 +142,14 @@ def _markdown_lines(result: FixResult, meta: dict) -> Iterator[str]:
         out += ["", "## Notes", ""] + [f"- {n}" for n in result.notes]
     yield from out
     several = len(result.modules) > 1
-    cells = result.cells if result.cells is not None else [None] * len(result.rows)
+    rows = result.rows
+    cells = result.cells if result.cells is not None else [None] * len(rows)
+    files = rows.column("file")
     for m in result.modules:
-        rows = [(r, c) for r, c in zip(result.rows, cells) if r.file == m.path]
+        ks = [k for k, file in enumerate(files) if file == m.path]
         if several:
             yield from ["", f"## {m.path}"]
-            if not rows and not m.edits:
+            if not ks and not m.edits:
                 yield from ["", "No motion instructions; written byte for byte as it was."]
                 continue
         level = "###" if several else "##"
@@ -157,13 +161,13 @@ def _markdown_lines(result: FixResult, meta: dict) -> Iterator[str]:
         else:
             yield "No change."
         yield from ["", f"{level} Targets", ""]
-        yield from _table(rows, "transient" in meta)
+        yield from _table(rows, ks, cells, "transient" in meta)
 
 
-def _table(rows: list[tuple[UseRow, str | None]], transient: bool = False) -> Iterator[str]:
-    """The rows' table; each row with its number cells when made already
-    (number_cells), else None."""
-    if not rows:
+def _table(rows: Rows, ks: list[int], cells, transient: bool = False) -> Iterator[str]:
+    """The table of rows ks; each row with its number cells when made
+    already (number_cells; cells[k] of row k), else None."""
+    if not ks:
         yield "No motion instructions."
         return
     after = ("after = the written values as the controller computes them at run time "
@@ -181,7 +185,7 @@ def _table(rows: list[tuple[UseRow, str | None]], transient: bool = False) -> It
            "conf before | conf after | notes |",
            "|---:|---|---|---|---|---|---|---|---|---:|---:|---:|---|---|---|"]
     yield from out
-    yield from (_row(r, c) for r, c in rows)
+    yield from (_row_of(rows, k, cells[k]) for k in ks)
 
 
 # A row with every number (a CAM report has 1e5): two % operations, the same
@@ -210,6 +214,31 @@ def _row(r: UseRow, cells: str | None = None) -> str:
     return _FULL_ROW % (r.line, r.instruction, _cell(r.target), r.status, _cell(r.rule or "-"),
                         _cell(r.action or "-"), cells, r.residual_um, _conf(r.conf_before),
                         _conf(r.conf_after), _notes(r))
+
+
+# Where each field is in a row of Rows (Rows.base).
+_AT_LINE, _AT_INSTRUCTION, _AT_TARGET, _AT_STATUS, _AT_RULE, _AT_ACTION = range(1, 7)
+_AT_ERROR_UM, _AT_ERROR_DEG, _AT_RESIDUAL_UM = (BASE_FIELDS.index(f) for f in (
+    "error_um", "error_deg", "residual_um"))
+_AT_CONF_BEFORE, _AT_CONF_AFTER, _AT_WARNINGS, _AT_REASON = (BASE_FIELDS.index(f) for f in (
+    "conf_before", "conf_after", "warnings", "reason"))
+assert BASE_FIELDS[1:7] == ("line", "instruction", "target", "status", "rule", "action")
+
+
+def _row_of(rows: Rows, k: int, cells: str | None = None) -> str:
+    """_row(rows[k], cells), read from the row's fields where it has every
+    number (no UseRow nor tuples of joints made: a CAM report's 1e5)."""
+    if not rows.full(k):
+        return _row_general(rows[k])
+    b = rows.base(k)
+    if cells is None:
+        qn, qc, dq = rows.joints(k)
+        cells = _CELLS % (*qn, *qc, *dq, b[_AT_ERROR_UM], b[_AT_ERROR_DEG])
+    reason, warnings = b[_AT_REASON], b[_AT_WARNINGS]
+    notes = _cell("; ".join(([reason] if reason else []) + list(warnings)))
+    return _FULL_ROW % (b[_AT_LINE], b[_AT_INSTRUCTION], _cell(b[_AT_TARGET]), b[_AT_STATUS],
+                        _cell(b[_AT_RULE] or "-"), _cell(b[_AT_ACTION] or "-"), cells,
+                        b[_AT_RESIDUAL_UM], _conf(b[_AT_CONF_BEFORE]), _conf(b[_AT_CONF_AFTER]), notes)
 
 
 def number_cells(qn_deg, qc_deg, err_p, err_r) -> list[str | None]:

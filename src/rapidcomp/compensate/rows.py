@@ -3,6 +3,7 @@ predicts and what `fix` did, in the same terms."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -56,58 +57,158 @@ _new_row = maker(UseRow)
 
 def rounded_rows(a: np.ndarray) -> list[tuple[float, ...] | None]:
     """Each row of a (n, k) as a tuple of round(x, 6), None for a row with
-    a NaN: the reports' joint columns (a CAM program has 1e5 rows, 3 columns
-    of 6). Bulk, with Python's round's results: round(x, 6) is the double
-    nearest N / 1e6, N = x * 10**6 rounded half to even exactly; rint of
-    the product in floating point is that N wherever the product lies
-    further than a few ulps from a half (the rest, ~1e-8 of random values,
-    is rounded by round itself); N / 1e6, one correctly rounded division of
-    exact numbers, is that nearest double (tested against round on ties,
-    near-ties, signed zeros and large values)."""
+    a NaN: the reports' joint columns (rounded_array's numbers)."""
+    out, nan = rounded_array(a)
+    # (Each row's tuple made from the columns' floats at once: no list per
+    # row first.)
+    rows = list(zip(*out.T.tolist())) if out.shape[1] else [()] * len(out)
+    for i in np.flatnonzero(nan).tolist():
+        rows[i] = None
+    return rows
+
+
+def rounded_array(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(round(x, 6) of every x of a (n, k), which rows hold a NaN): a CAM
+    program has 1e5 rows, 3 arrays of 6 joints each. Bulk, with Python's
+    round's results: round(x, 6) is the double nearest N / 1e6, N = x *
+    10**6 rounded half to even exactly; rint of the product in floating
+    point is that N wherever the product lies further than a few ulps from
+    a half (the rest, ~1e-8 of random values, is rounded by round itself);
+    N / 1e6, one correctly rounded division of exact numbers, is that
+    nearest double (tested against round on ties, near-ties, signed zeros
+    and large values)."""
     a = np.asarray(a, float)
     with np.errstate(over="ignore", invalid="ignore"):   # those go to round() below
         scaled = a * 1e6
         out = np.rint(scaled) / 1e6
         near_half = np.abs(scaled - np.floor(scaled) - 0.5) <= 4 * np.spacing(np.abs(scaled))
         odd = near_half | ~(np.abs(scaled) < 2.0 ** 52)    # NaN, inf, too large
-    # (Each row's tuple made from the columns' floats at once: no list per
-    # row first.)
-    rows = list(zip(*out.T.tolist())) if a.shape[1] else [()] * len(a)
-    for i in np.flatnonzero(odd.any(axis=1)).tolist():
-        r = list(rows[i])
-        for j in np.flatnonzero(odd[i]).tolist():
-            r[j] = round(float(a[i, j]), 6)
-        rows[i] = tuple(r)
-    # (A row with a NaN: round keeps NaN a NaN and inf an inf.)
-    for i in np.flatnonzero(np.isnan(a).any(axis=1)).tolist():
-        rows[i] = None
-    return rows
+    for i, j in zip(*np.nonzero(odd)):
+        out[i, j] = round(float(a[i, j]), 6)
+    return out, (np.isnan(a).any(axis=1) if a.shape[1] else np.zeros(len(a), bool))
 
 
 def number_columns(qn_deg, qc_deg, err_p, err_r) -> tuple[list, ...]:
     """A row's numbers for every solved target (Solved's q_deg rows,
     err_p, err_r): its nominal, compensated and delta joints (rounded_rows
     of each) and its uncompensated error in um and deg. The rows take them
-    (_Columns), and so do the report's number cells made ahead
+    (_Columns, as arrays), and so do the report's number cells made ahead
     (report.number_cells): one computation, the same numbers."""
     qn, qc = np.asarray(qn_deg, float), np.asarray(qc_deg, float)
     return (rounded_rows(qn), rounded_rows(qc), rounded_rows(qc - qn),
-            (np.asarray(err_p, float) * 1000).tolist(), (np.asarray(err_r, float) / DEG).tolist())
+            *_errors(err_p, err_r))
+
+
+def _errors(err_p, err_r) -> tuple[list, list]:
+    return (np.asarray(err_p, float) * 1000).tolist(), (np.asarray(err_r, float) / DEG).tolist()
 
 
 class _Columns:
-    """The solved numbers of every row as Python lists, converted once (a
+    """The solved numbers of every row: the joints as rounded arrays (the
+    rows read them: Rows), the others as Python lists, converted once (a
     CAM program has 1e5 rows; numpy scalars one by one cost ~10x more).
     Same values: elementwise, as for one row."""
 
     def __init__(self, solved: Solved):
-        self.qn, self.qc, self.dq, self.err_um, self.err_deg = number_columns(
-            solved.nominal.q_deg, solved.deformed.q_deg, solved.err_p, solved.err_r)
+        qn = np.asarray(solved.nominal.q_deg, float)
+        qc = np.asarray(solved.deformed.q_deg, float)
+        self.joints = (rounded_array(qn), rounded_array(qc), rounded_array(qc - qn))
+        self.err_um, self.err_deg = _errors(solved.err_p, solved.err_r)
         self.res_mm = solved.deformed.residual_mm.tolist()
         self.res_rad = solved.deformed.residual_rad.tolist()
         self.disp = solved.displacement_um_per_mm.tolist()
         self.warn_bits = solved.deformed.warnings.tolist()
         self.ok = solved.oks()
+
+
+# UseRow's fields but its joints, in order; a row's joints are read from
+# the solved numbers (Rows).
+_JOINTS = ("nominal_deg", "compensated_deg", "delta_deg")
+BASE_FIELDS = tuple(f for f in FIELDS if f not in _JOINTS)
+_AT = {name: k for k, name in enumerate(BASE_FIELDS)}
+assert FIELDS[7:10] == _JOINTS
+
+
+class Rows(Sequence):
+    """Every use's row, in text order, as a result holds them: per row its
+    fields but the joints (a tuple), and where its joints are in the
+    solved numbers' rounded arrays (one int: -1 none, 2i the nominal
+    joints of solved row i only, 2i + 1 all three). A row is a UseRow
+    made when asked for; no tuple of joints is kept per row (a CAM
+    program's 1e5 rows: ~75 MB), and the reports read the columns
+    (column(), base(), joint_code())."""
+
+    def __init__(self, base: list[tuple], codes: list[int], joints: tuple):
+        self._base, self._codes, self._joints = base, codes, joints
+
+    def __len__(self) -> int:
+        return len(self._base)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [self._row(i) for i in range(*k.indices(len(self._base)))]
+        if k < 0:
+            k += len(self._base)
+        return self._row(k)
+
+    def __iter__(self):
+        return map(self._row, range(len(self._base)))
+
+    def __eq__(self, other) -> bool:
+        if isinstance(other, Rows):
+            return len(self) == len(other) and all(map(_same_row, self, other))
+        if isinstance(other, (list, tuple)):
+            return len(self) == len(other) and all(map(_same_row, self, other))
+        return NotImplemented
+
+    def __repr__(self) -> str:
+        return f"Rows({len(self)} rows)"
+
+    def _joint(self, which: int, i: int):
+        values, nan = self._joints[which]
+        return None if nan[i] else tuple(values[i].tolist())
+
+    def joints(self, k: int) -> tuple:
+        """Row k's (nominal, compensated, delta) joints, each a tuple or
+        None."""
+        code = self._codes[k]
+        if code < 0:
+            return None, None, None
+        i = code >> 1
+        if code & 1:
+            return self._joint(0, i), self._joint(1, i), self._joint(2, i)
+        return self._joint(0, i), None, None
+
+    def _row(self, k: int) -> UseRow:
+        b = self._base[k]
+        return _new_row(b[0], b[1], b[2], b[3], b[4], b[5], b[6], *self.joints(k), b[7], b[8],
+                        b[9], b[10], b[11], b[12], b[13], b[14])
+
+    def column(self, name: str) -> list:
+        """Every row's value of field `name` (not a joints field)."""
+        at = _AT[name]
+        return [b[at] for b in self._base]
+
+    def base(self, k: int) -> tuple:
+        """Row k's fields but its joints (BASE_FIELDS)."""
+        return self._base[k]
+
+    def full(self, k: int) -> bool:
+        """Row k has all three joints, six each, none a NaN, and its error
+        and residual: the report's fast row (report._full)."""
+        code = self._codes[k]
+        if code < 0 or not code & 1:
+            return False
+        i = code >> 1
+        if any(nan[i] for _, nan in self._joints) or self._joints[0][0].shape[1] != 6:
+            return False
+        b = self._base[k]
+        return b[_AT["error_um"]] is not None and b[_AT["error_deg"]] is not None and (
+            b[_AT["residual_um"]] is not None)
+
+
+def _same_row(a: UseRow, b: UseRow) -> bool:
+    return a == b
 
 
 def displacement_warning(um_per_mm: float, track: bool = False) -> str:
@@ -123,7 +224,7 @@ def displacement_warning(um_per_mm: float, track: bool = False) -> str:
 def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
              actions: dict | None = None, verified: dict | None = None, mode: str | None = None,
              written_conf: dict | None = None,
-             statuses=(COMPENSATED, NOT_COMPENSATED), at: list | None = None) -> list[UseRow]:
+             statuses=(COMPENSATED, NOT_COMPENSATED), at: list | None = None) -> Rows:
     """Rows in text order. Without group_of/verified (check): per use, the
     solve's own residual and the confdata of the compensated joints; with
     them (fix, in `mode`): the written values' residual and confdata
@@ -133,29 +234,32 @@ def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
     ok_label, fail_label = statuses
     tracked = {k for k, _ in plan.track}
     cols = _Columns(solved)
-    out = []
+    out: list[tuple] = []
+    codes: list[int] = []
     for u in plan.uses:
-        # (file, line, instruction, target): UseRow's first fields, given
-        # by position (keywords cost ~2 us a row; a CAM report has 1e5).
+        # (file, line, instruction, target): a row's first fields.
         base = (u.file.source.display_path, u.line, u.motion.instruction, u.label)
         if u.reason is not None:
-            out.append(_new_row(*base, fail_label if u.blocked else UNTOUCHED, None, None, None,
-                                None, None, None, None, None, None, None, None, (), u.reason))
+            out.append((*base, fail_label if u.blocked else UNTOUCHED, None, None, None, None,
+                        None, None, None, None, (), u.reason))
+            codes.append(-1)
             if at is not None:
                 at.append(None)
             continue
         if at is not None:
             at.append(solved.row[u.key])
-        out.append(_row(solved, cols, u, base, group_of, actions, verified, mode,
-                        written_conf, ok_label, fail_label, tracked))
-    return out
+        row, code = _row(solved, cols, u, base, group_of, actions, verified, mode,
+                         written_conf, ok_label, fail_label, tracked)
+        out.append(row)
+        codes.append(code)
+    return Rows(out, codes, cols.joints)
 
 
 def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, verified,
-         mode, written_conf, ok_label, fail_label, tracked) -> UseRow:
+         mode, written_conf, ok_label, fail_label, tracked) -> tuple[tuple, int]:
+    """(the row's fields but its joints, where its joints are: Rows)."""
     i = solved.row[u.key]
     pick = solved.picks[i]
-    qn = cols.qn[i]
     has_q = pick.failure is None
     error = (cols.err_um[i], cols.err_deg[i]) if has_q else (None, None)
     # confdata is a robtarget's: a MoveAbsJ has none. (A record's conf is
@@ -173,8 +277,8 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
             f"{element_label(g, fk)} of the same group: {reason}")
     if why is not None:
         why = _hint(why, u, tracked)
-        return _new_row(*base, fail_label, pick.rule, None, qn if has_q else None, None, None,
-                        error[0], error[1], None, None, conf_before, None, d_warnings, why)
+        return ((*base, fail_label, pick.rule, None, error[0], error[1], None, None, conf_before,
+                 None, d_warnings, why), 2 * i if has_q else -1)
     warnings = d_warnings
     if g is not None:
         if g.mode == "absj" and u.motion.spec.name == "MoveL":
@@ -212,10 +316,8 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         res = verified[u.key]
     else:
         res = (cols.res_mm[i] * 1000, cols.res_rad[i] / DEG)
-    return _new_row(*base, ok_label, pick.rule,
-                    actions.get(u.key) if actions is not None else None,
-                    qn, cols.qc[i], cols.dq[i], error[0], error[1], res[0], res[1],
-                    conf_before, after, warnings, None)
+    return ((*base, ok_label, pick.rule, actions.get(u.key) if actions is not None else None,
+             error[0], error[1], res[0], res[1], conf_before, after, warnings, None), 2 * i + 1)
 
 
 def _conf_after(solved: Solved, i: int, u: TargetUse, written_conf):
@@ -257,21 +359,27 @@ def _hint(reason: str, u: TargetUse, tracked) -> str:
     return reason
 
 
-def summary(rows: list[UseRow], ok_label: str = COMPENSATED,
-            fail_label: str = NOT_COMPENSATED) -> dict:
-    comp = [r for r in rows if r.status == ok_label]
+def summary(rows, ok_label: str = COMPENSATED, fail_label: str = NOT_COMPENSATED) -> dict:
+    """rows: Rows (read by column), or UseRows."""
+    if isinstance(rows, Rows):
+        status, reason, error, residual, warns = (rows.column(name) for name in (
+            "status", "reason", "error_um", "residual_um", "warnings"))
+    else:
+        status, reason, error, residual, warns = ([getattr(r, name) for r in rows] for name in (
+            "status", "reason", "error_um", "residual_um", "warnings"))
+    comp = [k for k, st in enumerate(status) if st == ok_label]
     untouched: dict[str, int] = {}
-    for r in rows:
-        if r.status == UNTOUCHED:
-            untouched[r.reason] = untouched.get(r.reason, 0) + 1
-    errs = [r.error_um for r in comp]
-    res = [r.residual_um for r in comp]
+    for st, why in zip(status, reason):
+        if st == UNTOUCHED:
+            untouched[why] = untouched.get(why, 0) + 1
+    errs = [error[k] for k in comp]
+    res = [residual[k] for k in comp]
     return {
-        "target_uses": len(rows),
+        "target_uses": len(status),
         ok_label: len(comp),
-        fail_label.replace(" ", "_"): sum(r.status == fail_label for r in rows),
+        fail_label.replace(" ", "_"): sum(st == fail_label for st in status),
         "untouched": dict(sorted(untouched.items())),
         "error_before_um": {"max": max(errs), "mean": float(np.mean(errs))} if errs else None,
         "residual_after_um": {"max": max(res), "mean": float(np.mean(res))} if res else None,
-        "movel_to_moveabsj": sum(1 for r in comp if LINEAR_WARNING in r.warnings),
+        "movel_to_moveabsj": sum(1 for k in comp if LINEAR_WARNING in warns[k]),
     }

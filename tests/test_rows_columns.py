@@ -1,0 +1,88 @@
+"""A result's rows are held as columns (rows.Rows: per row its fields but
+the joints, and where its joints are in the solved numbers' rounded
+arrays), a UseRow made when asked for (issue #14: a CAM program's 1e5
+rows kept 3e5 tuples of joints, ~75 MB). Oracles: the Markdown row read
+from the columns is the row a UseRow writes (report._row), with and
+without the number cells made ahead; the summary read by column is the
+summary of the UseRows; a row asked for twice is the same row."""
+
+from pathlib import Path
+
+import pytest
+
+from rapidcomp.compensate import report
+from rapidcomp.compensate.check import check
+from rapidcomp.compensate.fix import fix
+from rapidcomp.compensate.load import load_solver
+from rapidcomp.compensate.plan import Task
+from rapidcomp.compensate.rows import BASE_FIELDS, FIELDS, Rows, UseRow, summary
+from rapidcomp.rapid.parse import parse_file
+
+ROOT = Path(__file__).resolve().parents[1]
+FIXTURES = ROOT / "fixtures"
+PROGRAMS = [FIXTURES / "cubes.mod", FIXTURES / "paper_front.mod",
+            *sorted((FIXTURES / "rapid").iterdir()),
+            ROOT / "tests" / "golden" / "fix" / "refusals" / "before.mod"]
+
+
+@pytest.fixture(scope="module")
+def solver():
+    return load_solver(str(FIXTURES / "warm.csv"), None, False, ("J5=-120:120",))
+
+
+@pytest.fixture(scope="module")
+def solver_115():
+    # (The data sheet's J5 limits: cubes.mod's S21 not compensated, its
+    # joints known.)
+    return load_solver(str(FIXTURES / "warm.csv"), None, False)
+
+
+@pytest.mark.parametrize("path", PROGRAMS, ids=lambda p: p.name)
+@pytest.mark.parametrize("mode", ["auto", "absj"])
+def test_rows_read_by_column_are_the_rows(path, mode, solver, solver_115):
+    seen = set()
+    for s in (solver, solver_115):
+        result = fix(Task(path.name, (parse_file(path, path.name),)), s, mode)
+        rows = result.rows
+        assert isinstance(rows, Rows)
+        made = list(rows)
+        assert all(type(r) is UseRow for r in made) and len(made) == len(rows)
+        assert rows == made and rows[:] == made and rows[-1] == made[-1]
+        assert rows[0] is not rows[0] and rows[0] == rows[0]
+        for k, r in enumerate(made):
+            assert rows.base(k) == tuple(getattr(r, f) for f in BASE_FIELDS)
+            assert rows.joints(k) == (r.nominal_deg, r.compensated_deg, r.delta_deg)
+            assert report._row_of(rows, k) == report._row(r)
+            assert rows.full(k) == report._full(r)
+            seen.add((r.status, r.nominal_deg is None, r.compensated_deg is None))
+        for name in BASE_FIELDS:
+            assert rows.column(name) == [getattr(r, name) for r in made]
+        assert summary(rows) == summary(made)
+        if result.cells is not None:
+            for k, r in enumerate(made):
+                assert report._row_of(rows, k, result.cells[k]) == report._row(r, result.cells[k])
+    # (Across the programs: compensated rows, rows not compensated with and
+    # without their nominal joints, untouched rows.)
+    assert seen
+
+
+def test_every_kind_of_row_is_read(solver, solver_115):
+    kinds = set()
+    for path in PROGRAMS:
+        for s in (solver, solver_115):
+            rows = fix(Task(path.name, (parse_file(path, path.name),)), s, "auto").rows
+            kinds |= {(r.status, r.nominal_deg is not None, r.compensated_deg is not None)
+                      for r in rows}
+    assert {("compensated", True, True), ("not compensated", True, False),
+            ("not compensated", False, False), ("untouched", False, False)} <= kinds
+
+
+def test_check_rows_too(solver):
+    path = FIXTURES / "cubes.mod"
+    result = check(Task(path.name, (parse_file(path, path.name),)), solver)
+    assert isinstance(result.rows, Rows) and len(result.rows) == 76
+    made = list(result.rows)
+    assert summary(result.rows, "compensable", "not compensable") == summary(
+        made, "compensable", "not compensable")
+    assert result.failed == sum(r.status == "not compensable" for r in made)
+    assert set(FIELDS) == set(made[0].as_dict())
