@@ -86,3 +86,26 @@ def test_check_rows_too(solver):
         made, "compensable", "not compensable")
     assert result.failed == sum(r.status == "not compensable" for r in made)
     assert set(FIELDS) == set(made[0].as_dict())
+
+
+def _failure(line: int, reason: str) -> UseRow:
+    return UseRow("m.mod", line, "MoveL", "inline", "not compensated", None, None, None, None,
+                  None, None, None, None, None, None, None, (), reason)
+
+
+def test_failures_alike_but_for_their_numbers():
+    # More than ALIKE reasons the same but for their numbers (a CAM program
+    # near J5 = 0: its J5 and its line each) are one line with the first
+    # one's reason; up to ALIKE, one line each; a reason shared exactly,
+    # one line as before.
+    many = [_failure(10 + k, f"at J5 {k / 10:.2f} deg: follows line {9 + k}")
+            for k in range(report.ALIKE + 1)]
+    few = [_failure(100 + k, f"out of reach by {k + 0.5} mm") for k in range(report.ALIKE)]
+    same = [_failure(200 + k, "tool t9 is not declared") for k in range(3)]
+    lines = report.failure_lines(many + few + same, several=False)
+    assert lines[0] == (f"not compensated ({report.ALIKE + 1} alike, each with numbers of its "
+                        "own; as line 10): at J5 0.00 deg: follows line 9 [lines 10-20]")
+    assert lines[1:1 + report.ALIKE] == [f"not compensated: line {100 + k} MoveL inline: out of "
+                                         f"reach by {k + 0.5} mm" for k in range(report.ALIKE)]
+    assert lines[1 + report.ALIKE:] == ["not compensated (3): tool t9 is not declared "
+                                        "[lines 200-202]"]

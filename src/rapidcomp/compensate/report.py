@@ -9,6 +9,7 @@ per module the diff and the rows of its motions.
 from __future__ import annotations
 
 import json
+import re
 
 from collections.abc import Iterable, Iterator
 from itertools import islice
@@ -78,24 +79,54 @@ def summary_lines(result: FixResult) -> list[str]:
 
 def failure_lines(rows: list[UseRow], several: bool, label: str = "not compensated") -> list[str]:
     """One line per failure; failures sharing a reason (a missing module
-    fails every move that uses it) in one line with their places."""
+    fails every move that uses it) in one line with their places; and so
+    are more than ALIKE failures whose reasons differ in their numbers
+    only (a CAM program near the wrist singularity: each its own J5 and
+    line), with the first one's reason."""
     by_reason: dict[str, list[UseRow]] = {}
     for r in rows:
         by_reason.setdefault(r.reason, []).append(r)
+    alike: dict[str, list[UseRow]] = {}
+    for reason, rs in by_reason.items():
+        if len(rs) <= 2:
+            alike.setdefault(_NUMBERS.sub("#", reason or ""), []).extend(rs)
     out = []
     for reason, rs in by_reason.items():
         if len(rs) <= 2:
-            for r in rs:
-                where = f"{r.file}:{r.line}" if several else f"line {r.line}"
-                out.append(f"{label}: {where} {r.instruction} {r.target}: {reason}")
+            group = alike.get(_NUMBERS.sub("#", reason or ""))
+            if group is None:
+                continue                              # (said with its first)
+            if len(group) <= ALIKE:
+                for r in rs:
+                    where = f"{r.file}:{r.line}" if several else f"line {r.line}"
+                    out.append(f"{label}: {where} {r.instruction} {r.target}: {reason}")
+                continue
+            del alike[_NUMBERS.sub("#", reason or "")]
+            first = group[0]
+            at = f"{first.file}:{first.line}" if several else f"line {first.line}"
+            out.append(f"{label} ({len(group)} alike, each with numbers of its own; as {at}): "
+                       f"{first.reason} [{_places(group, several)}]")
             continue
-        places: dict[str, list[int]] = {}
-        for r in rs:
-            places.setdefault(r.file, []).append(r.line)
-        where = "; ".join((f"{f} " if several else "") + "lines "
-                          + line_ranges(sorted(set(lines))) for f, lines in places.items())
-        out.append(f"{label} ({len(rs)}): {reason} [{where}]")
+        out.append(f"{label} ({len(rs)}): {reason} [{_places(rs, several)}]")
     return out
+
+
+# Failures whose reasons differ in their numbers only are said one by one
+# up to this many.
+ALIKE = 10
+
+
+def _places(rs: list[UseRow], several: bool) -> str:
+    places: dict[str, list[int]] = {}
+    for r in rs:
+        places.setdefault(r.file, []).append(r.line)
+    return "; ".join((f"{f} " if several else "") + "lines "
+                     + line_ranges(sorted(set(lines))) for f, lines in places.items())
+
+
+# A reason's numbers (a joint's value, a line): reasons alike but for them
+# are said in one line.
+_NUMBERS = re.compile(r"[+-]?\d+(?:\.\d+)?")
 
 
 def _cell(text: str) -> str:
