@@ -322,7 +322,8 @@ def _json_pieces(result: FixResult, meta: dict) -> Iterator[str]:
     yield head[:-2] + ',\n  "targets": [\n    '
     rows = result.rows
     for at in range(0, len(rows), CHUNK_TARGETS):
-        piece = ",\n    ".join([json_target(r) for r in rows[at:at + CHUNK_TARGETS]])
+        piece = ",\n    ".join([_json_target(*values) for values in rows.values(
+            range(at, min(at + CHUNK_TARGETS, len(rows))))])
         yield piece if at == 0 else ",\n    " + piece
     yield "\n  ]\n}\n"
 
@@ -398,13 +399,22 @@ def _reals(xs) -> str:
 def json_target(r: UseRow) -> str:
     """r as the JSON report's list holds it: the encoder's text of
     r.as_dict(), each line after the first indented by 4 more."""
+    return _json_target(*(getattr(r, name) for name in FIELDS))
+
+
+def _json_target(file, line, instruction, target, status, rule, action, nominal_deg,
+                 compensated_deg, delta_deg, error_um, error_deg, residual_um, residual_deg,
+                 conf_before, conf_after, warnings, reason) -> str:
+    """json_target of a row's fields (Rows.values: no UseRow made)."""
     try:
         return _TARGET % (
-            _text(r.file), _number(r.line), _text(r.instruction), _text(r.target),
-            _text(r.status), _text(r.rule), _text(r.action),
-            _reals(r.nominal_deg), _reals(r.compensated_deg),
-            _reals(r.delta_deg), _number(r.error_um), _number(r.error_deg),
-            _number(r.residual_um), _number(r.residual_deg), _array(r.conf_before, _number),
-            _array(r.conf_after, _number), _array(r.warnings, _text), _text(r.reason))
+            _text(file), _number(line), _text(instruction), _text(target), _text(status),
+            _text(rule), _text(action), _reals(nominal_deg), _reals(compensated_deg),
+            _reals(delta_deg), _number(error_um), _number(error_deg), _number(residual_um),
+            _number(residual_deg), _array(conf_before, _number), _array(conf_after, _number),
+            _array(warnings, _text), _text(reason))
     except _Other:
-        return _ENCODE(r.as_dict()).replace("\n", "\n    ")
+        return _ENCODE(dict(zip(FIELDS, (
+            file, line, instruction, target, status, rule, action, nominal_deg,
+            compensated_deg, delta_deg, error_um, error_deg, residual_um, residual_deg,
+            conf_before, conf_after, warnings, reason)))).replace("\n", "\n    ")

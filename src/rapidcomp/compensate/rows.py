@@ -121,6 +121,9 @@ class _Columns:
         self.ok = solved.oks()
 
 
+# Rows made at once where many are asked for (their joints' tuples made
+# from a block of the arrays).
+_BLOCK = 4096
 # UseRow's fields but its joints, in order; a row's joints are read from
 # the solved numbers (Rows).
 _JOINTS = ("nominal_deg", "compensated_deg", "delta_deg")
@@ -140,19 +143,53 @@ class Rows(Sequence):
 
     def __init__(self, base: list[tuple], codes: list[int], joints: tuple):
         self._base, self._codes, self._joints = base, codes, joints
+        self._full: list[bool] | None = None
 
     def __len__(self) -> int:
         return len(self._base)
 
     def __getitem__(self, k):
         if isinstance(k, slice):
-            return [self._row(i) for i in range(*k.indices(len(self._base)))]
+            return self._rows(range(*k.indices(len(self._base))))
         if k < 0:
             k += len(self._base)
         return self._row(k)
 
     def __iter__(self):
-        return map(self._row, range(len(self._base)))
+        for at in range(0, len(self._base), _BLOCK):
+            yield from self._rows(range(at, min(at + _BLOCK, len(self._base))))
+
+    def _rows(self, ks) -> list[UseRow]:
+        """The rows ks (UseRow)."""
+        return [_new_row(*values) for values in self.values(ks)]
+
+    def values(self, ks) -> list[tuple]:
+        """The fields of rows ks, in FIELDS order, their joints' tuples
+        made from a block of the arrays at once (the JSON report reads 1e5
+        rows so, no UseRow made)."""
+        codes = [self._codes[k] for k in ks]
+        at = [c >> 1 if c >= 0 else 0 for c in codes]
+        made = []
+        for values, nan in self._joints:
+            if not len(values) or not at:
+                made.append(([None] * len(at), [True] * len(at)))
+                continue
+            block = values[at]
+            made.append((list(zip(*block.T.tolist())) if block.shape[1] else [()] * len(at),
+                         nan[at].tolist()))
+        (qn, qn_nan), (qc, qc_nan), (dq, dq_nan) = made
+        out = []
+        for n, (k, code) in enumerate(zip(ks, codes)):
+            b = self._base[k]
+            if code < 0:
+                q = (None, None, None)
+            elif code & 1:
+                q = (None if qn_nan[n] else qn[n], None if qc_nan[n] else qc[n],
+                     None if dq_nan[n] else dq[n])
+            else:
+                q = (None if qn_nan[n] else qn[n], None, None)
+            out.append((*b[:7], *q, *b[7:]))
+        return out
 
     def __eq__(self, other) -> bool:
         if isinstance(other, Rows):
@@ -196,15 +233,24 @@ class Rows(Sequence):
     def full(self, k: int) -> bool:
         """Row k has all three joints, six each, none a NaN, and its error
         and residual: the report's fast row (report._full)."""
-        code = self._codes[k]
-        if code < 0 or not code & 1:
-            return False
-        i = code >> 1
-        if any(nan[i] for _, nan in self._joints) or self._joints[0][0].shape[1] != 6:
-            return False
-        b = self._base[k]
-        return b[_AT["error_um"]] is not None and b[_AT["error_deg"]] is not None and (
-            b[_AT["residual_um"]] is not None)
+        if self._full is None:
+            self._full = self._fulls()
+        return self._full[k]
+
+    def _fulls(self) -> list[bool]:
+        """full() of every row, at once."""
+        codes = np.array(self._codes, np.int64).reshape(-1)
+        values = self._joints[0][0]
+        ok = (codes >= 0) & (codes & 1 == 1)
+        if values.ndim != 2 or values.shape[1] != 6 or not len(values):
+            ok[:] = False
+        else:
+            at = np.where(ok, codes >> 1, 0)
+            for _, nan in self._joints:
+                ok &= ~nan[at]
+        e, d, r = _AT["error_um"], _AT["error_deg"], _AT["residual_um"]
+        return [bool(o) and b[e] is not None and b[d] is not None and b[r] is not None
+                for o, b in zip(ok.tolist(), self._base)]
 
 
 def _same_row(a: UseRow, b: UseRow) -> bool:
