@@ -194,3 +194,76 @@ def test_a_copy_out_of_its_moves_scope_is_not_taken(solver):
     written = V.relex(plan, editor.fields, {0: moved}, {0: bad})
     assert written is not None
     assert V.relex_copies(plan, editor.copies, {0: moved}, {0: bad}, written) is None
+
+
+DATA = """MODULE PartData
+  PERS tooldata tSpindle:=[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];
+  PERS wobjdata wPart:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  CONST robtarget p1:=%s;
+  CONST robtarget p2:=%s;
+  LOCAL CONST robtarget p3:=%s;
+  PROC near()
+    MoveL p3,v100,fine,tSpindle;
+    MoveL p3,v100,fine,tSpindle\\WObj:=wPart;
+  ENDPROC
+ENDMODULE
+"""
+
+PATH = """MODULE PartPath
+  PROC main()
+    MoveL p1,v100,z1,tSpindle\\WObj:=wPart;
+    MoveL Offs(p1,0,0,20),v100,z1,tSpindle\\WObj:=wPart;
+    MoveL p2,v100,z1,tSpindle\\WObj:=wPart;
+    MoveL p2,v100,z1,tSpindle;
+    MoveC p1,p2,v100,z1,tSpindle;
+    near;
+  ENDPROC
+ENDMODULE
+"""
+
+
+@pytest.mark.parametrize("mode", ["auto", "robtarget"])
+def test_copies_declared_in_a_data_module(monkeypatch, solver, mode):
+    # A task's data module holds the targets, another module the moves: the
+    # copies are declared in the data module (not LOCAL: the other module
+    # reads them), read again there; the moves naming them in theirs.
+    data = parse_text(DATA % tuple(_literals(3)), "PartData.mod")
+    path = parse_text(PATH, "PartPath.mod")
+    read, parsed, served = _fix_both(monkeypatch, Task("part", (data, path)), solver, mode)
+    _same(read, parsed)
+    # (p1's Offs and circle point, p2 in wPart, p3 in wPart.)
+    assert served == [4] and read.failed == 0
+    out_data, out_path = (m.text for m in read.modules)
+    assert "\n  CONST robtarget p1_offs_c:=" in out_data and "LOCAL CONST robtarget p3_c" in out_data
+    assert "MoveC p1_c,p2,v100,z1,tSpindle;" in out_path
+
+
+def test_a_copy_another_module_does_not_see_is_not_taken(solver):
+    # Were a copy another module reads declared LOCAL, that module would not
+    # see it: not taken.
+    data = parse_text(DATA % tuple(_literals(3)), "PartData.mod")
+    path = parse_text(PATH, "PartPath.mod")
+    task = Task("part", (data, path))
+    plan = Plan(task)
+    solved = solve(plan, solver)
+    gs = P.groups(plan, solved, "robtarget")
+    values = Values(plan, solved, solver.options.quadrant_tol_deg)
+    values.prepare(gs)
+    P.place(plan, gs)
+    P.fill_slots(plan, solver, gs)
+    editor = Editor(plan, values)
+    for g in gs:
+        if g.failure is None:
+            editor.apply(g)
+    edits = editor.file_edits()
+    texts = {fi: apply_edits(task.files[fi].source.text, es) for fi, es in edits.items()}
+    written = V.relex(plan, editor.fields, edits, texts)
+    assert V.relex_copies(plan, editor.copies, edits, texts, written) is not None
+    bad = dict(texts)
+    bad[0] = texts[0].replace("  CONST robtarget p2_c:=", "  LOCAL CONST robtarget p2_c:=")
+    moved = dict(edits)
+    moved[0] = [e._replace(replacement=e.replacement.replace(
+        "CONST robtarget p2_c:=", "LOCAL CONST robtarget p2_c:=")) for e in edits[0]]
+    assert bad[0] != texts[0]
+    assert V.relex_copies(plan, editor.copies, moved, bad, V.relex(plan, editor.fields, moved,
+                                                                   bad)) is None

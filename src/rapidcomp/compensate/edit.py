@@ -445,8 +445,8 @@ class Editor:
         self.converted: dict = {}
         # A declared robtarget or jointtarget that some of its uses read as
         # a CONST copy <name>_c next to it: use key -> (the use, the copy's
-        # literal, its name, its type); read again likewise
-        # (verify.relex_copies).
+        # literal, its name, its type, the file it is declared in); read
+        # again likewise (verify.relex_copies).
         self.copies: dict = {}
         self.others = False
         # Transient: each move whose target became rcTcR/rcTcJ(<cold>, <dq>):
@@ -667,7 +667,7 @@ class Editor:
             elif not g.array and _plain_ref(src.ref):
                 self._edit_at(u.key[0], src.ref.span.start, src.ref.span.end, new_ref,
                               f"{u.label} -> {new_ref}")
-                self.copies[u.key] = (u, literals[src.element], new_ref, type_name)
+                self.copies[u.key] = (u, literals[src.element], new_ref, type_name, g.home[0])
                 self.actions[u.key] = f"new {type_name} {new_ref}"
             else:
                 self.edit(u.key[0], src.ref.span, new_ref, f"{u.label} -> {new_ref}")

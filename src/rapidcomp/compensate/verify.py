@@ -272,35 +272,46 @@ COPY_TYPES = ("jointtarget", "robtarget")
 def relex_copies(plan: Plan, copies: dict, file_edits: dict, texts: dict[int, str],
                  written: Written) -> Written | None:
     """When targets are copied for some of their uses (Editor.copies: use
-    key -> (the use, the copy's literal, its name, its type)), each
-    statement naming a copy and each copy's declaration are read again
-    where the output holds them. The statement must be the input's with
-    each copied name replaced by its copy's, character for character; the
-    copy one one-line CONST declaration (FAST_DECL) of its type, in the
-    move's routine or else its module, of the literal meant. Returns
-    `written` with each such use's record as that literal decodes
-    (Written.uses: the resolver takes it in place of its declaration's),
-    or None where anything differs (the output is then parsed again)."""
+    key -> (the use, the copy's literal, its name, its type, the file it is
+    declared in)), each statement naming a copy and each copy's
+    declaration are read again where the output holds them. The statement
+    must be the input's with each copied name replaced by its copy's,
+    character for character; the copy one one-line CONST declaration
+    (FAST_DECL) of its type, of the literal meant, that the move sees: in
+    the move's routine or else its module, or, from another module, a
+    module's declaration not LOCAL (a task's data module holding the
+    targets of another's moves). Returns `written` with each such use's
+    record as that literal decodes (Written.uses: the resolver takes it in
+    place of its declaration's), or None where anything differs (the
+    output is then parsed again)."""
     eng, build = engine(), NodeBuilder()
     by_file: dict = {}
+    homes: set = set()
     for key, item in copies.items():
         by_file.setdefault(key[0], []).append(item)
+        homes.add(item[4])
+    # The new declarations of each file a copy is declared in.
+    declared: dict = {}
+    for fi in homes:
+        es, shift = _shifts(file_edits.get(fi, []))
+        kinds: list = []
+        wide: set = set()
+        got = _declared(eng, build, es, shift, texts[fi], plan.files[fi], COPY_TYPES,
+                        kinds=kinds, wide=wide)
+        if got is None:
+            return None
+        names, scopes, aggs, _ = got
+        declared[fi] = (names, np.frombuffer(scopes, np.int64), np.frombuffer(aggs, np.int64),
+                        kinds, wide)
     records: dict = {}
     decoded: dict = {}
     for fi, items in by_file.items():
         es, shift = _shifts(file_edits.get(fi, []))
         text, src = texts[fi], plan.files[fi].source.text
-        kinds: list = []
-        declared = _declared(eng, build, es, shift, text, plan.files[fi], COPY_TYPES,
-                             kinds=kinds)
-        if declared is None:
-            return None
-        names, scopes, aggs, _ = declared
-        at2, scope2 = np.frombuffer(aggs, np.int64), np.frombuffer(scopes, np.int64)
         # Each statement as meant: the input's, its copied names replaced
         # (MoveC: two targets of one statement).
         statements: dict = {}
-        for u, _, name, _ in items:
+        for u, _, name, _, _ in items:
             statements.setdefault(id(u.motion), (u.motion.span, set()))[1].add(
                 (tuple(u.source.ref.span), name))
         for (a, b), refs in statements.values():
@@ -312,13 +323,16 @@ def relex_copies(plan: Plan, copies: dict, file_edits: dict, texts: dict[int, st
             meant.append(src[pos:b])
             if text[x:y] != "".join(meant):
                 return None
-        for u, literal, name, type_name in items:
+        for u, literal, name, type_name, home in items:
+            names, scope2, at2, kinds, wide = declared[home]
             k = names.get(name.lower())
             if k is None or kinds[k] != type_name:
                 return None
             span, x = u.motion.span, int(at2[2 * k])
-            if not (scope2[2 * k] <= span.start and span.end <= scope2[2 * k + 1]
-                    and at2[2 * k + 1] - x == len(literal) and text.startswith(literal, x)):
+            seen = (scope2[2 * k] <= span.start and span.end <= scope2[2 * k + 1]
+                    if home == fi else k in wide)
+            if not (seen and at2[2 * k + 1] - x == len(literal)
+                    and texts[home].startswith(literal, x)):
                 return None
             record = decoded.get((literal, type_name))
             if record is None:
