@@ -23,7 +23,7 @@ from ..rapid import ast as A
 from ..rapid.values import RobTarget
 from ..rewrite import numbers, records
 from ..rewrite.names import NameAllocator
-from .place import Group, element_label, multi_index
+from .place import Group, element_label, multi_index, writable
 from .plan import Plan
 from .solve import Solved
 from .targets import Source, base_pose, stacked_poses, wobj_targets
@@ -640,6 +640,7 @@ class Editor:
             name = self.names.new(("jt_" + _stem(g)) if g.mode == "absj" else _stem(g) + "_c")
             _, _, nl, indent, _ = self._anchor(g)
             self.declare(g, type_name, name, _dims(g), self.array_value(g, nl, indent, texts))
+            g.names = writable(g.names)
             g.names["array"] = name
         else:
             literals = {}
@@ -651,6 +652,7 @@ class Editor:
                 # name it by a plain name: verify.relex_copies.)
                 self.declare(g, type_name, name, "", literals[k], converted=g.mode == "absj"
                              or all(_plain_ref(u.source.ref) for u in g.uses))
+                g.names = writable(g.names)
                 g.names[k] = name
         for u in g.uses:
             src = u.source
@@ -802,6 +804,7 @@ class Editor:
                 if literals is not None:
                     literals[k] = (literal, cold_text)
             names[key] = (cold, dq)
+            g.names = writable(g.names)
             g.names[key] = cold or g.decl.name
         return names
 

@@ -16,7 +16,9 @@ reached on two configurations needs two values). Placement:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 
@@ -37,6 +39,15 @@ ABSJ_FROM = {"auto": frozenset({"movej"}), "absj": TO_ABSJ, "robtarget": frozens
 _LEFT = int(Warn.ORIENTATION_LEFT)   # (plain bits: an IntFlag's & costs ~3 us per group)
 
 
+# A group's names or slots before any is written (writable() gives a dict
+# of its own to write).
+NONE: Mapping = MappingProxyType({})
+
+
+def writable(m: Mapping) -> dict:
+    return {} if m is NONE else m
+
+
 @dataclass(eq=False, slots=True)
 class Group:
     mode: str                        # "absj", "rob" or "joint"
@@ -50,9 +61,11 @@ class Group:
     rows: dict = field(default_factory=dict)      # element -> row in Solved
     failure: tuple | None = None     # (why, element)
     placement: str | None = None     # "inline", "in place", "new"
-    names: dict = field(default_factory=dict)     # element (or "array") -> new name
+    # (names and slots: NONE until written, one shared empty mapping, not
+    # two empty dicts per group: a CAM program's 1e5 groups write none.)
+    names: Mapping = field(default_factory=lambda: NONE)   # element (or "array") -> new name
     local: bool = True               # a new declaration is LOCAL to its module
-    slots: dict = field(default_factory=dict)     # unreached element -> (joints, what)
+    slots: Mapping = field(default_factory=lambda: NONE)   # unreached element -> (joints, what)
     rows_seen: dict = field(default_factory=dict)  # element -> first solved row (grouping)
     # Uses kept robtarget moves because other iterations of their statement
     # must stay ones (_one_statement).
@@ -344,10 +357,7 @@ def place(plan: Plan, gs: list[Group]) -> None:
         # (A new dict only where the round before wrote one: two empty dicts
         # per group, 1e5 groups, otherwise.)
         g.placement = None
-        if g.names:
-            g.names = {}
-        if g.slots:
-            g.slots = {}
+        g.names = g.slots = NONE
         if g.failure is not None:
             continue
         if g.decl is None:
@@ -409,4 +419,5 @@ def fill_slots(plan: Plan, solver: Solver, gs: list[Group]) -> None:
         conf[i] = record.conf
         valid[i] = True
     for (g, k), slot in zip(want, solve_slots(solver, R, p, conf, valid)):
+        g.slots = writable(g.slots)
         g.slots[k] = slot
