@@ -328,6 +328,12 @@ def parse_track(specs) -> tuple[tuple[int, np.ndarray], ...]:
     return tuple(out)
 
 
+def _name_or_node(expr):
+    """A plain name's text (the same data wherever it is written), else
+    the node's identity."""
+    return expr.name if type(expr) is A.Ref and not expr.selectors else id(expr)
+
+
 def _written_key(src: Source, pf) -> tuple[int, int]:
     """Where src's literal is written: (id(its file), its offset in the
     input), the key of Written (verify.relex makes them so)."""
@@ -786,9 +792,11 @@ class Resolver:
         sites = (self._sites(motion, module) if self.writes.literal or self.site_names
                  else None)
         if sites is not None:
-            # (Data the routine assigns: once per assignment it takes.)
-            # (Keyed by the assignment nodes, which live as long as the parse.)
-            key = (id(module), routine, id(t), id(w),
+            # (Data the routine assigns: once per assignment it takes, and
+            # per name where the move names it plainly, as _memo: a RoboDK
+            # program's 1e5 moves name the same two; keyed by the assignment
+            # nodes, which live as long as the parse.)
+            key = (id(module), routine, _name_or_node(t), _name_or_node(w),
                    *(id(site[1]) if site is not None else None for site in sites))
             hit = self._pairs.get(key)
             if hit is None:
