@@ -187,7 +187,10 @@ def test_one_token_calls_give_the_general_grammars_tree(monkeypatch):
              "g( a ,b , c )", "h([0,1.25])"]
     firsts = [agg, "p1", "pLong_2", *funcs, "[0,1.25]"]
     tails = [",v100,z1,tool1\\WObj:=wobj1;", ",v1000,fine,tool0;", "\\Conc,v10,z5,t;",
-             ",v5\\V:=100,z1,t\\WObj:=w;", ",a\\T:=1.5,b\\Opt;", ",v100,z1,tool1\\WObj:=wobj1;"]
+             ",v5\\V:=100,z1,t\\WObj:=w;", ",a\\T:=1.5,b\\Opt;", ",v100,z1,tool1\\WObj:=wobj1;",
+             # (Blanks around := as some posts write them.)
+             ", v100, z1, tool1 \\WObj := wobj1;", ",v5\\V :=100,z1,t\\WObj:=\tw ;",
+             ",a\\T:= 1.5,b \\Opt;"]
     lines = []
     for _ in range(300):
         name = rnd.choice(["MoveL", "MoveJ", "Foo"])

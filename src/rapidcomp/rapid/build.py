@@ -25,7 +25,7 @@ from .refs import plain_args
 DECL_HEAD = re.compile(r"(?:(LOCAL|TASK)[ \t]+)?(CONST|PERS|VAR)[ \t]+([A-Za-z][A-Za-z0-9_]*)"
                        r"[ \t]+([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*", re.IGNORECASE)
 _FAST_ITEM = re.compile(
-    r"\\([A-Za-z][A-Za-z0-9_]*)(?::=([A-Za-z][A-Za-z0-9_]*|\d+(?:\.\d*)?))?"
+    r"\\([A-Za-z][A-Za-z0-9_]*)(?:[ \t]*:=[ \t]*([A-Za-z][A-Za-z0-9_]*|\d+(?:\.\d*)?))?"
     r"|([A-Za-z][A-Za-z0-9_]*)")
 
 
