@@ -219,7 +219,35 @@ def test_previous_moves_that_disagree_are_refused():
 ENDMODULE""")
     r = rows_of(t)[12]
     assert r.status == "not compensated"
-    assert "depends on which move ran before it (lines 8, 10)" in r.reason
+    assert "depends on which move ran before it, or on the solution it took (lines 8, 10)" in r.reason
+
+
+# A path nothing calls (configuration supervision not known) ending in a
+# MoveC whose circle point follows a move that may stand on either of two
+# solutions (from a CAM trial).
+ARC = """MODULE Arc
+  PERS tooldata tSpindle:=[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];
+  PERS wobjdata wPart:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  PROC Path()
+    MoveL [[664.341,-22.091,198.394],[0.480747,0.154977,0.835020,0.218189],[-1,-1,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v100,z1,tSpindle\\WObj:=wPart;
+    MoveL [[582.152,-315.711,529.647],[0.588877,0.216899,0.673159,-0.391197],[-1,0,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v100,z1,tSpindle\\WObj:=wPart;
+    MoveL [[592.351,-419.782,351.690],[0.718510,0.432001,0.530041,-0.127181],[-1,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v100,z1,tSpindle\\WObj:=wPart;
+    MoveC [[719.333,270.783,530.856],[0.553563,0.163580,0.568579,0.586112],[0,-1,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],[[717.333,268.783,530.856],[0.553563,0.163580,0.568579,0.586112],[0,-1,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v100,z1,tSpindle\\WObj:=wPart;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_a_circle_point_after_a_move_on_either_solution_says_so():
+    """The circle point is passed on the solution closest to where the
+    robot is whatever the supervision: refused because the move before it
+    may stand on either of two solutions, said so (it said ConfL\\Off,
+    which the program never switches)."""
+    cir, = (r for r in fix(task(ARC), SOLVER, "auto").rows if r.status == "not compensated")
+    assert cir.line == 8 and cir.instruction == "MoveC"
+    assert cir.reason == ("the circle point is passed on the solution closest to where the robot "
+                          "is, and that depends on which move ran before it, or on the solution "
+                          "it took (line 7)")
 
 
 def test_scopes_local_data_parameters_and_ambiguous_globals():

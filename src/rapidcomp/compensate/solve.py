@@ -558,9 +558,14 @@ class _Chooser:
                 f"{where}): kept a robtarget move so the controller keeps each run's turn"))
             return sols, rep
         # Not compensated; its solutions still tell the moves after it where
-        # the robot may be.
-        return sols, _fail(f"{flag}\\Off: the controller takes the solution closest to where "
-                           "the robot is, and that depends on which move ran before it (lines "
+        # the robot may be. (A circle point's solution is the closest one
+        # whatever the supervision: the move before it may have left the
+        # robot in more than one place.)
+        what = ("the circle point is passed on the solution closest to where the robot is"
+                if rule.startswith("circle point") else
+                f"{flag}\\Off: the controller takes the solution closest to where the robot is")
+        return sols, _fail(f"{what}, and that depends on which move ran before it, or on the "
+                           f"solution it took ({'line' if len(lines) == 1 else 'lines'} "
                            f"{where})")
 
     def _on_or_off(self, on: Pick, off: list[Pick], flag: str) -> tuple[list[Pick], Pick]:
