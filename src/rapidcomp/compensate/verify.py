@@ -296,13 +296,15 @@ def relex_copies(plan: Plan, copies: dict, file_edits: dict, texts: dict[int, st
         es, shift = _shifts(file_edits.get(fi, []))
         kinds: list = []
         wide: set = set()
+        # (Robtarget copies written plainly: their numbers read at once,
+        # as relex reads the literals it edits; else each decoded below.)
         got = _declared(eng, build, es, shift, texts[fi], plan.files[fi], COPY_TYPES,
-                        kinds=kinds, wide=wide)
+                        rows_of=_robtarget_rows, width=17, kinds=kinds, wide=wide)
         if got is None:
             return None
-        names, scopes, aggs, _ = got
+        names, scopes, aggs, values = got
         declared[fi] = (names, np.frombuffer(scopes, np.int64), np.frombuffer(aggs, np.int64),
-                        kinds, wide)
+                        kinds, wide, values)
     records: dict = {}
     decoded: dict = {}
     for fi, items in by_file.items():
@@ -314,8 +316,9 @@ def relex_copies(plan: Plan, copies: dict, file_edits: dict, texts: dict[int, st
         for u, _, name, _, _ in items:
             statements.setdefault(id(u.motion), (u.motion.span, set()))[1].add(
                 (tuple(u.source.ref.span), name))
-        for (a, b), refs in statements.values():
-            x, y = (int(v + shift[np.searchsorted(es.ends, v, "right")]) for v in (a, b))
+        spans = np.array([span for span, _ in statements.values()], np.int64).reshape(-1, 2)
+        moved = (spans + shift[np.searchsorted(es.ends, spans, "right")]).tolist()
+        for ((a, b), refs), (x, y) in zip(statements.values(), moved):
             meant, pos = [], a
             for (start, end), name in sorted(refs):
                 meant += [src[pos:start], name]
@@ -324,7 +327,7 @@ def relex_copies(plan: Plan, copies: dict, file_edits: dict, texts: dict[int, st
             if text[x:y] != "".join(meant):
                 return None
         for u, literal, name, type_name, home in items:
-            names, scope2, at2, kinds, wide = declared[home]
+            names, scope2, at2, kinds, wide, values = declared[home]
             k = names.get(name.lower())
             if k is None or kinds[k] != type_name:
                 return None
@@ -336,14 +339,25 @@ def relex_copies(plan: Plan, copies: dict, file_edits: dict, texts: dict[int, st
                 return None
             record = decoded.get((literal, type_name))
             if record is None:
-                try:
-                    record = decoded[(literal, type_name)] = decode(
-                        type_name, A.NumAgg(literal, u.source.record.span))
-                except DecodeIssue:
-                    return None
+                if values is not None and type_name == "robtarget":
+                    record = RobTarget(tuple(values[k].tolist()), literal, u.source.record.span)
+                else:
+                    try:
+                        record = decode(type_name, A.NumAgg(literal, u.source.record.span))
+                    except DecodeIssue:
+                        return None
+                decoded[(literal, type_name)] = record
             records[u.key] = record
     written.uses = records
     return written
+
+
+def _robtarget_rows(lits: list[str]) -> np.ndarray | None:
+    """The numbers of robtarget literals each written in its plain frame
+    with decimal numbers (relex's first way: the decoder's numbers), as
+    rows (n, 17); else None (each is lexed, and decoded, on its own)."""
+    rows = _plain_values(lits)
+    return rows if isinstance(rows, np.ndarray) else None
 
 
 def relex_transient(plan: Plan, calls: dict, file_edits: dict,
