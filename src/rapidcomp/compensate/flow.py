@@ -45,7 +45,7 @@ from ..rapid.model import Module, ParsedFile, RoutineTable
 from ..rapid.motions import (BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS, DISPLACEMENT_OFF,
                              DISPLACEMENT_ON, MOVES_OTHERWISE, SUPERVISION, TRACK_OFFSET_OFF,
                              TRACK_OFFSET_ON, UNKNOWN_TARGET_CALLS, motion_spec)
-from ..rapid.refs import calls_in, loop_names
+from ..rapid.refs import calls_in, loop_names, plain_args
 
 ON, OFF = "on", "off"
 BOTH = frozenset((ON, OFF))
@@ -794,12 +794,36 @@ def _heads(s) -> tuple:
 def _function_calls(s) -> tuple:
     """Names of the functions (not built-ins) a statement's own expressions
     call, each once."""
-    if type(s) is A.ProcCall and s.plain:
-        return ()             # a move of a CAM program: asked 1e5 times
+    if type(s) is A.ProcCall:
+        if s.plain:
+            return ()             # a move of a CAM program: asked 1e5 times
+        calls = _plain_calls(s.args)
+        if calls is not None:
+            return calls
     out: dict = {}
     for c in calls_in(_heads(s)):
         if c.name.lower() not in BUILTIN_FUNCTIONS:
             out.setdefault(c.name.lower(), c.name)
+    return tuple(out.values())
+
+
+def _plain_calls(args) -> tuple | None:
+    """_function_calls of a call whose every argument is a plain name, a
+    literal or a call of such (MoveL Offs(p, 0, 0, 10), ...: a hand-written
+    or Offs-relative CAM program's every move), in the order the general
+    walk finds them (last argument first); None for any other argument."""
+    out: dict = {}
+    for arg in reversed(args):
+        v = arg.value
+        t = type(v)
+        if t is A.Call:
+            if not plain_args(v.args):
+                return None
+            if v.name.lower() not in BUILTIN_FUNCTIONS:
+                out.setdefault(v.name.lower(), v.name)
+        elif not (v is None or t is A.NumAgg or t is A.Num or t is A.Str or t is A.Bool
+                  or (t is A.Ref and not v.selectors)):
+            return None
     return tuple(out.values())
 
 

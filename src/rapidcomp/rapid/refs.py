@@ -68,6 +68,13 @@ def nodes(root, plain_calls: bool = False):
                 v = arg.value
                 if v is not None and type(v) is not A.NumAgg:
                     yield v
+        elif t is A.Call or t is A.ProcCall:
+            # (Their one field that holds nodes: Offs(p, 0, 0, 10) in every
+            # move of a hand-written or Offs-relative program.)
+            yield node
+            stack.append(node.args)
+        elif t is A.Num:
+            yield node
         elif not (t is A.NumAgg or node is None or t in (str, int, float, bool)):
             yield node
             if hasattr(t, "__dataclass_fields__"):
