@@ -897,3 +897,17 @@ def test_a_tool_the_routine_assigns_is_resolved_once_per_name(monkeypatch):
     assert result.failed == 0 and len(result.rows) == 40
     # (Once by the plan's resolver, once by the verifying one.)
     assert 1 <= len(calls) <= 2, calls
+
+
+def test_what_resolving_an_assigned_tool_noted_is_said_for_every_move():
+    """A tool its routine assigns, resolved once (above), still gives each
+    move's row what its resolution noted (a quaternion normalised): found
+    by a review, only the first move's row said it."""
+    tool = "[TRUE,[[0,0,150],[0.9,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]]"
+    moves = "\n".join(f"        MoveL {P1}, v100, fine, rdkTool;" for _ in range(3))
+    text = (f"MODULE M\n    PERS tooldata rdkTool:={tool};\n    PROC main()\n"
+            f"        rdkTool := {tool};\n{moves}\n    ENDPROC\nENDMODULE\n")
+    rows = fix(Task("m.mod", (parse_text(text, "m.mod"),)), SOLVER, "auto").rows
+    assert [r.line for r in rows] == [5, 6, 7]
+    assert all(any("quaternion norm 0.9" in w for w in r.warnings) for r in rows), [
+        r.warnings for r in rows]

@@ -49,6 +49,11 @@ def test_rows_read_by_column_are_the_rows(path, mode, solver, solver_115):
         assert all(type(r) is UseRow for r in made) and len(made) == len(rows)
         assert rows == made and rows[:] == made and rows[-1] == made[-1]
         assert rows[0] is not rows[0] and rows[0] == rows[0]
+        assert hash(rows) == hash(tuple(made)) and hash(result)
+        with pytest.raises(IndexError):
+            rows[-len(rows) - 1]
+        with pytest.raises(IndexError):
+            rows[len(rows)]
         for k, r in enumerate(made):
             assert rows.base(k) == tuple(getattr(r, f) for f in BASE_FIELDS)
             assert rows.joints(k) == (r.nominal_deg, r.compensated_deg, r.delta_deg)
@@ -109,3 +114,17 @@ def test_failures_alike_but_for_their_numbers():
                                          f"reach by {k + 0.5} mm" for k in range(report.ALIKE)]
     assert lines[1 + report.ALIKE:] == ["not compensated (3): tool t9 is not declared "
                                         "[lines 200-202]"]
+
+
+def test_failures_alike_keep_their_names_apart():
+    # A joint's name (J1, J5) and a target's (pS21) are names, not numbers:
+    # failures of J1 and of J5 are not one line (found by a review).
+    j1 = [_failure(10 + k, f"nominal: J1 beyond its limit by {k + 4.5} deg")
+          for k in range(report.ALIKE + 1)]
+    j5 = [_failure(40 + k, f"nominal: J5 beyond its limit by {k + 1.25} deg")
+          for k in range(report.ALIKE + 1)]
+    lines = report.failure_lines(j5 + j1, several=False)
+    assert len(lines) == 2
+    assert lines[0].startswith(f"not compensated ({report.ALIKE + 1} alike") and "J5" in lines[0]
+    assert "J1 beyond its limit by 4.5 deg [lines 10-20]" in lines[1]
+

@@ -301,8 +301,21 @@ def test_a_compensated_program_with_inline_targets_only_is_recognised(tmp_path):
     again = run("check", tmp_path / "robodk_comp.mod", "--profile", WARM)
     assert ("looks compensated already (robodk_comp.mod named as rapidcomp names its output)"
             in again.output), again.output
-    # A task folder written by fix is named so too.
+    # A task folder written by fix is named so too; so are a backup's
+    # output folder and a program file's (found by a review: their task is
+    # named otherwise).
     out = tmp_path / "cell_comp"
     assert run("fix", TASKS / "cell", "--profile", WARM, "-o", out, "-q").exit_code == 0
     assert "cell_comp named as rapidcomp names its output" in run(
         "check", out, "--profile", WARM).output
+    shutil.copytree(TASKS / "backup_irbt", tmp_path / "backup_irbt")
+    assert run("fix", tmp_path / "backup_irbt", "--profile", WARM, "--track", "a:x",
+               "-q").exit_code == 0
+    assert "backup_irbt_comp named as rapidcomp names its output" in run(
+        "check", tmp_path / "backup_irbt_comp", "--profile", WARM, "--track", "a:x").output
+    shutil.copytree(TASKS / "glue", tmp_path / "glue")
+    assert run("fix", tmp_path / "glue" / "Glue.pgf", "--profile", WARM, "-q").exit_code == 0
+    assert "Glue_comp named as rapidcomp names its output" in run(
+        "check", tmp_path / "glue" / "Glue_comp" / "Glue.pgf", "--profile", WARM).output
+    assert "looks compensated" not in run("check", tmp_path / "glue" / "Glue.pgf", "--profile",
+                                          WARM).output

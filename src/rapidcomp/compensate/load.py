@@ -81,8 +81,9 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
         for other in tasks_of(source.input, motion_only=False):
             if other.task != source.task:
                 observers += [_parse(other, rel) for rel in other.modules]
+    origin = source.input.parent.name if source.kind == "pgf" else source.input.name
     return Task(source.task or source.name, tuple(files), tuple(context), tuple(observers),
-                source.base_moved_by)
+                source.base_moved_by, origin)
 
 
 def _parse(source: TaskSource, rel: str):

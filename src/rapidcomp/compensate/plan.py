@@ -30,6 +30,9 @@ class Task:
     observers: tuple[ParsedFile, ...] = ()
     # The unit that moves the robot's base (a backup's MOC.cfg), if any.
     base_moved_by: str | None = None
+    # The name `fix` makes its output's from: a module's file, a folder's
+    # or backup's folder, a program file's folder (PROGRAM_comp).
+    origin: str | None = None
 
     @property
     def all_files(self) -> list[ParsedFile]:
@@ -123,8 +126,9 @@ class Plan:
 
     def _named_as_output(self) -> list[str]:
         """The task's folder and module files named as `fix` names its
-        output by default (PROGRAM_comp.mod, a folder PROGRAM_comp)."""
-        names = [Path(self.task.name).name] + [
+        output by default (PROGRAM_comp.mod, a folder PROGRAM_comp: a
+        backup's, or the folder of a program file)."""
+        names = [Path(self.task.name).name, self.task.origin or ""] + [
             part for pf in self.task.files for part in PurePath(pf.source.display_path).parts]
         return sorted({n for n in names if PurePath(n).stem.lower().endswith("_comp")})
 

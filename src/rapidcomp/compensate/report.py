@@ -125,8 +125,8 @@ def _places(rs: list[UseRow], several: bool) -> str:
 
 
 # A reason's numbers (a joint's value, a line): reasons alike but for them
-# are said in one line.
-_NUMBERS = re.compile(r"[+-]?\d+(?:\.\d+)?")
+# are said in one line. (Not digits of a word: J1 and J5, pS21 are names.)
+_NUMBERS = re.compile(r"(?<![A-Za-z_\d.])[+-]?\d+(?:\.\d+)?(?![A-Za-z_\d])")
 
 
 def _cell(text: str) -> str:

@@ -139,7 +139,7 @@ class Rows(Sequence):
     joints of solved row i only, 2i + 1 all three). A row is a UseRow
     made when asked for; no tuple of joints is kept per row (a CAM
     program's 1e5 rows: ~75 MB), and the reports read the columns
-    (column(), base(), joint_code())."""
+    (column(), base(), joints(), values()). A slice is a list of rows."""
 
     def __init__(self, base: list[tuple], codes: list[int], joints: tuple):
         self._base, self._codes, self._joints = base, codes, joints
@@ -153,7 +153,13 @@ class Rows(Sequence):
             return self._rows(range(*k.indices(len(self._base))))
         if k < 0:
             k += len(self._base)
+        if not 0 <= k < len(self._base):
+            raise IndexError("row index out of range")
         return self._row(k)
+
+    def __hash__(self) -> int:
+        # (As the tuple of rows a result held before: equal rows, equal hash.)
+        return hash(tuple(self))
 
     def __iter__(self):
         for at in range(0, len(self._base), _BLOCK):

@@ -800,12 +800,18 @@ class Resolver:
                    *(id(site[1]) if site is not None else None for site in sites))
             hit = self._pairs.get(key)
             if hit is None:
+                before = len(self._notes)
                 tool = (self._tool(t, module, routine, sites[0]) if sites[0] is not None
                         else self.tool(t, module, routine))
                 wobj = None if type(tool) is Unresolved else (
                     self._wobj(w, module, routine, sites[1]) if sites[1] is not None
                     else self.wobj(w, module, routine))
-                hit = self._pairs[key] = (tool, wobj, ())
+                # (What their resolution noted, said for every move that
+                # takes them: a quaternion normalised.)
+                self._pairs[key] = (tool, wobj, tuple(self._notes[before:]))
+                return tool, wobj
+            if hit[2]:
+                self._notes.extend(hit[2])
             return hit[0], hit[1]
         if type(t) is not A.Ref or type(w) is not A.Ref or t.selectors or w.selectors:
             tool = self.tool(t, module, routine)
