@@ -353,13 +353,36 @@ class Written:
         self.rows = {k: n for n, k in enumerate(keys)}
         self.values = values              # (n, 17), rows in the order of keys
         self.where = where                # per row: (input record, output text, start, end)
-        # Use key -> the record it reads where the output gives that use a
-        # copy of its target (verify.relex_copies), not the literal its
-        # name reads in the input.
+        # Use key -> what it reads where the output gives that use a copy
+        # of its target (verify.relex_copies), not the literal its name
+        # reads in the input: a record, or a robtarget read plainly as
+        # (its numbers' array, its row, the output's text, the literal's
+        # start and end there): no record and tuple of 17 floats each for
+        # 1e5 copies (a program whose every move is an Offs of one target).
         self.uses: dict = {}
 
     def __bool__(self) -> bool:
         return bool(self.records) or bool(self.rows) or bool(self.uses)
+
+    def copy(self, key, span):
+        """The record use `key` reads as its copy (span: its input record's,
+        as the record's), or None."""
+        got = self.uses.get(key)
+        if type(got) is not tuple:
+            return got
+        values, k, text, start, end = got
+        return RobTarget(tuple(values[k].tolist()), text[start:end], span)
+
+    def copy_values(self, key):
+        """The 17 numbers of the robtarget use `key` reads as its copy, a
+        row of an array or a record's tuple; None where it reads none or a
+        jointtarget."""
+        got = self.uses.get(key)
+        if got is None:
+            return None
+        if type(got) is tuple:
+            return got[0][got[1]]
+        return got.values if isinstance(got, RobTarget) else False
 
     def row(self, key) -> int | None:
         return self.rows.get(key)
@@ -1398,7 +1421,7 @@ class Resolver:
             # plan's source.
             self._guarded = {lp.var.lower() for lp in u.motion.loops if lp.guarded and lp.var}
             src = self._source(u.file, src.expr, u.module, u.motion.routine, dict(u.env))
-        copy = self.written.uses.get(u.key)
+        copy = self.written.copy(u.key, u.source.record.span) if self.written.uses else None
         src = self._as_written(src, u.file) if copy is None else src.with_record(copy)
         return self._complete(u.file, u.module, u.motion, u.role, u.kind, u.label, u.line,
                               u.env, u.key, src)
@@ -1430,12 +1453,12 @@ class Resolver:
                 continue
             if not isinstance(src.record, RobTarget):
                 continue
-            copy = copies.get(u.key) if copies else None
+            copy = written.copy_values(u.key) if copies else None
             row = written_row(_written_key(src, u.file)) if copy is None else None
+            if copy is False:
+                continue          # (a jointtarget copy: again() says why)
             if copy is not None:
-                if not isinstance(copy, RobTarget):
-                    continue
-                recs.append(copy.values)
+                recs.append(copy)
             elif row is not None:
                 at.append(len(done))
                 rows.append(row)

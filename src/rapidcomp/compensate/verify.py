@@ -337,15 +337,16 @@ def relex_copies(plan: Plan, copies: dict, file_edits: dict, texts: dict[int, st
             if not (seen and at2[2 * k + 1] - x == len(literal)
                     and texts[home].startswith(literal, x)):
                 return None
+            if values is not None and type_name == "robtarget":
+                # (Its numbers a row of the array read: Written.copy.)
+                records[u.key] = (values, k, texts[home], x, x + len(literal))
+                continue
             record = decoded.get((literal, type_name))
             if record is None:
-                if values is not None and type_name == "robtarget":
-                    record = RobTarget(tuple(values[k].tolist()), literal, u.source.record.span)
-                else:
-                    try:
-                        record = decode(type_name, A.NumAgg(literal, u.source.record.span))
-                    except DecodeIssue:
-                        return None
+                try:
+                    record = decode(type_name, A.NumAgg(literal, u.source.record.span))
+                except DecodeIssue:
+                    return None
                 decoded[(literal, type_name)] = record
             records[u.key] = record
     written.uses = records
