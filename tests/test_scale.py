@@ -772,6 +772,8 @@ ODD = """MODULE Odd
     MoveL pN,v100,z1,tA\\WObj:=wA;
     MoveJ pU,v100,z1,tA;
     MoveL Offs(pN,1,2,3),v100,z1,tA\\WObj:=wA;
+    MoveL Offs(pU,0.1,-2.3333333,1E3),v100,z1,tA;
+    MoveL RelTool(pN,1,2,3),v100,z1,tA\\WObj:=wA;
     MoveL [[520.5,-5.25,580],[0.000001,0.7071068,0.7071068,0.000001],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,fine,tool0;
     MoveL [[520.5,-5.25,580],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,fine,tA\\WObj:=wA;
     MoveAbsJ [[0,0,0,0,30,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,fine,tool0;
@@ -784,7 +786,8 @@ def test_uses_evaluated_again_as_arrays_are_again_bit_for_bit():
     """Resolver.again_many (the verification of an output whose edits are
     numbers only) gives, for each use it takes, again()'s pose and confdata
     exactly (float32 rounding, quaternions off unit length, tools and work
-    objects, the base), and leaves Offs/RelTool and MoveAbsJ to again()."""
+    objects, the base, an Offs of literal numbers), and leaves RelTool and
+    MoveAbsJ to again()."""
     from rapidcomp.compensate.targets import Resolver
     tasks = [Task("odd.mod", (parse_text(ODD, "odd.mod"),)),
              Task("cam.mod", (parse_text(_cam(300, 3, ""), "cam.mod"),))]
@@ -803,8 +806,8 @@ def test_uses_evaluated_again_as_arrays_are_again_bit_for_bit():
             assert one.conf == tuple(conf[j].tolist())
         left = [(u.label, u.kind) for n, u in enumerate(uses) if n not in set(done)]
         if task.name == "odd.mod":
-            assert len(done) == 4
-            assert left == [("Offs(pN,1,2,3)", "robtarget"), ("inline", "jointtarget")]
+            assert len(done) == 6
+            assert left == [("RelTool(pN,1,2,3)", "robtarget"), ("inline", "jointtarget")]
         taken += len(done)
     assert taken > 400
 

@@ -1439,13 +1439,22 @@ class Resolver:
         done, recs, tools, wobjs = [], [], [], []
         # Rows of the written array (at: their place in done), records' values.
         at, rows = [], []
+        # An Offs of literal numbers: its place in done, its displacement
+        # as this resolver reads it (poses() adds it to the target's
+        # position, as here; again() evaluates it again, float32).
+        offs_at, offs = [], []
         written = self.written
         written_row = written.row
         copies = written.uses
         for n, u in enumerate(uses):
             src = u.source
-            if u.kind != "robtarget" or src.call is not None:
+            if u.kind != "robtarget":
                 continue
+            d = None
+            if src.call is not None:
+                d = self._offs(src.call)
+                if d is None:
+                    continue
             # (A use whose tool is not resolved goes to again(), which says
             # why: its work object is not needed here.)
             tool, wobj = self._tool_wobj(u.motion, u.module)
@@ -1467,6 +1476,9 @@ class Resolver:
                 if not isinstance(record, RobTarget):
                     continue
                 recs.append(record.values)
+            if d is not None:
+                offs_at.append(len(done))
+                offs.append(d)
             done.append(n)
             tools.append(tool[1])
             wobjs.append(wobj[1])
@@ -1481,15 +1493,35 @@ class Resolver:
             v[np.setdiff1d(np.arange(m), at)] = np.array(recs, float).reshape(-1, 17)
         # What again() would refuse or note (not ok) goes to again(): it
         # says why.
-        return self._flanges(done, v, tools, wobjs)
+        return self._flanges(done, v, tools, wobjs,
+                             (offs_at, np.array(offs, float).reshape(-1, 3)) if offs else None)
 
-    def _flanges(self, done: list, v: np.ndarray, tools: list, wobjs: list):
+    def _offs(self, call: A.Call) -> list[float] | None:
+        """The displacement of Offs(target, x, y, z) of literal numbers, as
+        _offset reads it (this resolver's floats); None for anything else
+        (RelTool, an expression: again() evaluates it)."""
+        if call.name.lower() != "offs" or len(call.args) != 4:
+            return None
+        xyz = []
+        for a in call.args[1:]:
+            if a.kind != "pos" or type(a.value) is not A.Num:
+                return None
+            xyz.append(a.value.value)
+        if call.args[0].kind != "pos":
+            return None
+        return self._floats(xyz)
+
+    def _flanges(self, done: list, v: np.ndarray, tools: list, wobjs: list, offs=None):
         """(the entries of `done` kept, R, p, conf) of robtargets' values v
         (one row per entry) through their tools and work objects, as poses()
         composes them; a row a check would stop or note (not ok) is left
-        out."""
+        out. offs: (rows, displacements) of Offs uses, added to their
+        positions as poses() adds them (_relative)."""
         q, p, conf, ok = self._unit_parts(v)
         R = unit_quat_matrices(q)
+        if offs is not None:
+            rows, d = offs
+            p[rows] = p[rows] + d
         Rf, pf = flange_poses(stacked_poses([self.base] * len(done)), stacked_poses(wobjs),
                               (R, p), stacked_poses(tools))
         keep = np.flatnonzero(ok)
