@@ -27,7 +27,7 @@ from ..kinematics.ik import Solver, Warn
 from ..rapid.model import Declaration, Module
 from .plan import Plan
 from .solve import Solved, Solving, same_joints, solve_slots
-from .targets import Source, TargetUse, flange_pose
+from .targets import NO_ROTATION, Source, TargetUse, flange_pose
 
 MODES = ("auto", "absj", "robtarget")
 # Optional arguments MoveJ/MoveL share with MoveAbsJ (RAPID Instructions
@@ -159,7 +159,10 @@ def _call_key(src: Source):
     if src.call is None:
         return None
     return (src.call.name.lower(), tuple(np.round(src.rel_d, 12)),
-            tuple(np.round(src.rel_R, 12).ravel()))
+            _IDENTITY_KEY if src.rel_R is NO_ROTATION else tuple(np.round(src.rel_R, 12).ravel()))
+
+
+_IDENTITY_KEY = tuple(np.round(NO_ROTATION, 12).ravel())
 
 
 def multi_index(flat: int, dims: tuple[int, ...]) -> tuple[int, ...]:

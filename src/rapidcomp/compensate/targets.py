@@ -334,6 +334,12 @@ def _name_or_node(expr):
     return expr.name if type(expr) is A.Ref and not expr.selectors else id(expr)
 
 
+# An Offs's rotation (a RelTool's before its angles), one array for all
+# (read only: an Offs-relative program has one per move).
+NO_ROTATION = np.eye(3)
+NO_ROTATION.flags.writeable = False
+
+
 def _written_key(src: Source, pf) -> tuple[int, int]:
     """Where src's literal is written: (id(its file), its offset in the
     input), the key of Written (verify.relex makes them so)."""
@@ -1018,7 +1024,7 @@ class Resolver:
             return Unresolved(f"{call.name} of a non-robtarget", True)
         d = np.array(self._position([v.value for v in pos[1:]], pos[1].span.start, pf,
                                     f"the {call.name} displacement"))
-        rot = np.eye(3)
+        rot = NO_ROTATION
         if call.name.lower() == "reltool":
             for a in call.args:
                 if a.kind == "optval" and a.name.lower() in ("rx", "ry", "rz"):
