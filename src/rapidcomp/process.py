@@ -18,12 +18,6 @@ only there: a program that imports rapidcomp keeps its own settings.
   does everything else: 1e5 targets peaked 50 MB higher. A numpy block
   makes few allocations, so sharing the arena's lock costs nothing.
   Elsewhere than glibc there is nothing to set.
-* Blocks of 2 MiB and more (a batch's arrays) mapped on their own and
-  handed back when freed (glibc's M_MMAP_THRESHOLD, fixed: glibc raises
-  it as large blocks are freed, up to 32 MiB, and then carves the
-  batches' arrays from the heap, whose freed holes the next stage's
-  smaller objects do not fill): 1e5 targets peaked ~20 MiB lower, at
-  ~0.3 s of mapping fresh pages.
 * What a job lets go of (let_go(): the parsed program, once its result is
   made) is kept until the next job starts or the process ends, whose exit
   takes the memory back at once (cli.run): freed object by object, a
@@ -37,8 +31,6 @@ from __future__ import annotations
 import gc
 
 
-# (process.own: blocks from this size on are mapped on their own.)
-MMAP_FROM = 2 * 1024 * 1024
 _trim = None          # glibc's malloc_trim, once own() has run
 _owned = False        # own() has run: this is the command's own process
 _kept = None          # what the job let go of (let_go)
@@ -52,7 +44,6 @@ def own() -> None:
     try:
         libc = ctypes.CDLL(None)
         libc.mallopt(-8, 1)                        # M_ARENA_MAX
-        libc.mallopt(-3, MMAP_FROM)                # M_MMAP_THRESHOLD
         _trim = libc.malloc_trim
     except (OSError, AttributeError, TypeError):
         pass
