@@ -322,7 +322,7 @@ def _json_pieces(result: FixResult, meta: dict) -> Iterator[str]:
     yield head[:-2] + ',\n  "targets": [\n    '
     rows = result.rows
     for at in range(0, len(rows), CHUNK_TARGETS):
-        piece = ",\n    ".join([_json_target(*values) for values in rows.values(
+        piece = ",\n    ".join([_json_parts(b, *q) for b, q in rows.parts(
             range(at, min(at + CHUNK_TARGETS, len(rows))))])
         yield piece if at == 0 else ",\n    " + piece
     yield "\n  ]\n}\n"
@@ -400,6 +400,19 @@ def json_target(r: UseRow) -> str:
     """r as the JSON report's list holds it: the encoder's text of
     r.as_dict(), each line after the first indented by 4 more."""
     return _json_target(*(getattr(r, name) for name in FIELDS))
+
+
+def _json_parts(b: tuple, qn, qc, dq) -> str:
+    """json_target of a row's fields but its joints (Rows.parts) and its
+    joints."""
+    try:
+        return _TARGET % (
+            _text(b[0]), _number(b[1]), _text(b[2]), _text(b[3]), _text(b[4]), _text(b[5]),
+            _text(b[6]), _reals(qn), _reals(qc), _reals(dq), _number(b[7]), _number(b[8]),
+            _number(b[9]), _number(b[10]), _array(b[11], _number), _array(b[12], _number),
+            _array(b[13], _text), _text(b[14]))
+    except _Other:
+        return _json_target(*b[:7], qn, qc, dq, *b[7:])
 
 
 def _json_target(file, line, instruction, target, status, rule, action, nominal_deg,

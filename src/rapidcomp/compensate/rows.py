@@ -167,12 +167,17 @@ class Rows(Sequence):
 
     def _rows(self, ks) -> list[UseRow]:
         """The rows ks (UseRow)."""
-        return [_new_row(*values) for values in self.values(ks)]
+        return [_new_row(*b[:7], *q, *b[7:]) for b, q in self.parts(ks)]
 
     def values(self, ks) -> list[tuple]:
-        """The fields of rows ks, in FIELDS order, their joints' tuples
-        made from a block of the arrays at once (the JSON report reads 1e5
-        rows so, no UseRow made)."""
+        """The fields of rows ks, in FIELDS order."""
+        return [(*b[:7], *q, *b[7:]) for b, q in self.parts(ks)]
+
+    def parts(self, ks) -> list[tuple]:
+        """(fields but the joints (BASE_FIELDS), (nominal, compensated,
+        delta joints)) of rows ks, their joints' tuples made from a block
+        of the arrays at once (the JSON report reads 1e5 rows so, no UseRow
+        nor tuple of all fields made)."""
         codes = [self._codes[k] for k in ks]
         at = [c >> 1 if c >= 0 else 0 for c in codes]
         made = []
@@ -194,7 +199,7 @@ class Rows(Sequence):
                      None if dq_nan[n] else dq[n])
             else:
                 q = (None if qn_nan[n] else qn[n], None, None)
-            out.append((*b[:7], *q, *b[7:]))
+            out.append((b, q))
         return out
 
     def __eq__(self, other) -> bool:
