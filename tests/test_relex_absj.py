@@ -85,13 +85,14 @@ def test_a_real_cam_program_is_read_again(monkeypatch, solver, mode, turned):
     _same(read, parsed)
 
 
-def _converted(solver, text):
-    """The first round of fix's print on `text` (absj): the plan, the
-    editor's conversions, the file edits and the output text."""
-    task = Task("cam.mod", (parse_text(text, "cam.mod"),))
+def _converted(solver, text, mode="absj"):
+    """The first round of fix's print on `text` (a module's, or a Task) in
+    `mode`: the plan, the editor (its conversions and copies), the file
+    edits and the output texts, by file."""
+    task = text if isinstance(text, Task) else Task("cam.mod", (parse_text(text, "cam.mod"),))
     plan = Plan(task)
     solved = solve(plan, solver)
-    gs = P.groups(plan, solved, "absj")
+    gs = P.groups(plan, solved, mode)
     values = Values(plan, solved, solver.options.quadrant_tol_deg)
     values.prepare(gs)
     P.place(plan, gs)
@@ -101,7 +102,8 @@ def _converted(solver, text):
         if g.failure is None:
             editor.apply(g)
     edits = editor.file_edits()
-    return plan, editor, edits, {0: apply_edits(task.files[0].source.text, edits[0])}
+    return plan, editor, edits, {fi: apply_edits(task.files[fi].source.text, es)
+                                 for fi, es in edits.items()}
 
 
 def _flip(text: str, at: int) -> str:

@@ -15,12 +15,9 @@ from pathlib import Path
 import pytest
 
 from rapidcomp.compensate import fix as F
-from rapidcomp.compensate import place as P
 from rapidcomp.compensate import verify as V
-from rapidcomp.compensate.edit import Editor, Values
 from rapidcomp.compensate.load import load_solver
-from rapidcomp.compensate.plan import Plan, Task
-from rapidcomp.compensate.solve import solve
+from rapidcomp.compensate.plan import Task
 from rapidcomp.edits import apply_edits
 from rapidcomp.rapid.parse import parse_source, parse_text
 from rapidcomp.source import read_source
@@ -28,6 +25,7 @@ from rapidcomp.source import read_source
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
 from fix import cam_module  # noqa: E402
+from test_relex_absj import _converted  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -125,22 +123,8 @@ def test_copies_beside_moves_turned_into_moveabsj(monkeypatch, solver):
 
 
 def _printed(solver, text, mode="robtarget"):
-    """The first round of fix's print on `text`: the plan, the editor, the
-    file edits and the output text."""
-    task = Task("copies.mod", (parse_text(text, "copies.mod"),))
-    plan = Plan(task)
-    solved = solve(plan, solver)
-    gs = P.groups(plan, solved, mode)
-    values = Values(plan, solved, solver.options.quadrant_tol_deg)
-    values.prepare(gs)
-    P.place(plan, gs)
-    P.fill_slots(plan, solver, gs)
-    editor = Editor(plan, values)
-    for g in gs:
-        if g.failure is None:
-            editor.apply(g)
-    edits = editor.file_edits()
-    return plan, editor, edits, {0: apply_edits(task.files[0].source.text, edits[0])}
+    """The first round of fix's print on `text` (test_relex_absj)."""
+    return _converted(solver, Task("copies.mod", (parse_text(text, "copies.mod"),)), mode)
 
 
 def _relexed(plan, editor, edits, texts, bad=None):
@@ -243,20 +227,7 @@ def test_a_copy_another_module_does_not_see_is_not_taken(solver):
     # see it: not taken.
     data = parse_text(DATA % tuple(_literals(3)), "PartData.mod")
     path = parse_text(PATH, "PartPath.mod")
-    task = Task("part", (data, path))
-    plan = Plan(task)
-    solved = solve(plan, solver)
-    gs = P.groups(plan, solved, "robtarget")
-    values = Values(plan, solved, solver.options.quadrant_tol_deg)
-    values.prepare(gs)
-    P.place(plan, gs)
-    P.fill_slots(plan, solver, gs)
-    editor = Editor(plan, values)
-    for g in gs:
-        if g.failure is None:
-            editor.apply(g)
-    edits = editor.file_edits()
-    texts = {fi: apply_edits(task.files[fi].source.text, es) for fi, es in edits.items()}
+    plan, editor, edits, texts = _converted(solver, Task("part", (data, path)), "robtarget")
     written = V.relex(plan, editor.fields, edits, texts)
     assert V.relex_copies(plan, editor.copies, edits, texts, written) is not None
     bad = dict(texts)
