@@ -203,11 +203,10 @@ class Rows(Sequence):
         return out
 
     def __eq__(self, other) -> bool:
-        if isinstance(other, Rows):
-            return len(self) == len(other) and all(map(_same_row, self, other))
-        if isinstance(other, (list, tuple)):
-            return len(self) == len(other) and all(map(_same_row, self, other))
-        return NotImplemented
+        # (Equal to the rows it holds, as the tuple of rows a result held.)
+        if not isinstance(other, (Rows, list, tuple)):
+            return NotImplemented
+        return len(self) == len(other) and all(a == b for a, b in zip(self, other))
 
     def __repr__(self) -> str:
         return f"Rows({len(self)} rows)"
@@ -262,10 +261,6 @@ class Rows(Sequence):
         e, d, r = _AT["error_um"], _AT["error_deg"], _AT["residual_um"]
         return [bool(o) and b[e] is not None and b[d] is not None and b[r] is not None
                 for o, b in zip(ok.tolist(), self._base)]
-
-
-def _same_row(a: UseRow, b: UseRow) -> bool:
-    return a == b
 
 
 def displacement_warning(um_per_mm: float, track: bool = False) -> str:
