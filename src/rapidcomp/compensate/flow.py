@@ -360,7 +360,7 @@ class _Walker:
             if not set(self.called_names(rt.node)) & DISPLACEMENT_ON:
                 continue
             handlers = {id(s) for s in _statements_in([h.body for h in rt.node.handlers])}
-            for s in _statements(rt.node):
+            for s in statements(rt.node):
                 why = (self._set_at_run_time(s, rt) if type(s) is A.ProcCall
                        and s.name.lower() in DISPLACEMENT_ON else None)
                 if why is None:
@@ -837,18 +837,11 @@ def builtin(name: str) -> bool:
 def calls_of(node: A.Routine):
     """(offset of the statement, lower-case name or LATE) of each call a
     routine makes that is not a built-in, handlers' too."""
-    for s in _statements(node):
-        for name in _function_calls(s):
-            yield s.span.start, name.lower()
-        t = type(s)
-        if t is A.ProcCall:
-            name = s.name.lower()
-            if name in UNKNOWN_TARGET_CALLS:            # (CallByVar)
-                yield s.span.start, LATE
-            elif not builtin(name):
-                yield s.span.start, name
-        elif t is A.LateCall:
-            yield s.span.start, LATE
+    for at, name in _calls(node):
+        if name in UNKNOWN_TARGET_CALLS:                # (CallByVar)
+            yield at, LATE
+        elif not builtin(name):
+            yield at, name
 
 
 def _arg(s: A.ProcCall, name: str, k: int = -1):
@@ -864,16 +857,24 @@ def _arg(s: A.ProcCall, name: str, k: int = -1):
 def _called_names(node: A.Routine):
     """Lower-case names of the procedures and functions a routine calls
     (statically; LATE for a late-bound call)."""
-    for s in _statements(node):
-        yield from (name.lower() for name in _function_calls(s))
+    return (name for _, name in _calls(node))
+
+
+def _calls(node: A.Routine):
+    """(offset of the statement, lower-case name, or LATE for a late-bound
+    call) of each call a routine makes, built-ins too, handlers' too."""
+    for s in statements(node):
+        at = s.span.start
+        for name in _function_calls(s):
+            yield at, name.lower()
         t = type(s)
         if t is A.ProcCall:
-            yield s.name.lower()
+            yield at, s.name.lower()
         elif t is A.LateCall:
-            yield LATE
+            yield at, LATE
 
 
-def _statements(node: A.Routine):
+def statements(node: A.Routine):
     """Every statement of a routine, those in blocks and handlers too."""
     return _statements_in([node.body] + [h.body for h in node.handlers])
 

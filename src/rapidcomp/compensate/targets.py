@@ -37,10 +37,10 @@ from ..kinematics.frames import (DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z,
                                  unit_quat_matrices, unit_wxyz)
 from ..rapid import ast as A
 from ..rapid.model import Declaration, Module, Motion, ParsedFile
-from ..rapid.refs import literal_leaves, loop_names, nodes, usage
+from ..rapid.refs import literal_leaves, loop_names, usage
 from ..rapid.writes import Writes, task_writes
 from ..rapid.values import DecodeIssue, JointTarget, Pose, RobTarget, ToolData, WobjData, decode
-from .flow import LATE, calls_of
+from .flow import LATE, calls_of, statements
 from .transient import FUNC_J, FUNC_R, state_values
 
 IDENTITY_POSE = (np.eye(3), np.zeros(3))
@@ -642,7 +642,7 @@ class Resolver:
                     # Where the body ends: a move in a handler runs after an
                     # error anywhere, before an assignment too.
                     ends[key] = r.node.body[-1].span.end if r.node.body else -1
-                    if any(type(n) is A.Simple and n.kind == "GOTO" for n in nodes(r.node)):
+                    if any(type(n) is A.Simple and n.kind == "GOTO" for n in statements(r.node)):
                         jumps.add(key)
                     for st in r.node.body:
                         body[id(st)] = key
