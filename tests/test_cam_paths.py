@@ -166,6 +166,23 @@ def test_runs_stop_where_a_statement_is_not_the_same_call():
         assert _tokens(text, True) == _tokens(text, False), text
 
 
+def test_runs_tried_seldom_in_a_hand_written_text_lex_as_one_at_a_time():
+    """A hand-written program's moves are seldom alike twice in a row: a
+    pattern made for a pair of them fails on most of the moves it is tried
+    on, and is tried no more in that text; a run of that very call later
+    in the text lexes as one by one lexes it, and so does the next text."""
+    rnd = random.Random(5)
+    speeds, tools = ["v50", "v100", "v200"], ["tA", "tB\\WObj:=w1"]
+    lines = []
+    for _ in range(1500):
+        call = (f"{rnd.choice(['MoveL', 'MoveJ'])} p{rnd.randrange(40)}, "
+                f"{rnd.choice(speeds)}, z1, {rnd.choice(tools)};")
+        lines += [call] * rnd.choice([1, 1, 1, 2])
+    text = "\n".join(lines + ["MoveL p1, v50, z1, tA;"] * 50) + "\n"
+    for _ in range(2):
+        assert _tokens(text, True) == _tokens(text, False)
+
+
 def test_declaration_runs_stop_where_a_declaration_is_not_the_same_kind():
     """A run of one-line declarations ends at a reserved word as name,
     another storage, type, letter case or blank before the name, a value

@@ -184,17 +184,25 @@ def test_one_token_calls_give_the_general_grammars_tree(monkeypatch):
     # (Functions of names and aggregates too: fix --transient writes
     # rcTcR(p10, p10_dq) and rcTcR([[...]], [[...],[...]]).)
     funcs = ["rcTcR(p10, p10_dq)", "rcTcJ(jt_p1,jt_p1_dq)", f"f({agg},\t[[0.1,2],[0,1,0,0]])",
-             "g( a ,b , c )", "h([0,1.25])"]
-    firsts = [agg, "p1", "pLong_2", *funcs, "[0,1.25]"]
+             "g( a ,b , c )", "h([0,1.25])",
+             # (Optional arguments of the function, with or without a comma
+             # before them; signed numbers.)
+             "RelTool(p1, 0, 0, -10 \\Rz:=45)", "RelTool(p1,0,0,0\\Rx:=-10.5\\Rz:=+30)",
+             "f(a \\B)", "f(a, \\B:=c, 2)", "f(a,\\B := 1.5 )"]
+    # (A number first: WaitTime 0.2; AccSet 50, 100;)
+    firsts = [agg, "p1", "pLong_2", *funcs, "[0,1.25]", "0.2", "-1", "+2.", "50"]
     tails = [",v100,z1,tool1\\WObj:=wobj1;", ",v1000,fine,tool0;", "\\Conc,v10,z5,t;",
              ",v5\\V:=100,z1,t\\WObj:=w;", ",a\\T:=1.5,b\\Opt;", ",v100,z1,tool1\\WObj:=wobj1;",
              # (Blanks around := as some posts write them.)
              ", v100, z1, tool1 \\WObj := wobj1;", ",v5\\V :=100,z1,t\\WObj:=\tw ;",
-             ",a\\T:= 1.5,b \\Opt;"]
+             ",a\\T:= 1.5,b \\Opt;",
+             # (Numbers after the first (SetDO do1, 1;), signed too; none:
+             # Reset do1;)
+             ", 1;", ",0.5, -2\\T:=-3;", ";", " ;", ",+4.25,x;"]
     lines = []
     for _ in range(300):
         name = rnd.choice(["MoveL", "MoveJ", "Foo"])
-        first = rnd.choice(firsts if name == "Foo" else firsts[:-1])
+        first = rnd.choice(firsts if name == "Foo" else firsts[:-5])
         lines.append(f"    {name}{rnd.choice([' ', '  ', chr(9)])}{first}{rnd.choice(tails)}")
     text = "MODULE m\n  PROC p()\n" + "\n".join(lines) + "\n  ENDPROC\nENDMODULE\n"
     fast = parse_text(text)
@@ -211,7 +219,14 @@ def test_one_token_calls_give_the_general_grammars_tree(monkeypatch):
     "IF bFlag MoveL(p10),v100,z1,tool0;", "IF bDebug TPWrite(sMsg)\\Num:=nVal;",
     "IF a f([1,2]),c;", "IF x MoveL\\Conc,p,v,z,t;", "x := a f(b),c;",
     "Move L rcTcR(p10,p10_dq),v100,z1,tool1;", "Move L p10,v100,z1,tool1;",
-    "MoveL rcTcR(p10, p10_dq),v100,z1,tool1;"])
+    "MoveL rcTcR(p10, p10_dq),v100,z1,tool1;",
+    # (A declaration without a value, a call of one argument after a
+    # condition: the FAST_CALL of one argument has no place there.)
+    "VAR num n;", "IF bFlag Reset doGrip;", "IF a WaitTime 0.5;",
+    # (A number beyond a num's range: refused where the general parser
+    # refuses it, not read as inf.)
+    "MoveL p,v100\\V:=" + "1" * 400 + ",z1,t;", "WaitTime " + "9" * 40 + ";",
+    "SetDO do1, " + "9" * 400 + ";", "MoveL RelTool(p, 0, 0, 0 \\Rz:=" + "4" * 400 + "),v,z,t;"])
 def test_a_one_token_statement_where_none_fits_is_read_as_its_own_tokens(stmt, monkeypatch):
     """Text lexed as one FAST_CALL where the table has no place for a
     statement (its first word ends an IF's condition or an expression) is

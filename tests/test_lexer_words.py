@@ -47,22 +47,31 @@ def test_fast_call_refused_exactly_when_a_word_is_reserved():
     seen_no_comma = set()
     for _ in range(6000):
         name = word()
-        first = rnd.choice([word(), agg, "func"])
-        used = [name] + ([] if first == agg else [first])
+        first = rnd.choice([word(), agg, "func", "-2.5", "7"])
+        used = [name] + ([] if first == agg or not first[-1].isalpha() else [first])
         if first == "func":
             # A function of names and aggregates (rcTcR(p10, p10_dq)): its
             # name and names count too.
-            parts = [rnd.choice([word(), agg]) for _ in range(rnd.randint(1, 3))]
+            # Its optional arguments (RelTool(p, 0, 0, -10 \\Rz:=45)) too.
+            parts = [rnd.choice([word(), agg, "-10"]) for _ in range(rnd.randint(1, 3))]
             func = word()
-            first = f"{func}({rnd.choice(['', ' ']).join(p + ',' for p in parts)[:-1]})"
-            used = [name, func] + [p for p in parts if p != agg]
+            first = f"{func}({rnd.choice(['', ' ']).join(p + ',' for p in parts)[:-1]}"
+            used = [name, func] + [p for p in parts if p[-1].isalpha()]
+            if rnd.random() < 0.3:
+                w, v = word(), rnd.choice([word(), "45", "-45"])
+                first += f"{rnd.choice(['', ' ', ','])}\\{w}:={v}"
+                used += [w] + ([v] if v[-1].isalpha() else [])
+            first += ")"
         # After the first argument: names after commas and options, in any
         # order (a call without a comma too), spaces or tabs before them.
+        # (None: Reset do1; numbers: SetDO do1, 1;)
         after = ""
-        for _ in range(rnd.randint(1, 4)):
+        for _ in range(rnd.randint(0, 4)):
             pad = rnd.choice(["", "", " ", "\t"])
             kind = rnd.random()
-            if kind < 0.5:
+            if kind < 0.1:
+                after += f"{pad},{rnd.choice(['', ' '])}{rnd.choice(['1', '-0.5', '+2.'])}"
+            elif kind < 0.5:
                 w = word()
                 after += f"{pad},{rnd.choice(['', ' '])}{w}"
                 used.append(w)

@@ -91,6 +91,39 @@ def test_the_model_is_the_one_the_parse_makes_alone(children, monkeypatch):
     assert literals == 400 and children[-1][1].hits == literals
 
 
+def test_literals_written_with_blanks_after_their_commas_are_the_childs_too(children,
+                                                                           monkeypatch):
+    """People write `[[1, 2, 3], [1, 0, 0, 0], ...]`: the child reads those
+    literals too (values.spaced_values, as the parse would), and the model
+    is the one the parse makes alone; one beyond a num's range is left to
+    the parse, which says where."""
+    q, ext = "[0.707107, 0, 0.707107, 0]", "[9E+09,\t9E+09, 9E+09, 9E+09, 9E+09, 9E+09]"
+    lines = ["MODULE Hand"]
+    for i in range(30):
+        lines.append(f"  CONST robtarget p{i} := [[{500 + i}.5, {-i}, 300], {q}, "
+                     f"[0, 0, -1, 0], {ext}];")
+    lines.append("  CONST jointtarget j0 := [[0, 10, 20, 0, 30.5, 0], [9E+09, 9E+09, 9E+09, "
+                 "9E+09, 9E+09, 9E+09]];")
+    lines.append("  PROC main()")
+    for i in range(10):
+        lines.append(f"    MoveL [[{400 + i}, 0, 300] , {q},[0, 0, 0, 0], {ext}], v100, z1, "
+                     "tool0;")
+    lines += ["    MoveAbsJ j0, v100, fine, tool0;", "  ENDPROC", "ENDMODULE", ""]
+    text = "\n".join(lines)
+    source = parse_text(text, "hand.mod").source
+    alone = _alone(lambda: parse_source(source), monkeypatch)
+    got = parse_source(source)
+    assert got == alone
+    assert children[-1][1].hits == 30 + 1 + 10
+    # (A number beyond a num's: the same error, the child reading none.)
+    bad = text.replace("[[500.5, 0, 300]", "[[5E+39, 0, 300]")
+    with pytest.raises(InputError) as alone_error:
+        _alone(lambda: parse_text(bad, "hand.mod"), monkeypatch)
+    with pytest.raises(InputError) as got_error:
+        parse_text(bad, "hand.mod")
+    assert str(got_error.value) == str(alone_error.value) and "5E+39" in str(got_error.value)
+
+
 @pytest.mark.parametrize("trouble", ["raises", "exits early", "hangs"])
 def test_a_child_in_trouble_changes_nothing_but_the_time(trouble, children, monkeypatch):
     def raises(text):

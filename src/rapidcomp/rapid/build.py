@@ -24,9 +24,12 @@ from .refs import plain_args
 # editor's new declarations with it too).
 DECL_HEAD = re.compile(r"(?:(LOCAL|TASK)[ \t]+)?(CONST|PERS|VAR)[ \t]+([A-Za-z][A-Za-z0-9_]*)"
                        r"[ \t]+([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*", re.IGNORECASE)
+# A FAST_CALL's argument after its first (and an optional argument of its
+# function): \Opt:=value (groups 1, 2), a name (3), a number (4); a sign
+# right before a number is part of it, as the parser folds it (signed).
 _FAST_ITEM = re.compile(
-    r"\\([A-Za-z][A-Za-z0-9_]*)(?:[ \t]*:=[ \t]*([A-Za-z][A-Za-z0-9_]*|\d+(?:\.\d*)?))?"
-    r"|([A-Za-z][A-Za-z0-9_]*)")
+    r"\\([A-Za-z][A-Za-z0-9_]*)(?:[ \t]*:=[ \t]*([A-Za-z][A-Za-z0-9_]*|[-+]?\d+(?:\.\d*)?))?"
+    r"|([A-Za-z][A-Za-z0-9_]*)|([-+]?\d+(?:\.\d*)?)")
 
 
 _INF = float("inf")
@@ -60,14 +63,18 @@ class _Tail:
     def __init__(self, tail: str):
         items = []
         for m in _FAST_ITEM.finditer(tail):
-            opt, val, word = m.group(1, 2, 3)
+            opt, val, word, number = m.group(1, 2, 3, 4)
             if word is not None:
                 items.append((None, None, word, m.start(3), m.end(3), 0, 0, False, None))
+            elif number is not None:
+                # (A positional number: no option, its text as val.)
+                items.append((None, number, None, m.start(), m.end(), m.start(), m.end(),
+                              True, signed(number)))
             else:
-                is_num = val is not None and val[0].isdigit()
+                is_num = val is not None and not val[0].isalpha()
                 items.append((opt, val, None, m.start(), m.end(),
                               m.start(2), m.end(2), is_num,
-                              number_value(val) if is_num else None))
+                              signed(val) if is_num else None))
         self.items = tuple(items)
         self.uses = 0
         self.make = None
@@ -84,6 +91,9 @@ class _Tail:
             if word is not None:
                 span = _span((at + s0, at + e0))
                 args.append(_arg("pos", None, _ref(word, (), span), span))
+            elif opt is None:
+                span = _span((at + s0, at + e0))
+                args.append(_arg("pos", None, _num(num, val, span), span))
             elif val is None:
                 args.append(_arg("opt", opt, None, _span((at + s0, at + e0))))
             else:
@@ -94,6 +104,13 @@ class _Tail:
 
 
 _NUMBER_START = frozenset("+-.0123456789")
+
+
+def signed(text: str) -> float:
+    """The value of a decimal number with at most a sign before it, as the
+    parser makes it (NodeBuilder.unop folds the sign into the number)."""
+    value = number_value(text.lstrip("+-"))
+    return -value if text[0] == "-" else value
 
 
 def _fast_func(text: str, base: int, start: int, name_end: int) -> tuple:
@@ -107,6 +124,26 @@ def _fast_func(text: str, base: int, start: int, name_end: int) -> tuple:
     while True:
         while text[pos] in " \t":
             pos += 1
+        if text[pos] == "\\":
+            # (\Opt or \Opt:=name|number: as the tail's; grammar's _FAST_OPT.)
+            m = _FAST_ITEM.match(text, pos)
+            opt, val, end = m.group(1), m.group(2), m.end()
+            if val is None:
+                args.append(_arg("opt", opt, None, _span((base + pos, base + end))))
+            else:
+                vspan = _span((base + m.start(2), base + m.end(2)))
+                value = (_ref(val, (), vspan) if val[0].isalpha()
+                         else _num(signed(val), val, vspan))
+                args.append(_arg("optval", opt, value, _span((base + pos, base + end))))
+            pos = end
+            while text[pos] in " \t":
+                pos += 1
+            if text[pos] == ")":
+                return (_func(text[start:name_end], tuple(args),
+                              _span((base + start, base + pos + 1))), pos + 1)
+            if text[pos] == ",":
+                pos += 1
+            continue
         if text[pos] == "[":
             # (A numeric aggregate: it ends where its brackets close.)
             depth, end = 0, pos
@@ -124,8 +161,7 @@ def _fast_func(text: str, base: int, start: int, name_end: int) -> tuple:
             end = _FAST_NUM.match(text, pos).end()
             span = _span((base + pos, base + end))
             written = text[pos:end]
-            value = float(written.lstrip("+-"))
-            node = _num(-value if written[0] == "-" else value, written, span)
+            node = _num(signed(written), written, span)
         else:
             end = _FAST_ITEM.match(text, pos).end()
             span = _span((base + pos, base + end))
@@ -137,7 +173,9 @@ def _fast_func(text: str, base: int, start: int, name_end: int) -> tuple:
         if text[pos] == ")":
             return _func(text[start:name_end], tuple(args), _span((base + start, base + pos + 1))), \
                 pos + 1
-        pos += 1                                         # (a comma)
+        if text[pos] == ",":
+            pos += 1
+        # (else a '\\': an optional argument right after this one)
 
 
 def _fast_tail(tail: str) -> _Tail:
@@ -166,6 +204,10 @@ def _tail_maker(items: tuple):
         if word is not None:
             lines.append(f"    s{j} = _t(_Span, (at + {s0}, at + {e0}))")
             lines += node(A.Ref, f"r{j}", [f"word{j}", "()", f"s{j}"])
+            lines += node(A.Arg, f"a{j}", ["'pos'", "None", f"r{j}", f"s{j}"])
+        elif opt is None:
+            lines.append(f"    s{j} = _t(_Span, (at + {s0}, at + {e0}))")
+            lines += node(A.Num, f"r{j}", [f"num{j}", f"val{j}", f"s{j}"])
             lines += node(A.Arg, f"a{j}", ["'pos'", "None", f"r{j}", f"s{j}"])
         elif val is None:
             lines.append(f"    s{j} = _t(_Span, (at + {s0}, at + {e0}))")
@@ -403,6 +445,14 @@ class NodeBuilder:
             span = _span((base + pos, base + end))
             args = [_arg("pos", None, _numagg(text[pos:end], span), span)]
             pos = end
+        elif text[pos] in _NUMBER_START:
+            # A number (WaitTime 0.2;), its sign folded in as the parser
+            # folds it.
+            end = _FAST_NUM.match(text, pos).end()
+            span = _span((base + pos, base + end))
+            written = text[pos:end]
+            args = [_arg("pos", None, _num(signed(written), written, span), span)]
+            pos = end
         else:
             first = _FAST_ITEM.match(text, pos)      # a name
             end = first.end()
@@ -416,8 +466,8 @@ class NodeBuilder:
             span = _span((base + pos, base + end))
             args = [_arg("pos", None, _ref(first.group(3), (), span), span)]
             pos = end
-        # (Plain by construction: names, a numeric aggregate, \Opt, \Opt:=name
-        # or number.)
+        # (Plain by construction: names, a numeric aggregate, numbers, \Opt,
+        # \Opt:=name or number.)
         return _call(name, (*args, *_fast_tail(text[pos:]).nodes(base + pos)),
                      _span((base, base + len(text))), True)
 

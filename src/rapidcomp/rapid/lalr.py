@@ -102,8 +102,15 @@ class Engine:
                 regular.append(term)
         regular.sort(key=lambda t: (-t.priority, -t.pattern.max_width,
                                     -len(t.pattern.value), t.name))
-        self._master = re.compile("|".join(
-            f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in regular))
+        ws = next(t.pattern.to_regexp() for t in terms if t.name == "WS")
+        # The blanks before a token are matched with it (a hand-written
+        # program's indentation and line breaks: ~40 % of its matches
+        # otherwise). Where no token follows them (the text's end, a
+        # character no terminal takes), the pattern gives them back and
+        # they match as WS alone: the next match fails where the other
+        # does.
+        self._master = re.compile(f"(?:{ws})?(?:" + "|".join(
+            f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in regular) + ")")
         # Same alternation without the one-token statements, for when a
         # FAST_CALL/FAST_DECL match has a reserved word where an identifier
         # must be, and must be lexed token by token.
@@ -127,7 +134,7 @@ class Engine:
         # took 23 s), and only where the next statement may continue the
         # run (_may_follow).
         self._met: dict[tuple, int] = {}
-        self._ws = next(t.pattern.to_regexp() for t in terms if t.name == "WS")
+        self._ws = ws
         numagg = next(t.pattern.to_regexp() for t in terms if t.name == "NUMAGG")
         # The runs' NUMAGG: first tried without its optional whitespace
         # (each \s* deleted: a part of NUMAGG's language, the aggregates a
@@ -199,47 +206,52 @@ class Engine:
         ignore = self._ignore
         pos = 0
         end = len(text)
+        tried: dict = {}              # (_run's counts in this text)
         while pos < end:
             m = match(text, pos)
             if m is None:
                 raise LexFailure(pos)
             kind = m.lastgroup
+            stop = m.end()
+            if kind in ignore:
+                pos = stop
+                continue
+            # (Where the token begins: past the blanks matched with it.)
+            pos = m.start(kind)
             run = None
             if kind == "FAST_CALL":
-                if self._keyword_in(m.group()):
+                if self._keyword_in(m.group(kind)):
                     m = self._master_plain.match(text, pos)
-                    kind = m.lastgroup
+                    kind, stop = m.lastgroup, m.end()
                 else:
                     run = self._call_run
             elif kind == "FAST_DECL":
                 # Only type and name must be identifiers: the last two words
                 # before := (the aggregate after it has no word; the E of
                 # 9E+09 follows a digit).
-                decl = m.group()
+                decl = m.group(kind)
                 if any(w.upper() in keywords
                        for w in _WORD.findall(decl, 0, decl.index(":="))[-2:]):
                     m = self._master_plain.match(text, pos)
-                    kind = m.lastgroup
+                    kind, stop = m.lastgroup, m.end()
                 else:
                     run = self._decl_run
             if run is not None and runs:
-                first = m.group()
-                yield Tok(kind, first, pos, m.end())
-                pos = m.end()
-                for tok in run(text, first, pos):
+                first = m.group(kind)
+                yield Tok(kind, first, pos, stop)
+                pos = stop
+                for tok in run(text, first, pos, tried):
                     yield tok
                     pos = tok.end_pos
                 continue
-            stop = m.end()
-            if kind not in ignore:
-                value = m.group()
-                if kind == "NAME":
-                    kind = keywords.get(value.upper(), "NAME")
-                yield Tok(kind, value, pos, stop)
+            value = m.group(kind)
+            if kind == "NAME":
+                kind = keywords.get(value.upper(), "NAME")
+            yield Tok(kind, value, pos, stop)
             pos = stop
         yield Tok("$END", "", end, end)
 
-    def _call_run(self, text: str, first: str, pos: int):
+    def _call_run(self, text: str, first: str, pos: int, tried: dict):
         """The FAST_CALL tokens that follow the statement `first` right
         after pos (only whitespace between), each the same instruction name
         and the same text after its target. The pattern is FAST_CALL's with
@@ -252,6 +264,9 @@ class Engine:
         at = head.end()
         if first[at] == "[":
             after = first.rindex("]") + 1
+        elif not first[at].isalpha():
+            # (A number (WaitTime 0.2;): no run's target; lexed one by one.)
+            return iter(())
         else:
             after = _IDENT.match(first, at).end()
             if first[after] == "(":
@@ -261,9 +276,9 @@ class Engine:
         key = (head.group(1), first[after:])
         return self._run("FAST_CALL", key, lambda: (
             f"{re.escape(key[0])}[ \t]+(?:{self._numagg}|([A-Za-z][A-Za-z0-9_]*))"
-            f"{re.escape(key[1])}"), text, pos)
+            f"{re.escape(key[1])}"), text, pos, tried)
 
-    def _decl_run(self, text: str, first: str, pos: int):
+    def _decl_run(self, text: str, first: str, pos: int, tried: dict):
         """The FAST_DECL tokens that follow the declaration `first` right
         after pos (only whitespace between), each with the same text before
         its name (`CONST robtarget `, on 5e4 lines of a CAM program). The
@@ -277,15 +292,19 @@ class Engine:
         key = first[:name.start()]
         return self._run("FAST_DECL", key, lambda: (
             f"{re.escape(key)}([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*{self._numagg}[ \t]*;"),
-            text, pos)
+            text, pos, tried)
 
-    def _run(self, kind: str, key, regex, text: str, pos: int):
+    def _run(self, kind: str, key, regex, text: str, pos: int, tried: dict):
         """Tokens of `kind` one after the other from pos (only whitespace
         between), each matched by the pattern regex() gives (its group 1
         the token, group 2 a name that must not be a reserved word, or
         None), compiled once per (kind, key) met a second time (the first
         time nothing is matched here: the next statement is lexed on its
-        own)."""
+        own). tried: per (kind, key) of this text, [times a pattern was
+        tried, tokens it matched]; one tried 16 times or more that matched
+        fewer tokens than a quarter of its tries is not tried again in this
+        text (a hand-written program's: seldom two moves alike in a row,
+        and each try costs a match). The tokens are the same either way."""
         pattern = self._runs.get((kind, key))
         if pattern is None:
             if len(self._met) >= 4096:       # bounded: many programs in one process
@@ -296,6 +315,12 @@ class Engine:
             if len(self._runs) >= 4096:
                 self._runs.clear()
             pattern = self._runs[kind, key] = re.compile(f"(?:{self._ws})?({regex()})")
+        counts = tried.get((kind, key))
+        if counts is None:
+            counts = tried[kind, key] = [0, 0]
+        elif counts[0] >= 16 and counts[1] * 4 < counts[0]:
+            return
+        counts[0] += 1
         match = pattern.match
         keywords = self._keywords
         while True:
@@ -305,6 +330,7 @@ class Engine:
             name = m.group(2)
             if name is not None and name.upper() in keywords:
                 return
+            counts[1] += 1
             yield Tok(kind, m.group(1), m.start(1), m.end())
             pos = m.end()
 
@@ -336,14 +362,14 @@ class Engine:
         same on 1e5 lines of a CAM program) are looked at once per text:
         they begin at a comma, where no word begins either way."""
         if "(" in call:
-            # A function's arguments (rcTcR(p, p_dq), rcTcR([[...]], p_dq)):
-            # words may lie between its aggregates, and the text after the
-            # first comma is each line's own (not for the cache of argument
-            # lists): every word is looked at (no word begins inside an
-            # aggregate: see _WORD).
-            return not self.reserved.isdisjoint(_WORD.findall(call.upper()))
-        cut = call.rfind("]")
-        if cut >= 0:
+            # A function's arguments (rcTcR(p, p_dq), rcTcR([[...]], p_dq),
+            # RelTool(p, 0, 0, -10 \Rz:=45)): words may lie between its
+            # aggregates, and its text is each line's own: every word up to
+            # its ')' is looked at (no word begins inside an aggregate: see
+            # _WORD); the arguments after it are the cache's.
+            cut = call.rfind(")") + 1
+            head, tail = call[:cut], call[cut:]
+        elif (cut := call.rfind("]")) >= 0:
             head, tail = call[:call.index("[")], call[cut + 1:]
         else:
             comma = call.find(",")

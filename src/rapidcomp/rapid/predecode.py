@@ -5,7 +5,8 @@ module).
 A CAM program's module holds 1e5 robtarget literals; float() of their 1.7e6
 numbers is a fifth of its parse. They depend on the text alone, so a child
 forked before the parse reads every plain literal it finds (values.
-plain_values, the very function the parse would run on the same text) and
+plain_values, else values.spaced_values for one with blanks after its
+commas: the very functions the parse would run on the same text) and
 hands back the values, keyed by each literal's span, while the parent runs
 the grammar; the parent's decoding then takes them where a NumAgg has that
 span and that class, and decodes any other itself. The child also collects
@@ -36,7 +37,7 @@ from ..cpus import side_by_side
 from ..side import HELD, fork, settle_child
 from ..rewrite.names import words
 from .values import (JointTarget, RobTarget, frame_fields, head_size, plain_values,
-                     share_tail, tail_text)
+                     share_tail, spaced_values, tail_text)
 
 # Texts from this size on (characters) are decoded ahead: a fork costs a few
 # ms (1e4 targets, 1.7 MB: the parse 0.26 -> 0.25 s; 1e5: 2.64 -> 2.35 s).
@@ -45,13 +46,14 @@ PREDECODE_FROM = 1 << 20
 # both cores busy there.
 enabled = True
 # A plain literal (group 1): two or more bracketed groups of anything but
-# brackets (the numbers), in brackets, on one line. Strings and comments
+# brackets (the numbers), blanks around the commas between them, in
+# brackets, on one line. Strings and comments
 # are matched whole and passed over: a commented-out program would cost the
 # child more than its parse. The parse's NumAgg spans of the literals a
 # CAM program writes are these matches; any other text found is looked up
 # by no NumAgg.
 _SCAN = re.compile(r'"[^"\n\r]*"|![^\n\r]*'
-                   r"|(\[\[[^\[\]\n\r;]*\](?:,\[[^\[\]\n\r;]*\])+\])")
+                   r"|(\[\[[^\[\]\n\r;]*\](?:[ \t]*,[ \t]*\[[^\[\]\n\r;]*\])+\])")
 _BY_COUNT = {17: RobTarget, 12: JointTarget}
 _KINDS = (RobTarget, JointTarget)
 
@@ -126,7 +128,11 @@ def _decode_all(text: str) -> tuple:
             continue
         values = plain_values(cls, fields, lit)
         if values is None:
-            continue
+            # (Blanks after its commas, as people write them: as the parse
+            # reads it then.)
+            values = spaced_values(cls, lit)
+            if values is None:
+                continue
         kind = _KINDS.index(cls)
         head = head_size(cls)
         # (A robtarget's tail has two groups, a jointtarget's one: a tail
@@ -205,8 +211,8 @@ class Ahead:
 
 
 class Known:
-    """The child's values: values(cls, span) is plain_values of the
-    literal at span when the child decoded one of class cls exactly
+    """The child's values: values(cls, span) is plain_values (else
+    spaced_values) of the literal at span when the child decoded one of class cls exactly
     there, else None; words: the text's words (rewrite/names.words), which
     new names must not take."""
 

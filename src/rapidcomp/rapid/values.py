@@ -303,6 +303,7 @@ _PLAIN = {RobTarget: ROBTARGET_FRAME, JointTarget: JOINTTARGET_FRAME}
 _COMPACT = {"robtarget": RobTarget, "jointtarget": JointTarget}
 # (A CAM program's 1e5 literals: made as their classes make them, construct.py.)
 _MAKE = {cls: maker(cls) for cls in (RobTarget, JointTarget)}
+_NAME = {RobTarget: "robtarget", JointTarget: "jointtarget"}
 _COUNT = {RobTarget: 17, JointTarget: 12}
 # Over these characters float() reads exactly what NUMBER_RE matches (a
 # sign, digits, one '.', an exponent); hex, octal and binary have others.
@@ -446,14 +447,26 @@ def plain_values(cls, fields: list[str], text: str) -> tuple[float, ...] | None:
     return values if max(map(abs, values)) <= NUM_MAX else None
 
 
+def spaced_values(cls, text: str) -> tuple[float, ...] | None:
+    """The values of an all-numeric literal `text` of class cls written
+    otherwise than in its plain frame (blanks after its commas, as people
+    write them), read by the shape's regex: None where it does not match or
+    a number is beyond what a num holds (the general decoding says which)."""
+    m = _FAST[_NAME[cls]].fullmatch(text)
+    if m is None:
+        return None
+    values = tuple(map(float, m.groups()))
+    return values if max(map(abs, values)) <= NUM_MAX else None
+
+
 def _compact(t: str, expr, where: str, known=None) -> Record:
     """An all-numeric record, by its shape's frame when the value is a
     NumAgg: its numbers are what lies between its brackets and commas,
     and it has the shape when they, put back in the frame, give its text
     (whitespace around a number stays with it; float() drops it). A CAM
     program has 1e5: a third of the regex's time. Else by one regex match.
-    known: plain_values of the literals of the text, computed ahead
-    (predecode.py)."""
+    known: plain_values (else spaced_values) of the literals of the text,
+    computed ahead (predecode.py)."""
     cls = _COMPACT[t]
     if isinstance(expr, A.NumAgg):
         text = expr.text
