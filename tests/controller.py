@@ -3,8 +3,10 @@ independently of rapidcomp's compensation code (compensate/*).
 
 It runs main() statement by statement: calls of routines without
 arguments, FOR loops with literal bounds, ConfJ/ConfL \\On|\\Off,
-PDispSet/PDispOff, MoveAbsJ, MoveJ, MoveL, MoveC (circle point, then end
-point) and MoveExtJ. For every arm move it records the joints it commands,
+PDispSet/PDispOff, assignments of a literal to a tool or work object, whole
+or to its frame (rdkTool.tframe := [...], as RoboDK writes them; any other
+assignment moves nothing), MoveAbsJ, MoveJ, MoveL, MoveC (circle point,
+then end point) and MoveExtJ. For every arm move it records the joints it commands,
 from the numbers rounded to float32 as the controller stores them:
 
 * MoveAbsJ: the joints as written;
@@ -24,7 +26,7 @@ displacement and the track are done here.
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
@@ -32,7 +34,10 @@ import pinocchio as pin
 from rapidcomp.kinematics.ik import Solver
 from rapidcomp.rapid import ast as A
 from rapidcomp.rapid.motions import motion_spec
-from rapidcomp.rapid.values import JointTarget, RobTarget
+from rapidcomp.rapid.values import JointTarget, RobTarget, ToolData, WobjData, decode
+
+# The frames of a tool and of a work object, by component name.
+FRAMES = {ToolData: ("tframe",), WobjData: ("uframe", "oframe")}
 
 
 def f32(x):
@@ -90,6 +95,8 @@ class Controller:
         self.confj = confj      # as at program start, unless the test says otherwise
         self.confl = True
         self.disp = None
+        # Tools and work objects as assigned so far (name -> value).
+        self.assigned = {}
         self.out: list[Executed] = []
 
     # ------------------------------------------------------------ data
@@ -110,7 +117,8 @@ class Controller:
     def frame(self, expr, kind) -> pin.SE3:
         if expr is None or expr.name.lower() in ("tool0", "wobj0"):
             return pin.SE3.Identity()
-        v = self.decls[expr.name.lower()].value
+        name = expr.name.lower()
+        v = self.assigned.get(name, self.decls[name].value)
         if kind == "tool":
             return se3(v.tframe.xyz, v.tframe.quat_wxyz)
         return se3(v.uframe.xyz, v.uframe.quat_wxyz) * se3(v.oframe.xyz, v.oframe.quat_wxyz)
@@ -165,12 +173,27 @@ class Controller:
         for s in stmts:
             if isinstance(s, A.ProcCall):
                 self.call(pf, s, env)
+            elif isinstance(s, A.Assign):
+                self.assign(s)
             elif isinstance(s, A.For):
                 step = 1 if s.step is None else int(s.step.value)
                 for v in range(int(s.start.value), int(s.stop.value) + 1, step):
                     self.block(pf, s.body, {**env, s.var.lower(): v})
             else:
                 raise AssertionError(f"statement not modelled: {type(s).__name__}")
+
+    def assign(self, s: A.Assign) -> None:
+        name = s.target.name.lower()
+        d = self.decls.get(name)
+        if d is None or not isinstance(d.value, (ToolData, WobjData)):
+            return                          # (a speed, a counter: no motion)
+        if not s.target.selectors:
+            self.assigned[name] = decode(d.type, s.value)
+            return
+        (part,) = s.target.selectors
+        assert part.name.lower() in FRAMES[type(d.value)], f"not modelled: {part.name}"
+        old = self.assigned.get(name, d.value)
+        self.assigned[name] = replace(old, **{part.name.lower(): decode("pose", s.value)})
 
     def call(self, pf, s: A.ProcCall, env) -> None:
         name = s.name.lower()

@@ -26,6 +26,10 @@ Shapes (issue #10):
   rapid/cam_confoff.mod  a CAM post's output: ConfJ\\Off, ConfL\\Off, placeholder
                      confdata [0,-1,-1,0], a MoveAbsJ home, 180 MoveL along a path on
                      which J1, J4 and J6 cross quadrant boundaries.
+  rapid/robodk_frames.mod  RoboDK's ABB post's output: rdkTool and rdkWObj declared
+                     zero, their frames assigned in the routine before the moves
+                     (rdkTool.tframe := [...]), a work object and a tool change
+                     between moves (test_robodk_frames.py: the joints Q there).
 """
 
 from __future__ import annotations
@@ -383,11 +387,17 @@ ENDMODULE
     write(ROOT / "fixtures" / "rapid" / "cam_confoff.mod", text)
 
 
+def robodk() -> None:
+    from test_robodk_frames import BODY, program
+    write(ROOT / "fixtures" / "rapid" / "robodk_frames.mod", program(BODY))
+
+
 def main() -> None:
     cell()
     glue()
     backup()
     cam()
+    robodk()
     joints = {"cell": {"PICK_APP": PICK_APP, "PICK": PICK, "PLACE": PLACE, "GLUE": GLUE,
                        "HOME": HOME, "PARK": PARK},
               "glue": {"BEAD": BEAD},

@@ -30,6 +30,7 @@ FIX_CASES = {
     "paper_front_robtarget": ("paper_front.mod", "robtarget", ()),
     "refusals": (None, "absj", ()),
     "cam_confoff_robtarget": ("rapid/cam_confoff.mod", "robtarget", ()),
+    "robodk_frames_auto": ("rapid/robodk_frames.mod", "auto", ()),
 }
 # case -> (task folder under fixtures/tasks, mode)
 TASK_CASES = {

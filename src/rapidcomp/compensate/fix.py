@@ -378,6 +378,7 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
     # work object as declared; the robtarget move followed a change to them
     # (a TCP calibration, a user frame redefined on the FlexPendant).
     frames: dict[str, str] = {}         # (RAPID's names: one whatever their case)
+    assigned = False                    # (some as a routine assigns them: RoboDK's)
     for g in gs:
         if g.mode == "absj" and g.failure is None:
             for u in g.uses:
@@ -385,10 +386,13 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
                     for ref in (u.motion.tool, u.motion.wobj):
                         if type(ref) is A.Ref and ref.name.lower() not in ("tool0", "wobj0"):
                             frames.setdefault(ref.name.lower(), ref.name)
+                    assigned = assigned or any("@" in x[0] for x in (u.tool, u.wobj) if x)
     if frames:
         notes.append("the moves turned into MoveAbsJ go to joints computed with "
-                     + ", ".join(frames[k] for k in sorted(frames)) + " as the modules declare "
-                     "them: a MoveAbsJ does not follow a later change to a tool or work object "
+                     + ", ".join(frames[k] for k in sorted(frames))
+                     + (" as the modules declare or assign them" if assigned
+                        else " as the modules declare them")
+                     + ": a MoveAbsJ does not follow a later change to a tool or work object "
                      "(a TCP calibration, a user frame redefined on the FlexPendant) as the "
                      "robtarget move did; after one, run rapidcomp again, or keep robtarget "
                      "moves with --emit robtarget.")

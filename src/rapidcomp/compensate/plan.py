@@ -15,7 +15,7 @@ from pathlib import Path, PurePath
 
 from ..rapid.model import ParsedFile
 from .flow import Flow, State, analyse
-from .targets import EXTAX_UNUSED, Resolver, TargetUse
+from .targets import EXTAX_UNUSED, Resolver, TargetUse, assigned_name
 
 
 @dataclass(frozen=True)
@@ -164,15 +164,18 @@ class Plan:
         if taken:
             sites = self.resolver.site_map()
             said = "; ".join(
-                f"{sites[n].assigns[0][1].target.name} "
-                f"({sites[n].assigns[0][0].source.display_path} "
+                ", ".join(dict.fromkeys(assigned_name(a) for _, a in sites[n].assigns))
+                + f" ({sites[n].assigns[0][0].source.display_path} "
                 + ("line " if len(sites[n].assigns) == 1 else "lines ")
                 + line_ranges([pf.line(a.span) for pf, a in sites[n].assigns]) + ")"
                 for n in taken if n in sites)
+            parts = any(sites[n].parts for n in taken if n in sites)
             out.append(f"assigned by the routine that moves with them: {said}; each move "
-                       "there is solved with the value assigned last before it (moves before "
-                       "the first assignment, and in other routines, run with a value not "
-                       "known here: left as written)")
+                       "there is solved with the value assigned last before it"
+                       + (" (a component: with the rest of the value as declared, or as "
+                          "assigned whole before it; " if parts else " (")
+                       + "moves before the first assignment, and in other routines, run "
+                       "with a value not known here: left as written)")
         again = self._compensated_before()
         named = self._named_as_output()
         if again or named:

@@ -189,20 +189,54 @@ class _Reentry:
 
 
 class Sites(NamedTuple):
-    """Where one routine assigns a tool or work object (Resolver.site_map)."""
+    """Where one routine assigns a tool or work object (Resolver.site_map):
+    its whole value, or one component of it (rdkTool.tframe := [...])."""
 
     routine: tuple          # (module id, lower-case routine name)
     starts: list            # the assignments' offsets, in order
     assigns: list           # (ParsedFile, Assign) of each, in that order
     body_end: int           # where the routine's body ends (its handlers follow)
     reentries: list         # offsets of its calls that may run it again
+    parts: frozenset = frozenset()   # the components assigned (lower case)
+    whole: bool = True      # some assignment is of the whole value
+
+
+# The components of a tool or work object a routine may assign a literal to
+# (their types): the frames; the rest of the value is the declared one.
+PARTS = {"tooldata": {"tframe": "pose", "tload": "loaddata"},
+         "wobjdata": {"uframe": "pose", "oframe": "pose"}}
+
+
+def _part(assign) -> str | None:
+    """The component an assignment assigns (lower case), None: the whole."""
+    selectors = assign.target.selectors
+    return selectors[0].name.lower() if selectors else None
+
+
+def assigned_name(assign) -> str:
+    """The data an assignment assigns, as written: rdkTool, rdkTool.tframe."""
+    part = assign.target.selectors
+    return assign.target.name + (f".{part[0].name}" if part else "")
 
 
 def _data_key(expr, site) -> str:
     """A tool's or work object's key (grouping: one value, one key): its
-    name, and where a routine assigns it, the assignment's place."""
+    name, and where a routine assigns it, the place of the assignment last
+    before the move (which decides the assignments its value is made of)."""
     name = expr.name.lower()
-    return name if site is None else f"{name}@{site[1].span.start}"
+    return name if site is None else f"{name}@{site[-1][1].span.start}"
+
+
+def _chain(hit: Sites, k: int) -> tuple | None:
+    """The assignments of hit whose values make the one a move after the
+    first k of them uses (Resolver._sites), or None: not known."""
+    done = hit.assigns[:k]
+    if hit.whole:
+        w = next((i for i in range(k - 1, -1, -1) if _part(done[i][1]) is None), None)
+        # (No whole value before the move: the one it has where the routine
+        # begins is that of an earlier run, or not known.)
+        return None if w is None else tuple(done[w:])
+    return (tuple(done) if {_part(a) for _, a in done} == hit.parts else None)
 
 
 class Unresolved(NamedTuple):
@@ -587,9 +621,10 @@ class Resolver:
     # ------------------------------------------------------------ tool / wobj
     def _data(self, expr, module, routine: str, builtin: str, cls, what: str, site=None):
         """The literal value of a tool/work object argument, None for the
-        built-in one, or Unresolved. site: (ParsedFile, Assign) of the
-        assignment whose value the move uses (_sites), for data the program
-        assigns."""
+        built-in one, or Unresolved. site: the assignments ((ParsedFile,
+        Assign), in order) whose values make the one the move uses
+        (_sites), for data the program assigns: a whole value, then
+        components of it; or components of the declared value."""
         if not (isinstance(expr, A.Ref) and not expr.selectors):
             return Unresolved(f"the {what} is not a plain data name")
         if expr.name.lower() == builtin:
@@ -606,12 +641,22 @@ class Resolver:
             return Unresolved(f"{what} {expr.name} has no literal value "
                               f"({d.issue or 'run-time data'})")
         if site is not None:
-            pf, assign = site
-            try:
-                value = decode(d.type, assign.value, d.name)
-            except DecodeIssue as exc:
-                return Unresolved(f"{d.name} is assigned a value rapidcomp cannot read "
-                                  f"({pf.source.display_path}:{pf.line(assign.span)}: {exc})")
+            value = d.value
+            for pf, assign in site:
+                part = _part(assign)
+                try:
+                    if part is None:
+                        value = decode(d.type, assign.value, d.name)
+                    elif part not in PARTS.get(d.type, ()):
+                        raise DecodeIssue(f"a {d.type} has no component {part} whose "
+                                          "frame rapidcomp reads", assign.target.span)
+                    else:
+                        value = replace(value, **{part: decode(
+                            PARTS[d.type][part], assign.value, f"{d.name}.{part}")})
+                except DecodeIssue as exc:
+                    return Unresolved(f"{assigned_name(assign)} is assigned a value rapidcomp "
+                                      f"cannot read ({pf.source.display_path}:"
+                                      f"{pf.line(assign.span)}: {exc})")
             d = replace(d, value=value)
             self._assigned[id(d)] = (d, pf)
             return d
@@ -646,8 +691,11 @@ class Resolver:
                         jumps.add(key)
                     for st in r.node.body:
                         body[id(st)] = key
-                        if (not literal and type(st) is A.Assign and not st.target.selectors
-                                and st.target.name.lower() in self.site_names):
+                        if (not literal and type(st) is A.Assign
+                                and st.target.name.lower() in self.site_names
+                                and (not st.target.selectors
+                                     or (len(st.target.selectors) == 1
+                                         and type(st.target.selectors[0]) is A.Component))):
                             found.setdefault(st.target.name.lower(), []).append((pf, st))
         reentry = _Reentry(self.files)
         for name, assigns in (literal or found).items():
@@ -659,8 +707,10 @@ class Resolver:
             if risky is None:
                 continue
             ordered = sorted(assigns, key=lambda x: x[1].span.start)
+            parts = [_part(a) for _, a in ordered]
             sites[name] = Sites(routine, [a.span.start for _, a in ordered], ordered,
-                                ends[routine], risky)
+                                ends[routine], risky, frozenset(parts) - {None},
+                                None in parts)
         return sites
 
     def _home_of(self, d: Declaration) -> ParsedFile:
@@ -669,16 +719,21 @@ class Resolver:
         return hit[1] if hit is not None else self.home[id(d)]
 
     def _sites(self, motion, module) -> tuple | None:
-        """For a move's tool and work object, each the assignment whose
-        value it uses, (ParsedFile, Assign), or None: where all assignments
-        of that data are whole literals, each a statement of one routine's
-        body itself (not in a block, a handler or another routine: RoboDK's
-        `rdkTool := [...]` before its moves), the move lies in that
-        routine's body after one of them, that is the last before it, and
-        no call between them may run the routine again (the routine runs
-        its body in order: whatever ran before it, the move uses that
-        value). None when neither is such data (the common case: memoised
-        lookups)."""
+        """For a move's tool and work object, each the assignments whose
+        values make the one it uses ((ParsedFile, Assign), in order), or
+        None: where all assignments of that data are literals, of the whole
+        value or of one component, each a statement of one routine's body
+        itself (not in a block, a handler or another routine: RoboDK's
+        `rdkTool := [...]` or `rdkTool.tframe := [...]` before its moves),
+        the move lies in that routine's body after them, and no call
+        between them may run the routine again (the routine runs its body
+        in order: whatever ran before it, the move uses that value). Its
+        value is the whole value assigned last before it, with the
+        components assigned after that; where the routine assigns no whole
+        value, the declared one with the components assigned before it,
+        each component the routine assigns among them (else the value it
+        has where the routine begins is not known). None when neither is
+        such data (the common case: memoised lookups)."""
         sites = self.site_map()
         if not sites:
             return None
@@ -697,7 +752,7 @@ class Resolver:
                 r = bisect_right(hit.reentries, hit.starts[k - 1])
                 if r < len(hit.reentries) and hit.reentries[r] < motion.span.start:
                     k = 0
-            out.append(hit.assigns[k - 1] if k else None)
+            out.append(_chain(hit, k) if k else None)
         return tuple(out) if out[0] is not None or out[1] is not None else None
 
     def _task_writes(self, files, observers) -> None:
@@ -826,7 +881,7 @@ class Resolver:
             # program's 1e5 moves name the same two; keyed by the assignment
             # nodes, which live as long as the parse.)
             key = (id(module), routine, _name_or_node(t), _name_or_node(w),
-                   *(id(site[1]) if site is not None else None for site in sites))
+                   *(id(site[-1][1]) if site is not None else None for site in sites))
             hit = self._pairs.get(key)
             if hit is None:
                 before = len(self._notes)

@@ -37,6 +37,8 @@ class Usage:
     calls: tuple = ()                     # ProcCall/LateCall/Call: arguments may be written
                                           # (see writes.py)
     assigns: dict = field(default_factory=dict)  # lower-case name -> whole-value Assigns
+    # lower-case name -> Assigns of one component of it (rdkTool.tframe := ...)
+    parts: dict = field(default_factory=dict)
 
 
 def nodes(root, plain_calls: bool = False):
@@ -99,6 +101,7 @@ def usage(module: A.ModuleNode) -> Usage:
     refs: dict[str, list[A.Ref]] = {}
     writes: dict[str, list[A.Span]] = {}
     assigns: dict[str, list[A.Assign]] = {}
+    parts: dict[str, list[A.Assign]] = {}
     calls = []
     for node in nodes(module.items, plain_calls=True):
         t = type(node)
@@ -108,8 +111,11 @@ def usage(module: A.ModuleNode) -> Usage:
             continue
         elif t is A.Assign:
             writes.setdefault(node.target.name.lower(), []).append(node.span)
-            if not node.target.selectors:
+            selectors = node.target.selectors
+            if not selectors:
                 assigns.setdefault(node.target.name.lower(), []).append(node)
+            elif len(selectors) == 1 and type(selectors[0]) is A.Component:
+                parts.setdefault(node.target.name.lower(), []).append(node)
         elif t is A.ProcCall:
             if node.plain:
                 # (A CAM move, 1e5 of them: its references, in the order the
@@ -125,7 +131,7 @@ def usage(module: A.ModuleNode) -> Usage:
                 _search_writes(node, spec, writes)
         elif t is A.LateCall or t is A.Call:
             calls.append(node)
-    return Usage(refs, writes, tuple(calls), assigns)
+    return Usage(refs, writes, tuple(calls), assigns, parts)
 
 
 def _search_writes(node: A.ProcCall, spec, writes: dict) -> None:

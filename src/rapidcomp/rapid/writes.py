@@ -34,9 +34,11 @@ WRITING_BUILTINS = {
 class Writes:
     by_name: dict            # lower-case name -> (ParsedFile, Span, how it is written)
     anything: tuple | None   # (ParsedFile, Span, instruction) writing a name computed at run time
-    # Names written only by assigning a whole literal: name -> [(ParsedFile,
-    # Assign)] (RoboDK posts assign a tool or work object its own declared
-    # value at the top of every program: that changes nothing).
+    # Names written only by assigning a literal, whole or to one component:
+    # name -> [(ParsedFile, Assign)] (RoboDK posts assign a tool or work
+    # object its own declared value at the top of every program, which
+    # changes nothing, or its frame before the moves that use it:
+    # rdkTool.tframe := [...]).
     literal: dict = field(default_factory=dict)
 
     def why(self, name: str, literal_ok: bool = False) -> str | None:
@@ -79,7 +81,7 @@ def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
                 continue
             for name, spans in us.writes.items():
                 by_name.setdefault(name, (pf, spans[0], "assigned"))
-                whole = [a for a in us.assigns.get(name, ())
+                whole = [a for a in (*us.assigns.get(name, ()), *us.parts.get(name, ()))
                          if type(a.value) in (A.Agg, A.NumAgg)]
                 if len(whole) == len(spans):
                     literal.setdefault(name, []).extend((pf, a) for a in whole)
