@@ -22,7 +22,7 @@ from rapidcomp.rapid.parse import parse_file
 
 from test_real_programs import NOMINAL, evaluate, rapidcomp
 
-EXT = "[9E9,9E9,9E9,9E9,9E9,9E9]"
+EXT = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
 # Joints of the moves (deg): front workspace, away from the wrist singularity.
 Q = np.array([[10, 20, 10, 30, -60, 20], [25, 30, 5, -20, -45, 40], [-15, 15, 20, 40, -70, -30],
               [5, 35, -10, 10, -50, 60], [-30, 25, 15, -35, -80, 10], [20, 10, 25, 15, -40, -50],
@@ -33,11 +33,11 @@ FRAMES = {"U1": pin.SE3(pin.utils.rotate("z", 0.5), np.array([300.0, -100.0, 50.
           "U2": pin.SE3(pin.utils.rotate("z", -0.25), np.array([350.0, 80.0, 120.0]))}
 
 
-def pose_text(M: pin.SE3, decimals: int = 3) -> str:
+def pose_text(M: pin.SE3) -> str:
+    """A pose as the post writes one: [[x, y, z],[q1, q2, q3, q4]]."""
     w, x, y, z = matrix_to_quat_wxyz(M.rotation)
     t = M.translation
-    return (f"[[{t[0]:.{decimals}f},{t[1]:.{decimals}f},{t[2]:.{decimals}f}],"
-            f"[{w:.8f},{x:.8f},{y:.8f},{z:.8f}]]")
+    return f"[[{t[0]:.3f}, {t[1]:.3f}, {t[2]:.3f}],[{w:.8f}, {x:.8f}, {y:.8f}, {z:.8f}]]"
 
 
 def target(i: int, tool: str, frame: str) -> str:
@@ -48,7 +48,7 @@ def target(i: int, tool: str, frame: str) -> str:
     M = FRAMES[frame].inverse() * fk(NOMINAL, Q[i]) * TOOLS[tool]
     _, frames = Chain.from_robot(NOMINAL).joint_frames(q[None])
     conf = confdata(q[None], frames[:, 4], Solver(NOMINAL).geometry.phi)[0]
-    return f"[{pose_text(M, 6)[1:-1]},[{','.join(str(int(c)) for c in conf)}],{EXT}]"
+    return f"[{pose_text(M)[1:-1]},[{','.join(str(int(c)) for c in conf)}],{EXT}]"
 
 
 def move(kind: str, i: int, tool: str, frame: str) -> str:
@@ -76,7 +76,7 @@ def uframe(frame: str) -> str:
 
 
 BODY = [tframe("T1"), uframe("U1"), "    rdkSpeed := [500.00,500,5000,1000];",
-        f"    MoveAbsJ [[{','.join(f'{a:.2f}' for a in Q[0])}],{EXT}],rdkSpeed,z1,rdkTool,"
+        f"    MoveAbsJ [[{','.join(f'{a:.6f}' for a in Q[0])}],{EXT}],rdkSpeed,z1,rdkTool,"
         "\\WObj:=rdkWObj;",
         move("MoveJ", 1, "T1", "U1"), move("MoveL", 2, "T1", "U1"),
         uframe("U2"), move("MoveL", 3, "T1", "U2"), move("MoveL", 4, "T1", "U2"),
