@@ -6,7 +6,8 @@ arguments, FOR loops with literal bounds, ConfJ/ConfL \\On|\\Off,
 PDispSet/PDispOff, assignments of a literal to a tool or work object, whole
 or to its frame (rdkTool.tframe := [...], as RoboDK writes them; any other
 assignment moves nothing), MoveAbsJ, MoveJ, MoveL, MoveC (circle point,
-then end point) and MoveExtJ. For every arm move it records the joints it commands,
+then end point) and MoveExtJ; inline targets whose external axes are named
+data ([[x,y,z],[q],[cf],extj], as the Grasshopper plugin Robots writes them). For every arm move it records the joints it commands,
 from the numbers rounded to float32 as the controller stores them:
 
 * MoveAbsJ: the joints as written;
@@ -129,13 +130,24 @@ class Controller:
             d += f32(ext[k]) * np.asarray(u, float)
         return pin.SE3(np.eye(3), d) * self.base
 
+    def named_axes(self, expr, cls):
+        """An inline target written with named data for its external axes
+        ([[x,y,z],[q],[cf],extj], [[j1,..,j6],extj]: the Grasshopper plugin
+        Robots), read here: its literal numbers, then the data's."""
+        assert isinstance(expr, A.Agg) and isinstance(expr.items[-1], A.Ref), expr
+        ext = self.decls[expr.items[-1].name.lower()]
+        assert ext.type == "extjoint"
+        numbers = [n.value for part in (*expr.items[:-1], ext.node.init) for n in part.items]
+        return cls(tuple(float(v) for v in numbers), ((), ()), expr.span)
+
     def robtarget(self, expr, env, inline) -> tuple[pin.SE3, RobTarget]:
         if isinstance(expr, A.Call):        # Offs(p, dx, dy, dz)
             assert expr.name.lower() == "offs"
             base, *nums = [a.value for a in expr.args]
             M, rt = self.robtarget(base, env, None)
             return pin.SE3(M.rotation, M.translation + f32([n.value for n in nums])), rt
-        rt = inline if inline is not None else self.value(expr, env)
+        rt = (inline if inline is not None else self.named_axes(expr, RobTarget)
+              if isinstance(expr, A.Agg) else self.value(expr, env))
         assert isinstance(rt, RobTarget)
         return se3(rt.xyz, rt.quat_wxyz), rt
 
@@ -223,7 +235,9 @@ class Controller:
             return
         for t in mo.targets:
             if spec.joint_space:
-                jt = t.value if t.value is not None else self.value(t.expr, env)
+                jt = (t.value if t.value is not None else
+                      self.named_axes(t.expr, JointTarget) if isinstance(t.expr, A.Agg)
+                      else self.value(t.expr, env))
                 assert isinstance(jt, JointTarget)
                 self.q = f32(jt.joints)
                 self.out.append(Executed(where, line, mo.instruction, "joint", self.q.copy(),

@@ -30,6 +30,9 @@ Shapes (issue #10):
                      zero, their frames assigned in the routine before the moves
                      (rdkTool.tframe := [...]), a work object and a tool change
                      between moves (test_robodk_frames.py: the joints Q there).
+  rapid/grasshopper_robots.mod  the Grasshopper plugin Robots' output: inline
+                     targets whose external axes are the data extj
+                     (test_grasshopper.py).
 """
 
 from __future__ import annotations
@@ -392,12 +395,18 @@ def robodk() -> None:
     write(ROOT / "fixtures" / "rapid" / "robodk_frames.mod", program(BODY))
 
 
+def grasshopper() -> None:
+    from test_grasshopper import MOVES, program
+    write(ROOT / "fixtures" / "rapid" / "grasshopper_robots.mod", program(MOVES))
+
+
 def main() -> None:
     cell()
     glue()
     backup()
     cam()
     robodk()
+    grasshopper()
     joints = {"cell": {"PICK_APP": PICK_APP, "PICK": PICK, "PLACE": PLACE, "GLUE": GLUE,
                        "HOME": HOME, "PARK": PARK},
               "glue": {"BEAD": BEAD},

@@ -258,14 +258,18 @@ def test_source_lines_are_positions_lines():
 # ---------------------------------------------------------------- plan
 
 def _fields(u) -> list:
-    """Every field of a use; nodes, files and modules by identity."""
+    """Every field of a use; nodes, files and modules by identity (a record
+    by identity where the parse made it, else by value: an inline target
+    whose external axes are named data is read by each resolver)."""
     out = []
     for f in dataclasses.fields(u):
         v = getattr(u, f.name)
         if f.name in ("motion", "file", "module"):
             v = id(v)
         elif f.name == "source" and v is not None:
-            v = [id(x) if isinstance(x, (A.Ref, A.NumAgg, A.Agg, A.Call)) or g.name in (
+            named = type(v.expr) is A.Agg and type(v.expr.items[-1]) is A.Ref
+            v = [x if named and g.name == "record" else
+                 id(x) if isinstance(x, (A.Ref, A.NumAgg, A.Agg, A.Call)) or g.name in (
                 "record", "decl", "home", "home_module") else
                  (x.tolist() if isinstance(x, np.ndarray) else x)
                  for g in dataclasses.fields(v) for x in [getattr(v, g.name)]]

@@ -844,10 +844,16 @@ class Editor:
         element -> the confdata every state needs where the written one does
         not serve (the cold value is then a copy with it, <name>_cold)."""
         def cold_literal(g, k):
-            texts = list(self.values.source(g, k).record.texts)
+            src = self.values.source(g, k)
+            texts = list(src.record.texts)
             if k in confs:
                 texts[7:11] = [str(int(c)) for c in confs[k]]
-            return records.robtarget_literal(texts)
+            literal = records.robtarget_literal(texts)
+            if type(src.expr) is A.Agg and type(src.expr.items[-1]) is A.Ref:
+                # (Its external axes named data, [[x,y,z],[q],[cf],extj]:
+                # the name kept, as written.)
+                literal = literal[:literal.rindex(",[")] + "," + src.expr.items[-1].name + "]"
+            return literal
 
         # (Its cold value its target as written, a name or a literal, and no
         # Offs/RelTool around it: self.calls, read again as such.)

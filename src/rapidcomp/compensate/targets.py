@@ -1131,7 +1131,12 @@ class Resolver:
                 try:
                     record = decode(type_, v, f"{call.name} {type_}")
                 except DecodeIssue as exc:
-                    return Unresolved(exc.reason)
+                    # (The cold value's external axes named data, as its
+                    # move's target names them: _named_axes.)
+                    record = (self._named_record(v, type_, module, routine, exc.reason)
+                              if not parts and not exc.illegal else Unresolved(exc.reason))
+                    if type(record) is Unresolved:
+                        return record
                 parts.append(Source(record, None, None, None, False, v, whole, None, None, None))
             else:
                 src = self._source(pf, v, module, routine, env, outer=whole, types=(type_,))
@@ -1438,7 +1443,7 @@ class Resolver:
         if t.value is not None:
             src = Source(t.value, None, None, None, False, t.expr, t.expr, None, None, None)
         elif t.issue:
-            src = Unresolved(t.issue)
+            src = self._named_axes(t, kind, module, motion.routine)
         else:
             src = self._source(pf, t.expr, module, motion.routine, env)
         src = self._as_written(src, pf)
@@ -1446,6 +1451,43 @@ class Resolver:
                 and src.reason.endswith(f"({MISSING_HINT})")):
             return fail(self._all_missing(src, module, motion))
         return self._complete(pf, module, motion, t.role, kind, label, line, envt, key, src)
+
+    def _named_axes(self, t, kind: str, module, routine: str | None):
+        """The Source of an inline target whose external axes are named data
+        (the Grasshopper plugin Robots writes [[x,y,z],[q],[cf],extj] and
+        [[j1,..,j6],extj], extj a VAR extjoint of 9E9s), the rest literal:
+        its record with that data's value, where the data is an extjoint
+        with a literal value nothing changes at run time (its numbers are
+        never written: only the literal parts are); else why not."""
+        record = self._named_record(t.expr, kind, module, routine, t.issue)
+        if type(record) is Unresolved:
+            return record
+        return Source(record, None, None, None, False, t.expr, t.expr, None, None, None)
+
+    def _named_record(self, expr, kind: str, module, routine: str | None, issue: str):
+        """The record of a literal target whose external axes are named data
+        (_named_axes), or Unresolved (issue: why the literal alone is not
+        one)."""
+        if (type(expr) is not A.Agg or len(expr.items) != (4 if kind == "robtarget" else 2)
+                or type(expr.items[-1]) is not A.Ref or expr.items[-1].selectors
+                or any(type(x) not in (A.Agg, A.NumAgg) for x in expr.items[:-1])):
+            return Unresolved(issue)
+        d = self.lookup(expr.items[-1].name, module, routine)
+        if (not isinstance(d, Declaration) or d.type != "extjoint" or d.dims
+                or type(d.node.init) not in (A.Agg, A.NumAgg)):
+            return Unresolved(issue)
+        why = self._written(d, noted=False)
+        if why is not None:
+            return Unresolved(f"its external axes are {d.name}, which {why.split(' ', 1)[1]}"
+                              if why.startswith(d.name + " ") else why)
+        # (The record reads the declared value in place of the name: its
+        # external axes' spans are the declaration's, never edited, as the
+        # values the compensation writes are the pose's and confdata's.)
+        try:
+            return decode(kind, A.Agg((*expr.items[:-1], d.node.init), expr.span),
+                          f"inline {kind}")
+        except DecodeIssue as exc:
+            return Unresolved(str(exc) if exc.illegal else issue)
 
     def _as_written(self, src, pf):
         """src holding its record as the output writes it (self.written),

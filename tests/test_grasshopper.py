@@ -1,0 +1,100 @@
+"""Programs as the Grasshopper plugin Robots writes them for an ABB robot:
+every target inline, its external axes the data `extj` (a VAR extjoint of
+9E9s declared at the top of the module), `[[x,y,z],[q],[cf],extj]` and
+`[[j1,..,j6],extj]`. The literal numbers are compensated, the name stays,
+and the compensated program, run by the independent controller model
+(controller.py) on the warm robot, lands every move where the input sends
+the ideal one; where the data may change at run time, or the confdata is a
+name too, the move is left as written and the report says why."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rapidcomp.rapid.parse import parse_file
+
+import test_robodk_frames as RF
+from test_real_programs import evaluate, rapidcomp
+from test_robodk_frames import FRAMES, Q, TOOLS, pose_text, target
+
+
+def program(moves: list[str], extra: str = "") -> str:
+    tool, frame = pose_text(TOOLS["T1"]), pose_text(FRAMES["U1"])
+    return "\n".join([
+        "MODULE GH_T_ROB1",
+        "VAR extjoint extj := [9E9,9E9,9E9,9E9,9E9,9E9];",
+        "VAR confdata conf := [0,0,0,0];",
+        f"PERS tooldata Tool1:=[TRUE,{tool},[0.001,[0,0,0.001],[1,0,0,0],0,0,0]];",
+        f"TASK PERS wobjdata Frame1:=[FALSE,TRUE,\"\",{frame},[[0,0,0],[1,0,0,0]]];",
+        "TASK PERS speeddata Speed000:=[300,180,5000,1080];",
+        "PROC Main()", "ConfL \\Off;", extra,
+        f"MoveAbsJ [[{','.join(f'{a:g}' for a in Q[0])}],extj],Speed000,fine,Tool1;",
+        *moves, "ENDPROC", "ENDMODULE", ""])
+
+
+def move(kind: str, i: int, ext: str = "extj", conf: str | None = None) -> str:
+    text = target(i, "T1", "U1")
+    text = text[:text.rindex(",[")] + "," + ext + "]"
+    if conf is not None:
+        head = text[:text.rindex("],[", 0, text.rindex(","))]
+        text = head + "]," + conf + "," + ext + "]"
+    return f"{kind} {text},Speed000,fine,Tool1 \\WObj:=Frame1;"
+
+
+MOVES = [move("MoveJ", 1), move("MoveL", 2), move("MoveL", 3), move("MoveJ", 4)]
+
+
+@pytest.mark.parametrize("mode", ["auto", "absj", "robtarget"])
+def test_targets_whose_external_axes_are_named_data_are_compensated(mode, tmp_path):
+    src = tmp_path / "GH.mod"
+    src.write_text(program(MOVES))
+    out = tmp_path / "out.mod"
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out, "--emit", mode)
+    assert "5 of 5 target uses compensated" in r.stdout, r.stdout
+    before, after = src.read_text().splitlines(), out.read_text().splitlines()
+    # (The same lines, the moves' numbers only changed: each keeps its kind
+    # (a MoveAbsJ would write the value of extj, not follow the name) and
+    # names extj.)
+    assert len(before) == len(after)
+    for a, b in zip(before, after):
+        if a != b:
+            assert a.split(" ")[0] == b.split(" ")[0] and b.count(",extj]") == 1, (a, b)
+    assert sum(a != b for a, b in zip(before, after)) == 5
+    rows = evaluate([parse_file(src, src.name)], [parse_file(out, src.name)], entry="Main")
+    assert len(rows) == 5
+
+
+def test_named_data_that_may_change_or_a_named_confdata_leave_the_move_as_written(tmp_path):
+    src = tmp_path / "GH.mod"
+    # (extj is given a value at run time; the second move names its
+    # confdata too: neither is known here.)
+    src.write_text(program([move("MoveL", 2, ext="extj"), move("MoveL", 3, conf="conf")],
+                           extra="extj.eax_a := 100;"))
+    out = tmp_path / "out.mod"
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out, "--allow-partial")
+    assert "3 untouched" in r.stdout, r.stdout
+    assert "its external axes are extj, which is assigned at run time (GH.mod:9)" in r.stdout
+    assert "inline robtarget.robconf is not a literal aggregate" in r.stdout
+    assert out.read_text() == src.read_text()
+
+
+def test_transient_keeps_the_name_of_the_external_axes(tmp_path, monkeypatch):
+    """--transient writes each target as rcTcR/rcTcJ(as written, correction):
+    the one written again (its confdata changes: a MoveJ taught with J4 at
+    0, compensated a hundredth of a degree below) names extj as the input
+    does, and the output verifies at every thermal state."""
+    monkeypatch.setattr(RF, "Q", np.vstack([Q, [[5, 25, 10, 0, -60, 20]]]))
+    src = tmp_path / "GH.mod"
+    src.write_text(program(MOVES + [move("MoveJ", len(Q))]))
+    out = tmp_path / "out.mod"
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out, "--transient",
+                  "--tau-heat", "30")
+    assert "6 of 6 target uses compensated" in r.stdout, r.stdout
+    changed = [b for a, b in zip(src.read_text().splitlines(), out.read_text().splitlines())
+               if a != b]
+    assert len(changed) == 6
+    # (The MoveJ at J4 = 0 written again with its new confdata.)
+    assert "[0,0,0,1]" not in changed[-1] and "[0,-1,0,1]" in changed[-1], changed[-1]
+    assert all(("rcTcR(" in b or "rcTcJ(" in b) and b.count(",extj]") == 1 for b in changed)
+    assert "9E9" not in "".join(changed)
