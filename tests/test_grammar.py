@@ -226,7 +226,10 @@ def test_one_token_calls_give_the_general_grammars_tree(monkeypatch):
     # (A number beyond a num's range: refused where the general parser
     # refuses it, not read as inf.)
     "MoveL p,v100\\V:=" + "1" * 400 + ",z1,t;", "WaitTime " + "9" * 40 + ";",
-    "SetDO do1, " + "9" * 400 + ";", "MoveL RelTool(p, 0, 0, 0 \\Rz:=" + "4" * 400 + "),v,z,t;"])
+    "SetDO do1, " + "9" * 400 + ";", "MoveL RelTool(p, 0, 0, 0 \\Rz:=" + "4" * 400 + "),v,z,t;",
+    # (A digit of another script: not RAPID, refused where it stands.)
+    "WaitTime \u0661;", "Foo f(\u0661), v;", "MoveL p,v100\\V:=\uff11,z1,t;",
+    "SetDO do1, \u0661;"])
 def test_a_one_token_statement_where_none_fits_is_read_as_its_own_tokens(stmt, monkeypatch):
     """Text lexed as one FAST_CALL where the table has no place for a
     statement (its first word ends an IF's condition or an expression) is
@@ -255,3 +258,17 @@ def test_numbers_split_one_way_only():
             "  ENDPROC\nENDMODULE\n")
     call = parse_text(text).module.routines[0].node.body[0]
     assert call.name == "MoveAbsJ" and call.args[0].value.name == "rcTcJ"
+
+
+@pytest.mark.parametrize("stmt", ["WaitTime \u0661;", "x := \uff11;",
+                                  "MoveL [[\u0661,0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,"
+                                  "9E9]],v100,z1,tool0;"])
+def test_a_digit_of_another_script_is_refused_where_it_stands(stmt):
+    """The controller reads ASCII digits only: another script's digit (which
+    Python's float() would read) is an unexpected character, said where."""
+    from rapidcomp.errors import InputError
+    text = f"MODULE m\n  PROC p()\n    {stmt}\n  ENDPROC\nENDMODULE\n"
+    with pytest.raises(InputError) as err:
+        parse_text(text, "m.mod")
+    col = next(i for i, c in enumerate(stmt) if ord(c) > 127) + 5
+    assert str(err.value).startswith(f"m.mod:3:{col}: unexpected character")

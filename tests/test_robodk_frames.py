@@ -118,7 +118,10 @@ WHOLE_T1 = f"    rdkTool := [TRUE,{pose_text(TOOLS['T1'])},[2,[0,0,15],[1,0,0,0]
 
 
 @pytest.mark.parametrize("case", ["before the first", "after a whole value later",
-                                  "in a block", "a component of the load"])
+                                  "in a block", "a component of the load",
+                                  "a call between the frame's assignments",
+                                  "a call later in the move's loop",
+                                  "a call in the error handler"])
 def test_a_move_whose_frame_is_not_known_is_left_as_written(case, tmp_path):
     body = {
         # (Run again, the routine starts with the frames of its last run.)
@@ -134,6 +137,20 @@ def test_a_move_whose_frame_is_not_known_is_left_as_written(case, tmp_path):
         "a component of the load": ([tframe("T1"), uframe("U1"), "    rdkTool.tload.mass := 3;",
                                      move("MoveL", 1, "T1", "U1"),
                                      move("MoveL", 2, "T1", "U1")]),
+        # A call that may run the routine again (no given module declares
+        # UserProc) after the first assignment the frame is made of: between
+        # two of them; later in the loop, before the move's next round; in
+        # the error handler, before RETRY runs the move again.
+        "a call between the frame's assignments": (
+            [uframe("U1"), "    UserProc;", "    rdkWObj.oframe := [[0, 0, 0],[1, 0, 0, 0]];",
+             tframe("T1"), move("MoveL", 1, "T1", "U1"), move("MoveL", 2, "T1", "U1")]),
+        "a call later in the move's loop": (
+            [tframe("T1"), uframe("U1"), "    FOR i FROM 1 TO 2 DO",
+             move("MoveL", 1, "T1", "U1"), "      UserProc;", "    ENDFOR",
+             move("MoveL", 2, "T1", "U1")]),
+        "a call in the error handler": (
+            [tframe("T1"), uframe("U1"), move("MoveL", 1, "T1", "U1"),
+             move("MoveL", 2, "T1", "U1"), "  ERROR", "    UserRecover;", "    RETRY;"]),
     }[case]
     src = tmp_path / "MOD_Prog1.mod"
     src.write_text(program(body))
@@ -147,7 +164,30 @@ def test_a_move_whose_frame_is_not_known_is_left_as_written(case, tmp_path):
         assert "1 untouched" in r.stdout and moved == [body[-1]], r.stdout
     else:
         assert "2 untouched" in r.stdout and moved == [], r.stdout
-    # (Said with one of the assignments of rdkTool.)
-    writes = [FIRST_LINE + k for k, b in enumerate(body) if b.lstrip().startswith("rdkTool")]
-    assert any(f"rdkTool is assigned at run time (MOD_Prog1.mod:{n})" in r.stdout
+    # (Said with one of the assignments of the data not known: the tool's,
+    # or where only the work object's frame is not, its.)
+    name = "rdkWObj" if case == "a call between the frame's assignments" else "rdkTool"
+    writes = [FIRST_LINE + k for k, b in enumerate(body) if b.lstrip().startswith(name)]
+    assert any(f"{name} is assigned at run time (MOD_Prog1.mod:{n})" in r.stdout
                for n in writes), r.stdout
+
+
+def test_a_declared_frame_is_said_where_it_is_declared(tmp_path):
+    """The routine assigns the user frame; the object frame is the
+    declared one, in the task's data module: a message about it names that
+    module and line, not the assignment's."""
+    task = tmp_path / "cell"
+    task.mkdir()
+    (task / "Data.mod").write_text("\n".join([
+        "MODULE Data", "  PERS tooldata rdkTool := [TRUE,[[0,0,0],[1,0,0,0]],[2,[0,0,15],"
+        "[1,0,0,0],0,0,0.005]];",
+        "  PERS wobjdata rdkWObj := [FALSE, TRUE, \"\", [[0,0,0],[1,0,0,0]],"
+        "[[0,0,200000],[1,0,0,0]]];", "ENDMODULE", ""]))
+    (task / "Main.mod").write_text("\n".join([
+        "MODULE Main", "  VAR speeddata rdkSpeed := [250,500,5000,1000];", "  PROC main()",
+        tframe("T1"), uframe("U1"), move("MoveL", 1, "T1", "U1"), "  ENDPROC", "ENDMODULE",
+        ""]))
+    r = rapidcomp("fix", task, "--profile", "fixtures/warm.csv", "-o", tmp_path / "out",
+                  check=False)
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert "Data.mod:3:" in r.stderr and "200000" in r.stderr, r.stderr

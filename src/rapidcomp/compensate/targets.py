@@ -642,8 +642,13 @@ class Resolver:
                               f"({d.issue or 'run-time data'})")
         if site is not None:
             value = d.value
+            # The file each part of the value is read from (messages say
+            # where): a component the routine assigns, its assignment's;
+            # the rest, the whole value's assignment's, or the declaration's.
+            homes = {None: site[0][0] if _part(site[0][1]) is None else self.home[id(d)]}
             for pf, assign in site:
                 part = _part(assign)
+                homes[part] = pf
                 try:
                     if part is None:
                         value = decode(d.type, assign.value, d.name)
@@ -658,7 +663,7 @@ class Resolver:
                                       f"cannot read ({pf.source.display_path}:"
                                       f"{pf.line(assign.span)}: {exc})")
             d = replace(d, value=value)
-            self._assigned[id(d)] = (d, pf)
+            self._assigned[id(d)] = (d, homes)
             return d
         written = self._written(d)
         return Unresolved(written) if written else d
@@ -713,10 +718,13 @@ class Resolver:
                                 None in parts)
         return sites
 
-    def _home_of(self, d: Declaration) -> ParsedFile:
-        """The file of d's value: its declaration's, or the assignment's."""
+    def _home_of(self, d: Declaration, part: str | None = None) -> ParsedFile:
+        """The file of d's value (of its component `part`): its
+        declaration's, or the assignment's."""
         hit = self._assigned.get(id(d))
-        return hit[1] if hit is not None else self.home[id(d)]
+        if hit is None:
+            return self.home[id(d)]
+        return hit[1].get(part, hit[1][None])
 
     def _sites(self, motion, module) -> tuple | None:
         """For a move's tool and work object, each the assignments whose
@@ -725,8 +733,9 @@ class Resolver:
         value or of one component, each a statement of one routine's body
         itself (not in a block, a handler or another routine: RoboDK's
         `rdkTool := [...]` or `rdkTool.tframe := [...]` before its moves),
-        the move lies in that routine's body after them, and no call
-        between them may run the routine again (the routine runs its body
+        the move lies in that routine's body after them, and no call after
+        the first of them may run the routine again before the move (the
+        routine runs its body
         in order: whatever ran before it, the move uses that value). Its
         value is the whole value assigned last before it, with the
         components assigned after that; where the routine assigns no whole
@@ -746,13 +755,18 @@ class Resolver:
                 out.append(None)
                 continue
             k = bisect_left(hit.starts, motion.span.start)
-            # (A call between the assignment and the move that may run the
-            # routine again, its assignments too: the value is not known.)
-            if k and hit.reentries:
-                r = bisect_right(hit.reentries, hit.starts[k - 1])
-                if r < len(hit.reentries) and hit.reentries[r] < motion.span.start:
-                    k = 0
-            out.append(_chain(hit, k) if k else None)
+            chain = _chain(hit, k) if k else None
+            # A call that may run the routine again, its assignments too,
+            # after the first assignment the value is made of: the value is
+            # not known where it lies before the move, or runs before the
+            # move again (later in the move's loop: before its next round;
+            # in an error handler: RETRY runs the statement again).
+            if chain is not None and hit.reentries:
+                later = hit.reentries[bisect_right(hit.reentries, chain[0][1].span.start):]
+                if later and (later[0] < motion.span.start or motion.loops
+                              or later[-1] > hit.body_end):
+                    chain = None
+            out.append(chain)
         return tuple(out) if out[0] is not None or out[1] is not None else None
 
     def _task_writes(self, files, observers) -> None:
@@ -933,7 +947,8 @@ class Resolver:
         t = d.value
         if t.robhold.value is not True:
             return Unresolved(f"tool {expr.name} is a stationary tool (robhold FALSE)")
-        return _data_key(expr, site), self._pose(t.tframe, self._home_of(d), f"tool {d.name}")
+        return _data_key(expr, site), self._pose(t.tframe, self._home_of(d, "tframe"),
+                                                 f"tool {d.name}")
 
     def _wobj(self, expr, module, routine: str, site=None):
         if expr is None:
@@ -951,10 +966,9 @@ class Resolver:
         # one moves with, and is not used then.)
         if w.ufprog.value is not True:
             return Unresolved(f"work object {expr.name} is coordinated with a mechanical unit")
-        pf = self._home_of(d)
-        return _data_key(expr, site), compose_pose(self._pose(w.uframe, pf,
-                                                              f"work object {d.name}"),
-                                               self._pose(w.oframe, pf, f"work object {d.name}"))
+        return _data_key(expr, site), compose_pose(
+            self._pose(w.uframe, self._home_of(d, "uframe"), f"work object {d.name}"),
+            self._pose(w.oframe, self._home_of(d, "oframe"), f"work object {d.name}"))
 
     def world_M_base(self, record) -> tuple | Unresolved:
         """The robot base in the world frame for a target's external axes:

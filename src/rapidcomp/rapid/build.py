@@ -28,14 +28,14 @@ DECL_HEAD = re.compile(r"(?:(LOCAL|TASK)[ \t]+)?(CONST|PERS|VAR)[ \t]+([A-Za-z][
 # function): \Opt:=value (groups 1, 2), a name (3), a number (4); a sign
 # right before a number is part of it, as the parser folds it (signed).
 _FAST_ITEM = re.compile(
-    r"\\([A-Za-z][A-Za-z0-9_]*)(?:[ \t]*:=[ \t]*([A-Za-z][A-Za-z0-9_]*|[-+]?\d+(?:\.\d*)?))?"
-    r"|([A-Za-z][A-Za-z0-9_]*)|([-+]?\d+(?:\.\d*)?)")
+    r"\\([A-Za-z][A-Za-z0-9_]*)(?:[ \t]*:=[ \t]*([A-Za-z][A-Za-z0-9_]*|[-+]?[0-9]+(?:\.[0-9]*)?))?"
+    r"|([A-Za-z][A-Za-z0-9_]*)|([-+]?[0-9]+(?:\.[0-9]*)?)")
 
 
 _INF = float("inf")
 # A plain decimal number argument of a FAST_CALL's function (the grammar's
 # _FAST_NUM: at most 30 digits each side, never beyond a num's range).
-_FAST_NUM = re.compile(r"[-+]?(?:\d{1,30}(?:\.\d{0,30})?|\.\d{1,30})(?![\w.])")
+_FAST_NUM = re.compile(r"[-+]?(?:[0-9]{1,30}(?:\.[0-9]{0,30})?|\.[0-9]{1,30})(?![\w.])")
 
 # The nodes of one-token statements and declarations, made as their classes
 # make them (construct.py; a CAM program's 1e5 moves have ~15 each).
