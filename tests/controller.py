@@ -7,8 +7,9 @@ PDispSet/PDispOff, assignments of a literal to a tool or work object, whole
 or to its frame (rdkTool.tframe := [...], as RoboDK writes them; any other
 assignment moves nothing), MoveAbsJ, MoveJ, MoveL, MoveC (circle point,
 then end point) and MoveExtJ; inline targets whose external axes are named
-data ([[x,y,z],[q],[cf],extj], as the Grasshopper plugin Robots writes them). For every arm move it records the joints it commands,
-from the numbers rounded to float32 as the controller stores them:
+data ([[x,y,z],[q],[cf],extj], as the Grasshopper plugin Robots writes
+them). For every arm move it records the joints it commands, from the
+numbers rounded to float32 as the controller stores them:
 
 * MoveAbsJ: the joints as written;
 * a robtarget: base_M_flange = base_M_world . uframe . oframe . D . target

@@ -28,7 +28,8 @@ DECL_HEAD = re.compile(r"(?:(LOCAL|TASK)[ \t]+)?(CONST|PERS|VAR)[ \t]+([A-Za-z][
 # function): \Opt:=value (groups 1, 2), a name (3), a number (4); a sign
 # right before a number is part of it, as the parser folds it (signed).
 _FAST_ITEM = re.compile(
-    r"\\([A-Za-z][A-Za-z0-9_]*)(?:[ \t]*:=[ \t]*([A-Za-z][A-Za-z0-9_]*|[-+]?[0-9]+(?:\.[0-9]*)?))?"
+    r"\\([A-Za-z][A-Za-z0-9_]*)(?:[ \t]*:=[ \t]*"
+    r"([A-Za-z][A-Za-z0-9_]*|[-+]?[0-9]+(?:\.[0-9]*)?))?"
     r"|([A-Za-z][A-Za-z0-9_]*)|([-+]?[0-9]+(?:\.[0-9]*)?)")
 
 
