@@ -98,3 +98,46 @@ def test_transient_keeps_the_name_of_the_external_axes(tmp_path, monkeypatch):
     assert "[0,0,0,1]" not in changed[-1] and "[0,-1,0,1]" in changed[-1], changed[-1]
     assert all(("rcTcR(" in b or "rcTcJ(" in b) and b.count(",extj]") == 1 for b in changed)
     assert "9E9" not in "".join(changed)
+
+
+@pytest.mark.parametrize("extra,said", [
+    ("Add extj.eax_a, 100;", "its external axes are extj, which is changed by Add at run time "
+     "(GH.mod:9)"),
+    ("Incr extj.eax_b;", "its external axes are extj, which is changed by Incr at run time "
+     "(GH.mod:9)"),
+    ("TPReadNum extj.eax_a, \"Track?\";", "its external axes are extj, which is filled by "
+     "TPReadNum at run time (GH.mod:9)"),
+    ("Add Tool1.tframe.trans.z, 10;", "Tool1 is changed by Add at run time (GH.mod:9)")])
+def test_data_an_instruction_changes_at_run_time_leaves_the_moves_as_written(extra, said,
+                                                                            tmp_path):
+    """Add, Incr, TPReadNum... write their argument: the external axes (or
+    the tool) they change are not the declared value at run time."""
+    src = tmp_path / "GH.mod"
+    src.write_text(program(MOVES, extra=extra))
+    out = tmp_path / "out.mod"
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out, "--allow-partial")
+    assert said in r.stdout, r.stdout
+    # (The MoveAbsJ names extj too; a changed tool leaves the four
+    # robtarget moves.)
+    done = 1 if said.startswith("Tool1") else 0
+    assert f"{done} of 5 target uses compensated, 0 not compensated, {5 - done} untouched" \
+        in r.stdout, r.stdout
+
+
+def test_external_axes_beyond_a_num_or_not_declared(tmp_path):
+    """A number no num holds in extj's declaration is bad input, said where
+    it is written; extj declared nowhere in what was given: not compensated,
+    naming it (give the whole task)."""
+    src = tmp_path / "GH.mod"
+    src.write_text(program(MOVES).replace("extj := [9E9,", "extj := [4E38,"))
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", tmp_path / "o.mod",
+                  check=False)
+    assert r.returncode == 2 and "GH.mod:2:23: extj.eax_a is 4E38, beyond what a RAPID num" \
+        in r.stderr, r.stderr
+    text = "\n".join(line for line in program(MOVES).splitlines() if "extjoint" not in line)
+    src.write_text(text)
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", tmp_path / "o.mod",
+                  check=False)
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert "its external axes are extj, which is not declared in the given modules (give " \
+        "the whole task" in r.stdout, r.stdout

@@ -1483,13 +1483,22 @@ class Resolver:
         (_named_axes), or Unresolved (issue: why the literal alone is not
         one)."""
         if (type(expr) is not A.Agg or len(expr.items) != (4 if kind == "robtarget" else 2)
-                or type(expr.items[-1]) is not A.Ref or expr.items[-1].selectors
+                or type(expr.items[-1]) is not A.Ref
                 or any(type(x) not in (A.Agg, A.NumAgg) for x in expr.items[:-1])):
             return Unresolved(issue)
-        d = self.lookup(expr.items[-1].name, module, routine)
+        name = expr.items[-1]
+        d = None if name.selectors else self.lookup(name.name, module, routine)
+        if type(d) is Unresolved:
+            return Unresolved(f"its external axes are {name.name}: {d.reason}")
         if (not isinstance(d, Declaration) or d.type != "extjoint" or d.dims
                 or type(d.node.init) not in (A.Agg, A.NumAgg)):
-            return Unresolved(issue)
+            if d is None and not name.selectors:
+                return Unresolved(f"its external axes are {name.name}, which is not declared in "
+                                  f"the given modules ({MISSING_HINT})", True)
+            why = ("not a plain name" if name.selectors else
+                   f"a {d.type}, not an extjoint" if d.type != "extjoint" else
+                   "an array" if d.dims else "declared without a literal value")
+            return Unresolved(f"its external axes are {name.name}, {why}")
         why = self._written(d, noted=False)
         if why is not None:
             return Unresolved(f"its external axes are {d.name}, which {why.split(' ', 1)[1]}"
@@ -1501,7 +1510,15 @@ class Resolver:
             return decode(kind, A.Agg((*expr.items[:-1], d.node.init), expr.span),
                           f"inline {kind}")
         except DecodeIssue as exc:
-            return Unresolved(str(exc) if exc.illegal else issue)
+            if not exc.illegal:
+                return Unresolved(issue)
+            # (A value no controller loads, in the declaration's numbers: the
+            # literal's own were read by the parse.)
+            init = d.node.init.span
+            if init.start <= exc.span.start < init.end:
+                raise self.home[id(d)].source.error(
+                    exc.span.start, exc.reason.replace(f"inline {kind}.extax", d.name)) from None
+            return Unresolved(str(exc))
 
     def _as_written(self, src, pf):
         """src holding its record as the output writes it (self.written),

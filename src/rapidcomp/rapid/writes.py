@@ -27,7 +27,14 @@ WRITING_BUILTINS = {
     "getdataval": (1,), "readanybin": (1,), "unpackrawbytes": (2,), "getsysdata": (0,),
     "mtooltcpcalib": (4,), "stooltcpcalib": (3,), "mtoolrotcalib": (2,), "stoolrotcalib": (3,),
     "strtoval": (1,), "getnextsym": (0, 1), "testandset": (0,),
+    # (Their INOUT argument: Add extj.eax_a, 100; Incr n; TPReadNum x, "...".)
+    "add": (0,), "incr": (0,), "decr": (0,), "clear": (0,), "bitset": (0,), "bitclear": (0,),
+    "tpreadnum": (0,), "tpreaddnum": (0,), "tpreadfk": (0,), "readcfgdata": (2,),
+    "gettrapdata": (0,), "readerrdata": (1, 2, 3), "readrawbytes": (1,), "packrawbytes": (1,),
+    "copyrawbytes": (2,), "clearrawbytes": (0,),
 }
+# (Those that change the value it has, rather than fill it.)
+_CHANGING = frozenset(("add", "incr", "decr", "clear", "bitset", "bitclear", "clearrawbytes"))
 
 
 @dataclass(frozen=True)
@@ -109,7 +116,8 @@ def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
                     for k in WRITING_BUILTINS[name]:
                         if k < len(positional) and isinstance(positional[k].value, A.Ref):
                             written(positional[k].value.name.lower(), pf, positional[k].span,
-                                    f"filled by {call.name}")
+                                    f"{'changed' if name in _CHANGING else 'filled'} by "
+                                    f"{call.name}")
                 elif name not in BUILTIN_INSTRUCTIONS and name not in BUILTIN_FUNCTIONS:
                     kind = "function " if isinstance(call, A.Call) else ""
                     _args_written(written, pf, call.args, None,
