@@ -133,12 +133,18 @@ class Controller:
 
     def named_axes(self, expr, cls):
         """An inline target written with named data for its external axes
-        ([[x,y,z],[q],[cf],extj], [[j1,..,j6],extj]: the Grasshopper plugin
-        Robots), read here: its literal numbers, then the data's."""
-        assert isinstance(expr, A.Agg) and isinstance(expr.items[-1], A.Ref), expr
-        ext = self.decls[expr.items[-1].name.lower()]
-        assert ext.type == "extjoint"
-        numbers = [n.value for part in (*expr.items[:-1], ext.node.init) for n in part.items]
+        or confdata ([[x,y,z],[q],conf,extj], [[j1,..,j6],extj]: the
+        Grasshopper plugin Robots), read here: its literal numbers, the
+        data's in place of each name."""
+        assert isinstance(expr, A.Agg), expr
+        parts = []
+        for part in expr.items:
+            if isinstance(part, A.Ref):
+                d = self.decls[part.name.lower()]
+                assert d.type in ("extjoint", "confdata"), d.type
+                part = d.node.init
+            parts.append(part)
+        numbers = [n.value for part in parts for n in part.items]
         return cls(tuple(float(v) for v in numbers), ((), ()), expr.span)
 
     def robtarget(self, expr, env, inline) -> tuple[pin.SE3, RobTarget]:

@@ -1,11 +1,14 @@
 """Programs as the Grasshopper plugin Robots writes them for an ABB robot:
 every target inline, its external axes the data `extj` (a VAR extjoint of
-9E9s declared at the top of the module), `[[x,y,z],[q],[cf],extj]` and
-`[[j1,..,j6],extj]`. The literal numbers are compensated, the name stays,
-and the compensated program, run by the independent controller model
-(controller.py) on the warm robot, lands every move where the input sends
-the ideal one; where the data may change at run time, or the confdata is a
-name too, the move is left as written and the report says why."""
+9E9s declared at the top of the module), a MoveL's confdata the data `conf`
+(under ConfL\\Off the controller does not read it): `[[x,y,z],[q],conf,extj]`,
+`[[x,y,z],[q],[cf],extj]` and `[[j1,..,j6],extj]`. The literal numbers are
+compensated, the names stay, and the compensated program, run by the
+independent controller model (controller.py) on the warm robot, lands every
+move where the input sends the ideal one; where the data may change at run
+time, the move is left as written, and where a named confdata would have to
+change (a move under configuration supervision), it is not compensated; the
+report says why."""
 
 from __future__ import annotations
 
@@ -42,7 +45,8 @@ def move(kind: str, i: int, ext: str = "extj", conf: str | None = None) -> str:
     return f"{kind} {text},Speed000,fine,Tool1 \\WObj:=Frame1;"
 
 
-MOVES = [move("MoveJ", 1), move("MoveL", 2), move("MoveL", 3), move("MoveJ", 4)]
+MOVES = [move("MoveJ", 1), move("MoveL", 2, conf="conf"), move("MoveL", 3, conf="conf"),
+         move("MoveJ", 4)]
 
 
 @pytest.mark.parametrize("mode", ["auto", "absj", "robtarget"])
@@ -60,23 +64,46 @@ def test_targets_whose_external_axes_are_named_data_are_compensated(mode, tmp_pa
     for a, b in zip(before, after):
         if a != b:
             assert a.split(" ")[0] == b.split(" ")[0] and b.count(",extj]") == 1, (a, b)
+            assert (",conf,extj]" in a) == (",conf,extj]" in b), (a, b)
     assert sum(a != b for a, b in zip(before, after)) == 5
     rows = evaluate([parse_file(src, src.name)], [parse_file(out, src.name)], entry="Main")
     assert len(rows) == 5
 
 
-def test_named_data_that_may_change_or_a_named_confdata_leave_the_move_as_written(tmp_path):
+def test_named_data_that_may_change_leave_the_move_as_written(tmp_path):
     src = tmp_path / "GH.mod"
-    # (extj is given a value at run time; the second move names its
-    # confdata too: neither is known here.)
-    src.write_text(program([move("MoveL", 2, ext="extj"), move("MoveL", 3, conf="conf")],
+    # (extj is given a value at run time.)
+    src.write_text(program([move("MoveL", 2), move("MoveL", 3, conf="conf")],
                            extra="extj.eax_a := 100;"))
     out = tmp_path / "out.mod"
     r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out, "--allow-partial")
-    assert "3 untouched" in r.stdout, r.stdout
+    assert "0 of 3 target uses compensated, 0 not compensated, 3 untouched" in r.stdout, r.stdout
     assert "its external axes are extj, which is assigned at run time (GH.mod:9)" in r.stdout
-    assert "inline robtarget.robconf is not a literal aggregate" in r.stdout
     assert out.read_text() == src.read_text()
+
+
+def test_a_named_confdata_that_would_have_to_change_is_not_compensated(tmp_path, monkeypatch):
+    """A MoveJ under configuration supervision (ConfJ\\On, as the program
+    starts) whose confdata is the data conf, taught with J4 at 0: the
+    compensated joints lie a hundredth of a degree into the next quadrant,
+    which conf, shared by other moves, cannot say. Not compensated, said
+    why; the MoveL beside it, under ConfL\\Off, keeps conf and is."""
+    monkeypatch.setattr(RF, "Q", np.vstack([Q, [[5, 25, 10, 0, -60, 20]]]))
+    mine = move("MoveJ", len(Q))
+    cf = mine[mine.index("],[", mine.index("],[") + 3) + 3:]
+    cf = "[" + cf[:cf.index("]")] + "]"
+    src = tmp_path / "GH.mod"
+    text = program([move("MoveL", 2, conf="conf"), mine.replace(cf + ",extj]", "conf,extj]")])
+    src.write_text(text.replace("conf := [0,0,0,0]", f"conf := {cf}"))
+    out = tmp_path / "out.mod"
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out, "--allow-partial",
+                  check=False)
+    assert r.returncode == 1 and "2 of 3 target uses compensated, 1 not compensated" in r.stdout, \
+        r.stdout + r.stderr
+    assert f"its confdata is the data conf ({cf}), which other moves share: the compensated " \
+        "joints need" in r.stdout, r.stdout
+    before, after = src.read_text().splitlines(), out.read_text().splitlines()
+    assert [b for a, b in zip(before, after) if a != b and "MoveJ" in a] == []
 
 
 def test_transient_keeps_the_name_of_the_external_axes(tmp_path, monkeypatch):

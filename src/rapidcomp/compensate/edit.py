@@ -379,6 +379,23 @@ def _as_literal(record, texts) -> str:
     return records.jointtarget_literal(list(texts))
 
 
+def _named_conf(src: Source, texts) -> str | None:
+    """Why a target whose confdata is named data (the Grasshopper plugin
+    Robots: [[x,y,z],[q],conf,extj]) cannot be written with the confdata
+    texts `texts`, or None: they are its own (a move without configuration
+    supervision keeps its confdata as written)."""
+    expr = src.expr
+    if not (type(expr) is A.Agg and len(expr.items) == 4 and type(expr.items[2]) is A.Ref):
+        return None
+    old = [float(t) for t in src.record.texts[7:11]]
+    new = [float(t) for t in texts]
+    if new == old:
+        return None
+    return (f"its confdata is the data {expr.items[2].name} ({_conf(old)}), which other moves "
+            f"share: the compensated joints need {_conf(new)} here, under configuration "
+            "supervision (a confdata of its own, written in the target, would serve)")
+
+
 def _why(g: Group, k) -> str:
     """What an edit of element k's fields says it is for."""
     return f"{element_label(g, k)} compensated"
@@ -600,6 +617,11 @@ class Editor:
         if g.mode != "absj":
             for k in g.elements:
                 texts[k], changes[k] = vals.field_edits(g, k)
+                if g.mode == "rob" and type(texts[k]) is not str:
+                    why = _named_conf(vals.source(g, k), texts[k][7:11])
+                    if why is not None:
+                        g.failure = (why, k)
+                        return
         if g.mode != "absj" and not any(changes.values()):
             # Nothing moves beyond the precision a new text would carry: the
             # value stays as written (a zero profile changes no byte).
@@ -725,6 +747,12 @@ class Editor:
                 q = self.values.cold(g, k)
                 if all(quadrant_miss(q[col], conf[cf]) <= self.values.tol
                        for col, cf in ((0, 0), (3, 1), (5, 2))):
+                    why = _named_conf(self.values.source(g, k), [str(int(c)) for c in conf])
+                    if why is not None:
+                        g.failure = (why, k)
+                        for u in g.uses:
+                            self.actions.pop(u.key, None)
+                        return
                     confs[k] = conf
                     continue
                 g.failure = (f"the warm robot needs confdata {_conf(conf)}, the cold one "

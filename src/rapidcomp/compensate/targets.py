@@ -239,6 +239,22 @@ def _chain(hit: Sites, k: int) -> tuple | None:
     return (tuple(done) if {_part(a) for _, a in done} == hit.parts else None)
 
 
+# Where an inline target may name data for a part of its value (the
+# Grasshopper plugin Robots: [[x,y,z],[q],conf,extj]): item -> (the data's
+# type, what the part is called).
+_NAMED = {"robtarget": {2: ("confdata", "confdata"), 3: ("extjoint", "external axes")},
+          "jointtarget": {1: ("extjoint", "external axes")}}
+_FIELD = {"confdata": "robconf", "external axes": "extax"}
+
+
+def _are(what: str) -> str:
+    return "are" if what.endswith("s") else "is"
+
+
+def _a(type_: str) -> str:
+    return f"an {type_}" if type_[0] in "aeiou" else f"a {type_}"
+
+
 class Unresolved(NamedTuple):
     """Why a target, tool or work object has no static value; blocked: the
     input lacks something (a gap to fill), else it is so by design."""
@@ -1479,45 +1495,57 @@ class Resolver:
         return Source(record, None, None, None, False, t.expr, t.expr, None, None, None)
 
     def _named_record(self, expr, kind: str, module, routine: str | None, issue: str):
-        """The record of a literal target whose external axes are named data
-        (_named_axes), or Unresolved (issue: why the literal alone is not
-        one)."""
+        """The record of a literal target whose external axes (or a
+        robtarget's confdata) are named data (_named_axes), or Unresolved
+        (issue: why the literal alone is not one)."""
+        named = _NAMED[kind]
         if (type(expr) is not A.Agg or len(expr.items) != (4 if kind == "robtarget" else 2)
-                or type(expr.items[-1]) is not A.Ref
-                or any(type(x) not in (A.Agg, A.NumAgg) for x in expr.items[:-1])):
+                or any(type(x) not in (A.Agg, A.NumAgg) and not (i in named and type(x) is A.Ref)
+                       for i, x in enumerate(expr.items))):
             return Unresolved(issue)
-        name = expr.items[-1]
-        d = None if name.selectors else self.lookup(name.name, module, routine)
-        if type(d) is Unresolved:
-            return Unresolved(f"its external axes are {name.name}: {d.reason}")
-        if (not isinstance(d, Declaration) or d.type != "extjoint" or d.dims
-                or type(d.node.init) not in (A.Agg, A.NumAgg)):
-            if d is None and not name.selectors:
-                return Unresolved(f"its external axes are {name.name}, which is not declared in "
-                                  f"the given modules ({MISSING_HINT})", True)
-            why = ("not a plain name" if name.selectors else
-                   f"a {d.type}, not an extjoint" if d.type != "extjoint" else
-                   "an array" if d.dims else "declared without a literal value")
-            return Unresolved(f"its external axes are {name.name}, {why}")
-        why = self._written(d, noted=False)
-        if why is not None:
-            return Unresolved(f"its external axes are {d.name}, which {why.split(' ', 1)[1]}"
-                              if why.startswith(d.name + " ") else why)
-        # (The record reads the declared value in place of the name: its
-        # external axes' spans are the declaration's, never edited, as the
-        # values the compensation writes are the pose's and confdata's.)
+        items = list(expr.items)
+        decls = []
+        for i, (type_, what) in named.items():
+            ref = items[i]
+            if type(ref) is not A.Ref:
+                continue
+            d = None if ref.selectors else self.lookup(ref.name, module, routine)
+            if type(d) is Unresolved:
+                return Unresolved(f"its {what} {_are(what)} {ref.name}: {d.reason}")
+            if (not isinstance(d, Declaration) or d.type != type_ or d.dims
+                    or type(d.node.init) not in (A.Agg, A.NumAgg)):
+                if d is None and not ref.selectors:
+                    return Unresolved(f"its {what} {_are(what)} {ref.name}, which is not declared "
+                                      f"in the given modules ({MISSING_HINT})", True)
+                why = ("not a plain name" if ref.selectors else
+                       f"a {d.type}, not {_a(type_)}" if d.type != type_ else
+                       "an array" if d.dims else "declared without a literal value")
+                return Unresolved(f"its {what} {_are(what)} {ref.name}, {why}")
+            why = self._written(d, noted=False)
+            if why is not None:
+                return Unresolved(f"its {what} {_are(what)} {d.name}, which "
+                                  f"{why.split(' ', 1)[1]}" if why.startswith(d.name + " ")
+                                  else why)
+            # (The record reads the declared value in place of the name: the
+            # spans of those fields are the declaration's, never edited: the
+            # compensation writes the pose's values, and a confdata only
+            # where it changes, which a named one may not: edit.py.)
+            items[i] = d.node.init
+            decls.append((d, what))
         try:
-            return decode(kind, A.Agg((*expr.items[:-1], d.node.init), expr.span),
-                          f"inline {kind}")
+            return decode(kind, A.Agg(tuple(items), expr.span), f"inline {kind}")
         except DecodeIssue as exc:
             if not exc.illegal:
                 return Unresolved(issue)
-            # (A value no controller loads, in the declaration's numbers: the
+            # (A value no controller loads, in a declaration's numbers: the
             # literal's own were read by the parse.)
-            init = d.node.init.span
-            if init.start <= exc.span.start < init.end:
-                raise self.home[id(d)].source.error(
-                    exc.span.start, exc.reason.replace(f"inline {kind}.extax", d.name)) from None
+            for d, what in decls:
+                init = d.node.init.span
+                if init.start <= exc.span.start < init.end:
+                    field = _FIELD[what]
+                    raise self.home[id(d)].source.error(
+                        exc.span.start, exc.reason.replace(f"inline {kind}.{field}", d.name)
+                    ) from None
             return Unresolved(str(exc))
 
     def _as_written(self, src, pf):
