@@ -19,7 +19,7 @@ than assumed, or for PERS targets (place.mode_of).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -119,6 +119,12 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     solved = solving.finish()
     solving = None
     P.settle(gs, solved, plan, mode)
+    if not any(g.mode == "rob" for g in gs):
+        # No robtarget is written (a CAM program entered from main: 1e5
+        # MoveAbsJ): the nominal FK of the compensated joints, which a
+        # robtarget's value is made of (edit.Values), is not needed (~10 MB
+        # off the peak, which is the printing's and the verification's).
+        solved = replace(solved, flange_R=None, flange_p=None)
     clock("solve")
     cells = None
     # The flow's per-use states go before the values are printed and
