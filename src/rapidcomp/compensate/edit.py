@@ -26,7 +26,7 @@ from ..rewrite.names import NameAllocator
 from .place import Group, element_label, multi_index, writable
 from .plan import Plan
 from .solve import Solved
-from .targets import Source, base_pose, stacked_poses, wobj_targets
+from .targets import Source, base_pose, named_part, stacked_poses, wobj_targets
 from .transient import FUNC_J, FUNC_R
 
 
@@ -384,14 +384,14 @@ def _named_conf(src: Source, texts) -> str | None:
     Robots: [[x,y,z],[q],conf,extj]) cannot be written with the confdata
     texts `texts`, or None: they are its own (a move without configuration
     supervision keeps its confdata as written)."""
-    expr = src.expr
-    if not (type(expr) is A.Agg and len(expr.items) == 4 and type(expr.items[2]) is A.Ref):
+    name = named_part(src.expr, 2)
+    if name is None:
         return None
     old = [float(t) for t in src.record.texts[7:11]]
     new = [float(t) for t in texts]
     if new == old:
         return None
-    return (f"its confdata is the data {expr.items[2].name} ({_conf(old)}), which other moves "
+    return (f"its confdata is the data {name} ({_conf(old)}), which other moves "
             f"share: the compensated joints need {_conf(new)} here, under configuration "
             "supervision (a confdata of its own, written in the target, would serve)")
 
@@ -877,10 +877,11 @@ class Editor:
             if k in confs:
                 texts[7:11] = [str(int(c)) for c in confs[k]]
             literal = records.robtarget_literal(texts)
-            if type(src.expr) is A.Agg and type(src.expr.items[-1]) is A.Ref:
+            axes = named_part(src.expr, -1)
+            if axes is not None:
                 # (Its external axes named data, [[x,y,z],[q],[cf],extj]:
                 # the name kept, as written.)
-                literal = literal[:literal.rindex(",[")] + "," + src.expr.items[-1].name + "]"
+                literal = literal[:literal.rindex(",[")] + "," + axes + "]"
             return literal
 
         # (Its cold value its target as written, a name or a literal, and no

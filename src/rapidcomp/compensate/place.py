@@ -24,11 +24,10 @@ import numpy as np
 
 from ..errors import InputError
 from ..kinematics.ik import Solver, Warn
-from ..rapid import ast as A
 from ..rapid.model import Declaration, Module
 from .plan import Plan
 from .solve import Solved, Solving, same_joints, solve_slots
-from .targets import NO_ROTATION, Source, TargetUse, flange_pose
+from .targets import NO_ROTATION, Source, TargetUse, flange_pose, named_part
 
 MODES = ("auto", "absj", "robtarget")
 # Optional arguments MoveJ/MoveL share with MoveAbsJ (RAPID Instructions
@@ -121,11 +120,10 @@ def kept_robtarget(u: TargetUse, plan: Plan, solved: Solved, row: int) -> str | 
     if u.source.decl is not None and u.source.decl.storage == "PERS":
         return (f"{u.source.decl.name} is PERS data (ModPos or another task may change it; a "
                 "MoveAbsJ would not follow): kept a robtarget move")
-    expr = u.source.expr
-    if type(expr) is A.Agg and type(expr.items[-1]) is A.Ref:
-        # (targets.Resolver._named_axes: [[x,y,z],[q],[cf],extj].)
-        return (f"its external axes are the data {expr.items[-1].name} (a MoveAbsJ would "
-                "write their value, not follow the name): kept a robtarget move")
+    axes = named_part(u.source.expr, -1)
+    if axes is not None:
+        return (f"its external axes are the data {axes} (a MoveAbsJ would write their "
+                "value, not follow the name): kept a robtarget move")
     return None
 
 

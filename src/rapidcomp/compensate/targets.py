@@ -242,9 +242,21 @@ def _chain(hit: Sites, k: int) -> tuple | None:
 # Where an inline target may name data for a part of its value (the
 # Grasshopper plugin Robots: [[x,y,z],[q],conf,extj]): item -> (the data's
 # type, what the part is called).
-_NAMED = {"robtarget": {2: ("confdata", "confdata"), 3: ("extjoint", "external axes")},
-          "jointtarget": {1: ("extjoint", "external axes")}}
-_FIELD = {"confdata": "robconf", "external axes": "extax"}
+# item -> (the data's type, what the part is called, its fields' name).
+_NAMED = {"robtarget": {2: ("confdata", "confdata", "robconf"),
+                        3: ("extjoint", "external axes", "extax")},
+          "jointtarget": {1: ("extjoint", "external axes", "extax")}}
+
+
+def named_part(expr, item: int) -> str | None:
+    """The name of the data an inline target names for its part `item`
+    (Resolver._named_axes: 2 a robtarget's confdata, -1 the external axes),
+    or None: the part is a literal (or expr is no literal target)."""
+    if type(expr) is A.Agg and len(expr.items) in (2, 4) and item < len(expr.items):
+        ref = expr.items[item]
+        if type(ref) is A.Ref:
+            return ref.name
+    return None
 
 
 def _are(what: str) -> str:
@@ -751,8 +763,8 @@ class Resolver:
         `rdkTool := [...]` or `rdkTool.tframe := [...]` before its moves),
         the move lies in that routine's body after them, and no call after
         the first of them may run the routine again before the move (the
-        routine runs its body
-        in order: whatever ran before it, the move uses that value). Its
+        routine runs its body in order: whatever ran before it, the move
+        uses that value). Its
         value is the whole value assigned last before it, with the
         components assigned after that; where the routine assigns no whole
         value, the declared one with the components assigned before it,
@@ -1483,12 +1495,14 @@ class Resolver:
         return self._complete(pf, module, motion, t.role, kind, label, line, envt, key, src)
 
     def _named_axes(self, t, kind: str, module, routine: str | None):
-        """The Source of an inline target whose external axes are named data
-        (the Grasshopper plugin Robots writes [[x,y,z],[q],[cf],extj] and
-        [[j1,..,j6],extj], extj a VAR extjoint of 9E9s), the rest literal:
-        its record with that data's value, where the data is an extjoint
-        with a literal value nothing changes at run time (its numbers are
-        never written: only the literal parts are); else why not."""
+        """The Source of an inline target whose external axes, or a
+        robtarget's confdata, are named data (the Grasshopper plugin Robots
+        writes [[x,y,z],[q],conf,extj], [[x,y,z],[q],[cf],extj] and
+        [[j1,..,j6],extj], extj a VAR extjoint of 9E9s, conf a VAR
+        confdata), the rest literal: its record with that data's values,
+        where each is data of its type with a literal value nothing changes
+        at run time (never written: only the literal parts are); else why
+        not."""
         record = self._named_record(t.expr, kind, module, routine, t.issue)
         if type(record) is Unresolved:
             return record
@@ -1505,7 +1519,7 @@ class Resolver:
             return Unresolved(issue)
         items = list(expr.items)
         decls = []
-        for i, (type_, what) in named.items():
+        for i, (type_, what, field) in named.items():
             ref = items[i]
             if type(ref) is not A.Ref:
                 continue
@@ -1531,7 +1545,7 @@ class Resolver:
             # compensation writes the pose's values, and a confdata only
             # where it changes, which a named one may not: edit.py.)
             items[i] = d.node.init
-            decls.append((d, what))
+            decls.append((d, field))
         try:
             return decode(kind, A.Agg(tuple(items), expr.span), f"inline {kind}")
         except DecodeIssue as exc:
@@ -1539,10 +1553,9 @@ class Resolver:
                 return Unresolved(issue)
             # (A value no controller loads, in a declaration's numbers: the
             # literal's own were read by the parse.)
-            for d, what in decls:
+            for d, field in decls:
                 init = d.node.init.span
                 if init.start <= exc.span.start < init.end:
-                    field = _FIELD[what]
                     raise self.home[id(d)].source.error(
                         exc.span.start, exc.reason.replace(f"inline {kind}.{field}", d.name)
                     ) from None

@@ -114,6 +114,15 @@ def signed(text: str) -> float:
     return -value if text[0] == "-" else value
 
 
+def _fast_number(text: str, base: int, pos: int) -> tuple:
+    """The Num a FAST_CALL's number at text[pos] is (the grammar's
+    _FAST_NUM), its sign folded in as the parser folds it; and where it
+    ends in text."""
+    end = _FAST_NUM.match(text, pos).end()
+    written = text[pos:end]
+    return _num(signed(written), written, _span((base + pos, base + end))), end
+
+
 def _fast_func(text: str, base: int, start: int, name_end: int) -> tuple:
     """The function call a FAST_CALL's first argument is (its name at
     text[start:name_end], then '(' arguments ')': names, numeric
@@ -159,10 +168,8 @@ def _fast_func(text: str, base: int, start: int, name_end: int) -> tuple:
         elif text[pos] in _NUMBER_START:
             # (As the parser makes it: a sign right before the number folded
             # into it, its span from the sign.)
-            end = _FAST_NUM.match(text, pos).end()
-            span = _span((base + pos, base + end))
-            written = text[pos:end]
-            node = _num(signed(written), written, span)
+            node, end = _fast_number(text, base, pos)
+            span = node.span
         else:
             end = _FAST_ITEM.match(text, pos).end()
             span = _span((base + pos, base + end))
@@ -447,13 +454,9 @@ class NodeBuilder:
             args = [_arg("pos", None, _numagg(text[pos:end], span), span)]
             pos = end
         elif text[pos] in _NUMBER_START:
-            # A number (WaitTime 0.2;), its sign folded in as the parser
-            # folds it.
-            end = _FAST_NUM.match(text, pos).end()
-            span = _span((base + pos, base + end))
-            written = text[pos:end]
-            args = [_arg("pos", None, _num(signed(written), written, span), span)]
-            pos = end
+            # A number (WaitTime 0.2;).
+            node, pos = _fast_number(text, base, pos)
+            args = [_arg("pos", None, node, node.span)]
         else:
             first = _FAST_ITEM.match(text, pos)      # a name
             end = first.end()

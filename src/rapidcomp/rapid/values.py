@@ -477,17 +477,19 @@ def _compact(t: str, expr, where: str, known=None) -> Record:
         values = plain_values(cls, frame_fields(text), text)
         if values is not None:
             return _MAKE[cls](values, text, expr.span)
-        m = _FAST[t].fullmatch(expr.text)
+        values = spaced_values(cls, text)
+        if values is not None:
+            return _MAKE[cls](values, text, expr.span)
+        m = _FAST[t].fullmatch(text)
         if m is not None:
+            # (Its shape, with a number beyond a num's range: which, and
+            # where. No NaN: the regex's numbers.)
             texts = m.groups()
-            values = tuple(map(float, texts))
-            if not max(map(abs, values)) <= NUM_MAX:      # (no NaN: the regex's numbers)
-                k = next(i for i, v in enumerate(values) if not abs(v) <= NUM_MAX)
-                s, e = m.regs[k + 1]
-                raise DecodeIssue(f"{where} component {texts[k]} is beyond what a RAPID num "
-                                  "holds (+-3.4E38)",
-                                  Span(expr.span.start + s, expr.span.start + e), True)
-            return cls(values, expr.text, expr.span)
+            k = next(i for i, x in enumerate(texts) if not abs(float(x)) <= NUM_MAX)
+            s, e = m.regs[k + 1]
+            raise DecodeIssue(f"{where} component {texts[k]} is beyond what a RAPID num "
+                              "holds (+-3.4E38)",
+                              Span(expr.span.start + s, expr.span.start + e), True)
     nested = _walk(SHAPES[t], expr, where, NAMES[t])
     fields = [f for group in nested for f in group]
     base = expr.span.start
