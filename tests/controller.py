@@ -210,6 +210,8 @@ class Controller:
             self.assigned[name] = decode(d.type, s.value)
             return
         (part,) = s.target.selectors
+        if part.name.lower() == "tload":
+            return                          # (a tool's load moves no target)
         assert part.name.lower() in FRAMES[type(d.value)], f"not modelled: {part.name}"
         old = self.assigned.get(name, d.value)
         self.assigned[name] = replace(old, **{part.name.lower(): decode("pose", s.value)})

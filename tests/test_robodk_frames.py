@@ -191,3 +191,175 @@ def test_a_declared_frame_is_said_where_it_is_declared(tmp_path):
                   check=False)
     assert r.returncode == 2, r.stdout + r.stderr
     assert "Data.mod:3:" in r.stderr and "200000" in r.stderr, r.stderr
+
+
+# ---------------------------------------------------------------- several programs
+
+def module(name: str, routines: dict[str, list[str]], data: bool = True) -> str:
+    """A module as the post writes a main program and the programs it
+    calls: each PROC its own frames' assignments before its moves."""
+    lines = ["MODULE " + name, ""]
+    if data:
+        lines += [
+            "  PERS tooldata rdkTool := [TRUE,[[0,0,0],[1,0,0,0]],[2,[0,0,15],[1,0,0,0],0,0,"
+            "0.005]];",
+            "  PERS wobjdata rdkWObj := [FALSE, TRUE, \"\", [[0,0,0],[1,0,0,0]],"
+            "[[0,0,0],[1,0,0,0]]];",
+            "  VAR speeddata rdkSpeed := [250,500,5000,1000];", ""]
+    for routine, body in routines.items():
+        lines += [f"  PROC {routine}()", *body, "  ENDPROC", ""]
+    return "\n".join(lines + ["ENDMODULE", ""])
+
+
+def whole_tool(tool: str) -> str:
+    return f"    rdkTool := [TRUE,{pose_text(TOOLS[tool])},[2,[0,0,15],[1,0,0,0],0,0,0.005]];"
+
+
+def whole_wobj(frame: str) -> str:
+    return f"    rdkWObj := [FALSE, TRUE, \"\", {pose_text(FRAMES[frame])},[[0,0,0],[1,0,0,0]]];"
+
+
+@pytest.mark.parametrize("mode", ["auto", "robtarget"])
+@pytest.mark.parametrize("style", ["frames", "whole values"])
+def test_each_program_is_compensated_with_the_frames_it_assigns_itself(mode, style, tmp_path):
+    """RoboDK's main program and the programs it calls each assign rdkTool
+    and rdkWObj before their own moves (their frames, or whole values): each
+    move is compensated with its own routine's, checked on the controller
+    model running the whole program."""
+    tool, wobj = (tframe, uframe) if style == "frames" else (whole_tool, whole_wobj)
+    src = tmp_path / "MOD_Main.mod"
+    src.write_text(module("MOD_Main", {
+        "Main": [tool("T1"), wobj("U1"), move("MoveL", 0, "T1", "U1"),
+                 move("MoveJ", 1, "T1", "U1"), "    Prog2;", "    Prog3;"],
+        "Prog2": [tool("T2"), wobj("U2"), move("MoveL", 3, "T2", "U2"),
+                  move("MoveL", 4, "T2", "U2")],
+        "Prog3": [tool("T1"), wobj("U2"), move("MoveJ", 5, "T1", "U2"),
+                  move("MoveL", 6, "T1", "U2")]}))
+    out = tmp_path / "out.mod"
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out, "--emit", mode,
+                  "--allow-partial")
+    assert "6 of 6 target uses compensated" in r.stdout, r.stdout
+    assert "assigned by the routines: " in r.stdout, r.stdout
+    rows = evaluate([parse_file(src, src.name)], [parse_file(out, src.name)], entry="Main")
+    assert len(rows) == 6
+    for (x, _, _, _), q in zip(rows, np.delete(Q, 2, axis=0)):
+        want = fk(NOMINAL, q)
+        got = x.pose if x.pose is not None else fk(NOMINAL, x.q_deg)
+        assert np.linalg.norm(got.translation - want.translation) < 1e-2
+
+
+TRAP = "  VAR intnum irq;\n  TRAP OnSignal\n    Prog2;\n  ENDTRAP\n\n  PROC Main()"
+# case -> (routines, text replaced in the module, Main's moves (Q rows) left
+# as written, how many moves are, what the report says of them).
+CROSS = {
+    # (Outer runs Prog2, which assigns them: Main's moves after either call
+    # take Prog2's frames.)
+    "a call of a program that calls one that assigns them": (
+        {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1"), "    Outer;",
+                  move("MoveL", 1, "T1", "U1"), "    Prog2;", move("MoveL", 2, "T1", "U1")],
+         "Outer": ["    WaitTime 0.1;", "    Prog2;"],
+         "Prog2": [tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2")]},
+        None, (1, 2), 2, "the call at line 11 may assign it again before this move"),
+    "an interrupt routine that calls one": (
+        {"Main": ["    CONNECT irq WITH OnSignal;", tframe("T1"), uframe("U1"),
+                  move("MoveL", 0, "T1", "U1")],
+         "Prog2": [tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2")]},
+        ("  PROC Main()", TRAP), (0,), 2, "by a routine an interrupt may run"),
+    # (Its arguments are evaluated before the move moves: Zn's tool.)
+    "a function in the move's own arguments": (
+        {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1"),
+                  move("MoveL", 1, "T1", "U1").replace(",z1,", ",Zn(),")],
+         "Prog2": [tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2")]},
+        ("  PROC Prog2()", "  FUNC zonedata Zn()\n    Prog2;\n    RETURN z1;\n  ENDFUNC\n\n"
+         "  PROC Prog2()"), (1,), 1, "the call at line 11 may assign it again before this move"),
+    # (Prog2 moves the object frame; Main assigns the user frame only: the
+    # object frame is Prog2's where it ran before, else the declared one.)
+    "another routine assigns a frame this one does not": (
+        {"Main": ["    Prog2;", tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+         "Prog2": [tframe("T2"), uframe("U2"), "    rdkWObj.oframe := [[0,0,37],[1,0,0,0]];",
+                   move("MoveL", 3, "T2", "U2")]},
+        None, (0,), 1, "another routine assigns rdkWObj.oframe (MOD_Main.mod:17)"),
+    # (Nothing calls SetT2 and it moves with nothing: run from the
+    # FlexPendant, or as an event routine, while the program is stopped.)
+    "a service routine that assigns them": (
+        {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+         "SetT2": [tframe("T2")]},
+        None, (0,), 1, "by SetT2 (MOD_Main.mod:14), which no given routine calls"),
+}
+
+
+@pytest.mark.parametrize("case", list(CROSS))
+def test_a_move_whose_frames_another_routine_may_change_is_left_as_written(case, tmp_path):
+    """Between a routine's assignments and its move, a call that may run
+    another routine assigning the same data (through others, in the move's
+    own arguments too) changes the value; an interrupt may run one
+    anywhere, and so may a routine nothing calls that moves with none of it
+    (a service or event routine): then no move of the data is followed;
+    another routine that assigns a frame this one does not leaves that
+    frame unknown. The report says which of these it is."""
+    routines, replaced, kept, n, said = CROSS[case]
+    text = module("MOD_Main", routines)
+    if replaced is not None:
+        text = text.replace(*replaced)
+    src = tmp_path / "MOD_Main.mod"
+    src.write_text(text)
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", tmp_path / "out.mod",
+                  "--allow-partial", check=False)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert f"{n} untouched" in r.stdout and said in r.stdout, r.stdout
+    after = (tmp_path / "out.mod").read_text()
+    lines = [b for body in routines.values() for b in body if b.lstrip().startswith("Move")]
+    for k in kept:
+        line = next(b for b in lines if b == move("MoveL", k, "T1", "U1")
+                    or b == move("MoveL", k, "T1", "U1").replace(",z1,", ",Zn(),"))
+        assert line in after
+
+
+def test_a_tool_load_another_routine_assigns_changes_no_target(tmp_path):
+    """Another routine assigns the tool's load only (rdkTool.tload): the
+    moves of a routine that assigns its frame are followed all the same."""
+    src = tmp_path / "MOD_Main.mod"
+    src.write_text(module("MOD_Main", {
+        "Main": ["    Prog2;", tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+        "Prog2": ["    rdkTool.tload := [3,[0,0,20],[1,0,0,0],0,0,0];", tframe("T2"),
+                  uframe("U2"), move("MoveL", 3, "T2", "U2")]}))
+    out = tmp_path / "out.mod"
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out)
+    assert "2 of 2 target uses compensated" in r.stdout, r.stdout
+    rows = evaluate([parse_file(src, src.name)], [parse_file(out, src.name)], entry="Main")
+    assert len(rows) == 2
+
+
+def test_routines_of_two_modules_keep_their_own_values(tmp_path):
+    """Two modules of a task, alike to the character up to their routines'
+    assignments (at the same offsets), assign different tools there and
+    move to one declared target: each move with its own routine's tool."""
+    task = tmp_path / "cell"
+    task.mkdir()
+    # (The flange at the joints Q[2] through the tool T1; through T2 close by.)
+    q = Q[2] * DEG
+    _, frames = Chain.from_robot(NOMINAL).joint_frames(q[None])
+    conf = confdata(q[None], frames[:, 4], Solver(NOMINAL).geometry.phi)[0]
+    pose = pose_text(fk(NOMINAL, Q[2]) * TOOLS["T1"])
+    (task / "Data.mod").write_text("\n".join([
+        "MODULE Data",
+        "  PERS tooldata rdkTool := [TRUE,[[0,0,0],[1,0,0,0]],[2,[0,0,15],[1,0,0,0],0,0,"
+        "0.005]];",
+        "  PERS wobjdata rdkWObj := [FALSE, TRUE, \"\", [[0,0,0],[1,0,0,0]],"
+        "[[0,0,0],[1,0,0,0]]];",
+        "  VAR speeddata rdkSpeed := [250,500,5000,1000];",
+        f"  CONST robtarget pShared := [{pose[1:-1]},[{','.join(str(int(c)) for c in conf)}],"
+        f"{EXT}];",
+        "  PROC main()", "    ProgA;", "    ProgB;", "  ENDPROC", "ENDMODULE", ""]))
+    for name, tool in (("A", "T1"), ("B", "T2")):
+        (task / f"Mod{name}.mod").write_text(module(f"Mod{name}", {f"Prog{name}": [
+            tframe(tool),
+            "    MoveL pShared,rdkSpeed,z1,rdkTool,\\WObj:=rdkWObj;"]}, data=False))
+    out = tmp_path / "out"
+    r = rapidcomp("fix", task, "--profile", "fixtures/warm.csv", "-o", out, "--emit",
+                  "robtarget")
+    assert "2 of 2 target uses compensated" in r.stdout, r.stdout
+    names = ["Data.mod", "ModA.mod", "ModB.mod"]
+    inp = [parse_file(task / n, n) for n in names]
+    rows = evaluate(inp, [parse_file(out / n, n) for n in names])
+    assert len(rows) == 2

@@ -163,19 +163,22 @@ class Plan:
                         if "@" in key})
         if taken:
             sites = self.resolver.site_map()
-            said = "; ".join(
-                ", ".join(dict.fromkeys(assigned_name(a) for _, a in sites[n].assigns))
-                + f" ({sites[n].assigns[0][0].source.display_path} "
-                + ("line " if len(sites[n].assigns) == 1 else "lines ")
-                + line_ranges([pf.line(a.span) for pf, a in sites[n].assigns]) + ")"
-                for n in taken if n in sites)
-            parts = any(sites[n].parts for n in taken if n in sites)
-            out.append(f"assigned by the routine that moves with them: {said}; each move "
-                       "there is solved with the value assigned last before it"
+            said = "; ".join(_assigned_at([a for hit in sites[n].values() for a in hit.assigns])
+                             for n in taken if n in sites)
+            parts = any(hit.parts for n in taken if n in sites for hit in sites[n].values())
+            several = any(len(sites[n]) > 1 for n in taken if n in sites)
+            out.append(("assigned by the routines: " if several else
+                        "assigned by the routine that moves with them: ")
+                       + f"{said}; each move "
+                       + ("is solved with the value its own routine assigned last before it"
+                          if several else
+                          "there is solved with the value assigned last before it")
                        + (" (a component: with the rest of the value as declared, or as "
                           "assigned whole before it; " if parts else " (")
-                       + "moves before the first assignment, and in other routines, run "
-                       "with a value not known here: left as written)")
+                       + ("moves before their routine's first assignment, and in routines "
+                          "that assign none, run" if several else
+                          "moves before the first assignment, and in other routines, run")
+                       + " with a value not known here: left as written)")
         again = self._compensated_before()
         named = self._named_as_output()
         if again or named:
@@ -225,6 +228,17 @@ class Plan:
                     "the robot's base: each target is solved relative to the base at its own "
                     "track position, and a MoveAbsJ keeps the track value.")
         return out
+
+
+def _assigned_at(assigns: list) -> str:
+    """What assignments ((ParsedFile, Assign)) assign, and where, by file:
+    "rdkTool (a.mod lines 6, 12)"."""
+    by_file: dict = {}
+    for pf, a in assigns:
+        by_file.setdefault(pf.source.display_path, []).append(pf.line(a.span))
+    return (", ".join(dict.fromkeys(assigned_name(a) for _, a in assigns)) + " ("
+            + "; ".join(f"{f} " + ("line " if len(ls) == 1 else "lines ")
+                        + line_ranges(sorted(ls)) for f, ls in by_file.items()) + ")")
 
 
 # Ranges a list of lines names; past them the count of the lines left (a

@@ -173,24 +173,29 @@ class _Reentry:
         hit = self._reach[name] = (frozenset(seen), anything)
         return hit
 
-    def calls(self, key: tuple) -> list | None:
-        """The offsets of the calls of routine `key` that may run it again;
-        None when an interrupt may run it (anywhere)."""
+    def calls(self, key: tuple, others=frozenset()) -> list | None:
+        """The offsets of the calls of routine `key` that may run it again,
+        or any of the routines `others`; None when an interrupt may run one
+        of them (anywhere)."""
+        them = others | {key}
         for trap in self.traps:
             reached, anything = self._reached(trap[1])
-            if anything or key in reached:
+            if anything or not them.isdisjoint(reached):
                 return None
         out = []
         for at, name in self.calls_by[key]:
             reached, anything = self._reached(name)
-            if anything or key in reached:
+            if anything or not them.isdisjoint(reached):
                 out.append(at)
         return sorted(out)
 
 
 class Sites(NamedTuple):
     """Where one routine assigns a tool or work object (Resolver.site_map):
-    its whole value, or one component of it (rdkTool.tframe := [...])."""
+    its whole value, or one component of it (rdkTool.tframe := [...]).
+    reentries: its calls that may run it again, or another routine that
+    assigns the same data (RoboDK: a main program and each program it
+    calls assign rdkTool before their own moves)."""
 
     routine: tuple          # (module id, lower-case routine name)
     starts: list            # the assignments' offsets, in order
@@ -199,7 +204,17 @@ class Sites(NamedTuple):
     reentries: list         # offsets of its calls that may run it again
     parts: frozenset = frozenset()   # the components assigned (lower case)
     whole: bool = True      # some assignment is of the whole value
+    # Other routines' assignments of the same data, in order: a component
+    # they assign that this routine's value does not, or a whole value,
+    # may be what the rest of its value is.
+    elsewhere: tuple = ()
+    # Why this routine's moves are not followed (a GOTO), or None.
+    why: str | None = None
 
+
+# The components of PARTS that are no frame (which target a move reaches
+# does not depend on them).
+_LOADS = frozenset(("tload",))
 
 # The components of a tool or work object a routine may assign a literal to
 # (their types): the frames; the rest of the value is the declared one.
@@ -222,21 +237,54 @@ def assigned_name(assign) -> str:
 def _data_key(expr, site) -> str:
     """A tool's or work object's key (grouping: one value, one key): its
     name, and where a routine assigns it, the place of the assignment last
-    before the move (which decides the assignments its value is made of)."""
+    before the move (which decides the assignments its value is made of):
+    its file (routines of several modules may assign it) and offset."""
     name = expr.name.lower()
-    return name if site is None else f"{name}@{site[-1][1].span.start}"
+    if site is None:
+        return name
+    pf, assign = site[-1]
+    return f"{name}@{id(pf)}:{assign.span.start}"
 
 
-def _chain(hit: Sites, k: int) -> tuple | None:
+def _chain(hit: Sites, k: int) -> tuple | str:
     """The assignments of hit whose values make the one a move after the
-    first k of them uses (Resolver._sites), or None: not known."""
+    first k of them uses (Resolver._sites), or why that is not known."""
     done = hit.assigns[:k]
     if hit.whole:
         w = next((i for i in range(k - 1, -1, -1) if _part(done[i][1]) is None), None)
         # (No whole value before the move: the one it has where the routine
         # begins is that of an earlier run, or not known.)
-        return None if w is None else tuple(done[w:])
-    return (tuple(done) if {_part(a) for _, a in done} == hit.parts else None)
+        if w is None:
+            pf, a = next(x for x in hit.assigns if _part(x[1]) is None)
+            return (f"its routine assigns the whole value only after this move "
+                    f"({_where(pf, a.span.start)}): the rest is the one it had where the routine "
+                    "began")
+        return tuple(done[w:])
+    assigned = {_part(a) for _, a in done}
+    if assigned != hit.parts:
+        pf, a = next(x for x in hit.assigns[k:] if _part(x[1]) not in assigned)
+        return (f"its routine assigns {assigned_name(a)} only after this move "
+                f"({_where(pf, a.span.start)}): that part is the one it had where the routine "
+                "began")
+    # (Only components: the rest as declared, unless another routine
+    # assigns the whole value, or a frame this one does not: a tool's
+    # load moves nothing.)
+    other = next((x for x in hit.elsewhere if _part(x[1]) not in assigned
+                  and _part(x[1]) not in _LOADS), None)
+    if other is not None:
+        pf, a = other
+        if _part(a) is None:
+            return (f"another routine assigns the whole {a.target.name} "
+                    f"({_where(pf, a.span.start)}), this one only "
+                    + ", ".join(sorted(assigned)) + ": the rest of the value is not known here")
+        return (f"another routine assigns {assigned_name(a)} ({_where(pf, a.span.start)}), "
+                "which this one does not before the move: that frame is not known here")
+    return tuple(done)
+
+
+def _where(pf, offset: int) -> str:
+    """"file:line" of an offset of pf."""
+    return f"{pf.source.display_path}:{pf.source.position(offset)[0]}"
 
 
 # Where an inline target may name data for a part of its value (the
@@ -697,10 +745,12 @@ class Resolver:
         return Unresolved(written) if written else d
 
     def site_map(self) -> dict:
-        """Tool and work object names whose every assignment is a whole
-        literal and a statement of one routine's body itself -> Sites; not
-        in a routine with a GOTO (its body may run out of order) or one an
-        interrupt may run. Made once."""
+        """Tool and work object names whose every assignment is a literal
+        (of the whole value or of one component) and a statement of a
+        routine's body itself -> {routine key: Sites} of each routine that
+        assigns it; not a routine with a GOTO (its body may run out of
+        order), and none where an interrupt may run one of them. Made
+        once."""
         sites = self._site_map
         if sites is not None:
             return sites
@@ -711,12 +761,13 @@ class Resolver:
                    and self.pers_anything is None else {})
         if not literal and not self.site_names:
             return sites
-        body, ends, jumps = {}, {}, set()
+        body, ends, jumps, names = {}, {}, set(), {}
         found: dict = {}        # (the output: the plan's names, assigned where they were)
         for pf in self.files:
             for m in pf.modules:
                 for r in m.routines:
                     key = (id(m), r.name.lower())
+                    names[key] = r.name
                     # Where the body ends: a move in a handler runs after an
                     # error anywhere, before an assignment too.
                     ends[key] = r.node.body[-1].span.end if r.node.body else -1
@@ -731,20 +782,63 @@ class Resolver:
                                          and type(st.target.selectors[0]) is A.Component))):
                             found.setdefault(st.target.name.lower(), []).append((pf, st))
         reentry = _Reentry(self.files)
+        called = {n for calls in reentry.calls_by.values() for _, n in calls}
+        moves_with = self._moves_with()
         for name, assigns in (literal or found).items():
-            where = {body.get(id(a)) for _, a in assigns}
-            if len(where) != 1 or None in where:
+            by_routine: dict = {}
+            for pf, a in assigns:
+                by_routine.setdefault(body.get(id(a)), []).append((pf, a))
+            if None in by_routine or (literal and self._only_itself(name)):
                 continue
-            (routine,) = where
-            risky = reentry.calls(routine) if routine not in jumps else None
-            if risky is None:
+            # A routine nothing given calls that assigns the data and makes
+            # no move with it, beside others that assign it, is a service
+            # or event routine: it may run while the program is stopped,
+            # between any two statements (main is the program's entry).
+            service = next((r for r in by_routine if len(by_routine) > 1 and r[1] != "main"
+                            and r[1] not in called and name not in moves_with.get(r, ())),
+                           None)
+            if service is not None:
+                pf, a = by_routine[service][0]
+                sites[name] = (f"{a.target.name} is assigned at run time by {names[service]} "
+                               f"({_where(pf, a.span.start)}), which no given routine calls "
+                               "and which makes no move with it: a service or event routine "
+                               "may run while the program is stopped")
                 continue
-            ordered = sorted(assigns, key=lambda x: x[1].span.start)
-            parts = [_part(a) for _, a in ordered]
-            sites[name] = Sites(routine, [a.span.start for _, a in ordered], ordered,
-                                ends[routine], risky, frozenset(parts) - {None},
-                                None in parts)
+            # (Each routine's moves take the value it assigns itself: a call
+            # between that may run any routine assigning it, this one
+            # again included, changes the value.)
+            here: dict = {}
+            them = frozenset(by_routine)
+            for routine, mine in by_routine.items():
+                risky = reentry.calls(routine, them)
+                if risky is None:
+                    pf, a = mine[0]
+                    here = (f"{a.target.name} is assigned at run time ({_where(pf, a.span.start)})"
+                            " by a routine an interrupt may run: at any moment")
+                    break
+                ordered = sorted(mine, key=lambda x: x[1].span.start)
+                parts = [_part(a) for _, a in ordered]
+                elsewhere = tuple(x for r, xs in by_routine.items() if r != routine for x in xs)
+                here[routine] = Sites(
+                    routine, [a.span.start for _, a in ordered], ordered, ends[routine], risky,
+                    frozenset(parts) - {None}, None in parts, elsewhere,
+                    "its routine has a GOTO (its body may run out of order)"
+                    if routine in jumps else None)
+            sites[name] = here
         return sites
+
+    def _moves_with(self) -> dict:
+        """(module id, lower-case routine name) -> the lower-case names of
+        the tools and work objects its moves name."""
+        out: dict = {}
+        for pf in self.files:
+            for m in pf.modules:
+                for mo in m.motions:
+                    names = out.setdefault((id(m), (mo.routine or "").lower()), set())
+                    for ref in (mo.tool, mo.wobj):
+                        if type(ref) is A.Ref:
+                            names.add(ref.name.lower())
+        return out
 
     def _home_of(self, d: Declaration, part: str | None = None) -> ParsedFile:
         """The file of d's value (of its component `part`): its
@@ -756,46 +850,92 @@ class Resolver:
 
     def _sites(self, motion, module) -> tuple | None:
         """For a move's tool and work object, each the assignments whose
-        values make the one it uses ((ParsedFile, Assign), in order), or
-        None: where all assignments of that data are literals, of the whole
-        value or of one component, each a statement of one routine's body
-        itself (not in a block, a handler or another routine: RoboDK's
-        `rdkTool := [...]` or `rdkTool.tframe := [...]` before its moves),
-        the move lies in that routine's body after them, and no call after
-        the first of them may run the routine again before the move (the
+        values make the one it uses ((ParsedFile, Assign), in order), why
+        its value is not known (a string: the move is left as written), or
+        None: not such data. Followed where all assignments of that data
+        are literals, of the whole value or of one component, each a
+        statement of a routine's body
+        itself (not in a block or a handler: RoboDK's `rdkTool := [...]` or
+        `rdkTool.tframe := [...]` before its moves, in each program), the
+        move lies in the body of a routine that assigns it, after those
+        assignments, and no call after the first of them may run that
+        routine again, or another that assigns it, before the move (the
         routine runs its body in order: whatever ran before it, the move
         uses that value). Its
         value is the whole value assigned last before it, with the
         components assigned after that; where the routine assigns no whole
         value, the declared one with the components assigned before it,
         each component the routine assigns among them (else the value it
-        has where the routine begins is not known). None when neither is
-        such data (the common case: memoised lookups)."""
+        has where the routine begins is not known), and where another
+        routine assigns the data, the components it assigns among them.
+        None when neither is such data (the common case: memoised
+        lookups)."""
         sites = self.site_map()
         if not sites:
             return None
         out = []
+        routine = (id(module), (motion.routine or "").lower())
         for ref in (motion.tool, motion.wobj):
-            hit = (sites.get(ref.name.lower()) if type(ref) is A.Ref and not ref.selectors
-                   else None)
-            if (hit is None or hit.routine != (id(module), (motion.routine or "").lower())
-                    or motion.span.start > hit.body_end):
-                out.append(None)
-                continue
-            k = bisect_left(hit.starts, motion.span.start)
-            chain = _chain(hit, k) if k else None
-            # A call that may run the routine again, its assignments too,
-            # after the first assignment the value is made of: the value is
-            # not known where it lies before the move, or runs before the
-            # move again (later in the move's loop: before its next round;
-            # in an error handler: RETRY runs the statement again).
-            if chain is not None and hit.reentries:
-                later = hit.reentries[bisect_right(hit.reentries, chain[0][1].span.start):]
-                if later and (later[0] < motion.span.start or motion.loops
-                              or later[-1] > hit.body_end):
-                    chain = None
-            out.append(chain)
+            entry = (sites.get(ref.name.lower()) if type(ref) is A.Ref and not ref.selectors
+                     else None)
+            if type(entry) is dict:
+                entry = self._site_chain(ref, entry, routine, motion)
+                # (The output's resolver takes the plan's word: a move the
+                # plan left as written is not verified.)
+                if type(entry) is str and not self.writes.literal:
+                    entry = None
+            out.append(entry)
         return tuple(out) if out[0] is not None or out[1] is not None else None
+
+    def _site_chain(self, ref, by_routine: dict, routine: tuple, motion) -> tuple | str:
+        """_sites of one tool or work object the routines by_routine
+        assign: the chain, or why the value is not known (a reason the move
+        is left untouched with)."""
+        def unknown(why: str, at=None) -> str:
+            pf, a = at or first
+            return f"{ref.name} is assigned at run time ({_where(pf, a.span.start)}): {why}"
+
+        hit = by_routine.get(routine)
+        if hit is None:
+            first = next(iter(by_routine.values())).assigns[0]
+            return unknown("by other routines, not by this move's own: its value here is the "
+                           "one some routine left")
+        first = hit.assigns[0]
+        if hit.why is not None:
+            return unknown(hit.why)
+        if motion.span.start > hit.body_end:
+            return unknown("this move is in an error handler, which may run before any of "
+                           "its routine's assignments")
+        k = bisect_left(hit.starts, motion.span.start)
+        if not k:
+            return unknown("this move comes before its routine assigns it: the value is the "
+                           "one it had where the routine began")
+        chain = _chain(hit, k)
+        if type(chain) is str:
+            return unknown(chain, hit.assigns[k - 1])
+        # A call that may run the routine again, or another that assigns
+        # the data, after the first assignment the value is made of: the
+        # value is not known where the call lies before the move (in the
+        # move's own statement too: its arguments are evaluated before it
+        # moves), or runs before the move again (later in the move's
+        # loop: before its next round; in an error handler: RETRY runs
+        # the statement again).
+        if hit.reentries:
+            later = hit.reentries[bisect_right(hit.reentries, chain[0][1].span.start):]
+            if later:
+                pf = first[0]
+                if later[0] <= motion.span.start:
+                    return unknown(f"the call at line {pf.source.position(later[0])[0]} may "
+                                   "assign it again before this move", chain[-1])
+                if motion.loops:
+                    return unknown(f"the call at line {pf.source.position(later[0])[0]} may "
+                                   "assign it again before this move's loop runs it again",
+                                   chain[-1])
+                if later[-1] > hit.body_end:
+                    return unknown(f"the call at line {pf.source.position(later[-1])[0]}, in "
+                                   "the error handler, may assign it again before RETRY",
+                                   chain[-1])
+        return chain
 
     def _task_writes(self, files, observers) -> None:
         """What the task may change at run time, and what the controller's
@@ -874,6 +1014,14 @@ class Resolver:
             why = f"{d.name} {self.pers_anything}"
         return why
 
+    def _only_itself(self, name: str) -> bool:
+        """Whether every declaration of this name (lower case) is only ever
+        assigned its own declared value (_assigned_itself): that value,
+        wherever a move uses it."""
+        decls = [d for (_, n), d in self.module_decls.items() if n == name]
+        decls += [d for (_, _, n), d in self.routine_decls.items() if n == name]
+        return bool(decls) and all(self._assigned_itself(d) is not None for d in decls)
+
     def _assigned_itself(self, d: Declaration) -> str | None:
         """A note when every write of d assigns it its own declared value
         (which changes nothing), else None."""
@@ -923,13 +1071,15 @@ class Resolver:
             # program's 1e5 moves name the same two; keyed by the assignment
             # nodes, which live as long as the parse.)
             key = (id(module), routine, _name_or_node(t), _name_or_node(w),
-                   *(id(site[-1][1]) if site is not None else None for site in sites))
+                   *(id(site[-1][1]) if type(site) is tuple else site for site in sites))
             hit = self._pairs.get(key)
             if hit is None:
                 before = len(self._notes)
-                tool = (self._tool(t, module, routine, sites[0]) if sites[0] is not None
+                tool = (Unresolved(sites[0]) if type(sites[0]) is str else
+                        self._tool(t, module, routine, sites[0]) if sites[0] is not None
                         else self.tool(t, module, routine))
                 wobj = None if type(tool) is Unresolved else (
+                    Unresolved(sites[1]) if type(sites[1]) is str else
                     self._wobj(w, module, routine, sites[1]) if sites[1] is not None
                     else self.wobj(w, module, routine))
                 # (What their resolution noted, said for every move that
