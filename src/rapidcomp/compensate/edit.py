@@ -191,18 +191,18 @@ class Values:
         supervision (once per group: an array group is given once per
         element)."""
         s = self.solved
-        picks, row = s.picks, s.row
+        kind, row = s.picks.kind, s.row
         out = []
         seen: dict = {}
         for g in gs:
             uses = g.uses
             if len(uses) == 1:
                 # (One use: its row is the group's one row.)
-                out.append(picks[next(iter(g.rows.values()))].kind == "closest")
+                out.append(kind[next(iter(g.rows.values()))] == "closest")
                 continue
             v = seen.get(id(g))
             if v is None:
-                v = seen[id(g)] = all(picks[row[u.key]].kind == "closest" for u in uses)
+                v = seen[id(g)] = all(kind[row[u.key]] == "closest" for u in uses)
             out.append(v)
         return out
 

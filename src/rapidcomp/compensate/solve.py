@@ -58,7 +58,7 @@ class Solved:
     flange_R: np.ndarray       # nominal FK of the compensated joints
     flange_p: np.ndarray
     conf_after: np.ndarray     # confdata of the compensated joints
-    picks: list                # Pick: how the nominal solution was chosen, or why none
+    picks: "Picks"             # Pick: how the nominal solution was chosen, or why none
     displacement_um_per_mm: np.ndarray  # extra error per mm of program displacement
     start: np.ndarray | None = None     # --start joints, deg
 
@@ -67,7 +67,7 @@ class Solved:
 
     def oks(self) -> list[bool]:
         """ok(i) of every row, as a list (1e5 rows asked at once)."""
-        return [p.failure is None and s for p, s in zip(self.picks,
+        return [f is None and s for f, s in zip(self.picks.failure,
                                                         self.deformed.success.tolist())]
 
     def reason(self, i: int) -> str | None:
@@ -114,6 +114,32 @@ class Pick(NamedTuple):
     # configuration stays the controller's choice, and the report says what
     # was assumed.
     caution: str | None = None
+
+
+class Picks:
+    """Every row's Pick as columns, past the choice (a CAM program's 1e5: no
+    tuple and joint array each, ~20 MB to the report); picks[i] makes row
+    i's Pick when asked (its joints: the row of the nominal solutions as
+    chosen)."""
+
+    def __init__(self, picks: list, q: np.ndarray):
+        self.q = q
+        self.rule = [p.rule for p in picks]
+        self.failure = [p.failure for p in picks]
+        self.kind = [p.kind for p in picks]
+        self.caution = [p.caution for p in picks]
+        # ("closest": the joints and the line of the move it is closest to.)
+        self.closest = {i: (p.prev, p.line) for i, p in enumerate(picks)
+                        if p.prev is not None or p.line is not None}
+
+    def __len__(self) -> int:
+        return len(self.rule)
+
+    def __getitem__(self, i: int) -> Pick:
+        failure = self.failure[i]
+        prev, line = self.closest.get(i, (None, None))
+        return _pick((None if failure is not None else self.q[i], self.rule[i], failure,
+                      self.kind[i], prev, line, self.caution[i]))
 
 
 # (A Pick as its class makes it, every field given: run's quick cases make
@@ -817,6 +843,8 @@ class Solving:
         for i in range(n):
             if bad[i] and picks[i].failure is None:
                 picks[i] = _fail(f"nominal: {seed.reason(i)}")
+        # (Past the choice, as columns.)
+        self.picks = picks = Picks(picks, q_nom)
         self.R, self.p = R, p
         self._deformed = side.run(_solve_deformed, guessed, solver, R, p, self.nominal, tcp,
                                   np.nan_to_num(q_nom) * DEG)
@@ -827,7 +855,7 @@ class Solving:
         deformed, self.err_p, self.err_r, Rn, pn, conf_after = self._deformed.get()
         disp = np.full(len(uses), np.nan)
         moved = [i for i, u in enumerate(uses) if u.kind == "robtarget"
-                 and plan.may_be_displaced(u) and picks[i].failure is None
+                 and plan.may_be_displaced(u) and picks.failure[i] is None
                  and deformed.success[i]]
         if moved:
             disp[moved] = _displacement_sensitivity(solver, deformed.q_deg[moved])

@@ -1253,8 +1253,9 @@ def _closest(solved: Solved, rob: list) -> tuple[list, np.ndarray | None]:
     previous move's nominal solution (its compensated joints are within
     the joint-change bound of them: no other solution is that close)."""
     picks = solved.picks
-    closest = [n for n, i in enumerate(rob) if picks[i].kind == "closest"]
-    return closest, (np.array([picks[rob[n]].prev for n in closest]) if closest else None)
+    closest = [n for n, i in enumerate(rob) if picks.kind[i] == "closest"]
+    return closest, (np.array([picks.closest[rob[n]][0] for n in closest]) if closest
+                     else None)
 
 
 def _ideal_joints(solved: Solved, solver: Solver, rob: list, R, p, conf, closest: list,
