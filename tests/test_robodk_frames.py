@@ -284,7 +284,20 @@ CROSS = {
     "a service routine that assigns them": (
         {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
          "SetT2": [tframe("T2")]},
-        None, (0,), 1, "by SetT2 (MOD_Main.mod:14), which no given routine calls"),
+        None, (0,), 1, "by SetT2 (MOD_Main.mod:14), which the program does not run"),
+    # (Something calls SetT2, but only ToolChange, which main does not run.)
+    "a routine only a service routine runs": (
+        {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+         "ToolChange": ["    SetT2;"], "SetT2": [tframe("T2")]},
+        None, (0,), 1, "by SetT2 (MOD_Main.mod:18), which the program does not run"),
+    # (A MoveLSync runs the procedure it names at its point: the moves after
+    # it take Prog2's frames; so may the MoveLSync's own, zone or not.)
+    "a procedure a MoveLSync runs": (
+        {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1"),
+                  move("MoveLSync", 1, "T1", "U1")[:-1] + ",\"Prog2\";",
+                  move("MoveL", 2, "T1", "U1")],
+         "Prog2": [tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2")]},
+        None, (2,), 2, "the call at line 11 may assign it again before this move"),
 }
 
 
@@ -363,3 +376,31 @@ def test_routines_of_two_modules_keep_their_own_values(tmp_path):
     inp = [parse_file(task / n, n) for n in names]
     rows = evaluate(inp, [parse_file(out / n, n) for n in names])
     assert len(rows) == 2
+
+
+@pytest.mark.parametrize("other", ["writes nothing of it", "assigns its frame"])
+def test_another_task_of_a_backup_only_changes_what_it_writes(other, tmp_path):
+    """A backup's other task that never writes rdkTool leaves each program's
+    frames followed; one that assigns its frame (PERS data are shared
+    between tasks) may change it at any moment: its moves are left as
+    written."""
+    root = tmp_path / "backup"
+    for path, text in {
+        "BACKINFO/backinfo.txt": ">>SYSTEM_ID:\nCELL\n\n>>TASK1: (T_ROB1,,)\n"
+                                 "PROGMOD/MOD_Main.mod\n\n>>TASK2: (T_COMM,,)\n"
+                                 "PROGMOD/Comm.mod\n\n>>EOF:\n",
+        "SYSPAR/SYS.cfg": "SYS:CFG_1.0:6:0::\n#\nCAB_TASKS:\n\n      -Name \"T_ROB1\" -Type "
+                          "\"NORMAL\" -MotionTask\n\n      -Name \"T_COMM\" -Type \"SEMISTATIC\"\n",
+        "RAPID/TASK1/PROGMOD/MOD_Main.mod": module("MOD_Main", {
+            "main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1"), "    Prog2;"],
+            "Prog2": [tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2")]}),
+        "RAPID/TASK2/PROGMOD/Comm.mod": module("Comm", {"main": (
+            ["    WaitTime 1;"] if other == "writes nothing of it" else [tframe("T2")])}),
+    }.items():
+        (root / path).parent.mkdir(parents=True, exist_ok=True)
+        (root / path).write_text(text)
+    r = rapidcomp("fix", root, "--profile", "fixtures/warm.csv", "-o", tmp_path / "out",
+                  "--allow-partial", check=False)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert ("2 of 2 target uses compensated" if other == "writes nothing of it"
+            else "0 of 2 target uses compensated") in r.stdout, r.stdout

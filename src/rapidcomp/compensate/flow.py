@@ -834,12 +834,26 @@ def builtin(name: str) -> bool:
             or name in MOVES_OTHERWISE or motion_spec(name) is not None)
 
 
+# Moves that run a procedure, named by their last argument (a string), at
+# their point.
+SYNC_MOVES = frozenset(("movejsync", "movelsync", "movecsync"))
+
+
 def calls_of(node: A.Routine):
     """(offset of the statement, lower-case name or LATE) of each call a
-    routine makes that is not a built-in, handlers' too."""
+    routine makes that is not a built-in, handlers' too; the procedure a
+    MoveLSync runs at its point too (LATE where its name is not a literal)."""
+    syncs = None
     for at, name in _calls(node):
         if name in UNKNOWN_TARGET_CALLS:                # (CallByVar)
             yield at, LATE
+        elif name in SYNC_MOVES:
+            if syncs is None:
+                syncs = {x.span.start: x for x in statements(node)
+                         if type(x) is A.ProcCall and x.name.lower() in SYNC_MOVES}
+            args = syncs[at].args
+            last = args[-1].value if args else None
+            yield at, last.value.lower() if type(last) is A.Str else LATE
         elif not builtin(name):
             yield at, name
 

@@ -36,7 +36,7 @@ from ..errors import RapidcompError
 from ..kinematics.frames import (DEG, quat_wxyz_to_matrix, rot_x, rot_y, rot_z,
                                  unit_quat_matrices, unit_wxyz)
 from ..rapid import ast as A
-from ..rapid.model import Declaration, Module, Motion, ParsedFile
+from ..rapid.model import Declaration, Module, Motion, ParsedFile, RoutineTable
 from ..rapid.refs import literal_leaves, loop_names, usage
 from ..rapid.writes import Writes, task_writes
 from ..rapid.values import DecodeIssue, JointTarget, Pose, RobTarget, ToolData, WobjData, decode
@@ -782,32 +782,18 @@ class Resolver:
                                          and type(st.target.selectors[0]) is A.Component))):
                             found.setdefault(st.target.name.lower(), []).append((pf, st))
         reentry = _Reentry(self.files)
-        called = {n for calls in reentry.calls_by.values() for _, n in calls}
         moves_with = self._moves_with()
+        run = None              # (the routines the program runs: made where needed)
         for name, assigns in (literal or found).items():
             by_routine: dict = {}
             for pf, a in assigns:
                 by_routine.setdefault(body.get(id(a)), []).append((pf, a))
             if None in by_routine or (literal and self._only_itself(name)):
                 continue
-            # A routine nothing given calls that assigns the data and makes
-            # no move with it, beside others that assign it, is a service
-            # or event routine: it may run while the program is stopped,
-            # between any two statements (main is the program's entry).
-            service = next((r for r in by_routine if len(by_routine) > 1 and r[1] != "main"
-                            and r[1] not in called and name not in moves_with.get(r, ())),
-                           None)
-            if service is not None:
-                pf, a = by_routine[service][0]
-                sites[name] = (f"{a.target.name} is assigned at run time by {names[service]} "
-                               f"({_where(pf, a.span.start)}), which no given routine calls "
-                               "and which makes no move with it: a service or event routine "
-                               "may run while the program is stopped")
-                continue
             # (Each routine's moves take the value it assigns itself: a call
             # between that may run any routine assigning it, this one
             # again included, changes the value.)
-            here: dict = {}
+            here: dict | str = {}
             them = frozenset(by_routine)
             for routine, mine in by_routine.items():
                 risky = reentry.calls(routine, them)
@@ -824,8 +810,52 @@ class Resolver:
                     frozenset(parts) - {None}, None in parts, elsewhere,
                     "its routine has a GOTO (its body may run out of order)"
                     if routine in jumps else None)
+            # A routine the program does not run that assigns the data,
+            # beside others that assign it, is a service or event routine:
+            # it may run while the program is stopped, between any two
+            # statements.
+            if type(here) is dict and len(by_routine) > 1:
+                if run is None:
+                    run = self._program_runs(reentry, moves_with)
+                service = next((r for r in by_routine if r not in run), None)
+                if service is not None:
+                    pf, a = by_routine[service][0]
+                    here = (f"{a.target.name} is assigned at run time by {names[service]} "
+                            f"({_where(pf, a.span.start)}), which the program does not run "
+                            "(from main, or a routine nothing calls that moves with it): a "
+                            "service or event routine may run while the program is stopped")
             sites[name] = here
         return sites
+
+    def _program_runs(self, reentry: _Reentry, moves_with: dict) -> set:
+        """The routines (module id, lower-case name) the program runs: those
+        main calls, through others, each call resolved as the controller
+        resolves it (the calling module's own routine first); where no given
+        module has a main, from each routine nothing calls that moves with
+        a tool or work object. (A late-bound call is followed where it is
+        made: _Reentry.)"""
+        table = RoutineTable()
+        keys: dict = {}                 # routine key -> its module
+        for pf in self.files:
+            for m in pf.modules:
+                for r in m.routines:
+                    key = (id(m), r.name.lower())
+                    keys.setdefault(key, m)
+                    table.add(m, r, (m, key))
+        entries = [key for key in keys if key[1] == "main"]
+        if not entries:
+            called = {n for calls in reentry.calls_by.values() for _, n in calls}
+            entries = [key for key in keys if key[1] not in called and moves_with.get(key)]
+        seen = set(entries)
+        todo = list(entries)
+        while todo:
+            key = todo.pop()
+            for _, name in reentry.calls_by.get(key, ()):
+                hit = table.find(keys[key], name) if name != LATE else None
+                if hit is not None and hit[1] not in seen:
+                    seen.add(hit[1])
+                    todo.append(hit[1])
+        return seen
 
     def _moves_with(self) -> dict:
         """(module id, lower-case routine name) -> the lower-case names of
@@ -904,8 +934,8 @@ class Resolver:
         if hit.why is not None:
             return unknown(hit.why)
         if motion.span.start > hit.body_end:
-            return unknown("this move is in an error handler, which may run before any of "
-                           "its routine's assignments")
+            return unknown("this move is in a handler of its routine (ERROR, UNDO or "
+                           "BACKWARD), which may run before any of its assignments")
         k = bisect_left(hit.starts, motion.span.start)
         if not k:
             return unknown("this move comes before its routine assigns it: the value is the "
@@ -933,8 +963,8 @@ class Resolver:
                                    chain[-1])
                 if later[-1] > hit.body_end:
                     return unknown(f"the call at line {pf.source.position(later[-1])[0]}, in "
-                                   "the error handler, may assign it again before RETRY",
-                                   chain[-1])
+                                   "a handler of its routine, may assign it again before a "
+                                   "RETRY runs this move again", chain[-1])
         return chain
 
     def _task_writes(self, files, observers) -> None:
@@ -952,7 +982,11 @@ class Resolver:
         for name, (pf, span, how) in other.by_name.items():
             if name in pers:
                 by_name.setdefault(name, (pf, span, f"{how} in another task"))
-        self.writes = Writes(by_name, self.writes.anything)
+        # (Data only this task assigns literals to stays followed: a backup's
+        # other tasks that never write it change nothing.)
+        literal = {name: assigns for name, assigns in self.writes.literal.items()
+                   if not (name in pers and name in other.by_name)}
+        self.writes = Writes(by_name, self.writes.anything, literal)
         if other.anything is not None and pers:
             pf, span, what = other.anything
             self.pers_anything = (f"may be changed at run time by {what} with a name computed at "
