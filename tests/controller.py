@@ -81,11 +81,15 @@ class Controller:
         self.track = track or {}          # external axis index -> unit vector (world)
         self.base = base if base is not None else pin.SE3.Identity()   # world_M_base
         self.decls = {}
+        self.local = {}                   # (id(file), name) -> a module's LOCAL data
         self.procs = {}
         for pf in files:
             for m in pf.modules:
                 for d in m.declarations:
-                    self.decls[d.name.lower()] = d
+                    if d.scope == "LOCAL" and d.routine is None:
+                        self.local[(id(pf), d.name.lower())] = d
+                    else:
+                        self.decls[d.name.lower()] = d
                 for r in m.routines:
                     self.procs[r.name.lower()] = (pf, r.node)
         self.motions = {}
@@ -104,7 +108,7 @@ class Controller:
     # ------------------------------------------------------------ data
     def value(self, expr, env):
         if isinstance(expr, A.Ref):
-            d = self.decls[expr.name.lower()]
+            d = self.named(expr.name)
             if not expr.selectors:
                 return d.value
             idx = []
@@ -116,11 +120,27 @@ class Controller:
             return d.value[flat]
         raise AssertionError(f"not a data reference: {expr}")
 
-    def frame(self, expr, kind) -> pin.SE3:
+    def named(self, name: str):
+        """Data by name where the file does not matter (targets, external
+        axes): the global, else a module's LOCAL data of that name."""
+        d = self.decls.get(name.lower())
+        if d is None:
+            d = next(x for (_, n), x in self.local.items() if n == name.lower())
+        return d
+
+    def data(self, pf, name: str):
+        """(the declaration a name means in a file's module, where its
+        assigned value is kept): its LOCAL data, else the global."""
+        key = (id(pf), name.lower())
+        if key in self.local:
+            return self.local[key], key
+        return self.decls.get(name.lower()), name.lower()
+
+    def frame(self, pf, expr, kind) -> pin.SE3:
         if expr is None or expr.name.lower() in ("tool0", "wobj0"):
             return pin.SE3.Identity()
-        name = expr.name.lower()
-        v = self.assigned.get(name, self.decls[name].value)
+        d, slot = self.data(pf, expr.name)
+        v = self.assigned.get(slot, d.value)
         if kind == "tool":
             return se3(v.tframe.xyz, v.tframe.quat_wxyz)
         return se3(v.uframe.xyz, v.uframe.quat_wxyz) * se3(v.oframe.xyz, v.oframe.quat_wxyz)
@@ -140,7 +160,7 @@ class Controller:
         parts = []
         for part in expr.items:
             if isinstance(part, A.Ref):
-                d = self.decls[part.name.lower()]
+                d = self.named(part.name)
                 assert d.type in ("extjoint", "confdata"), d.type
                 part = d.node.init
             parts.append(part)
@@ -193,7 +213,7 @@ class Controller:
             if isinstance(s, A.ProcCall):
                 self.call(pf, s, env)
             elif isinstance(s, A.Assign):
-                self.assign(s)
+                self.assign(pf, s)
             elif isinstance(s, A.For):
                 step = 1 if s.step is None else int(s.step.value)
                 for v in range(int(s.start.value), int(s.stop.value) + 1, step):
@@ -201,9 +221,8 @@ class Controller:
             else:
                 raise AssertionError(f"statement not modelled: {type(s).__name__}")
 
-    def assign(self, s: A.Assign) -> None:
-        name = s.target.name.lower()
-        d = self.decls.get(name)
+    def assign(self, pf, s: A.Assign) -> None:
+        d, name = self.data(pf, s.target.name)
         if d is None or not isinstance(d.value, (ToolData, WobjData)):
             return                          # (a speed, a counter: no motion)
         if not s.target.selectors:
@@ -255,8 +274,8 @@ class Controller:
             wobj_M_target, rt = self.robtarget(t.expr, env, t.value)
             if self.disp is not None:
                 wobj_M_target = self.disp * wobj_M_target
-            pose = (self.world_M_base(rt.ext).inverse() * self.frame(mo.wobj, "wobj")
-                    * wobj_M_target * self.frame(mo.tool, "tool").inverse())
+            pose = (self.world_M_base(rt.ext).inverse() * self.frame(pf, mo.wobj, "wobj")
+                    * wobj_M_target * self.frame(pf, mo.tool, "tool").inverse())
             # A circle point is passed on the way: the configuration follows
             # from where the robot is (its confdata is not read).
             supervised = (self.confj if spec.interpolation == "joint" else self.confl) \

@@ -404,3 +404,33 @@ def test_another_task_of_a_backup_only_changes_what_it_writes(other, tmp_path):
     assert r.returncode == 0, r.stdout + r.stderr
     assert ("2 of 2 target uses compensated" if other == "writes nothing of it"
             else "0 of 2 target uses compensated") in r.stdout, r.stdout
+
+
+def test_local_data_of_one_name_in_two_modules_is_followed_apart(tmp_path):
+    """Each program's module declares its own LOCAL PERS rdkTool (as
+    RoboDK's post does); one program assigns it whole, the other only its
+    frame: two data, each followed on its own (not one name whose whole
+    value another routine assigns), checked on the controller model, which
+    keeps a module's LOCAL data apart."""
+    task = tmp_path / "cell"
+    task.mkdir()
+    local = ("  LOCAL PERS tooldata rdkTool := [TRUE,[[0,0,0],[1,0,0,0]],[2,[0,0,15],"
+             "[1,0,0,0],0,0,0.005]];\n  LOCAL PERS wobjdata rdkWObj := [FALSE, TRUE, \"\", "
+             "[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n  VAR speeddata rdkSpeed := "
+             "[250,500,5000,1000];\n")
+    (task / "Main.mod").write_text(module("Main", {"main": ["    ProgA;", "    ProgB;"]},
+                                          data=False))
+    (task / "ModA.mod").write_text(module("ModA", {"ProgA": [
+        whole_tool("T1"), whole_wobj("U1"), move("MoveL", 0, "T1", "U1")]},
+        data=False).replace("MODULE ModA\n", "MODULE ModA\n" + local))
+    (task / "ModB.mod").write_text(module("ModB", {"ProgB": [
+        tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2")]},
+        data=False).replace("MODULE ModB\n", "MODULE ModB\n" + local.replace(
+            "VAR speeddata rdkSpeed", "LOCAL VAR speeddata rdkSpeed")))
+    out = tmp_path / "out"
+    r = rapidcomp("fix", task, "--profile", "fixtures/warm.csv", "-o", out)
+    assert "2 of 2 target uses compensated" in r.stdout, r.stdout
+    names = ["Main.mod", "ModA.mod", "ModB.mod"]
+    rows = evaluate([parse_file(task / n, n) for n in names],
+                    [parse_file(out / n, n) for n in names])
+    assert len(rows) == 2

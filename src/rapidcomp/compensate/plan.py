@@ -163,10 +163,13 @@ class Plan:
                         if "@" in key})
         if taken:
             sites = self.resolver.site_map()
-            said = "; ".join(_assigned_at([a for hit in sites[n].values() for a in hit.assigns])
-                             for n in taken if n in sites)
-            parts = any(hit.parts for n in taken if n in sites for hit in sites[n].values())
-            several = any(len(sites[n]) > 1 for n in taken if n in sites)
+            # (Per name, each data of it that routines assign: {routine: Sites}.)
+            datas = {n: [d for d in sites[n].values() if type(d) is dict]
+                     for n in taken if n in sites}
+            said = "; ".join(_assigned_at([a for d in ds for hit in d.values()
+                                           for a in hit.assigns]) for ds in datas.values())
+            parts = any(hit.parts for ds in datas.values() for d in ds for hit in d.values())
+            several = any(len(d) > 1 for ds in datas.values() for d in ds)
             out.append(("assigned by the routines: " if several else
                         "assigned by the routine that moves with them: ")
                        + f"{said}; each move "

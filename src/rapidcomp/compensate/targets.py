@@ -761,13 +761,14 @@ class Resolver:
                    and self.pers_anything is None else {})
         if not literal and not self.site_names:
             return sites
-        body, ends, jumps, names = {}, {}, set(), {}
+        body, ends, jumps, names, modules = {}, {}, set(), {}, {}
         found: dict = {}        # (the output: the plan's names, assigned where they were)
         for pf in self.files:
             for m in pf.modules:
                 for r in m.routines:
                     key = (id(m), r.name.lower())
                     names[key] = r.name
+                    modules[key] = m
                     # Where the body ends: a move in a handler runs after an
                     # error anywhere, before an assignment too.
                     ends[key] = r.node.body[-1].span.end if r.node.body else -1
@@ -783,49 +784,73 @@ class Resolver:
                             found.setdefault(st.target.name.lower(), []).append((pf, st))
         reentry = _Reentry(self.files)
         moves_with = self._moves_with()
-        run = None              # (the routines the program runs: made where needed)
+        self._runs = None       # (the routines the program runs: made where needed)
         for name, assigns in (literal or found).items():
-            by_routine: dict = {}
+            # (By the data each assigns: a LOCAL declaration of a module or
+            # routine is data of its own, as RoboDK's LOCAL PERS rdkTool in
+            # each program's module; global data of one name is one.)
+            by_data: dict = {}
             for pf, a in assigns:
-                by_routine.setdefault(body.get(id(a)), []).append((pf, a))
-            if None in by_routine or (literal and self._only_itself(name)):
+                routine = body.get(id(a))
+                data = (None if routine is None else
+                        self._data_id(a.target.name, modules[routine], names[routine]))
+                by_data.setdefault(data, {}).setdefault(routine, []).append((pf, a))
+            if None in by_data or (literal and self._only_itself(name)):
                 continue
-            # (Each routine's moves take the value it assigns itself: a call
-            # between that may run any routine assigning it, this one
-            # again included, changes the value.)
-            here: dict | str = {}
-            them = frozenset(by_routine)
-            for routine, mine in by_routine.items():
-                risky = reentry.calls(routine, them)
-                if risky is None:
-                    pf, a = mine[0]
-                    here = (f"{a.target.name} is assigned at run time ({_where(pf, a.span.start)})"
-                            " by a routine an interrupt may run: at any moment")
-                    break
-                ordered = sorted(mine, key=lambda x: x[1].span.start)
-                parts = [_part(a) for _, a in ordered]
-                elsewhere = tuple(x for r, xs in by_routine.items() if r != routine for x in xs)
-                here[routine] = Sites(
-                    routine, [a.span.start for _, a in ordered], ordered, ends[routine], risky,
-                    frozenset(parts) - {None}, None in parts, elsewhere,
-                    "its routine has a GOTO (its body may run out of order)"
-                    if routine in jumps else None)
-            # A routine the program does not run that assigns the data,
-            # beside others that assign it, is a service or event routine:
-            # it may run while the program is stopped, between any two
-            # statements.
-            if type(here) is dict and len(by_routine) > 1:
-                if run is None:
-                    run = self._program_runs(reentry, moves_with)
-                service = next((r for r in by_routine if r not in run), None)
-                if service is not None:
-                    pf, a = by_routine[service][0]
-                    here = (f"{a.target.name} is assigned at run time by {names[service]} "
-                            f"({_where(pf, a.span.start)}), which the program does not run "
-                            "(from main, or a routine nothing calls that moves with it): a "
-                            "service or event routine may run while the program is stopped")
-            sites[name] = here
+            sites[name] = {data: self._sites_of(by_routine, reentry, moves_with, jumps, ends,
+                                                names)
+                           for data, by_routine in by_data.items()}
         return sites
+
+    def _data_id(self, name: str, module: Module, routine: str | None):
+        """Which data a name means in a routine: its LOCAL declaration
+        (module's or routine's), else the name (global data of one name is
+        one, PERS shared)."""
+        d = self.lookup(name, module, routine)
+        if type(d) is Declaration and (d.routine is not None or d.scope == "LOCAL"):
+            return id(d)
+        return name.lower()
+
+    def _sites_of(self, by_routine: dict, reentry: _Reentry, moves_with: dict, jumps: set,
+                  ends: dict, names: dict) -> dict | str:
+        """site_map's entry of one data the routines by_routine assign:
+        {routine key: Sites}, or why no move of it is followed."""
+        # (Each routine's moves take the value it assigns itself: a call
+        # between that may run any routine assigning it, this one
+        # again included, changes the value.)
+        here: dict | str = {}
+        them = frozenset(by_routine)
+        for routine, mine in by_routine.items():
+            risky = reentry.calls(routine, them)
+            if risky is None:
+                pf, a = mine[0]
+                here = (f"{a.target.name} is assigned at run time ({_where(pf, a.span.start)})"
+                        " by a routine an interrupt may run: at any moment")
+                break
+            ordered = sorted(mine, key=lambda x: x[1].span.start)
+            parts = [_part(a) for _, a in ordered]
+            elsewhere = tuple(x for r, xs in by_routine.items() if r != routine for x in xs)
+            here[routine] = Sites(
+                routine, [a.span.start for _, a in ordered], ordered, ends[routine], risky,
+                frozenset(parts) - {None}, None in parts, elsewhere,
+                "its routine has a GOTO (its body may run out of order)"
+                if routine in jumps else None)
+        # A routine the program does not run that assigns the data,
+        # beside others that assign it, is a service or event routine:
+        # it may run while the program is stopped, between any two
+        # statements.
+        if type(here) is dict and len(by_routine) > 1:
+            run = self._runs
+            if run is None:
+                run = self._runs = self._program_runs(reentry, moves_with)
+            service = next((r for r in by_routine if r not in run), None)
+            if service is not None:
+                pf, a = by_routine[service][0]
+                here = (f"{a.target.name} is assigned at run time by {names[service]} "
+                        f"({_where(pf, a.span.start)}), which the program does not run "
+                        "(from main, or a routine nothing calls that moves with it): a "
+                        "service or event routine may run while the program is stopped")
+        return here
 
     def _program_runs(self, reentry: _Reentry, moves_with: dict) -> set:
         """The routines (module id, lower-case name) the program runs: those
@@ -908,6 +933,10 @@ class Resolver:
         for ref in (motion.tool, motion.wobj):
             entry = (sites.get(ref.name.lower()) if type(ref) is A.Ref and not ref.selectors
                      else None)
+            if entry is not None:
+                # (The data the name means here; one no routine assigns a
+                # literal to goes the common way: _written says why.)
+                entry = entry.get(self._data_id(ref.name, module, motion.routine))
             if type(entry) is dict:
                 entry = self._site_chain(ref, entry, routine, motion)
                 # (The output's resolver takes the plan's word: a move the
