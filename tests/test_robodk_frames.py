@@ -284,12 +284,24 @@ CROSS = {
     "a service routine that assigns them": (
         {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
          "SetT2": [tframe("T2")]},
-        None, (0,), 1, "by SetT2 (MOD_Main.mod:14), which the program does not run"),
+        None, (0,), 1, "by SetT2 (MOD_Main.mod:14), which no given routine calls"),
     # (Something calls SetT2, but only ToolChange, which main does not run.)
     "a routine only a service routine runs": (
         {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
          "ToolChange": ["    SetT2;"], "SetT2": [tframe("T2")]},
-        None, (0,), 1, "by SetT2 (MOD_Main.mod:18), which the program does not run"),
+        None, (0,), 1, "by SetT2 (MOD_Main.mod:18), which ToolChange (MOD_Main.mod:13) runs"),
+    # (Main runs SetT2 too, after its own move; ToolChange may run it at
+    # any stop.)
+    "a routine main runs that a service routine runs too": (
+        {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1"), "    SetT2;"],
+         "ToolChange": ["    SetT2;"], "SetT2": [tframe("T2")]},
+        None, (0,), 1, "by SetT2 (MOD_Main.mod:19), which ToolChange (MOD_Main.mod:14) runs"),
+    # (No main: the program is Prog1, the routine nothing calls that moves
+    # with them; ToolChange moves with tool0 only, and may run at any stop.)
+    "without a main, a routine that moves with another tool only": (
+        {"Prog1": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+         "ToolChange": [f"    MoveAbsJ [[0,0,0,0,30,0],{EXT}],v100,fine,tool0;", tframe("T2")]},
+        None, (0,), 1, "by ToolChange (MOD_Main.mod:15), which no given routine calls"),
     # (A MoveLSync runs the procedure it names at its point: the moves after
     # it take Prog2's frames; so may the MoveLSync's own, zone or not.)
     "a procedure a MoveLSync runs": (
@@ -404,6 +416,10 @@ def test_another_task_of_a_backup_only_changes_what_it_writes(other, tmp_path):
     assert r.returncode == 0, r.stdout + r.stderr
     assert ("2 of 2 target uses compensated" if other == "writes nothing of it"
             else "0 of 2 target uses compensated") in r.stdout, r.stdout
+    if other != "writes nothing of it":
+        # (Said by the other task's write, not this task's own.)
+        assert "in another task at run time (RAPID/TASK2/PROGMOD/Comm.mod:" in r.stdout, \
+            r.stdout
 
 
 def test_local_data_of_one_name_in_two_modules_is_followed_apart(tmp_path):
@@ -433,4 +449,20 @@ def test_local_data_of_one_name_in_two_modules_is_followed_apart(tmp_path):
     names = ["Main.mod", "ModA.mod", "ModB.mod"]
     rows = evaluate([parse_file(task / n, n) for n in names],
                     [parse_file(out / n, n) for n in names])
+    assert len(rows) == 2
+
+
+def test_without_a_main_a_routine_that_runs_the_programs_is_their_entry(tmp_path):
+    """No main: Run, which nothing calls and which moves with nothing
+    itself, runs the programs that do; each assigns its own frames: all
+    followed (Run is the program's entry, not a service routine)."""
+    src = tmp_path / "MOD_Main.mod"
+    src.write_text(module("MOD_Main", {
+        "Run": ["    Prog1;", "    Prog2;"],
+        "Prog1": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+        "Prog2": [tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2")]}))
+    out = tmp_path / "out.mod"
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out)
+    assert "2 of 2 target uses compensated" in r.stdout, r.stdout
+    rows = evaluate([parse_file(src, src.name)], [parse_file(out, src.name)], entry="Run")
     assert len(rows) == 2

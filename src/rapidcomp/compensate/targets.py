@@ -784,7 +784,7 @@ class Resolver:
                             found.setdefault(st.target.name.lower(), []).append((pf, st))
         reentry = _Reentry(self.files)
         moves_with = self._moves_with()
-        self._runs = None       # (the routines the program runs: made where needed)
+        self._roots = None      # (what each routine nothing calls runs: made where needed)
         for name, assigns in (literal or found).items():
             # (By the data each assigns: a LOCAL declaration of a module or
             # routine is data of its own, as RoboDK's LOCAL PERS rdkTool in
@@ -797,8 +797,8 @@ class Resolver:
                 by_data.setdefault(data, {}).setdefault(routine, []).append((pf, a))
             if None in by_data or (literal and self._only_itself(name)):
                 continue
-            sites[name] = {data: self._sites_of(by_routine, reentry, moves_with, jumps, ends,
-                                                names)
+            sites[name] = {data: self._sites_of(name, by_routine, reentry, moves_with, jumps,
+                                                ends, names)
                            for data, by_routine in by_data.items()}
         return sites
 
@@ -811,8 +811,8 @@ class Resolver:
             return id(d)
         return name.lower()
 
-    def _sites_of(self, by_routine: dict, reentry: _Reentry, moves_with: dict, jumps: set,
-                  ends: dict, names: dict) -> dict | str:
+    def _sites_of(self, name: str, by_routine: dict, reentry: _Reentry, moves_with: dict,
+                  jumps: set, ends: dict, names: dict) -> dict | str:
         """site_map's entry of one data the routines by_routine assign:
         {routine key: Sites}, or why no move of it is followed."""
         # (Each routine's moves take the value it assigns itself: a call
@@ -835,52 +835,69 @@ class Resolver:
                 frozenset(parts) - {None}, None in parts, elsewhere,
                 "its routine has a GOTO (its body may run out of order)"
                 if routine in jumps else None)
-        # A routine the program does not run that assigns the data,
-        # beside others that assign it, is a service or event routine:
-        # it may run while the program is stopped, between any two
-        # statements.
+        # A routine nothing calls, other than the program's entry, that
+        # runs a routine assigning the data (itself, or through others), is
+        # a service or event routine: it may run while the program is
+        # stopped, between any two statements.
         if type(here) is dict and len(by_routine) > 1:
-            run = self._runs
-            if run is None:
-                run = self._runs = self._program_runs(reentry, moves_with)
-            service = next((r for r in by_routine if r not in run), None)
-            if service is not None:
-                pf, a = by_routine[service][0]
-                here = (f"{a.target.name} is assigned at run time by {names[service]} "
-                        f"({_where(pf, a.span.start)}), which the program does not run "
-                        "(from main, or a routine nothing calls that moves with it): a "
-                        "service or event routine may run while the program is stopped")
+            roots = self._roots
+            if roots is None:
+                roots = self._roots = self._root_reach(reentry)
+            mains, reach = roots[:2]
+            movers = {key for key, used in moves_with.items() if name in used}
+            # (Without a main, each routine nothing calls that runs a move
+            # with the data is a program: RoboDK's, entered by PP to routine.)
+            programs = mains or [r for r in reach if not reach[r].isdisjoint(movers)]
+            for root, runs in reach.items():
+                hit = None if root in programs else next(
+                    (r for r in by_routine if r in runs), None)
+                if hit is not None:
+                    pf, a = by_routine[hit][0]
+                    who = ("which" if hit == root else
+                           f"which {names[root]} ({roots[2][root]}) runs, a routine that")
+                    return (f"{a.target.name} is assigned at run time by {names[hit]} "
+                            f"({_where(pf, a.span.start)}), {who} no given routine calls and "
+                            "that is not the program's entry (main, or where no module has "
+                            "one, a routine that moves with it): a service or event routine, "
+                            "it may run while the program is stopped")
         return here
 
-    def _program_runs(self, reentry: _Reentry, moves_with: dict) -> set:
-        """The routines (module id, lower-case name) the program runs: those
-        main calls, through others, each call resolved as the controller
-        resolves it (the calling module's own routine first); where no given
-        module has a main, from each routine nothing calls that moves with
-        a tool or work object. (A late-bound call is followed where it is
-        made: _Reentry.)"""
+    def _root_reach(self, reentry: _Reentry) -> tuple[list, dict, dict]:
+        """(the program's entries, {each routine no given routine calls, but
+        an interrupt's: the routines it runs, itself among them}, {each of
+        those: "file:line" of it}). The
+        entries: main (a LOCAL main only where no other is), called or not.
+        Calls resolved as the controller resolves them (the calling
+        module's own routine first); a late-bound call is followed where it
+        is made (_Reentry), not here."""
         table = RoutineTable()
-        keys: dict = {}                 # routine key -> its module
+        keys: dict = {}                 # routine key -> (its module, its node)
+        where: dict = {}
         for pf in self.files:
             for m in pf.modules:
                 for r in m.routines:
                     key = (id(m), r.name.lower())
-                    keys.setdefault(key, m)
+                    keys.setdefault(key, (m, r.node))
+                    where.setdefault(key, _where(pf, r.node.span.start))
                     table.add(m, r, (m, key))
-        entries = [key for key in keys if key[1] == "main"]
-        if not entries:
-            called = {n for calls in reentry.calls_by.values() for _, n in calls}
-            entries = [key for key in keys if key[1] not in called and moves_with.get(key)]
-        seen = set(entries)
-        todo = list(entries)
-        while todo:
-            key = todo.pop()
-            for _, name in reentry.calls_by.get(key, ()):
-                hit = table.find(keys[key], name) if name != LATE else None
-                if hit is not None and hit[1] not in seen:
-                    seen.add(hit[1])
-                    todo.append(hit[1])
-        return seen
+        mains = [k for k, (_, n) in keys.items() if k[1] == "main" and n.scope != "LOCAL"]
+        mains = mains or [k for k in keys if k[1] == "main"]
+        called = {n for calls in reentry.calls_by.values() for _, n in calls}
+        roots = [k for k, (_, n) in keys.items()
+                 if (k[1] not in called or k in mains) and n.kind != "TRAP"]
+        reach: dict = {}
+        for root in roots:
+            seen = {root}
+            todo = [root]
+            while todo:
+                key = todo.pop()
+                for _, callee in reentry.calls_by.get(key, ()):
+                    hit = table.find(keys[key][0], callee) if callee != LATE else None
+                    if hit is not None and hit[1] not in seen:
+                        seen.add(hit[1])
+                        todo.append(hit[1])
+            reach[root] = seen
+        return mains, reach, where
 
     def _moves_with(self) -> dict:
         """(module id, lower-case routine name) -> the lower-case names of
@@ -1010,7 +1027,9 @@ class Resolver:
         by_name = dict(self.writes.by_name)
         for name, (pf, span, how) in other.by_name.items():
             if name in pers:
-                by_name.setdefault(name, (pf, span, f"{how} in another task"))
+                # (Said by the other task's write: this task's own may be
+                # one rapidcomp follows.)
+                by_name[name] = (pf, span, f"{how} in another task")
         # (Data only this task assigns literals to stays followed: a backup's
         # other tasks that never write it change nothing.)
         literal = {name: assigns for name, assigns in self.writes.literal.items()
