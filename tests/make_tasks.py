@@ -391,8 +391,9 @@ ENDMODULE
 
 
 def robodk() -> None:
-    from test_robodk_frames import BODY, program
+    from test_robodk_frames import BODY, PROGRAMS, module, program
     write(ROOT / "fixtures" / "rapid" / "robodk_frames.mod", program(BODY))
+    write(ROOT / "fixtures" / "rapid" / "robodk_programs.mod", module("MOD_Main", PROGRAMS))
 
 
 def grasshopper() -> None:

@@ -31,6 +31,7 @@ FIX_CASES = {
     "refusals": (None, "absj", ()),
     "cam_confoff_robtarget": ("rapid/cam_confoff.mod", "robtarget", ()),
     "robodk_frames_auto": ("rapid/robodk_frames.mod", "auto", ()),
+    "robodk_programs_auto": ("rapid/robodk_programs.mod", "auto", ()),
 }
 # case -> (task folder under fixtures/tasks, mode)
 TASK_CASES = {

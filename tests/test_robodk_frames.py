@@ -219,6 +219,19 @@ def whole_wobj(frame: str) -> str:
     return f"    rdkWObj := [FALSE, TRUE, \"\", {pose_text(FRAMES[frame])},[[0,0,0],[1,0,0,0]]];"
 
 
+# RoboDK's main program and the programs it calls, each assigning its frames
+# before its moves; main's move after the calls is left as written (the
+# fixture rapid/robodk_programs.mod, and its golden case).
+PROGRAMS = {
+    "Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1"),
+             move("MoveJ", 1, "T1", "U1"), "    Prog2;", "    Prog3;",
+             move("MoveL", 2, "T1", "U1")],
+    "Prog2": [tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2"),
+              move("MoveL", 4, "T2", "U2")],
+    "Prog3": [tframe("T1"), uframe("U2"), move("MoveJ", 5, "T1", "U2"),
+              move("MoveL", 6, "T1", "U2")]}
+
+
 @pytest.mark.parametrize("mode", ["auto", "robtarget"])
 @pytest.mark.parametrize("style", ["frames", "whole values"])
 def test_each_program_is_compensated_with_the_frames_it_assigns_itself(mode, style, tmp_path):

@@ -75,7 +75,8 @@ def test_relex_verifies_as_a_second_parse_does(path, mode, solver, monkeypatch):
 # diffs change no name and add no declaration); since the moves turned
 # into MoveAbsJ on jointtargets of their own are read again too
 # (verify.relex_absj), cam_confoff.mod in auto (its one MoveJ) and
-# robodk_frames.mod in auto (its MoveJ, inline jointtargets); since
+# robodk_frames.mod and robodk_programs.mod in auto (their MoveJ, inline
+# jointtargets); since
 # targets copied for some of their uses are read again too
 # (verify.relex_copies), cubes.mod (p_c), paper_front.mod and
 # robotstudio_crlf.mod (their diffs add `_c` copies of declared targets
@@ -83,6 +84,7 @@ def test_relex_verifies_as_a_second_parse_does(path, mode, solver, monkeypatch):
 SERVED = {("cubes_comp.mod", "robtarget"), ("cubes_comp.mod", "auto"),
           ("cam_confoff.mod", "robtarget"), ("robodk.mod", "robtarget"), ("robodk.mod", "auto"),
           ("robodk_frames.mod", "robtarget"), ("robodk_frames.mod", "auto"),
+          ("robodk_programs.mod", "robtarget"), ("robodk_programs.mod", "auto"),
           ("system_bom.sys", "robtarget"), ("system_bom.sys", "auto"), ("cam_confoff.mod", "auto"),
           *((name, mode) for name in ("cubes.mod", "paper_front.mod", "robotstudio_crlf.mod")
             for mode in ("robtarget", "auto"))}
