@@ -159,7 +159,9 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         # verification); a retry prepares them again.
         done = [(g, u) for g in gs if g.failure is None for u in g.uses]
         confs = iter(values.confs([(g, u.source.element) for g, u in done if g.mode == "rob"]))
-        written_conf = {u.key: next(confs) if g.mode == "rob" else None for g, u in done}
+        # (Only where a robtarget is written: a CAM program's 1e5 MoveAbsJ,
+        # none; rows.use_rows reads a use not in it as none written.)
+        written_conf = {u.key: next(confs) for g, u in done if g.mode == "rob"}
         values.forget()
         # (The new declarations are in the edits now, as texts of their own:
         # 1e5 MoveL turned into MoveAbsJ, ~18 MB of them twice.)

@@ -280,7 +280,7 @@ def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
     """Rows in text order. Without group_of/verified (check): per use, the
     solve's own residual and the confdata of the compensated joints; with
     them (fix, in `mode`): the written values' residual and confdata
-    (written_conf: use key -> the confdata written, None where no robtarget
+    (written_conf: use key -> the confdata written, absent where no robtarget
     is written). `at`, when given, receives each row's row of `solved`
     (None for a use not solved)."""
     ok_label, fail_label = statuses
