@@ -309,6 +309,25 @@ CROSS = {
         {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1"), "    SetT2;"],
          "ToolChange": ["    SetT2;"], "SetT2": [tframe("T2")]},
         None, (0,), 1, "by SetT2 (MOD_Main.mod:19), which ToolChange (MOD_Main.mod:14) runs"),
+    # (ToolChange calls itself: it is entered from outside all the same.)
+    "a service routine that calls itself": (
+        {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+         "ToolChange": [tframe("T2"), "    IF FALSE ToolChange;"]},
+        None, (0,), 1, "by ToolChange (MOD_Main.mod:14), which no given routine calls"),
+    # (One routine assigns them, twice; TestProg runs it, at a stop it may
+    # leave T2 for the move after the first assignment.)
+    "one routine that assigns them twice, which a service routine runs": (
+        {"Main": ["    Prog1;"],
+         "Prog1": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1"), tframe("T2"),
+                   move("MoveL", 3, "T2", "U1")],
+         "TestProg": ["    Prog1;"]},
+        None, (0,), 2, "by Prog1 (MOD_Main.mod:15), which TestProg (MOD_Main.mod:19) runs"),
+    # (Svc may run any routine: Prog2 too.)
+    "a service routine that makes a late-bound call": (
+        {"Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1"), "    Prog2;"],
+         "Prog2": [tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2")],
+         "Svc": ['    CallByVar "Prog", 2;']},
+        None, (0,), 2, "may run any routine (a late-bound call"),
     # (No main: the program is Prog1, the routine nothing calls that moves
     # with them; ToolChange moves with tool0 only, and may run at any stop.)
     "without a main, a routine that moves with another tool only": (
@@ -479,3 +498,22 @@ def test_without_a_main_a_routine_that_runs_the_programs_is_their_entry(tmp_path
     assert "2 of 2 target uses compensated" in r.stdout, r.stdout
     rows = evaluate([parse_file(src, src.name)], [parse_file(out, src.name)], entry="Run")
     assert len(rows) == 2
+
+
+def test_a_local_routine_of_one_name_in_two_modules_is_called_or_not_on_its_own(tmp_path):
+    """ModA's main calls ModA's LOCAL Setup; ModB's LOCAL Setup, which
+    assigns the tool, nothing calls (a call resolves to the calling
+    module's own routine first): a service routine, so no move of the tool
+    is followed."""
+    task = tmp_path / "cell"
+    task.mkdir()
+    (task / "ModA.mod").write_text(module("ModA", {
+        "main": ["    Setup;", tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")]}
+    ).replace("  PROC main()", "  LOCAL PROC Setup()\n    WaitTime 0.1;\n  ENDPROC\n\n"
+              "  PROC main()"))
+    (task / "ModB.mod").write_text(module("ModB", {"Setup": [tframe("T2")]}, data=False)
+                                   .replace("  PROC Setup()", "  LOCAL PROC Setup()"))
+    r = rapidcomp("fix", task, "--profile", "fixtures/warm.csv", "-o", tmp_path / "out",
+                  "--allow-partial", check=False)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "1 untouched" in r.stdout and "by Setup (ModB.mod:4)" in r.stdout, r.stdout

@@ -169,7 +169,9 @@ class Plan:
             said = "; ".join(_assigned_at([a for d in ds for hit in d.values()
                                            for a in hit.assigns]) for ds in datas.values())
             parts = any(hit.parts for ds in datas.values() for d in ds for hit in d.values())
-            several = any(len(d) > 1 for ds in datas.values() for d in ds)
+            # (Several routines: of one data, or each of its own data of one
+            # name, LOCAL in two modules.)
+            several = any(len(ds) > 1 or any(len(d) > 1 for d in ds) for ds in datas.values())
             out.append(("assigned by the routines: " if several else
                         "assigned by the routine that moves with them: ")
                        + f"{said}; each move "

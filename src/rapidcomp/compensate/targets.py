@@ -212,6 +212,9 @@ class Sites(NamedTuple):
     why: str | None = None
 
 
+# In what a routine runs (Resolver._root_reach): any routine may run.
+ANY = ("any routine",)
+
 # The components of PARTS that are no frame (which target a move reaches
 # does not depend on them).
 _LOADS = frozenset(("tload",))
@@ -797,7 +800,7 @@ class Resolver:
                 by_data.setdefault(data, {}).setdefault(routine, []).append((pf, a))
             if None in by_data or (literal and self._only_itself(name)):
                 continue
-            sites[name] = {data: self._sites_of(name, by_routine, reentry, moves_with, jumps,
+            sites[name] = {data: self._sites_of(data, by_routine, reentry, moves_with, jumps,
                                                 ends, names)
                            for data, by_routine in by_data.items()}
         return sites
@@ -811,7 +814,7 @@ class Resolver:
             return id(d)
         return name.lower()
 
-    def _sites_of(self, name: str, by_routine: dict, reentry: _Reentry, moves_with: dict,
+    def _sites_of(self, data, by_routine: dict, reentry: _Reentry, moves_with: dict,
                   jumps: set, ends: dict, names: dict) -> dict | str:
         """site_map's entry of one data the routines by_routine assign:
         {routine key: Sites}, or why no move of it is followed."""
@@ -836,40 +839,54 @@ class Resolver:
                 "its routine has a GOTO (its body may run out of order)"
                 if routine in jumps else None)
         # A routine nothing calls, other than the program's entry, that
-        # runs a routine assigning the data (itself, or through others), is
-        # a service or event routine: it may run while the program is
-        # stopped, between any two statements.
-        if type(here) is dict and len(by_routine) > 1:
+        # runs a routine assigning the data (itself, or through others; or
+        # anything, late-bound), is a service or event routine: it may run
+        # while the program is stopped, between any two statements, and
+        # take back or change the value the moves after take.
+        if type(here) is dict:
             roots = self._roots
             if roots is None:
                 roots = self._roots = self._root_reach(reentry)
-            mains, reach = roots[:2]
-            movers = {key for key, used in moves_with.items() if name in used}
+            mains, reach, where = roots
+            movers = {key for key, used in moves_with.items() if data in used}
             # (Without a main, each routine nothing calls that runs a move
             # with the data is a program: RoboDK's, entered by PP to routine.)
             programs = mains or [r for r in reach if not reach[r].isdisjoint(movers)]
             for root, runs in reach.items():
-                hit = None if root in programs else next(
-                    (r for r in by_routine if r in runs), None)
-                if hit is not None:
-                    pf, a = by_routine[hit][0]
-                    who = ("which" if hit == root else
-                           f"which {names[root]} ({roots[2][root]}) runs, a routine that")
-                    return (f"{a.target.name} is assigned at run time by {names[hit]} "
-                            f"({_where(pf, a.span.start)}), {who} no given routine calls and "
-                            "that is not the program's entry (main, or where no module has "
-                            "one, a routine that moves with it): a service or event routine, "
-                            "it may run while the program is stopped")
+                if root in programs:
+                    continue
+                hit = next((r for r in by_routine if r in runs), None)
+                if hit is None and ANY not in runs:
+                    continue
+                if hit is None:
+                    pf, a = next(iter(by_routine.values()))[0]
+                    return (f"{a.target.name} is assigned at run time "
+                            f"({_where(pf, a.span.start)}), and {names[root]} "
+                            f"({where[root]}), which no given routine calls and that is not "
+                            "the program's entry (main, or where no module has one, a routine "
+                            "that moves with it), may run any routine (a late-bound call, or "
+                            "one no given module declares): a service or event routine, it "
+                            "may run while the program is stopped")
+                pf, a = by_routine[hit][0]
+                who = ("which" if hit == root else
+                       f"which {names[root]} ({where[root]}) runs, a routine that")
+                return (f"{a.target.name} is assigned at run time by {names[hit]} "
+                        f"({_where(pf, a.span.start)}), {who} no given routine calls and "
+                        "that is not the program's entry (main, or where no module has "
+                        "one, a routine that moves with it): a service or event routine, "
+                        "it may run while the program is stopped")
         return here
 
     def _root_reach(self, reentry: _Reentry) -> tuple[list, dict, dict]:
-        """(the program's entries, {each routine no given routine calls, but
-        an interrupt's: the routines it runs, itself among them}, {each of
-        those: "file:line" of it}). The
-        entries: main (a LOCAL main only where no other is), called or not.
-        Calls resolved as the controller resolves them (the calling
-        module's own routine first); a late-bound call is followed where it
-        is made (_Reentry), not here."""
+        """(the program's entries, {each routine no other routine calls, but
+        an interrupt's: the routines it runs, itself among them, or ANY
+        where it may run any (a late-bound call, a routine no given module
+        declares)}, {each routine: "file:line" of it}). The entries: main (a
+        LOCAL main only where no other is), called or not. A routine is
+        called where another calls it that it does not run itself (a
+        routine calling itself, or routines calling each other, are
+        entered from outside all the same). Calls resolved as the
+        controller resolves them (the calling module's own routine first)."""
         table = RoutineTable()
         keys: dict = {}                 # routine key -> (its module, its node)
         where: dict = {}
@@ -880,36 +897,46 @@ class Resolver:
                     keys.setdefault(key, (m, r.node))
                     where.setdefault(key, _where(pf, r.node.span.start))
                     table.add(m, r, (m, key))
+        callees: dict = {}              # routine key -> the routines it calls, or ANY among them
+        for key, (m, _) in keys.items():
+            out = callees[key] = set()
+            for _, name in reentry.calls_by.get(key, ()):
+                hit = table.find(m, name) if name != LATE else None
+                out.add(hit[1] if hit is not None else ANY)
+        reach: dict = {}
+        for key in keys:
+            seen = {key}
+            todo = [key]
+            while todo:
+                for callee in callees.get(todo.pop(), ()):
+                    if callee not in seen:
+                        seen.add(callee)
+                        if callee is not ANY:
+                            todo.append(callee)
+            reach[key] = seen
         mains = [k for k, (_, n) in keys.items() if k[1] == "main" and n.scope != "LOCAL"]
         mains = mains or [k for k in keys if k[1] == "main"]
-        called = {n for calls in reentry.calls_by.values() for _, n in calls}
-        roots = [k for k, (_, n) in keys.items()
-                 if (k[1] not in called or k in mains) and n.kind != "TRAP"]
-        reach: dict = {}
-        for root in roots:
-            seen = {root}
-            todo = [root]
-            while todo:
-                key = todo.pop()
-                for _, callee in reentry.calls_by.get(key, ()):
-                    hit = table.find(keys[key][0], callee) if callee != LATE else None
-                    if hit is not None and hit[1] not in seen:
-                        seen.add(hit[1])
-                        todo.append(hit[1])
-            reach[root] = seen
-        return mains, reach, where
+        roots = {k for k, (_, n) in keys.items() if n.kind != "TRAP" and (k in mains or all(
+            c in reach[k] for c in keys if k in callees[c]))}
+        return mains, {k: reach[k] for k in roots}, where
 
     def _moves_with(self) -> dict:
-        """(module id, lower-case routine name) -> the lower-case names of
+        """(module id, lower-case routine name) -> the data (_data_id) of
         the tools and work objects its moves name."""
         out: dict = {}
+        seen: dict = {}                 # (a CAM program's 1e5 moves name a few)
         for pf in self.files:
             for m in pf.modules:
                 for mo in m.motions:
-                    names = out.setdefault((id(m), (mo.routine or "").lower()), set())
+                    routine = mo.routine or ""
+                    datas = out.setdefault((id(m), routine.lower()), set())
                     for ref in (mo.tool, mo.wobj):
                         if type(ref) is A.Ref:
-                            names.add(ref.name.lower())
+                            k = (id(m), routine, ref.name)
+                            data = seen.get(k)
+                            if data is None:
+                                data = seen[k] = self._data_id(ref.name, m, mo.routine)
+                            datas.add(data)
         return out
 
     def _home_of(self, d: Declaration, part: str | None = None) -> ParsedFile:
