@@ -12,15 +12,35 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from click.testing import CliRunner
 
 from controller import fk
+from rapidcomp.cli import main
 from rapidcomp.kinematics.chain import Chain
 from rapidcomp.kinematics.conf import confdata
 from rapidcomp.kinematics.frames import DEG, matrix_to_quat_wxyz
 from rapidcomp.kinematics.ik import Solver
 from rapidcomp.rapid.parse import parse_file
 
-from test_real_programs import NOMINAL, evaluate, rapidcomp
+from conftest import ROOT
+from test_real_programs import NOMINAL, evaluate
+
+
+class _Run:
+    def __init__(self, result):
+        self.returncode = result.exit_code
+        self.stdout = result.stdout
+        self.stderr = result.stderr
+
+
+def rapidcomp(*args, check=True):
+    """The command line, run in this process (a few dozen runs: no Python
+    started for each); the profile's path from the repository's root."""
+    args = [str(ROOT / a) if a == "fixtures/warm.csv" else str(a) for a in args]
+    r = _Run(CliRunner().invoke(main, args, catch_exceptions=False))
+    if check:
+        assert r.returncode == 0, r.stdout + r.stderr
+    return r
 
 EXT = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
 # Joints of the moves (deg): front workspace, away from the wrist singularity.
