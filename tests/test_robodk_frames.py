@@ -252,6 +252,20 @@ PROGRAMS = {
               move("MoveL", 6, "T1", "U2")]}
 
 
+def fixed_and_run(tmp_path, routines: dict, entry: str, n: int, *options) -> tuple:
+    """The module of these routines fixed: every one of its n target uses
+    compensated, and both run on the controller model from entry (the
+    stdout, the rows evaluate() checked)."""
+    src = tmp_path / "MOD_Main.mod"
+    src.write_text(module("MOD_Main", routines))
+    out = tmp_path / "out.mod"
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out, *options)
+    assert f"{n} of {n} target uses compensated" in r.stdout, r.stdout
+    rows = evaluate([parse_file(src, src.name)], [parse_file(out, src.name)], entry=entry)
+    assert len(rows) == n
+    return r.stdout, rows
+
+
 @pytest.mark.parametrize("mode", ["auto", "robtarget"])
 @pytest.mark.parametrize("style", ["frames", "whole values"])
 def test_each_program_is_compensated_with_the_frames_it_assigns_itself(mode, style, tmp_path):
@@ -260,21 +274,14 @@ def test_each_program_is_compensated_with_the_frames_it_assigns_itself(mode, sty
     move is compensated with its own routine's, checked on the controller
     model running the whole program."""
     tool, wobj = (tframe, uframe) if style == "frames" else (whole_tool, whole_wobj)
-    src = tmp_path / "MOD_Main.mod"
-    src.write_text(module("MOD_Main", {
+    stdout, rows = fixed_and_run(tmp_path, {
         "Main": [tool("T1"), wobj("U1"), move("MoveL", 0, "T1", "U1"),
                  move("MoveJ", 1, "T1", "U1"), "    Prog2;", "    Prog3;"],
         "Prog2": [tool("T2"), wobj("U2"), move("MoveL", 3, "T2", "U2"),
                   move("MoveL", 4, "T2", "U2")],
         "Prog3": [tool("T1"), wobj("U2"), move("MoveJ", 5, "T1", "U2"),
-                  move("MoveL", 6, "T1", "U2")]}))
-    out = tmp_path / "out.mod"
-    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out, "--emit", mode,
-                  "--allow-partial")
-    assert "6 of 6 target uses compensated" in r.stdout, r.stdout
-    assert "assigned by the routines: " in r.stdout, r.stdout
-    rows = evaluate([parse_file(src, src.name)], [parse_file(out, src.name)], entry="Main")
-    assert len(rows) == 6
+                  move("MoveL", 6, "T1", "U2")]}, "Main", 6, "--emit", mode)
+    assert "assigned by the routines: " in stdout, stdout
     for (x, _, _, _), q in zip(rows, np.delete(Q, 2, axis=0)):
         want = fk(NOMINAL, q)
         got = x.pose if x.pose is not None else fk(NOMINAL, x.q_deg)
@@ -395,16 +402,10 @@ def test_a_move_whose_frames_another_routine_may_change_is_left_as_written(case,
 def test_a_tool_load_another_routine_assigns_changes_no_target(tmp_path):
     """Another routine assigns the tool's load only (rdkTool.tload): the
     moves of a routine that assigns its frame are followed all the same."""
-    src = tmp_path / "MOD_Main.mod"
-    src.write_text(module("MOD_Main", {
+    fixed_and_run(tmp_path, {
         "Main": ["    Prog2;", tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
         "Prog2": ["    rdkTool.tload := [3,[0,0,20],[1,0,0,0],0,0,0];", tframe("T2"),
-                  uframe("U2"), move("MoveL", 3, "T2", "U2")]}))
-    out = tmp_path / "out.mod"
-    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out)
-    assert "2 of 2 target uses compensated" in r.stdout, r.stdout
-    rows = evaluate([parse_file(src, src.name)], [parse_file(out, src.name)], entry="Main")
-    assert len(rows) == 2
+                  uframe("U2"), move("MoveL", 3, "T2", "U2")]}, "Main", 2)
 
 
 def test_routines_of_two_modules_keep_their_own_values(tmp_path):
@@ -508,16 +509,10 @@ def test_without_a_main_a_routine_that_runs_the_programs_is_their_entry(tmp_path
     """No main: Run, which nothing calls and which moves with nothing
     itself, runs the programs that do; each assigns its own frames: all
     followed (Run is the program's entry, not a service routine)."""
-    src = tmp_path / "MOD_Main.mod"
-    src.write_text(module("MOD_Main", {
+    fixed_and_run(tmp_path, {
         "Run": ["    Prog1;", "    Prog2;"],
         "Prog1": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
-        "Prog2": [tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2")]}))
-    out = tmp_path / "out.mod"
-    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out)
-    assert "2 of 2 target uses compensated" in r.stdout, r.stdout
-    rows = evaluate([parse_file(src, src.name)], [parse_file(out, src.name)], entry="Run")
-    assert len(rows) == 2
+        "Prog2": [tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2")]}, "Run", 2)
 
 
 def test_a_local_routine_of_one_name_in_two_modules_is_called_or_not_on_its_own(tmp_path):
