@@ -24,6 +24,7 @@ from rapidcomp.rapid.parse import parse_file
 
 from conftest import ROOT
 from test_real_programs import NOMINAL, evaluate
+from test_real_programs import rapidcomp as own_process
 
 
 class _Run:
@@ -532,3 +533,30 @@ def test_a_local_routine_of_one_name_in_two_modules_is_called_or_not_on_its_own(
                   "--allow-partial", check=False)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "1 untouched" in r.stdout and "by Setup (ModB.mod:4)" in r.stdout, r.stdout
+
+
+def test_a_routine_run_at_a_stop_that_can_only_assign_the_same_value_changes_nothing(
+        tmp_path):
+    """TestProg runs Prog1 too, but every assignment of the frames gives the
+    same value: run at a stop, it assigns it again. The moves are followed
+    (left as written, had it assigned another)."""
+    fixed_and_run(tmp_path, {
+        "Main": ["    Prog1;"],
+        "Prog1": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1"),
+                  move("MoveJ", 1, "T1", "U1")],
+        "TestProg": ["    Prog1;"]}, "Main", 2)
+
+
+def test_the_reason_names_the_first_service_routine_in_the_text(tmp_path):
+    """Several routines nothing calls assign the tool: the reason names the
+    first of them as the text has them, the same on every run."""
+    src = tmp_path / "MOD_Main.mod"
+    src.write_text(module("MOD_Main", {
+        "Main": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+        **{f"Svc{k}": [tframe("T2")] for k in (3, 1, 2)}}))
+    # (Each run a process of its own: the order of a set of ids is not the
+    # same from one process to the next.)
+    outs = {own_process("fix", src, "--profile", "fixtures/warm.csv", "-o", tmp_path / "o.mod",
+                        "--allow-partial").stdout for _ in range(3)}
+    (out,) = outs
+    assert "by Svc3 (MOD_Main.mod:14), which no given routine calls" in out, out

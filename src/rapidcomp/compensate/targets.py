@@ -285,6 +285,65 @@ def _chain(hit: Sites, k: int) -> tuple | str:
     return tuple(done)
 
 
+def _one_value(by_routine: dict) -> bool:
+    """Whether every assignment of by_routine's data ({routine: [(pf,
+    Assign)]}) gives the part it assigns one and the same literal value (the
+    whole value, or each component; not both)."""
+    values: dict = {}
+    for assigns in by_routine.values():
+        for _, a in assigns:
+            leaves = literal_leaves(a.value)
+            if leaves is None or values.setdefault(_part(a), leaves) != leaves:
+                return False
+    return None not in values or len(values) == 1
+
+
+def _components(keys, callees: dict) -> dict:
+    """Each routine's strongly connected component of the call graph (an
+    id; Tarjan's, without recursion: a chain of 1e4 calls is no limit)."""
+    index: dict = {}
+    low: dict = {}
+    comp: dict = {}
+    stack: list = []
+    on: set = set()
+    counter = 0
+    for start in keys:
+        if start in index:
+            continue
+        work = [(start, 0)]
+        index[start] = low[start] = counter
+        counter += 1
+        stack.append(start)
+        on.add(start)
+        while work:
+            v, i = work[-1]
+            nexts = [c for c in callees.get(v, ()) if c is not ANY]
+            if i < len(nexts):
+                work[-1] = (v, i + 1)
+                w = nexts[i]
+                if w not in index:
+                    index[w] = low[w] = counter
+                    counter += 1
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, 0))
+                elif w in on:
+                    low[v] = min(low[v], index[w])
+                continue
+            work.pop()
+            if work:
+                u = work[-1][0]
+                low[u] = min(low[u], low[v])
+            if low[v] == index[v]:
+                while True:
+                    w = stack.pop()
+                    on.discard(w)
+                    comp[w] = index[v]
+                    if w == v:
+                        break
+    return comp
+
+
 def _where(pf, offset: int) -> str:
     """"file:line" of an offset of pf."""
     return f"{pf.source.display_path}:{pf.source.position(offset)[0]}"
@@ -850,12 +909,19 @@ class Resolver:
             mains, reach, where = roots
             movers = {key for key, used in moves_with.items() if data in used}
             # (Without a main, each routine nothing calls that runs a move
-            # with the data is a program: RoboDK's, entered by PP to routine.)
-            programs = mains or [r for r in reach if not reach[r].isdisjoint(movers)]
+            # with the data is a program: RoboDK's, entered by PP to routine;
+            # of several LOCAL mains, those that do.)
+            programs = ([r for r in mains if not reach[r].isdisjoint(movers)]
+                        if len(mains) > 1 else mains) or [
+                r for r in reach if not reach[r].isdisjoint(movers)]
+            # (Where every assignment gives each part it assigns one and the
+            # same value, a routine run at a stop assigns that value again:
+            # nothing changes.)
+            same = _one_value(by_routine)
             for root, runs in reach.items():
                 if root in programs:
                     continue
-                hit = next((r for r in by_routine if r in runs), None)
+                hit = None if same else next((r for r in by_routine if r in runs), None)
                 if hit is None and ANY not in runs:
                     continue
                 if hit is None:
@@ -899,26 +965,33 @@ class Resolver:
                     table.add(m, r, (m, key))
         callees: dict = {}              # routine key -> the routines it calls, or ANY among them
         for key, (m, _) in keys.items():
-            out = callees[key] = set()
+            out = callees[key] = []
             for _, name in reentry.calls_by.get(key, ()):
                 hit = table.find(m, name) if name != LATE else None
-                out.add(hit[1] if hit is not None else ANY)
+                out.append(hit[1] if hit is not None else ANY)
+        # Called from outside: by a routine of another strongly connected
+        # component (a routine calling itself, or routines calling each
+        # other, are entered from outside all the same).
+        comp = _components(keys, callees)
+        inside = {comp[c] for k in keys for c in callees[k]
+                  if c is not ANY and comp[c] != comp[k]}
+        mains = [k for k, (_, n) in keys.items() if k[1] == "main" and n.scope != "LOCAL"]
+        mains = mains or [k for k in keys if k[1] == "main"]
+        # (In text order, as keys are: a reason names the first it finds.)
+        roots = [k for k, (_, n) in keys.items() if n.kind != "TRAP"
+                 and (k in mains or comp[k] not in inside)]
         reach: dict = {}
-        for key in keys:
-            seen = {key}
-            todo = [key]
+        for root in roots:
+            seen = {root}
+            todo = [root]
             while todo:
                 for callee in callees.get(todo.pop(), ()):
                     if callee not in seen:
                         seen.add(callee)
                         if callee is not ANY:
                             todo.append(callee)
-            reach[key] = seen
-        mains = [k for k, (_, n) in keys.items() if k[1] == "main" and n.scope != "LOCAL"]
-        mains = mains or [k for k in keys if k[1] == "main"]
-        roots = {k for k, (_, n) in keys.items() if n.kind != "TRAP" and (k in mains or all(
-            c in reach[k] for c in keys if k in callees[c]))}
-        return mains, {k: reach[k] for k in roots}, where
+            reach[root] = seen
+        return mains, reach, where
 
     def _moves_with(self) -> dict:
         """(module id, lower-case routine name) -> the data (_data_id) of
