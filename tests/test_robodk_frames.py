@@ -560,3 +560,32 @@ def test_the_reason_names_the_first_service_routine_in_the_text(tmp_path):
                         "--allow-partial").stdout for _ in range(3)}
     (out,) = outs
     assert "by Svc3 (MOD_Main.mod:14), which no given routine calls" in out, out
+
+
+@pytest.mark.parametrize("event", [False, True])
+def test_an_event_routine_of_sys_cfg_that_assigns_the_tool(event, tmp_path):
+    """main calls ResetTool, which assigns the tool, then assigns its own
+    and moves: followed, unless SYSPAR/SYS.cfg also runs ResetTool at an
+    event (EVENT_ROUTINE, RESTART): then it may run between any two
+    statements, and the moves are left as written with that reason."""
+    root = tmp_path / "backup"
+    cfg = ("SYS:CFG_1.0:6:0::\n#\nCAB_TASKS:\n\n      -Name \"T_ROB1\" -Type \"NORMAL\" "
+           "-MotionTask\n")
+    if event:
+        cfg += "#\nEVENT_ROUTINE:\n\n      -Routine \"ResetTool\" -Shelf \"RESTART\"\n"
+    for path, text in {
+        "BACKINFO/backinfo.txt": ">>SYSTEM_ID:\nCELL\n\n>>TASK1: (T_ROB1,,)\n"
+                                 "PROGMOD/MOD_Main.mod\n\n>>EOF:\n",
+        "SYSPAR/SYS.cfg": cfg,
+        "RAPID/TASK1/PROGMOD/MOD_Main.mod": module("MOD_Main", {
+            "main": ["    ResetTool;", tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+            "ResetTool": [tframe("T2")]}),
+    }.items():
+        (root / path).parent.mkdir(parents=True, exist_ok=True)
+        (root / path).write_text(text)
+    r = rapidcomp("fix", root, "--profile", "fixtures/warm.csv", "-o", tmp_path / "out",
+                  "--allow-partial")
+    if event:
+        assert "1 untouched" in r.stdout and "which is an event routine" in r.stdout, r.stdout
+    else:
+        assert "1 of 1 target uses compensated" in r.stdout, r.stdout

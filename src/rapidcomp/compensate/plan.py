@@ -33,6 +33,8 @@ class Task:
     # The name `fix` makes its output's from: a module's file, a folder's
     # or backup's folder, a program file's folder (PROGRAM_comp).
     origin: str | None = None
+    # The routines a backup's SYSPAR/SYS.cfg runs at events (lower case).
+    event_routines: tuple[str, ...] = ()
 
     @property
     def all_files(self) -> list[ParsedFile]:
@@ -49,7 +51,8 @@ class Plan:
         self.files = task.all_files
         self.n_written = len(task.files)
         self.resolver = Resolver(self.files, track=track, base=base,
-                                 observers=task.observers, moved_by=task.base_moved_by)
+                                 observers=task.observers, moved_by=task.base_moved_by,
+                                 events=task.event_routines)
         self.track = tuple(track)
         self.uses: list[TargetUse] = []
         for fi, pf in enumerate(task.files):

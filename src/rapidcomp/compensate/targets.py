@@ -590,13 +590,17 @@ class Resolver:
     def __init__(self, files: list[ParsedFile], float32: bool = False,
                  usages: dict | None = None, writes: bool = True, track=(), base=None,
                  observers=(), moved_by: str | None = None, written: Written | None = None,
-                 like: "Resolver | None" = None, states: tuple[float, ...] = ()):
+                 like: "Resolver | None" = None, states: tuple[float, ...] = (),
+                 events: tuple[str, ...] = ()):
         """like: a resolver of these very files (the plan's, for verify.py):
         its tables of the files' declarations are taken, not made again.
         states: the thermal states a transient output is read at, each in
         turn (self.state, one of them): its rcTcJ/rcTcR(cold, dq) are
-        evaluated there as the controller does (_at_state)."""
+        evaluated there as the controller does (_at_state). events: the
+        routines the controller runs at events (a backup's SYS.cfg), lower
+        case."""
         self.float32 = float32
+        self.events = frozenset(events)
         self.states = tuple(states)
         self.state: float | None = None
         # (call, its FOR loops' values) -> (the Source of its cold value, its
@@ -934,6 +938,13 @@ class Resolver:
                             "one no given module declares): a service or event routine, it "
                             "may run while the program is stopped")
                 pf, a = by_routine[hit][0]
+                if root[1] in self.events:
+                    who = ("which is an event routine" if hit == root else
+                           f"which {names[root]} ({where[root]}), an event routine, runs")
+                    return (f"{a.target.name} is assigned at run time by {names[hit]} "
+                            f"({_where(pf, a.span.start)}), {who} (SYSPAR/SYS.cfg "
+                            "EVENT_ROUTINE): it may run at a stop or a restart, between any "
+                            "two statements")
                 who = ("which" if hit == root else
                        f"which {names[root]} ({where[root]}) runs, a routine that")
                 return (f"{a.target.name} is assigned at run time by {names[hit]} "
@@ -948,7 +959,8 @@ class Resolver:
         an interrupt's: the routines it runs, itself among them, or ANY
         where it may run any (a late-bound call, a routine no given module
         declares)}, {each routine: "file:line" of it}). The entries: main (a
-        LOCAL main only where no other is), called or not. A routine is
+        LOCAL main only where no other is), called or not. An event routine
+        (self.events) is a root, called or not. A routine is
         called where another calls it that it does not run itself (a
         routine calling itself, or routines calling each other, are
         entered from outside all the same). Calls resolved as the
@@ -977,9 +989,10 @@ class Resolver:
                   if c is not ANY and comp[c] != comp[k]}
         mains = [k for k, (_, n) in keys.items() if k[1] == "main" and n.scope != "LOCAL"]
         mains = mains or [k for k in keys if k[1] == "main"]
-        # (In text order, as keys are: a reason names the first it finds.)
+        # (In text order, as keys are: a reason names the first it finds.
+        # An event routine is entered from outside, called or not.)
         roots = [k for k, (_, n) in keys.items() if n.kind != "TRAP"
-                 and (k in mains or comp[k] not in inside)]
+                 and (k in mains or comp[k] not in inside or k[1] in self.events)]
         reach: dict = {}
         for root in roots:
             seen = {root}

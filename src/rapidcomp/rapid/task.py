@@ -53,6 +53,9 @@ class TaskSource:
     # -base_frame_coordinated or -base_frame_moved_by, a track): robtargets
     # need --track.
     base_moved_by: str | None = None
+    # The routines SYSPAR/SYS.cfg runs at events (EVENT_ROUTINE: RESTART,
+    # START, STOP...) in this task, lower case.
+    event_routines: tuple[str, ...] = ()
 
     @property
     def is_folder(self) -> bool:
@@ -217,11 +220,17 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
     groups = motion if motion is not None else {t.task.upper(): None for t in tasks}
     moc_cfg = _read_cfg(root / "SYSPAR" / "MOC.cfg", shown)
     frames = _base_frames(moc_cfg, shown, groups, _group_robots(sys_cfg, moc_cfg, shown))
+    events = _cfg_instances(sys_cfg, "EVENT_ROUTINE", f"{shown}/SYSPAR/SYS.cfg")
     out = []
     for n, t in enumerate(tasks):
         frame, problem, mover = frames.get(t.task.upper(), (None, None, None))
+        # (An event routine without -Task, or with -AllTask, may be any
+        # task's: taken as this one's too.)
+        mine = tuple(sorted({e["routine"].lower() for e in events if e.get("routine")
+                             and (e.get("task") is None or "alltask" in e
+                                  or e["task"].upper() == t.task.upper())}))
         out.append(replace(t, notes=tuple(skipped) if n == 0 else (), base=frame,
-                           base_problem=problem, base_moved_by=mover))
+                           base_problem=problem, base_moved_by=mover, event_routines=mine))
     return out
 
 
