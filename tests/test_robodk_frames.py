@@ -589,3 +589,23 @@ def test_an_event_routine_of_sys_cfg_that_assigns_the_tool(event, tmp_path):
         assert "1 untouched" in r.stdout and "which is an event routine" in r.stdout, r.stdout
     else:
         assert "1 of 1 target uses compensated" in r.stdout, r.stdout
+
+
+def test_local_mains_that_move_with_nothing_are_still_the_entries(tmp_path):
+    """Two LOCAL mains, neither moving with the tool: they are the entries
+    all the same (not the routines nothing calls that do move with it,
+    which is the rule without any main), so Prog2, which nothing calls
+    and which assigns another tool, may run at a stop: nothing followed."""
+    task = tmp_path / "cell"
+    task.mkdir()
+    (task / "ModA.mod").write_text(module("ModA", {
+        "main": ['    TPWrite "A";'],
+        "Prog1": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+        "Prog2": [tframe("T2"), uframe("U2"), move("MoveL", 3, "T2", "U2")]}
+    ).replace("  PROC main()", "  LOCAL PROC main()"))
+    (task / "ModB.mod").write_text(module("ModB", {"main": ['    TPWrite "B";']}, data=False)
+                                   .replace("  PROC main()", "  LOCAL PROC main()"))
+    r = rapidcomp("fix", task, "--profile", "fixtures/warm.csv", "-o", tmp_path / "out",
+                  "--allow-partial")
+    assert "0 of 2 target uses compensated" in r.stdout, r.stdout
+    assert "which no given routine calls" in r.stdout, r.stdout

@@ -300,7 +300,8 @@ def _one_value(by_routine: dict) -> bool:
 
 def _components(keys, callees: dict) -> dict:
     """Each routine's strongly connected component of the call graph (an
-    id; Tarjan's, without recursion: a chain of 1e4 calls is no limit)."""
+    id; Tarjan's, without recursion: a chain of 1e4 calls is no limit).
+    callees: each routine's distinct callees (no ANY)."""
     index: dict = {}
     low: dict = {}
     comp: dict = {}
@@ -317,7 +318,7 @@ def _components(keys, callees: dict) -> dict:
         on.add(start)
         while work:
             v, i = work[-1]
-            nexts = [c for c in callees.get(v, ()) if c is not ANY]
+            nexts = callees.get(v, ())
             if i < len(nexts):
                 work[-1] = (v, i + 1)
                 w = nexts[i]
@@ -915,9 +916,10 @@ class Resolver:
             # (Without a main, each routine nothing calls that runs a move
             # with the data is a program: RoboDK's, entered by PP to routine;
             # of several LOCAL mains, those that do.)
-            programs = ([r for r in mains if not reach[r].isdisjoint(movers)]
-                        if len(mains) > 1 else mains) or [
-                r for r in reach if not reach[r].isdisjoint(movers)]
+            if len(mains) > 1:
+                programs = [r for r in mains if not reach[r].isdisjoint(movers)] or mains
+            else:
+                programs = mains or [r for r in reach if not reach[r].isdisjoint(movers)]
             # (Where every assignment gives each part it assigns one and the
             # same value, a routine run at a stop assigns that value again:
             # nothing changes.)
@@ -977,14 +979,16 @@ class Resolver:
                     table.add(m, r, (m, key))
         callees: dict = {}              # routine key -> the routines it calls, or ANY among them
         for key, (m, _) in keys.items():
-            out = callees[key] = []
-            for _, name in reentry.calls_by.get(key, ()):
+            out = {}                    # (distinct, in the order called: a CAM-like routine
+            for _, name in reentry.calls_by.get(key, ()):   # calls one 1e4 times)
                 hit = table.find(m, name) if name != LATE else None
-                out.append(hit[1] if hit is not None else ANY)
+                out[hit[1] if hit is not None else ANY] = None
+            callees[key] = list(out)
         # Called from outside: by a routine of another strongly connected
         # component (a routine calling itself, or routines calling each
         # other, are entered from outside all the same).
-        comp = _components(keys, callees)
+        comp = _components(keys, {k: [c for c in cs if c is not ANY]
+                                  for k, cs in callees.items()})
         inside = {comp[c] for k in keys for c in callees[k]
                   if c is not ANY and comp[c] != comp[k]}
         mains = [k for k, (_, n) in keys.items() if k[1] == "main" and n.scope != "LOCAL"]
