@@ -201,7 +201,7 @@ class Sites(NamedTuple):
     starts: list            # the assignments' offsets, in order
     assigns: list           # (ParsedFile, Assign) of each, in that order
     body_end: int           # where the routine's body ends (its handlers follow)
-    reentries: list         # offsets of its calls that may run it again
+    reentries: list         # offsets of its calls that may run it, or another assigning it
     parts: frozenset = frozenset()   # the components assigned (lower case)
     whole: bool = True      # some assignment is of the whole value
     # Other routines' assignments of the same data, in order: a component
@@ -814,10 +814,12 @@ class Resolver:
     def site_map(self) -> dict:
         """Tool and work object names whose every assignment is a literal
         (of the whole value or of one component) and a statement of a
-        routine's body itself -> {routine key: Sites} of each routine that
-        assigns it; not a routine with a GOTO (its body may run out of
-        order), and none where an interrupt may run one of them. Made
-        once."""
+        routine's body itself -> {each data of that name (_data_id): the
+        Sites of each routine that assigns it ({routine key: Sites}), or
+        why none of its moves is followed (an interrupt or a service or
+        event routine may change it: _sites_of)}. Names only ever assigned
+        their own declared value are left out (that value, everywhere).
+        Made once."""
         sites = self._site_map
         if sites is not None:
             return sites
