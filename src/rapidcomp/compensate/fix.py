@@ -157,11 +157,11 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         # not per row later). Past this point the values, their texts and
         # the edits' index are not needed (1e5 targets: ~230 MB before
         # verification); a retry prepares them again.
-        done = [(g, u) for g in gs if g.failure is None for u in g.uses]
-        confs = iter(values.confs([(g, u.source.element) for g, u in done if g.mode == "rob"]))
         # (Only where a robtarget is written: a CAM program's 1e5 MoveAbsJ,
         # none; rows.use_rows reads a use not in it as none written.)
-        written_conf = {u.key: next(confs) for g, u in done if g.mode == "rob"}
+        done = [(g, u) for g in gs if g.failure is None and g.mode == "rob" for u in g.uses]
+        written_conf = dict(zip([u.key for _, u in done],
+                                values.confs([(g, u.source.element) for g, u in done])))
         values.forget()
         # (The new declarations are in the edits now, as texts of their own:
         # 1e5 MoveL turned into MoveAbsJ, ~18 MB of them twice.)
@@ -246,7 +246,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # hundreds of MB): the edited literals as written, the output parsed
     # again; of the editor the rows read what it did per use only.
     actions = editor.actions
-    values = written = converted = calls = out_files = done = confs = editor = keys = None
+    values = written = converted = calls = out_files = done = editor = keys = None
     # The rows read the plan's uses and track only: the resolver's caches
     # go before the rows are made (a later use of them fails loudly).
     plan.resolver = None

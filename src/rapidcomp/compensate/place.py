@@ -114,7 +114,7 @@ def kept_robtarget(u: TargetUse, plan: Plan, solved: Solved, row: int) -> str | 
     if plan.may_be_displaced(u):
         return ("program displacement may be active here (a MoveAbsJ would ignore it): kept a "
                 "robtarget move")
-    caution = solved.picks[row].caution
+    caution = solved.picks.caution[row]
     if caution is not None:
         return caution
     if u.source.decl is not None and u.source.decl.storage == "PERS":

@@ -311,8 +311,10 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
          mode, written_conf, ok_label, fail_label, tracked) -> tuple[tuple, int]:
     """(the row's fields but its joints, where its joints are: Rows)."""
     i = solved.row[u.key]
-    pick = solved.picks[i]
-    has_q = pick.failure is None
+    # (The pick's columns read where they are: no Pick made for each row.)
+    picks = solved.picks
+    rule, caution = picks.rule[i], picks.caution[i]
+    has_q = picks.failure[i] is None
     error = (cols.err_um[i], cols.err_deg[i]) if has_q else (None, None)
     # confdata is a robtarget's: a MoveAbsJ has none. (A record's conf is
     # a tuple of ints already.)
@@ -329,7 +331,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
             f"{element_label(g, fk)} of the same group: {reason}")
     if why is not None:
         why = _hint(why, u, tracked)
-        return ((*base, fail_label, pick.rule, None, error[0], error[1], None, None, conf_before,
+        return ((*base, fail_label, rule, None, error[0], error[1], None, None, conf_before,
                  None, d_warnings, why), 2 * i if has_q else -1)
     warnings = d_warnings
     if g is not None:
@@ -353,8 +355,8 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
                                    "copy, which changes to it at run time (ModPos, another "
                                    "task) no longer reach",)
     warnings = warnings + u.notes
-    if pick.caution is not None:
-        warnings = warnings + (pick.caution,)
+    if caution is not None:
+        warnings = warnings + (caution,)
     after = _conf_after(solved, i, u, written_conf)
     if written_conf is not None and after is not None and after != conf_before:
         changed = [f"{n} {a} -> {b}" for n, a, b in zip(("cf1", "cf4", "cf6", "cfx"),
@@ -368,7 +370,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         res = verified[u.key]
     else:
         res = (cols.res_mm[i] * 1000, cols.res_rad[i] / DEG)
-    return ((*base, ok_label, pick.rule, actions.get(u.key) if actions is not None else None,
+    return ((*base, ok_label, rule, actions.get(u.key) if actions is not None else None,
              error[0], error[1], res[0], res[1], conf_before, after, warnings, None), 2 * i + 1)
 
 

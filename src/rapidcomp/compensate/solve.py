@@ -63,17 +63,16 @@ class Solved:
     start: np.ndarray | None = None     # --start joints, deg
 
     def ok(self, i: int) -> bool:
-        return self.picks[i].failure is None and bool(self.deformed.success[i])
+        return self.picks.failure[i] is None and bool(self.deformed.success[i])
 
     def oks(self) -> list[bool]:
         """ok(i) of every row, as a list (1e5 rows asked at once)."""
         return [f is None and s for f, s in zip(self.picks.failure,
-                                                        self.deformed.success.tolist())]
+                                                self.deformed.success.tolist())]
 
     def reason(self, i: int) -> str | None:
-        if self.picks[i].failure is not None:
-            return self.picks[i].failure
-        return self.deformed.reason(i)
+        failure = self.picks.failure[i]
+        return failure if failure is not None else self.deformed.reason(i)
 
 
 def _in_text_order(keys) -> list:

@@ -616,6 +616,8 @@ class Resolver:
         self._records: dict | None = None       # _component_type's: RECORD name -> components
         # Tools and work objects a routine assigns literals to (site_map).
         self._site_map: dict | None = None
+        # What each routine nothing calls runs (_root_reach: made where needed).
+        self._roots: tuple | None = None
         # id -> (the declaration given an assigned value, the file of the
         # assignment): kept, so the id stays its own (self.home, which a
         # resolver of the same files shares, is not written).
@@ -852,8 +854,10 @@ class Resolver:
                                          and type(st.target.selectors[0]) is A.Component))):
                             found.setdefault(st.target.name.lower(), []).append((pf, st))
         reentry = _Reentry(self.files)
-        moves_with = self._moves_with()
-        self._roots = None      # (what each routine nothing calls runs: made where needed)
+        # (The output's resolver, which knows no writes, follows the names
+        # the plan followed: a move the plan left as written is not verified,
+        # and a service routine is the plan's to find.)
+        moves_with = self._moves_with() if literal else None
         for name, assigns in (literal or found).items():
             # (By the data each assigns: a LOCAL declaration of a module or
             # routine is data of its own, as RoboDK's LOCAL PERS rdkTool in
@@ -880,7 +884,7 @@ class Resolver:
             return id(d)
         return name.lower()
 
-    def _sites_of(self, data, by_routine: dict, reentry: _Reentry, moves_with: dict,
+    def _sites_of(self, data, by_routine: dict, reentry: _Reentry, moves_with: dict | None,
                   jumps: set, ends: dict, names: dict) -> dict | str:
         """site_map's entry of one data the routines by_routine assign:
         {routine key: Sites}, or why no move of it is followed."""
@@ -909,7 +913,7 @@ class Resolver:
         # anything, late-bound), is a service or event routine: it may run
         # while the program is stopped, between any two statements, and
         # take back or change the value the moves after take.
-        if type(here) is dict:
+        if type(here) is dict and moves_with is not None:
             roots = self._roots
             if roots is None:
                 roots = self._roots = self._root_reach(reentry)
