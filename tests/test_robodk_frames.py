@@ -562,17 +562,33 @@ def test_the_reason_names_the_first_service_routine_in_the_text(tmp_path):
     assert "by Svc3 (MOD_Main.mod:14), which no given routine calls" in out, out
 
 
-@pytest.mark.parametrize("event", [False, True])
+# How a backup's SYSPAR/SYS.cfg names an event routine (the Controller
+# topic's Event Routine type, CAB_EXEC_HOOKS), and whether it is this task's.
+EVENTS = {
+    "none": ("", False),
+    "this task": ('-Routine "ResetTool" -Shelf "RESTART" -Task "T_ROB1"', True),
+    "all tasks": ('-Routine "ResetTool" -Shelf "POWER_ON" -Task "T_ROB2" -AllTask', True),
+    "all motion tasks": ('-Routine "ResetTool" -Shelf "START" -Task "T_ROB2" -AllMotionTask', True),
+    "continued line": ('-Routine "ResetTool" -Shelf "STOP" \\\n          -Task "T_ROB1"', True),
+    "another task": ('-Routine "ResetTool" -Shelf "RESTART" -Task "T_ROB2"', False),
+}
+
+
+@pytest.mark.parametrize("event", EVENTS)
 def test_an_event_routine_of_sys_cfg_that_assigns_the_tool(event, tmp_path):
     """main calls ResetTool, which assigns the tool, then assigns its own
     and moves: followed, unless SYSPAR/SYS.cfg also runs ResetTool at an
-    event (EVENT_ROUTINE, RESTART): then it may run between any two
-    statements, and the moves are left as written with that reason."""
+    event of this task (CAB_EXEC_HOOKS, e.g. RESTART): then it may run
+    between any two statements, and the moves are left as written with that
+    reason. The section may come twice (a file merged from several): the
+    hook is in the second."""
+    hook, counts = EVENTS[event]
     root = tmp_path / "backup"
-    cfg = ("SYS:CFG_1.0:6:0::\n#\nCAB_TASKS:\n\n      -Name \"T_ROB1\" -Type \"NORMAL\" "
-           "-MotionTask\n")
-    if event:
-        cfg += "#\nEVENT_ROUTINE:\n\n      -Routine \"ResetTool\" -Shelf \"RESTART\"\n"
+    cfg = ("SYS:CFG_1.0:6:0::\n#\nCAB_EXEC_HOOKS:\n\n      -Routine \"Other\" -Shelf "
+           "\"POWER_ON\" -Task \"T_ROB1\"\n#\nCAB_TASKS:\n\n      -Name \"T_ROB1\" -Type "
+           "\"NORMAL\" -MotionTask\n")
+    if hook:
+        cfg += f"#\nCAB_EXEC_HOOKS:\n\n      {hook}\n"
     for path, text in {
         "BACKINFO/backinfo.txt": ">>SYSTEM_ID:\nCELL\n\n>>TASK1: (T_ROB1,,)\n"
                                  "PROGMOD/MOD_Main.mod\n\n>>EOF:\n",
@@ -585,7 +601,7 @@ def test_an_event_routine_of_sys_cfg_that_assigns_the_tool(event, tmp_path):
         (root / path).write_text(text)
     r = rapidcomp("fix", root, "--profile", "fixtures/warm.csv", "-o", tmp_path / "out",
                   "--allow-partial")
-    if event:
+    if counts:
         assert "1 untouched" in r.stdout and "which is an event routine" in r.stdout, r.stdout
     else:
         assert "1 of 1 target uses compensated" in r.stdout, r.stdout

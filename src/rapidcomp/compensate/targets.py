@@ -951,8 +951,8 @@ class Resolver:
                            f"which {names[root]} ({where[root]}), an event routine, runs")
                     return (f"{a.target.name} is assigned at run time by {names[hit]} "
                             f"({_where(pf, a.span.start)}), {who} (SYSPAR/SYS.cfg "
-                            "EVENT_ROUTINE): it may run at a stop or a restart, between any "
-                            "two statements")
+                            "CAB_EXEC_HOOKS, Event Routine): it may run at a stop or a restart, "
+                            "between any two statements")
                 who = ("which" if hit == root else
                        f"which {names[root]} ({where[root]}) runs, a routine that")
                 return (f"{a.target.name} is assigned at run time by {names[hit]} "

@@ -53,8 +53,9 @@ class TaskSource:
     # -base_frame_coordinated or -base_frame_moved_by, a track): robtargets
     # need --track.
     base_moved_by: str | None = None
-    # The routines SYSPAR/SYS.cfg runs at events (EVENT_ROUTINE: RESTART,
-    # START, STOP...) in this task, lower case.
+    # The routines SYSPAR/SYS.cfg runs at events (CAB_EXEC_HOOKS, the
+    # Controller topic's Event Routine: POWER_ON, START, STOP, RESTART...)
+    # in this task, lower case.
     event_routines: tuple[str, ...] = ()
 
     @property
@@ -220,14 +221,15 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
     groups = motion if motion is not None else {t.task.upper(): None for t in tasks}
     moc_cfg = _read_cfg(root / "SYSPAR" / "MOC.cfg", shown)
     frames = _base_frames(moc_cfg, shown, groups, _group_robots(sys_cfg, moc_cfg, shown))
-    events = _cfg_instances(sys_cfg, "EVENT_ROUTINE", f"{shown}/SYSPAR/SYS.cfg")
+    events = _cfg_instances(sys_cfg, "CAB_EXEC_HOOKS", f"{shown}/SYSPAR/SYS.cfg")
     out = []
     for n, t in enumerate(tasks):
         frame, problem, mover = frames.get(t.task.upper(), (None, None, None))
-        # (An event routine without -Task, or with -AllTask, may be any
-        # task's: taken as this one's too.)
+        # (An event routine without -Task, or with -AllTask or
+        # -AllMotionTask, may be any motion task's: taken as this one's too.)
         mine = tuple(sorted({e["routine"].lower() for e in events if e.get("routine")
                              and (e.get("task") is None or "alltask" in e
+                                  or "allmotiontask" in e
                                   or e["task"].upper() == t.task.upper())}))
         out.append(replace(t, notes=tuple(skipped) if n == 0 else (), base=frame,
                            base_problem=problem, base_moved_by=mover, event_routines=mine))
@@ -296,17 +298,17 @@ def _cfg_instances(text: str | None, type_name: str,
     bad input (in `where`): which one the controller took cannot be told."""
     if text is None:
         return []
-    start = re.search(rf"^{type_name}:", text, re.MULTILINE)
-    if start is None:
-        return []
-    section = text[start.end():]
-    # The section ends at the next type line ("NAME:" at the start of a
-    # line; UCCM0: has digits too).
-    end = re.search(r"^[A-Z][A-Z0-9_]*:", section, re.MULTILINE)
-    if end:
-        section = section[:end.start()]
+    sections = []
+    # (Every section of the type: a file merged from several may hold it
+    # twice.)
+    for start in re.finditer(rf"^{type_name}:", text, re.MULTILINE):
+        section = text[start.end():]
+        # The section ends at the next type line ("NAME:" at the start of a
+        # line; UCCM0: has digits too).
+        end = re.search(r"^[A-Z][A-Z0-9_]*:", section, re.MULTILINE)
+        sections.append(section[:end.start()] if end else section)
     out = []
-    for line in re.sub(r"\\[ \t]*\r?\n", " ", section).splitlines():
+    for line in re.sub(r"\\[ \t]*\r?\n", " ", "\n".join(sections)).splitlines():
         if line.lstrip().startswith("#"):
             continue                  # (a comment: `# old: -name "ROB_OLD" ...`)
         pairs = re.findall(r'(?:^|\s)-(\w+)(?:[ \t]+("[^"]*"|[^\s"-]\S*|-[\d.]\S*))?', line)
