@@ -562,6 +562,21 @@ def test_the_reason_names_the_first_service_routine_in_the_text(tmp_path):
     assert "by Svc3 (MOD_Main.mod:14), which no given routine calls" in out, out
 
 
+def backup(tmp_path, sys_cfg: str, routines: dict[str, list[str]]):
+    """A controller backup of one motion task, T_ROB1, holding one module
+    of these routines, with this SYSPAR/SYS.cfg."""
+    root = tmp_path / "backup"
+    for path, text in {
+        "BACKINFO/backinfo.txt": ">>SYSTEM_ID:\nCELL\n\n>>TASK1: (T_ROB1,,)\n"
+                                 "PROGMOD/MOD_Main.mod\n\n>>EOF:\n",
+        "SYSPAR/SYS.cfg": sys_cfg,
+        "RAPID/TASK1/PROGMOD/MOD_Main.mod": module("MOD_Main", routines),
+    }.items():
+        (root / path).parent.mkdir(parents=True, exist_ok=True)
+        (root / path).write_text(text)
+    return root
+
+
 # How a backup's SYSPAR/SYS.cfg names an event routine (the Controller
 # topic's Event Routine type, CAB_EXEC_HOOKS), and whether it is this task's.
 EVENTS = {
@@ -583,28 +598,49 @@ def test_an_event_routine_of_sys_cfg_that_assigns_the_tool(event, tmp_path):
     reason. The section may come twice (a file merged from several): the
     hook is in the second."""
     hook, counts = EVENTS[event]
-    root = tmp_path / "backup"
     cfg = ("SYS:CFG_1.0:6:0::\n#\nCAB_EXEC_HOOKS:\n\n      -Routine \"Other\" -Shelf "
            "\"POWER_ON\" -Task \"T_ROB1\"\n#\nCAB_TASKS:\n\n      -Name \"T_ROB1\" -Type "
            "\"NORMAL\" -MotionTask\n")
     if hook:
         cfg += f"#\nCAB_EXEC_HOOKS:\n\n      {hook}\n"
-    for path, text in {
-        "BACKINFO/backinfo.txt": ">>SYSTEM_ID:\nCELL\n\n>>TASK1: (T_ROB1,,)\n"
-                                 "PROGMOD/MOD_Main.mod\n\n>>EOF:\n",
-        "SYSPAR/SYS.cfg": cfg,
-        "RAPID/TASK1/PROGMOD/MOD_Main.mod": module("MOD_Main", {
-            "main": ["    ResetTool;", tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
-            "ResetTool": [tframe("T2")]}),
-    }.items():
-        (root / path).parent.mkdir(parents=True, exist_ok=True)
-        (root / path).write_text(text)
+    root = backup(tmp_path, cfg, {
+        "main": ["    ResetTool;", tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+        "ResetTool": [tframe("T2")]})
     r = rapidcomp("fix", root, "--profile", "fixtures/warm.csv", "-o", tmp_path / "out",
                   "--allow-partial")
     if counts:
         assert "1 untouched" in r.stdout and "which is an event routine" in r.stdout, r.stdout
     else:
         assert "1 of 1 target uses compensated" in r.stdout, r.stdout
+
+
+@pytest.mark.parametrize("entry", [None, "Start"])
+def test_the_entry_routine_a_backup_names(entry, tmp_path):
+    """SYS.cfg's CAB_TASKS -Entry names the routine the program starts at.
+    Start is it: walked from the program's start (no "entered from
+    outside" note for it), and Prog2, which nothing calls and which assigns
+    another tool, is then a routine an operator may run at a stop: no move
+    with the tool is followed. Without -Entry there is no main: Start and
+    Prog2 are each a program of their own, each move compensated with its
+    own routine's tool."""
+    cfg = ("SYS:CFG_1.0:6:0::\n#\nCAB_TASKS:\n\n      -Name \"T_ROB1\" -Type \"NORMAL\" "
+           "-MotionTask" + (f' -Entry "{entry}"' if entry else "") + "\n")
+    root = backup(tmp_path, cfg, {
+        "Start": [tframe("T1"), uframe("U1"), move("MoveL", 0, "T1", "U1")],
+        "Prog2": [tframe("T2"), uframe("U1"), move("MoveL", 1, "T2", "U1")]})
+    r = rapidcomp("fix", root, "--profile", "fixtures/warm.csv", "-o", tmp_path / "out",
+                  "--allow-partial")
+    outside = "entered from outside what was given"
+    if entry:
+        assert "0 of 2 target uses compensated" in r.stdout, r.stdout
+        assert "by Prog2 (RAPID/TASK1/PROGMOD/MOD_Main.mod:" in r.stdout, r.stdout
+        assert "(Start, or where" in r.stdout, r.stdout
+        note = next(line for line in r.stdout.splitlines() if outside in line)
+        assert note.rstrip().endswith(": Prog2") or "Prog2;" in note, note
+        assert "Start" not in note.split(outside)[1].split(";")[0], note
+    else:
+        assert "2 of 2 target uses compensated" in r.stdout, r.stdout
+        assert "Prog2, Start" in r.stdout or "Start, Prog2" in r.stdout, r.stdout
 
 
 def test_local_mains_that_move_with_nothing_are_still_the_entries(tmp_path):

@@ -269,7 +269,8 @@ class _Walker:
                       BOTH if has_eoffs else _OFF, frozenset((PROGRAM_START,)))
         self.flow.entry = replace(entry, last=None)
         main = next((rt for rt in self.routines if rt.fi < self.n_written
-                     and rt.node.kind == "PROC" and rt.node.name.lower() == "main"), None)
+                     and rt.node.kind == "PROC"
+                     and rt.node.name.lower() == self.resolver.entry.lower()), None)
         others = [rt for rt in self.routines if rt is not main and id(rt.node) not in called]
         try:
             if main is not None:

@@ -83,7 +83,7 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
                 observers += [_parse(other, rel) for rel in other.modules]
     origin = source.input.parent.name if source.kind == "pgf" else source.input.name
     return Task(source.task or source.name, tuple(files), tuple(context), tuple(observers),
-                source.base_moved_by, origin, source.event_routines)
+                source.base_moved_by, origin, source.event_routines, source.entry)
 
 
 def _parse(source: TaskSource, rel: str):

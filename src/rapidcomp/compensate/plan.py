@@ -35,6 +35,8 @@ class Task:
     origin: str | None = None
     # The routines a backup's SYSPAR/SYS.cfg runs at events (lower case).
     event_routines: tuple[str, ...] = ()
+    # The routine the program starts at (a backup's SYS.cfg -Entry).
+    entry: str = "main"
 
     @property
     def all_files(self) -> list[ParsedFile]:
@@ -52,7 +54,7 @@ class Plan:
         self.n_written = len(task.files)
         self.resolver = Resolver(self.files, track=track, base=base,
                                  observers=task.observers, moved_by=task.base_moved_by,
-                                 events=task.event_routines)
+                                 events=task.event_routines, entry=task.entry)
         self.track = tuple(track)
         self.uses: list[TargetUse] = []
         for fi, pf in enumerate(task.files):

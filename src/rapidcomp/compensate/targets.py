@@ -592,16 +592,18 @@ class Resolver:
                  usages: dict | None = None, writes: bool = True, track=(), base=None,
                  observers=(), moved_by: str | None = None, written: Written | None = None,
                  like: "Resolver | None" = None, states: tuple[float, ...] = (),
-                 events: tuple[str, ...] = ()):
+                 events: tuple[str, ...] = (), entry: str = "main"):
         """like: a resolver of these very files (the plan's, for verify.py):
         its tables of the files' declarations are taken, not made again.
         states: the thermal states a transient output is read at, each in
         turn (self.state, one of them): its rcTcJ/rcTcR(cold, dq) are
         evaluated there as the controller does (_at_state). events: the
         routines the controller runs at events (a backup's SYS.cfg), lower
-        case."""
+        case; entry: the routine the program starts at (main unless a
+        backup's SYS.cfg names another)."""
         self.float32 = float32
         self.events = frozenset(events)
+        self.entry = entry
         self.states = tuple(states)
         self.state: float | None = None
         # (call, its FOR loops' values) -> (the Source of its cold value, its
@@ -941,7 +943,7 @@ class Resolver:
                     return (f"{a.target.name} is assigned at run time "
                             f"({_where(pf, a.span.start)}), and {names[root]} "
                             f"({where[root]}), which no given routine calls and that is not "
-                            "the program's entry (main, or where no module has one, a routine "
+                            f"the program's entry ({self.entry}, or where no module has one, a routine "
                             "that moves with it), may run any routine (a late-bound call, or "
                             "one no given module declares): a service or event routine, it "
                             "may run while the program is stopped")
@@ -957,7 +959,7 @@ class Resolver:
                        f"which {names[root]} ({where[root]}) runs, a routine that")
                 return (f"{a.target.name} is assigned at run time by {names[hit]} "
                         f"({_where(pf, a.span.start)}), {who} no given routine calls and "
-                        "that is not the program's entry (main, or where no module has "
+                        f"that is not the program's entry ({self.entry}, or where no module has "
                         "one, a routine that moves with it): a service or event routine, "
                         "it may run while the program is stopped")
         return here
@@ -997,8 +999,9 @@ class Resolver:
                                   for k, cs in callees.items()})
         inside = {comp[c] for k in keys for c in callees[k]
                   if c is not ANY and comp[c] != comp[k]}
-        mains = [k for k, (_, n) in keys.items() if k[1] == "main" and n.scope != "LOCAL"]
-        mains = mains or [k for k in keys if k[1] == "main"]
+        entry = self.entry.lower()
+        mains = [k for k, (_, n) in keys.items() if k[1] == entry and n.scope != "LOCAL"]
+        mains = mains or [k for k in keys if k[1] == entry]
         # (In text order, as keys are: a reason names the first it finds.
         # An event routine is entered from outside, called or not.)
         roots = [k for k, (_, n) in keys.items() if n.kind != "TRAP"

@@ -57,6 +57,9 @@ class TaskSource:
     # Controller topic's Event Routine: POWER_ON, START, STOP, RESTART...)
     # in this task, lower case.
     event_routines: tuple[str, ...] = ()
+    # The routine the task's program starts at (SYS.cfg CAB_TASKS -Entry),
+    # as written there.
+    entry: str = "main"
 
     @property
     def is_folder(self) -> bool:
@@ -222,6 +225,9 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
     moc_cfg = _read_cfg(root / "SYSPAR" / "MOC.cfg", shown)
     frames = _base_frames(moc_cfg, shown, groups, _group_robots(sys_cfg, moc_cfg, shown))
     events = _cfg_instances(sys_cfg, "CAB_EXEC_HOOKS", f"{shown}/SYSPAR/SYS.cfg")
+    entries = {(e.get("name") or "").upper(): e["entry"]
+               for e in _cfg_instances(sys_cfg, "CAB_TASKS", f"{shown}/SYSPAR/SYS.cfg")
+               if e.get("entry")}
     out = []
     for n, t in enumerate(tasks):
         frame, problem, mover = frames.get(t.task.upper(), (None, None, None))
@@ -232,7 +238,8 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
                                   or "allmotiontask" in e
                                   or e["task"].upper() == t.task.upper())}))
         out.append(replace(t, notes=tuple(skipped) if n == 0 else (), base=frame,
-                           base_problem=problem, base_moved_by=mover, event_routines=mine))
+                           base_problem=problem, base_moved_by=mover, event_routines=mine,
+                           entry=entries.get(t.task.upper(), "main")))
     return out
 
 
