@@ -71,6 +71,9 @@ class Executed:
     q_deg: np.ndarray | None
     pose: pin.SE3 | None         # the base_M_flange a robtarget asks for
     displaced: bool = False
+    # The move's tool centre point in the flange frame (mm): where its
+    # position is judged.
+    tcp: np.ndarray | None = None
 
 
 class Controller:
@@ -269,7 +272,7 @@ class Controller:
                 assert isinstance(jt, JointTarget)
                 self.q = f32(jt.joints)
                 self.out.append(Executed(where, line, mo.instruction, "joint", self.q.copy(),
-                                         None))
+                                         None, tcp=self.frame(pf, mo.tool, "tool").translation))
                 continue
             wobj_M_target, rt = self.robtarget(t.expr, env, t.value)
             if self.disp is not None:
@@ -282,4 +285,5 @@ class Controller:
                 and t.role != "cir"
             self.q = self.joints(pose, rt, supervised)
             self.out.append(Executed(where, line, mo.instruction, "rob", self.q.copy(), pose,
-                                     self.disp is not None))
+                                     self.disp is not None,
+                                     self.frame(pf, mo.tool, "tool").translation))

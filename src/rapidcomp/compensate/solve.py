@@ -31,10 +31,10 @@ import numpy as np
 from .. import side
 from ..kinematics.conf import confdata
 from ..kinematics.frames import DEG
-from ..kinematics.ik import IKBatch, Solver, Status, reusing
+from ..kinematics.ik import IKBatch, Solver, Status, Warn, reusing
 from .flow import OFF, ON, PROGRAM_START, State
 from .plan import Plan, line_ranges
-from .targets import IDENTITY_POSE, TargetUse, flange_stack, stacked_poses
+from .targets import IDENTITY_POSE, UNKNOWN_TOOL, TargetUse, flange_stack, stacked_poses
 
 # Two solutions closer than this (deg, Euclidean) are the same solution.
 SAME_DEG = 1e-6
@@ -852,6 +852,17 @@ class Solving:
     def finish(self) -> Solved:
         plan, solver, uses, picks = self._plan, self._solver, self.uses, self.picks
         deformed, self.err_p, self.err_r, Rn, pn, conf_after = self._deformed.get()
+        # A MoveAbsJ whose tool is not known, at the wrist singularity: the
+        # position held exact there is the flange's, not the tool's.
+        left = np.flatnonzero(deformed.warnings & Warn.ORIENTATION_LEFT).tolist()
+        for i in left:
+            u = uses[i]
+            if u.kind == "jointtarget" and u.tool is None and picks.failure[i] is None:
+                why = next(n.split(": its errors")[0] for n in u.notes
+                           if n.startswith(UNKNOWN_TOOL))
+                picks.failure[i] = (f"at the wrist singularity (J5 {self.nominal.q_deg[i][4]:.2f}"
+                                    " deg) only the tool centre point's position can be held "
+                                    f"exact, and {why}")
         disp = np.full(len(uses), np.nan)
         moved = [i for i, u in enumerate(uses) if u.kind == "robtarget"
                  and plan.may_be_displaced(u) and picks.failure[i] is None

@@ -56,6 +56,11 @@ EXTAX_UNUSED = 8.9e9
 MAX_LOOP_ITERATIONS = 1_000_000
 MISSING_HINT = ("give the whole task: its folder, program file or backup, or the declaring "
                 "module with --with")
+# A MoveAbsJ whose tool is not known (its note: this, why, and what
+# follows): its joints reach the flange's whole pose all the same, except at
+# the wrist singularity, where only one point's position is held exact
+# (solve.py fails those).
+UNKNOWN_TOOL = "its tool is not known"
 AXES = "abcdef"
 # A transient output's targets (transient.py), evaluated at a thermal state.
 _STATE_FUNCS = frozenset((FUNC_J.lower(), FUNC_R.lower()))
@@ -1314,6 +1319,19 @@ class Resolver:
         self._pairs[key] = (tool, wobj, tuple(self._notes[before:]))
         return tool, wobj
 
+    def _tool_of(self, motion, module):
+        """tool() of a move as _tool_wobj resolves it, without its work
+        object (a MoveAbsJ's joints do not depend on one)."""
+        t, routine = motion.tool, motion.routine
+        sites = (self._sites(motion, module) if self.writes.literal or self.site_names
+                 else None)
+        site = None if sites is None else sites[0]
+        if type(site) is str:
+            return Unresolved(site)
+        if site is not None:
+            return self._tool(t, module, routine, site)
+        return self.tool(t, module, routine)
+
     def tool(self, expr, module, routine: str):
         """(key, tframe as (R, p)), or Unresolved."""
         return self._memo("tool", expr, module, routine, self._tool)
@@ -2122,9 +2140,19 @@ class Resolver:
                     raise home.source.error(src.record.span.start + src.record.regs[i][0],
                                             f"J{i + 1} is {src.record.texts[i]} deg: not a "
                                             f"joint angle (|J| <= {MAX_JOINT_DEG:g})")
+            # Its tool: where its errors are measured and what the wrist
+            # singularity's fallback holds exact (the joints reach the
+            # flange's whole pose elsewhere, whatever the tool).
+            tool = self._tool_of(motion, module)
+            if type(tool) is Unresolved:
+                self._notes.append(f"{UNKNOWN_TOOL} ({tool.reason}): its errors are measured "
+                                   "at the flange (its joints reach the flange's whole pose, "
+                                   "so the tool's too)")
+                tool = None
             return TargetUse(motion, role, label, line, kind, None, None, None, joints, None,
-                             src, env=envt, file=pf, module=module,
-                             ext=self._one(src.record.ext, True), key=key)
+                             src, tool, env=envt, file=pf, module=module,
+                             ext=self._one(src.record.ext, True), key=key,
+                             notes=tuple(self._notes))
         if not isinstance(src.record, RobTarget):
             return fail(Unresolved("not a robtarget", True))
         tool, wobj = self._tool_wobj(motion, module)

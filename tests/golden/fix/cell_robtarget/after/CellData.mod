@@ -7,8 +7,8 @@ MODULE CellData
     ! Tray offset measured by the camera before each pick.
     PERS pose pdTray:=[[2.5,-1.25,0],[1,0,0,0]];
     ! Home and park: the wrist straight (J5 = 0 and 0.2 deg).
-    CONST jointtarget jHome:=[[-0.002694,0.012189,-0.017685,-0.005332,0.008272,-0.005415],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
-    CONST jointtarget jPark:=[[-89.985974,-30.012344,29.995598,-0.131597,0.208667,0.114718],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+    CONST jointtarget jHome:=[[-0.001448,0.012189,-0.017607,-0.005346,0.008114,-0.0054],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+    CONST jointtarget jPark:=[[-89.988269,-30.012344,29.995598,-0.07648,0.208655,0.059599],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
     ! Positioner (eax_a) turned to 90 deg; the robot does not move.
     CONST jointtarget jTurn:=[[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09],[90,9E+09,9E+09,9E+09,9E+09,9E+09]];
     CONST robtarget pPickApp:=[[61.510428,408.295931,288.355995],[0.005111412,-0.154705925,0.983075929,0.097988102],[0,0,-1,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
