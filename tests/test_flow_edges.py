@@ -690,6 +690,39 @@ def test_a_searched_exep_sets_the_displacement_at_run_time():
     assert {k: s for k, (s, _) in fixed.items()} == {7: "compensated", 9: "compensated"}
 
 
+def test_a_frame_or_exep_not_made_where_the_robot_is_reads_no_move():
+    """A PDispSet frame (here from an analog input) or an \\ExeP from a
+    search reads no move's position: the move just before it is compensated
+    (only the displaced moves stay as written). Where the task calls
+    CRobT() anywhere, the frame may have been made with it: that move is
+    left as written, and the reason says so."""
+    body = """        MoveL p1, v500, fine, tool0;
+        SearchL \\Stop, di1, pFound, p2, v50, tool0;
+        MoveL p1, v500, fine, tool0;
+        PDispOn \\ExeP:=pFound, p2, tool0;
+        MoveL p2, v200, fine, tool0;
+        PDispOff;
+        MoveL p2, v500, fine, tool0;
+        fr.trans.x := AInput(aiCamX);
+        PDispSet fr;
+        MoveL p1, v200, fine, tool0;
+        PDispOff;
+"""
+    decls = "    VAR robtarget pFound;\n    VAR pose fr;\n"
+    rows = _statuses(body, decls)
+    assert {k: s for k, (s, _) in rows.items()} == {
+        8: "compensated", 9: "compensated", 10: "compensated", 12: "untouched",
+        14: "compensated", 17: "untouched"}, rows
+    crobt = _statuses(body + "        pHere := CRobT();\n",
+                      decls + "    VAR robtarget pHere;\n")
+    for line, at in ((11, "M0.mod:12"), (15, "M0.mod:17")):
+        assert crobt[line][0] == "untouched", crobt
+        assert crobt[line][1].startswith(
+            f"a program displacement set at run time ({at}) may read where this move leaves "
+            "the robot (PDispOn without \\ExeP does; a frame or \\ExeP made with CRobT(), "
+            "CPos() or CJointT(), which the task calls, may)"), crobt[line][1]
+
+
 def test_a_frame_set_at_run_time_reaches_the_routines_it_displaces():
     """PDispSet of a pose the program computes (DefFrame of points, here a
     variable assigned by a function no given module declares) may be

@@ -37,6 +37,7 @@ where --start says the robot is; RESUME: where an error stopped it).
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field, replace
 
 from ..construct import maker
@@ -54,6 +55,10 @@ BOTH = frozenset((ON, OFF))
 # does not fix: a search's result, CRobT()): if the robot measured it, its
 # thermal error is in the displacement already (State.pdisp).
 MEASURED = "measured"
+# The functions that read where the controller has the robot: a value made
+# with one (a PDispSet frame, an \ExeP) changes when a move before it is
+# compensated.
+POSITION_READ = re.compile(r"\b(?:CRobT|CPos|CJointT)\s*\(", re.IGNORECASE)
 # Not moves, in State.last: the program starts here (the robot is where
 # --start says, else unknown), and: where an error stopped the robot.
 PROGRAM_START = ("program start",)
@@ -205,6 +210,10 @@ class _Walker:
         # id(PDispOn/PDispSet statement) -> why its displacement is set at
         # run time (_find_measured, which sees every one before the walk).
         self.run_time: dict = {}
+        # Of those, the ones that may read where the moves before them left
+        # the robot (_reads_position).
+        self.reads: set = set()
+        self._position_read: bool | None = None
         self.called: dict[int, tuple[str, ...]] = {}   # id(routine node) -> names it calls
         self.visits = 0
         self.memo: dict = {}
@@ -370,10 +379,27 @@ class _Walker:
                 at = f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}"
                 if f"{at}: {why}" not in self.flow.measured:
                     self.flow.measured.append(f"{at}: {why}")
+                if not self._reads_position(s):
+                    continue
+                self.reads.add(id(s))
                 if (id(rt.node) in interrupted or id(s) in handlers) and not self.flow.anywhere:
                     self.flow.anywhere = at
         if self.flow.measured:
             self.unknown = State(BOTH, BOTH, BOTH | {MEASURED}, BOTH, None)
+
+    def _reads_position(self, s: A.ProcCall) -> bool:
+        """Whether the displacement a run-time PDispOn/PDispSet sets may
+        depend on where the moves before it left the robot: PDispOn without
+        \\ExeP reads it; a PDispSet frame or an \\ExeP may have been made
+        with CRobT(), CPos() or CJointT() where the task calls one (else it
+        is a search's result, an input, another task's value: none of them
+        moves with a compensated move before it)."""
+        if s.name.lower() == "pdispon" and _arg(s, "exep") is None:
+            return True
+        if self._position_read is None:
+            self._position_read = any(POSITION_READ.search(pf.source.text)
+                                      for pf in self.files)
+        return self._position_read
 
     def _set_at_run_time(self, s: A.ProcCall, rt: _Routine) -> str | None:
         """Why the displacement PDispOn/PDispSet s sets is known only at
@@ -654,13 +680,14 @@ class _Walker:
             if why is None:
                 return replace(st, pdisp=_ON | kept)
             # It may read where the moves before it left the robot (PDispOn
-            # without \ExeP does; CRobT() would): a compensated one would
-            # change the displacement with it.
+            # without \ExeP does; a frame or \ExeP made with CRobT() may:
+            # _reads_position): a compensated one would change the
+            # displacement with it.
             # (Where the flow does not know the position, no move it
             # follows put the robot there: a search, a routine not given;
             # in an error handler or a TRAP any may have, found by run().)
             at = f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}"
-            for key in st.last or ():
+            for key in (st.last or ()) if id(s) in self.reads else ():
                 if key is not PROGRAM_START and key is not RESUME:
                     self.flow.read_by.setdefault(key, at)
             prog = _arg(s, "progpoint", 0)

@@ -94,7 +94,9 @@ class Plan:
             if u.key in read_by:
                 return replace(u, reason="a program displacement set at run time "
                                f"({read_by[u.key]}) may read where this move leaves the "
-                               "robot (PDispOn without \\ExeP does; CRobT() would): "
+                               "robot (PDispOn without \\ExeP does; a frame or \\ExeP "
+                               "made with CRobT(), CPos() or CJointT(), which the task "
+                               "calls, may): "
                                "compensated, the displacement would change with it; left "
                                "as written")
             st = before.get(u.key, entry)
