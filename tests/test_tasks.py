@@ -319,3 +319,42 @@ def test_a_compensated_program_with_inline_targets_only_is_recognised(tmp_path):
         "check", tmp_path / "glue" / "Glue_comp" / "Glue.pgf", "--profile", WARM).output
     assert "looks compensated" not in run("check", tmp_path / "glue" / "Glue.pgf", "--profile",
                                           WARM).output
+
+
+@pytest.mark.parametrize("elsewhere", [
+    "PERS tooldata tG;",                                                    # takes B's value
+    "PERS tooldata tG:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,50],[1,0,0,0],0,0,0]];",  # the same
+    "PERS tooldata tG:=[TRUE,[[0,0,120],[1,0,0,0]],[1,[0,0,50],[1,0,0,0],0,0,0]];",  # another
+])
+def test_a_pers_declared_without_a_value_takes_the_one_another_module_gives(tmp_path,
+                                                                            elsewhere):
+    """PERS of one name are one object: a declaration without a value
+    takes the value another module declares it with, so the move is
+    compensated exactly as with that module's declaration alone (the same
+    error, the same written numbers); two different values are a load-order
+    question and stay refused."""
+    def task(folder, decl_a):
+        folder.mkdir()
+        (folder / "A.mod").write_text(
+            f"MODULE A\n    {decl_a}\n"
+            "    CONST robtarget p10:=[[522.217,0,335.289],[0,0,1,0],[0,0,0,0],"
+            "[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+            "    PROC main()\n        MoveL p10, v100, fine, tG;\n    ENDPROC\nENDMODULE\n")
+        (folder / "B.mod").write_text(
+            "MODULE B\n    PERS tooldata tG:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,50],"
+            "[1,0,0,0],0,0,0]];\nENDMODULE\n")
+        return folder
+    alone = run("fix", task(tmp_path / "alone", "VAR num nOther;"), "--profile", WARM,
+                "-o", tmp_path / "alone_out", "--json", tmp_path / "alone.json")
+    got = run("fix", task(tmp_path / "two", elsewhere), "--profile", WARM,
+              "-o", tmp_path / "two_out", "--json", tmp_path / "two.json")
+    if "120" in elsewhere:
+        assert got.exit_code == 1, got.output
+        assert "tG is declared PERS with different values (A.mod:2, B.mod:2)" in got.output
+        return
+    assert alone.exit_code == got.exit_code == 0, got.output
+    rows = [json.loads((tmp_path / f"{n}.json").read_text())["targets"] for n in ("alone", "two")]
+    assert [r["error_um"] for r in rows[0]] == [r["error_um"] for r in rows[1]]
+    out = [(tmp_path / f"{n}_out" / "A.mod").read_text().splitlines()[2:] for n in ("alone",
+                                                                                "two")]
+    assert out[0] == out[1] and out[0] != (tmp_path / "two" / "A.mod").read_text().splitlines()[2:]

@@ -760,15 +760,19 @@ class Resolver:
         # Global data of one name in two modules: the controller refuses to
         # load the task. PERS of one type are one shared object: allowed, but
         # which initial value it holds depends on the load order unless they
-        # are all the same.
+        # are all the same. A PERS declared without one (`PERS tooldata t;`)
+        # takes the value the others give it.
+        valued = [x for x in found if x.node.init is not None] or found
         if len(found) > 1 and not (all(x.storage == "PERS" and x.type == found[0].type
-                                       for x in found) and _same_values(found, self.home)):
+                                       for x in found) and _same_values(valued, self.home)):
             where = ", ".join(f"{self.home[id(x)].source.display_path}:"
                               f"{self.home[id(x)].line(x.span)}" for x in found)
             what = ("PERS with different values" if all(x.storage == "PERS" for x in found)
                     else "globally more than once")
             return Unresolved(f"{name} is declared {what} ({where})", True)
-        return d if d is not None else found[0]
+        if d is not None and (d.node.init is not None or valued is found):
+            return d
+        return valued[0]
 
     # ------------------------------------------------------------ tool / wobj
     def _data(self, expr, module, routine: str, builtin: str, cls, what: str, site=None):
