@@ -51,6 +51,10 @@ def test_caret_points_at_column():
     ("MODULE m\nPROC p()\n IF x THEN\n ENDPROC\nENDMODULE\n", "4:2", "ELSE, ELSEIF or ENDIF"),
     ("MODULE m\n VAR num x := 1 @ 2;\nENDMODULE\n", "2:17", "unexpected character '@'"),
     ("MODULE m\n VAR num if := 1;\nENDMODULE\n", "2:10", "unexpected 'if'; expected an identifier"),
+    # (Not the lexer's names of its own tokens: FAST_DECL is a declaration.)
+    ("MODULE m\n PROC main()\n ENDPROC\n", "4:1",
+     "unexpected end of file; expected a declaration, ALIAS, ENDMODULE, FUNC, PROC, RECORD, "
+     "TRAP or a placeholder such as <SMT> (is ENDMODULE missing?)"),
 ])
 def test_messages(text, where, phrase):
     with pytest.raises(InputError) as exc:

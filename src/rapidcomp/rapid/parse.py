@@ -325,7 +325,8 @@ _EXPR_STARTS = {"NAME", "NUMBER", "STRING", "NUMAGG", "LBRACK", "LPAR", "TRUE", 
 _OPERATORS = {"ADDOP", "STAR", "SLASH", "DIV", "MOD", "RELOP", "EQ", "AND", "OR", "XOR"}
 _NAMES = {
     "NAME": "an identifier", "NUMBER": "a number", "STRING": "a string",
-    "NUMAGG": "'['", "FAST_CALL": "a statement", "$END": "end of file",
+    "NUMAGG": "'['", "FAST_CALL": "a statement", "FAST_DECL": "a declaration",
+    "$END": "end of file",
     "HEADER": "a %%% header", "PLACEHOLDER": "a placeholder such as <SMT>",
     "RELOP": "a comparison", "ADDOP": "'+' or '-'", "BACKSLASH": "an optional argument '\\'",
 }
@@ -365,7 +366,7 @@ def describe_expected(expected: frozenset[str]) -> str:
         rest -= _OPERATORS
     if {"VAR", "PERS", "CONST"} <= rest:
         parts.insert(0, "a declaration")
-        rest -= {"VAR", "PERS", "CONST", "LOCAL", "TASK"}
+        rest -= {"VAR", "PERS", "CONST", "LOCAL", "TASK", "FAST_DECL"}
     parts.extend(sorted(_describe_terminal(t) for t in rest))
     if len(parts) > 8:
         parts = parts[:8] + ["..."]
