@@ -144,6 +144,16 @@ class Controller:
             return pin.SE3.Identity()
         d, slot = self.data(pf, expr.name)
         v = self.assigned.get(slot, d.value)
+        if expr.selectors:
+            # An array's element, its indices literal numbers or CONST nums.
+            (sel,) = expr.selectors
+            flat = 0
+            for i, n in zip(sel.indices, d.dims):
+                k = (int(i.value) if isinstance(i, A.Num)
+                     else int(self.named(i.name).node.init.value))
+                assert 1 <= k <= n
+                flat = flat * n + k - 1
+            v = v[flat]
         if kind == "tool":
             return se3(v.tframe.xyz, v.tframe.quat_wxyz)
         return se3(v.uframe.xyz, v.uframe.quat_wxyz) * se3(v.oframe.xyz, v.oframe.quat_wxyz)

@@ -83,3 +83,62 @@ def test_a_moveabsj_whose_tool_is_not_known(tmp_path):
     after = out.read_text()
     assert _joints(after, "jPark") == [0, 0, 0, 0, 0, 0]
     assert _joints(after, "jHome") != [0, 10, 20, 0, 60, 0]
+
+
+def test_tools_and_work_objects_named_by_array_elements(tmp_path):
+    """tGrip{2} and wFix{2,1} (an element with literal indices or a CONST
+    num) are data of their own: each move is compensated with its
+    element's frames (the tests' controller runs input and output: every
+    move lands on its pose at its tool's point), two elements are two
+    tools (one MoveAbsJ each, not one shared). An index the program
+    computes, or an array it writes, is left as written with the reason;
+    an index beyond the bounds is an error of the program."""
+    from rapidcomp.rapid.parse import parse_file
+    from test_real_programs import evaluate
+    from test_robodk_frames import FRAMES, TOOLS, pose_text, target
+
+    def tool(t):
+        return f"[TRUE,{pose_text(TOOLS[t])},[1,[0,0,50],[1,0,0,0],0,0,0]]"
+
+    def wobj(f):
+        return f'[FALSE,TRUE,"",{pose_text(FRAMES[f])},[[0,0,0],[1,0,0,0]]]'
+    src = tmp_path / "grip.mod"
+    src.write_text(f"""MODULE Grip
+    PERS tooldata tGrip{{2}}:=[{tool("T1")},{tool("T2")}];
+    PERS wobjdata wFix{{2,1}}:=[[{wobj("U1")}],[{wobj("U2")}]];
+    PERS tooldata tSpare{{2}}:=[{tool("T1")},{tool("T1")}];
+    CONST num nSecond:=2;
+    CONST robtarget p10:={target(0, "T1", "U1")};
+    CONST robtarget p20:={target(1, "T2", "U2")};
+    VAR num nT:=1;
+    PROC main()
+        MoveJ p10, v100, fine, tGrip{{1}}\\WObj:=wFix{{1,1}};
+        MoveJ p20, v100, fine, tGrip{{nSecond}}\\WObj:=wFix{{2,1}};
+        MoveJ p10, v100, fine, tGrip{{1}}\\WObj:=wFix{{1,1}};
+    ENDPROC
+    PROC Others()
+        MoveL p10, v100, fine, tGrip{{nT}}\\WObj:=wFix{{1,1}};
+        MoveL p10, v100, fine, tSpare{{1}}\\WObj:=wFix{{1,1}};
+        tSpare{{2}}.tframe.trans.z := 120;
+    ENDPROC
+ENDMODULE
+""")
+    out = tmp_path / "grip_comp.mod"
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(ROOT / "fixtures/warm.csv"),
+                                  "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "3 of 5 target uses compensated" in r.output, r.output
+    assert ("the tool is not a plain data name, nor an element of an array with fixed "
+            "indices") in r.output
+    assert "tSpare" in r.output and "assigned at run time" in r.output, r.output
+    # The two moves to p10 with one element: one jointtarget.
+    assert out.read_text().count("CONST jointtarget jt_p10") == 1
+    rows = evaluate([parse_file(src, "grip.mod")], [parse_file(out, "grip.mod")])
+    moved = [x.line for x, y, _, _ in rows if not np.array_equal(x.q_deg, y.q_deg)]
+    assert moved == [10, 11, 12]
+    beyond = tmp_path / "beyond.mod"
+    beyond.write_text(src.read_text().replace("tGrip{nSecond}", "tGrip{3}"))
+    r = CliRunner().invoke(main, ["check", str(beyond), "--profile",
+                                  str(ROOT / "fixtures/warm.csv")])
+    assert r.exit_code == 1 and "tool tGrip{3} is beyond the array's bounds {2}" in r.output, \
+        r.output

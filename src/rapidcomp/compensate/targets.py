@@ -629,6 +629,9 @@ class Resolver:
         # assignment): kept, so the id stays its own (self.home, which a
         # resolver of the same files shares, is not written).
         self._assigned: dict = {}
+        # id -> the key of a tool or work object array's element (_element):
+        # its name and indices, one key per value.
+        self._elements: dict = {}
         # The names the plan found so (verify.py: a resolver of the output,
         # which knows no writes, finds their assignments there).
         self.site_names: frozenset = frozenset()
@@ -781,9 +784,9 @@ class Resolver:
         Assign), in order) whose values make the one the move uses
         (_sites), for data the program assigns: a whole value, then
         components of it; or components of the declared value."""
-        if not (isinstance(expr, A.Ref) and not expr.selectors):
+        if type(expr) is not A.Ref:
             return Unresolved(f"the {what} is not a plain data name")
-        if expr.name.lower() == builtin:
+        if expr.name.lower() == builtin and not expr.selectors:
             return None
         d = self.lookup(expr.name, module, routine)
         if isinstance(d, Unresolved):
@@ -791,6 +794,8 @@ class Resolver:
         if d is None:
             return Unresolved(f"{what} {expr.name} is not declared in the given modules "
                               f"({MISSING_HINT})", True)
+        if expr.selectors:
+            return self._element(expr, d, module, routine, cls, what, site)
         if not isinstance(d.value, cls):
             if d.type != cls.__name__.lower():
                 return Unresolved(f"{expr.name} is a {d.type}, not {what} data", True)
@@ -823,6 +828,46 @@ class Resolver:
             return d
         written = self._written(d)
         return Unresolved(written) if written else d
+
+    def _element(self, expr, d: Declaration, module, routine, cls, what: str, site):
+        """_data of an element of a tool or work object array named with
+        fixed indices (`tGrip{2}`: literals or CONST nums), or Unresolved:
+        its declared value, where nothing writes the array."""
+        sel = expr.selectors
+        index = (None if len(sel) != 1 or type(sel[0]) is not A.Index else
+                 [self.integer(i, module, routine) for i in sel[0].indices])
+        if index is None or None in index:
+            return Unresolved(f"the {what} is not a plain data name, nor an element of an array "
+                              "with fixed indices")
+        if site is not None:
+            return Unresolved(f"{what} {expr.name} is an array the program assigns: its "
+                              "elements are not followed")
+        dims = d.dims
+        if None in dims:
+            return Unresolved(f"{what} {expr.name} is an array whose size is not a literal")
+        if not d.dims or type(d.value) is not tuple or not all(
+                isinstance(v, cls) for v in d.value):
+            if d.type != cls.__name__.lower():
+                return Unresolved(f"{expr.name} is a {d.type}, not {what} data", True)
+            if not dims:
+                return Unresolved(f"{what} {expr.name} is not an array", True)
+            return Unresolved(f"{what} {expr.name} has no literal value "
+                              f"({d.issue or 'run-time data'})")
+        if len(index) != len(dims) or not all(1 <= i <= n for i, n in zip(index, dims)):
+            shown = ",".join(map(str, index))
+            return Unresolved(f"{what} {expr.name}{{{shown}}} is beyond the array's bounds "
+                              f"{{{','.join(map(str, dims))}}}", True)
+        written = self._written(d)
+        if written:
+            return Unresolved(written)
+        flat = 0
+        for i, n in zip(index, dims):
+            flat = flat * n + (i - 1)
+        # (The element as data of its own: its file is the array's.)
+        e = replace(d, value=d.value[flat])
+        self._assigned[id(e)] = (e, {None: self.home[id(d)]})
+        self._elements[id(e)] = f"{d.name.lower()}{{{','.join(map(str, index))}}}"
+        return e
 
     def site_map(self) -> dict:
         """Tool and work object names whose every assignment is a literal
@@ -1355,8 +1400,8 @@ class Resolver:
         t = d.value
         if t.robhold.value is not True:
             return Unresolved(f"tool {expr.name} is a stationary tool (robhold FALSE)")
-        return _data_key(expr, site), self._pose(t.tframe, self._home_of(d, "tframe"),
-                                                 f"tool {d.name}")
+        return self._elements.get(id(d)) or _data_key(expr, site), self._pose(
+            t.tframe, self._home_of(d, "tframe"), f"tool {d.name}")
 
     def _wobj(self, expr, module, routine: str, site=None):
         if expr is None:
@@ -1374,7 +1419,7 @@ class Resolver:
         # one moves with, and is not used then.)
         if w.ufprog.value is not True:
             return Unresolved(f"work object {expr.name} is coordinated with a mechanical unit")
-        return _data_key(expr, site), compose_pose(
+        return self._elements.get(id(d)) or _data_key(expr, site), compose_pose(
             self._pose(w.uframe, self._home_of(d, "uframe"), f"work object {d.name}"),
             self._pose(w.oframe, self._home_of(d, "oframe"), f"work object {d.name}"))
 
