@@ -96,3 +96,13 @@ def test_missing_column():
 def test_force_allows_large_values():
     prof = parse_profile(HEAD + "J1,6,0,0,0,1.5,0\n", "w.csv", force=True)
     assert prof.get("J1").d_mm[0] == 6
+
+
+def test_a_long_comment_or_cell_is_read_not_a_crash():
+    """A comment line (or a cell) longer than the csv module's default
+    field limit (128 KiB) is part of the file like any other: the profile
+    reads as without it; the measured-data reader shares the table code."""
+    text = (FIXTURES / "warm.csv").read_text()
+    head, rest = text.split("\n", 1)
+    long = head + "\n# " + "x" * 200_000 + "\n" + rest
+    assert parse_profile(long, "p.csv") == parse_profile(text, "p.csv")

@@ -258,6 +258,11 @@ def test_bad_transient_options_exit_2_with_nothing_written(tmp_path, args, messa
     ("  VAR num aiT:=1;\n", ["--temperature", "aiT:20:40"],
      "extra.mod:2 declares aiT as num data, not an analog input (signalai)"),
     ("", ["--temperature", "tool0:20:40"], "a predefined data name"),
+    # (AInput(TRUE), AInput(v100), AInput(MoveL): none loads.)
+    *[("", ["--temperature", f"{name}:20:40"], what) for name, what in (
+        ("TRUE", "a word RAPID reserves"), ("v100", "a predefined data name"),
+        ("fine", "a predefined data name"), ("ERRNO", "a predefined data name"),
+        ("MoveL", "a predefined routine's name"), ("AInput", "a predefined routine's name"))],
     # (A routine hides the predefined one of its name: the support module
     # would call the task's Exp.)
     ("  FUNC num Exp(num x)\n    RETURN x;\n  ENDFUNC\n", ["--tau-heat", "30"],

@@ -45,7 +45,15 @@ def header_and_rows(text: str, source: str, required, what: str = "file", known=
     A file saved by a spreadsheet with ';' between cells and decimal commas
     (1,5 for 1.5) is read as such: the commas become points."""
     delimiter = _delimiter(text)
-    rows = list(csv.reader(io.StringIO(text), delimiter=delimiter))
+    # (A cell or a comment line as long as the text is one cell: the csv
+    # module's default limit, 128 KiB, is no limit of the file's.)
+    if len(text) >= csv.field_size_limit():
+        csv.field_size_limit(len(text) + 1)
+    reader = csv.reader(io.StringIO(text), delimiter=delimiter)
+    try:
+        rows = list(reader)
+    except csv.Error as exc:
+        raise InputError(source, f"not a CSV {what}: {exc}", reader.line_num + 1) from None
     if delimiter == ";":
         rows = [[c.replace(",", ".") for c in r] for r in rows]
     numbered = [(i + 1, r) for i, r in enumerate(rows)

@@ -30,6 +30,7 @@ output is, on the robot deformed by s . profile.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -152,8 +153,31 @@ GLOBAL_NAMES = ("rcS", "rcLastDay", "rcLastMin", "rcTauHeat", "rcTauCool", "rcGa
 # data of the task by one of these names would be called in their place (a
 # routine hides the predefined routines of its name).
 CALLED = ("CDate", "CTime", "StrToVal", "StrPart", "Exp", "NOrient", "TPWrite", "AInput")
-# Predefined data no analog input is named like.
-_PREDEFINED_DATA = ("tool0", "wobj0", "load0")
+# Predefined data no analog input is named like: tools, loads, the speed
+# and zone data every system has, and the system's variables.
+_PREDEFINED_DATA = ("tool0", "wobj0", "load0", "pi", "errno", "intno", "fine", "vmax")
+_PREDEFINED_PATTERN = re.compile(r"(?:v|vrot|vlin|z)\d+|err_\w+|inpos\d+|stoptime\w*|"
+                                 r"fllwtime\w*", re.IGNORECASE)
+
+
+def _check_signal(name: str) -> None:
+    """RapidcompError where an analog input cannot have this name: a word
+    RAPID reserves (TRUE, IF, ...), a predefined data name (v100, fine,
+    tool0, pi, ERRNO, ...), a predefined routine's (MoveL, AInput, ...):
+    the support module's AInput(name) would not load."""
+    from ..rapid.grammar import engine
+    from ..rapid.motions import BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS, motion_spec
+    lower = name.lower()
+    if name.upper() in engine().reserved or lower in ("true", "false"):
+        what = "a word RAPID reserves"
+    elif lower in _PREDEFINED_DATA or _PREDEFINED_PATTERN.fullmatch(name):
+        what = "a predefined data name (speed, zone, tool, load data, a system variable)"
+    elif lower in BUILTIN_FUNCTIONS or lower in BUILTIN_INSTRUCTIONS or motion_spec(name):
+        what = "a predefined routine's name"
+    else:
+        return
+    raise RapidcompError(f"--temperature {name}: {what}, not an analog input (the support "
+                         f"module's AInput({name}) would not load)")
 
 
 def check_names(task, tr: Transient | None = None) -> None:
@@ -172,9 +196,8 @@ def check_names(task, tr: Transient | None = None) -> None:
                 "--transient already? Compensate the original program)")
     called = {n.lower(): n for n in CALLED}
     signal = tr.signal.lower() if tr is not None and tr.signal else None
-    if signal in {n.lower() for n in _PREDEFINED_DATA}:
-        raise RapidcompError(f"--temperature {tr.signal}: a predefined data name (tooldata, "
-                             "wobjdata, loaddata), not an analog input")
+    if signal is not None:
+        _check_signal(tr.signal)
     for pf in task.files + task.context:
         for m in pf.modules:
             declared = [(r.node.name, r.node.scope, f"a {r.kind}", r.node.span)
