@@ -140,5 +140,52 @@ ENDMODULE
     beyond.write_text(src.read_text().replace("tGrip{nSecond}", "tGrip{3}"))
     r = CliRunner().invoke(main, ["check", str(beyond), "--profile",
                                   str(ROOT / "fixtures/warm.csv")])
-    assert r.exit_code == 1 and "tool tGrip{3} is beyond the array's bounds {2}" in r.output, \
-        r.output
+    assert r.exit_code == 2 and ("beyond.mod:11:38: tool tGrip{3} is beyond the array's "
+                                 "bounds {2}: the controller stops here with ERR_INDEX"
+                                 ) in r.output, r.output
+    # A FOR loop's variable as the index: each iteration may take another
+    # element (a CONST of that name is not the one meant).
+    looped = tmp_path / "looped.mod"
+    looped.write_text(src.read_text().replace(
+        "    PROC main()\n",
+        "    PROC main()\n        FOR nSecond FROM 1 TO 2 DO\n            MoveJ p10, v100, fine, "
+        "tGrip{nSecond}\\WObj:=wFix{1,1};\n        ENDFOR\n", 1))
+    r = CliRunner().invoke(main, ["check", str(looped), "--profile",
+                                  str(ROOT / "fixtures/warm.csv")])
+    assert ("untouched (1): tGrip is indexed with the variable of an enclosing FOR loop (each "
+            "iteration may take another element): not followed") in r.output, r.output
+
+
+def test_one_jointtarget_at_j5_0_moved_to_with_two_tools(tmp_path):
+    """At J5 = 0 the joints that hold tool0's point exact miss a 300 mm
+    tool's by ~35 um, and the other way round: one value cannot serve both
+    moves, so each tool's move gets its own (a copy beside the
+    declaration), each landing on its tool's point. Away from J5 = 0 one
+    value serves any tool: jHome stays one declaration."""
+    src = tmp_path / "two.mod"
+    src.write_text("""MODULE Two
+    PERS tooldata tLong:=[TRUE,[[0,0,300],[1,0,0,0]],[2,[0,0,100],[1,0,0,0],0,0,0]];
+    CONST jointtarget jPark:=[[0,0,0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+    CONST jointtarget jHome:=[[0,10,20,0,60,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+    PROC main()
+        MoveAbsJ jPark, v100, fine, tool0;
+        MoveAbsJ jPark, v100, fine, tLong;
+        MoveAbsJ jHome, v100, fine, tool0;
+        MoveAbsJ jHome, v100, fine, tLong;
+    ENDPROC
+ENDMODULE
+""")
+    out = tmp_path / "two_comp.mod"
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(ROOT / "fixtures/warm.csv"),
+                                  "-o", str(out)])
+    assert r.exit_code == 0 and "4 of 4 target uses compensated" in r.output, r.output
+    after = out.read_text()
+    assert "jPark_c" in after and "jHome_c" not in after
+    nominal = irb140()
+    warm = deform(nominal, read_profile(ROOT / "fixtures/warm.csv"))
+    for name, tcp in (("jPark", np.zeros(3)), ("jPark_c", TCP), ("jHome", np.zeros(3)),
+                      ("jHome", TCP)):
+        q0 = _joints(src.read_text(), name.split("_")[0])
+        q1 = _joints(after, name)
+        want = nominal.base_M_flange(q0).act(tcp)
+        assert np.linalg.norm(warm.base_M_flange(q1).act(tcp) - want) * 1000 < 0.05, name

@@ -720,7 +720,55 @@ def test_a_frame_or_exep_not_made_where_the_robot_is_reads_no_move():
         assert crobt[line][1].startswith(
             f"a program displacement set at run time ({at}) may read where this move leaves "
             "the robot (PDispOn without \\ExeP does; a frame or \\ExeP made with CRobT(), "
-            "CPos() or CJointT(), which the task calls, may)"), crobt[line][1]
+            "CPos() or CJointT(), which a task calls, may)"), crobt[line][1]
+
+
+def test_the_moves_a_position_read_measures_are_the_ones_before_it():
+    """Where the task sets a displacement at run time from what CRobT()
+    read, the move before the CRobT() is the one it measured (not only the
+    move before the PDispSet): both are left as written, the first with
+    where CRobT() reads. A CRobT() in a comment or a string reads nothing;
+    another task's CRobT() (\\TaskName: it may read this robot) counts."""
+    body = """        MoveL p1, v500, fine, tool0;
+        pHere := CRobT();
+        MoveL p2, v500, fine, tool0;
+        fr := [pHere.trans, [1,0,0,0]];
+        PDispSet fr;
+        MoveL p2, v200, fine, tool0;
+        PDispOff;
+"""
+    decls = "    VAR robtarget pHere;\n    VAR pose fr;\n"
+    rows = _statuses(body, decls)
+    assert {k: s for k, (s, _) in rows.items()} == {
+        8: "untouched", 10: "untouched", 13: "untouched"}, rows
+    assert rows[8][1].startswith("a program displacement set at run time (M0.mod:9, where "
+                                 "CRobT() reads it) may read where this move leaves the robot")
+    quiet = body.replace("pHere := CRobT();", "pHere := pHere; ! not CRobT() any more")
+    rows = _statuses(quiet.replace("tool0;\n        fr", "tool0;\n        TPWrite \"CRobT()\";"
+                                   "\n        fr"), decls)
+    assert {k: s for k, (s, _) in rows.items()} == {
+        8: "compensated", 10: "compensated", 14: "untouched"}, rows
+    other = parse_text("MODULE T2\n    PERS robtarget pShared;\n    PROC main()\n        "
+                       "pShared := CRobT(\\TaskName:=\"T_ROB1\");\n    ENDPROC\nENDMODULE\n",
+                       "T2.mod")
+    t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    CONST robtarget p2:={P2};
+    PERS robtarget pShared;
+    VAR pose fr;
+    PROC main()
+        MoveL p1, v500, fine, tool0;
+        fr := [pShared.trans, [1,0,0,0]];
+        PDispSet fr;
+        MoveL p2, v200, fine, tool0;
+        PDispOff;
+    ENDPROC
+ENDMODULE""")
+    alone = {r.line: r.status for r in fix(t, SOLVER, "auto").rows}
+    t = Task(t.name, t.files, observers=(other,))
+    shared = {r.line: r.status for r in fix(t, SOLVER, "auto").rows}
+    assert alone == {7: "compensated", 10: "untouched"}
+    assert shared == {7: "untouched", 10: "untouched"}
 
 
 def test_a_frame_set_at_run_time_reaches_the_routines_it_displaces():

@@ -98,6 +98,24 @@ def test_force_allows_large_values():
     assert prof.get("J1").d_mm[0] == 6
 
 
+@pytest.mark.parametrize("row, phrase", [
+    ("J2,1e30,0,0,0,0,0", "J2 shift of 1e+30 mm exceeds 100.0 mm"),
+    ("J2,0,0,0,0,25,0", "J2 rotation of 25 deg exceeds 20.0 deg"),
+])
+def test_force_lifts_the_bounds_twenty_times_no_further(row, phrase):
+    """--force studies a robot beyond any real one, not one the model
+    cannot compute: 1e30 mm made the IK's matrix singular (a traceback)."""
+    with pytest.raises(InputError) as exc:
+        parse_profile(HEAD + row + "\n", "w.csv", force=True)
+    assert exc.value.format().startswith("w.csv:2: " + phrase)
+    assert "--force allows 20 times the bound of a real robot, no more" in exc.value.format()
+    from click.testing import CliRunner
+    from rapidcomp.cli import main
+    r = CliRunner().invoke(main, ["simulate", "-o", "unused.csv", "--force", "--effect",
+                                  "link_elongation:J2-J3=1e6"])
+    assert r.exit_code == 2 and "--force allows 20 times" in r.output, r.output
+
+
 def test_a_long_comment_or_cell_is_read_not_a_crash():
     """A comment line (or a cell) longer than the csv module's default
     field limit (128 KiB) is part of the file like any other: the profile
@@ -106,3 +124,19 @@ def test_a_long_comment_or_cell_is_read_not_a_crash():
     head, rest = text.split("\n", 1)
     long = head + "\n# " + "x" * 200_000 + "\n" + rest
     assert parse_profile(long, "p.csv") == parse_profile(text, "p.csv")
+
+
+@pytest.mark.parametrize("com, ok", [("0,0,60", True), ("0,0,1e30", False), ("-2500,0,0", False)])
+def test_a_payloads_centre_of_mass_is_bounded_as_payload_is(com, ok):
+    """The payload row's centre of mass is held to the bound --payload
+    has (2000 mm from the flange): 1e30 mm made a J2 sag of 1e24 deg."""
+    text = ("joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg,compliance_deg_per_nm,mass_kg\n"
+            "J2,0,0,0,0,0,0,0.0001,\n"
+            f"payload,{com},0,0,0,,5\n")
+    if ok:
+        assert parse_profile(text, "p.csv").payload.mass_kg == 5
+        return
+    with pytest.raises(InputError) as exc:
+        parse_profile(text, "p.csv")
+    assert exc.value.format().startswith("p.csv:3: the payload's centre of mass [")
+    assert "is not within 2000 mm of the flange" in exc.value.format()

@@ -58,7 +58,10 @@ MEASURED = "measured"
 # The functions that read where the controller has the robot: a value made
 # with one (a PDispSet frame, an \ExeP) changes when a move before it is
 # compensated.
+POSITION_READERS = frozenset(("crobt", "cpos", "cjointt"))
 POSITION_READ = re.compile(r"\b(?:CRobT|CPos|CJointT)\s*\(", re.IGNORECASE)
+# A RAPID string or comment, where a function's name is no call.
+_STRING_OR_COMMENT = re.compile(r'"(?:[^"\n]|"")*"|!.*')
 # Not moves, in State.last: the program starts here (the robot is where
 # --start says, else unknown), and: where an error stopped the robot.
 PROGRAM_START = ("program start",)
@@ -214,6 +217,8 @@ class _Walker:
         # the robot (_reads_position).
         self.reads: set = set()
         self._position_read: bool | None = None
+        # id(statement) -> the position read its expressions call, or None.
+        self.position_reads: dict = {}
         self.called: dict[int, tuple[str, ...]] = {}   # id(routine node) -> names it calls
         self.visits = 0
         self.memo: dict = {}
@@ -387,6 +392,15 @@ class _Walker:
         if self.flow.measured:
             self.unknown = State(BOTH, BOTH, BOTH | {MEASURED}, BOTH, None)
 
+    def _read_here(self, s, st: State, rt: _Routine, what: str = "") -> None:
+        """The moves that may have left the robot where statement s is read
+        where it is (st.last): compensated, a displacement made of what s
+        reads would move with them."""
+        at = f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}{what}"
+        for key in st.last or ():
+            if key is not PROGRAM_START and key is not RESUME:
+                self.flow.read_by.setdefault(key, at)
+
     def _reads_position(self, s: A.ProcCall) -> bool:
         """Whether the displacement a run-time PDispOn/PDispSet sets may
         depend on where the moves before it left the robot: PDispOn without
@@ -397,8 +411,11 @@ class _Walker:
         if s.name.lower() == "pdispon" and _arg(s, "exep") is None:
             return True
         if self._position_read is None:
-            self._position_read = any(POSITION_READ.search(pf.source.text)
-                                      for pf in self.files)
+            # (Another task's too: PERS data are shared, and CRobT() takes
+            # \\TaskName. Not in a comment or a string.)
+            self._position_read = any(
+                POSITION_READ.search(_STRING_OR_COMMENT.sub("", pf.source.text))
+                for pf in (*self.files, *getattr(self.resolver, "observers", ())))
         return self._position_read
 
     def _set_at_run_time(self, s: A.ProcCall, rt: _Routine) -> str | None:
@@ -577,6 +594,15 @@ class _Walker:
                     fcalls = self.functions[id(s)] = _function_calls(s)
                 for name in fcalls:
                     st = self.function(name, s, st, frame)
+                if self.reads and st.last:
+                    read = self.position_reads.get(id(s), False)
+                    if read is False:
+                        read = self.position_reads[id(s)] = _position_read(s)
+                    if read is not None:
+                        # What a displacement set at run time may be made
+                        # of: CRobT() here reads where the moves before
+                        # left the robot.
+                        self._read_here(s, st, frame.rt, f", where {read}() reads it")
             if t is A.ProcCall:
                 st = self.call(s, st, env, frame)
             elif t is A.LateCall:
@@ -687,9 +713,8 @@ class _Walker:
             # follows put the robot there: a search, a routine not given;
             # in an error handler or a TRAP any may have, found by run().)
             at = f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}"
-            for key in (st.last or ()) if id(s) in self.reads else ():
-                if key is not PROGRAM_START and key is not RESUME:
-                    self.flow.read_by.setdefault(key, at)
+            if id(s) in self.reads:
+                self._read_here(s, st, rt)
             prog = _arg(s, "progpoint", 0)
             if (name == "pdispon" and _arg(s, "exep") is None and st.last
                     and PROGRAM_START not in st.last and RESUME not in st.last
@@ -817,6 +842,13 @@ def _heads(s) -> tuple:
     if t is A.Simple:
         return (s.expr,)
     return ()
+
+
+def _position_read(s) -> str | None:
+    """The first of CRobT(), CPos() or CJointT() a statement's own
+    expressions call (its name as written), or None."""
+    return next((c.name for c in calls_in(_heads(s)) if c.name.lower() in POSITION_READERS),
+                None)
 
 
 def _function_calls(s) -> tuple:

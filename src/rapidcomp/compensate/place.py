@@ -23,7 +23,7 @@ from types import MappingProxyType
 import numpy as np
 
 from ..errors import InputError
-from ..kinematics.ik import Solver, Warn
+from ..kinematics.ik import IKOptions, Solver, Warn
 from ..rapid.model import Declaration, Module
 from .plan import Plan
 from .solve import Solved, Solving, same_joints, solve_slots
@@ -211,6 +211,11 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str) -> list[Group]:
         rounded.view(np.dtype((np.void, rounded.itemsize * 6))).ravel().tolist())]
     rows = [solved.row[u.key] for u in loop_first]
     modes = [mode_of(u, mode, plan, solved, row) for u, row in zip(loop_first, rows)]
+    # A jointtarget's compensation does not depend on the move's tool (its
+    # joints reach the flange's whole pose), except near J5 = 0, where the
+    # wrist fallback holds the tool's point exact: there the tool is part
+    # of what one written value serves.
+    wrist = np.abs(np.nan_to_num(q_all[:, 4], nan=180.0)) < IKOptions().wrist_fallback_deg
     kept = _one_statement(loop_first, modes)
     for u, row, m in zip(loop_first, rows, modes):
         src = u.source
@@ -220,7 +225,8 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str) -> list[Group]:
             home = (u.key[0], u.module)
         where = (("decl", id(src.decl)) if src.decl is not None
                  else ("inline", u.key[0], src.ref.span))
-        context = (None, None) if m == "joint" else (u.tool[0], u.wobj[0])
+        context = (((u.tool[0] if u.tool is not None else None) if wrist[row] else None,
+                    None) if m == "joint" else (u.tool[0], u.wobj[0]))
         base = (m, where, _call_key(src), *context, home[0], id(home[1]))
         if src.by_loop or m == "joint":
             key = base + (None,)

@@ -95,7 +95,7 @@ class Plan:
                 return replace(u, reason="a program displacement set at run time "
                                f"({read_by[u.key]}) may read where this move leaves the "
                                "robot (PDispOn without \\ExeP does; a frame or \\ExeP "
-                               "made with CRobT(), CPos() or CJointT(), which the task "
+                               "made with CRobT(), CPos() or CJointT(), which a task "
                                "calls, may): "
                                "compensated, the displacement would change with it; left "
                                "as written")

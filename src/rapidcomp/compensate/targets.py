@@ -242,6 +242,20 @@ def assigned_name(assign) -> str:
     return assign.target.name + (f".{part[0].name}" if part else "")
 
 
+def _loop_indexed(motion, *refs) -> Unresolved | None:
+    """Why a tool or work object indexed with the variable of an enclosing
+    FOR loop is not followed (each iteration may take another element), or
+    None."""
+    if not motion.loops:
+        return None
+    names = {lp.var.lower() for lp in motion.loops if lp.var}
+    for ref in refs:
+        if type(ref) is A.Ref and ref.selectors and names & loop_names(ref, motion.loops):
+            return Unresolved(f"{ref.name} is indexed with the variable of an enclosing FOR "
+                              "loop (each iteration may take another element): not followed")
+    return None
+
+
 def _data_key(expr, site) -> str:
     """A tool's or work object's key (grouping: one value, one key): its
     name, and where a routine assigns it, the place of the assignment last
@@ -676,6 +690,9 @@ class Resolver:
                 self.usages[mid] = us
         if writes or usages is None:
             self._task_writes(files, observers)
+        # (The other tasks' modules: flow.py asks whether any reads where
+        # this task's robot is, CRobT(\\TaskName:=...).)
+        self.observers = tuple(observers)
 
     def _tables(self) -> None:
         """The files' declarations by where their names are seen, and the
@@ -854,9 +871,15 @@ class Resolver:
             return Unresolved(f"{what} {expr.name} has no literal value "
                               f"({d.issue or 'run-time data'})")
         if len(index) != len(dims) or not all(1 <= i <= n for i, n in zip(index, dims)):
+            # (As a target's index beyond its array: the controller stops
+            # there with ERR_INDEX.)
+            pf = next(f for f in self.files if any(m is module for m in f.modules))
             shown = ",".join(map(str, index))
-            return Unresolved(f"{what} {expr.name}{{{shown}}} is beyond the array's bounds "
-                              f"{{{','.join(map(str, dims))}}}", True)
+            at = next((e.span.start for e, i, n in zip(sel[0].indices, index, dims)
+                       if not 1 <= i <= n), sel[0].span.start)
+            raise pf.source.error(at, f"{what} {expr.name}{{{shown}}} is beyond "
+                                  f"the array's bounds {{{','.join(map(str, dims))}}}: the "
+                                  "controller stops here with ERR_INDEX")
         written = self._written(d)
         if written:
             return Unresolved(written)
@@ -1325,6 +1348,9 @@ class Resolver:
         a plain name (a CAM program's 1e5 moves name the same two), with
         the notes their resolution gave."""
         t, w, routine = motion.tool, motion.wobj, motion.routine
+        looped = _loop_indexed(motion, t, w)
+        if looped is not None:
+            return looped, None
         sites = (self._sites(motion, module) if self.writes.literal or self.site_names
                  else None)
         if sites is not None:
@@ -1372,6 +1398,9 @@ class Resolver:
         """tool() of a move as _tool_wobj resolves it, without its work
         object (a MoveAbsJ's joints do not depend on one)."""
         t, routine = motion.tool, motion.routine
+        looped = _loop_indexed(motion, t)
+        if looped is not None:
+            return looped
         sites = (self._sites(motion, module) if self.writes.literal or self.site_names
                  else None)
         site = None if sites is None else sites[0]

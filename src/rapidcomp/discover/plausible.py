@@ -34,19 +34,23 @@ MAX_CYCLIC_DEG = 0.1
 FRAMES = ("base_frame", "tool_offset")
 
 
-def bounds(effect: Effect, first: bool = False) -> tuple[float, float, float]:
-    """(mm, deg, plain number) limits of one effect's parameters."""
+def bounds(effect: Effect, first: bool = False, factor: float = 1.0
+           ) -> tuple[float, float, float]:
+    """(mm, deg, plain number) limits of one effect's parameters (factor:
+    --force's FORCE_FACTOR times them)."""
     if effect.kind in FRAMES:
-        k = FIRST_FRAME_FACTOR if first else 1.0
+        k = (FIRST_FRAME_FACTOR if first else 1.0) * factor
         return MAX_FRAME_SHIFT_MM * k, MAX_ROTATION_DEG * k, 0.0
     if effect.kind == "gravity_compliance":
-        return 0.0, 0.0, MAX_COMPLIANCE_DEG_PER_NM
-    return MAX_SHIFT_MM, MAX_ROTATION_DEG, MAX_SCALE
+        return 0.0, 0.0, MAX_COMPLIANCE_DEG_PER_NM * factor
+    return MAX_SHIFT_MM * factor, MAX_ROTATION_DEG * factor, MAX_SCALE * factor
 
 
-def implausible(effect: Effect, user: dict[str, float], first: bool = False) -> str | None:
-    """Why these values are beyond what a real robot has, or None."""
-    mm, deg, num = bounds(effect, first)
+def implausible(effect: Effect, user: dict[str, float], first: bool = False,
+                factor: float = 1.0) -> str | None:
+    """Why these values are beyond what a real robot has (factor 1), or
+    beyond what --force allows (FORCE_FACTOR), or None."""
+    mm, deg, num = bounds(effect, first, factor)
     shift = math.sqrt(sum(v * v for k, v in user.items() if k.endswith("_mm")))
     turn = max([abs(v) for k, v in user.items() if k.endswith("_deg")] or [0.0])
     plain = max([abs(v) for k, v in user.items()
@@ -55,9 +59,9 @@ def implausible(effect: Effect, user: dict[str, float], first: bool = False) -> 
         shift = 0.0
     if effect.kind == "cyclic":
         amplitude = math.hypot(*user.values())
-        if amplitude > MAX_CYCLIC_DEG:
+        if amplitude > MAX_CYCLIC_DEG * factor:
             return (f"{effect.id} needs a cyclic error of {amplitude:.3g} deg (a real robot's "
-                    f"gears: <= {MAX_CYCLIC_DEG:g} deg)")
+                    f"gears: <= {MAX_CYCLIC_DEG * factor:g} deg)")
         return None
     if shift > mm:
         return f"{effect.id} needs a shift of {shift:.3g} mm (a real robot: <= {mm:g} mm)"

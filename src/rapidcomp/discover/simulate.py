@@ -25,7 +25,7 @@ import pinocchio as pin
 from ..errors import RapidcompError
 from ..kinematics.frames import DEG
 from ..kinematics.gravity import Payload
-from ..kinematics.profile import ThermalProfile, deform
+from ..kinematics.profile import FORCE_FACTOR, ThermalProfile, deform
 from ..kinematics.robot import RobotModel
 from .effects import Effect, find, to_profile
 from .model import ZERO_COLUMN, ParamModel
@@ -54,9 +54,15 @@ def parse_effect_values(effects, specs, force: bool = False) -> dict[Effect, np.
                                  + ", ".join(e.params))
         if e.kind == "gravity_compliance" and vals[0] < 0:
             raise RapidcompError(f"--effect {spec}: a compliance is >= 0")
-        why = implausible(e, dict(zip(e.params, vals)), first=True)
+        user = dict(zip(e.params, vals))
+        why = implausible(e, user, first=True)
         if why is not None and not force:
             raise RapidcompError(f"--effect {spec}: {why}; --force simulates it anyway")
+        why = implausible(e, user, first=True, factor=FORCE_FACTOR) if force else None
+        if why is not None:
+            raise RapidcompError(f"--effect {spec}: {why.replace('a real robot', '--force')}; "
+                                 f"--force allows {FORCE_FACTOR:g} times the bound of a real "
+                                 "robot, no more")
         if e in out:
             raise RapidcompError(f"--effect {spec}: {e.id} given twice")
         out[e] = e.internal(vals)

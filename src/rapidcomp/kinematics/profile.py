@@ -63,6 +63,13 @@ MAX_FRAME_SHIFT_MM = 10.0
 MAX_ROTATION_DEG = 1.0
 MAX_SCALE = 5e-3
 MAX_COMPLIANCE_DEG_PER_NM = 0.01
+# --force lifts the bounds above to this many times them, no further: a
+# what-if of a robot far from any real one, still one the model can compute
+# (a gear ratio of 0, a shift of 1e30 mm: no robot, no solution).
+FORCE_FACTOR = 20.0
+# A payload's centre of mass from the flange (mm): as --payload takes one
+# (no tool on a 6 kg arm reaches further).
+MAX_PAYLOAD_COM_MM = 2000.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -199,10 +206,13 @@ def parse_profile(text: str, source: str, joint_names=("J1", "J2", "J3", "J4", "
                                  "dz_mm) and mass_kg; its rotations must be 0", line)
             if not 0 <= extra["mass_kg"] <= 1000:
                 raise InputError(source, f"mass_kg is {extra['mass_kg']}, expected 0..1000", line)
+            if not all(abs(c) <= MAX_PAYLOAD_COM_MM for c in d):
+                raise InputError(source, "the payload's centre of mass [" + ", ".join(
+                    f"{c:g}" for c in d) + f"] mm is not within {MAX_PAYLOAD_COM_MM:g} mm of the "
+                    "flange", line)
             payload = Payload(extra["mass_kg"], d)
             continue
-        if not force:
-            _check_size(source, line, key, d, r, extra)
+        _check_size(source, line, key, d, r, extra, FORCE_FACTOR if force else 1.0)
         if extra["compliance_deg_per_nm"] < 0:
             raise InputError(source, f"{key} compliance_deg_per_nm is "
                              f"{extra['compliance_deg_per_nm']}, expected >= 0 (a joint yields "
@@ -256,23 +266,26 @@ def _amount(x: float) -> str:
     return f"{x:.3f}" if abs(x) < 1e6 else f"{x:.4g}"
 
 
-def _check_size(source, line, key, d, r, extra) -> None:
-    limit = MAX_FRAME_SHIFT_MM if key in ("base", "flange") else MAX_SHIFT_MM
+def _check_size(source, line, key, d, r, extra, factor: float = 1.0) -> None:
+    """The bounds of a real robot's values (factor 1), or with --force
+    FORCE_FACTOR times them."""
+    hint = ("use --force if intended" if factor == 1.0 else
+            f"--force allows {FORCE_FACTOR:g} times the bound of a real robot, no more")
+    limit = (MAX_FRAME_SHIFT_MM if key in ("base", "flange") else MAX_SHIFT_MM) * factor
     if math.hypot(*d) > limit:
         raise InputError(source, f"{key} shift of {_amount(math.hypot(*d))} mm exceeds "
-                         f"{limit} mm (thermal shifts are microns; use --force "
-                         "if this is intended)", line)
+                         f"{limit} mm (thermal shifts are microns; {hint})", line)
     rot = max(abs(a) for a in (*r, extra["offset_deg"]))
-    if rot > MAX_ROTATION_DEG:
+    if rot > MAX_ROTATION_DEG * factor:
         raise InputError(source, f"{key} rotation of {rot:.6g} deg "
-                         f"exceeds {MAX_ROTATION_DEG} deg (use --force if intended)", line)
-    if abs(extra["scale"]) > MAX_SCALE:
-        raise InputError(source, f"{key} scale of {extra['scale']:.6g} exceeds {MAX_SCALE} "
-                         "(use --force if intended)", line)
-    if extra["compliance_deg_per_nm"] > MAX_COMPLIANCE_DEG_PER_NM:
+                         f"exceeds {MAX_ROTATION_DEG * factor} deg ({hint})", line)
+    if abs(extra["scale"]) > MAX_SCALE * factor:
+        raise InputError(source, f"{key} scale of {extra['scale']:.6g} exceeds "
+                         f"{MAX_SCALE * factor} ({hint})", line)
+    if extra["compliance_deg_per_nm"] > MAX_COMPLIANCE_DEG_PER_NM * factor:
         raise InputError(source, f"{key} compliance of {extra['compliance_deg_per_nm']:.6g} "
                          "deg/N m "
-                         f"exceeds {MAX_COMPLIANCE_DEG_PER_NM} (use --force if intended)", line)
+                         f"exceeds {MAX_COMPLIANCE_DEG_PER_NM * factor} ({hint})", line)
 
 
 def read_profile(path: str | Path, force: bool = False, joint_names=None) -> ThermalProfile:

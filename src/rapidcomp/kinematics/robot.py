@@ -225,6 +225,18 @@ def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
         if not (math.isfinite(mass) and mass >= 0):
             raise InputError(str(path), f"joint {model.names[i]}: its link's mass {mass:g} kg "
                                         "is not a mass")
+        # (Pinocchio refuses an inertia matrix that is not positive when it
+        # is scaled to mm below: said here, with the joint.)
+        inertia = np.asarray(model.inertias[i].inertia, float)
+        com = np.asarray(model.inertias[i].lever, float)
+        if not (np.isfinite(inertia).all() and np.isfinite(com).all()
+                and np.abs(com).max() <= MAX_LINK_M
+                and np.linalg.eigvalsh((inertia + inertia.T) / 2).min()
+                >= -1e-9 * max(1.0, float(np.abs(inertia).max()))):
+            raise InputError(str(path), f"joint {model.names[i]}: its link's inertial is not a "
+                                        "body's (expected a centre of mass within "
+                                        f"{MAX_LINK_M:g} m and a positive semi-definite "
+                                        "inertia matrix)")
     for i in range(1, model.njoints):
         p = model.jointPlacements[i]
         model.jointPlacements[i] = pin.SE3(p.rotation, p.translation * MM_PER_M)
