@@ -29,6 +29,9 @@ from .simulate import add_noise, detectability, parse_effect_values, simulate_po
 
 MIN_DISTINCT_POSES = 6
 MAX_RANDOM_POINTS = 100_000
+# Rows of one simulated file (a warm-up campaign: points x rounds): as many
+# as random:N's most.
+MAX_ROWS = MAX_RANDOM_POINTS
 
 
 @dataclass(frozen=True)
@@ -362,6 +365,10 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
     thermal = {}
     if campaign is not None:
         times, thermal_specs, tau, sensors, stands, tau_cool = campaign
+        if len(times) * len(q) > MAX_ROWS:
+            raise RapidcompError(f"--times: {len(times)} rounds of {len(q)} points make "
+                                 f"{len(times) * len(q)} rows; a campaign file holds at most "
+                                 f"{MAX_ROWS} (fewer rounds or points)")
         thermal = parse_effect_values(cat, thermal_specs, force)
         for e in thermal:
             if e.kind not in THERMAL_KINDS:
