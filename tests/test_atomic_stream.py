@@ -79,3 +79,17 @@ def test_a_file_name_that_is_not_utf8_is_written_back_as_its_bytes(tmp_path):
 def test_discover_reports_a_file_name_that_is_not_utf8_as_its_bytes(tmp_path):
     _run_as(tmp_path, b"m\xe9.csv", "measured.csv", "discover", "--report", "r.md", "-q")
     assert b"- measured: m\xe9.csv\n" in (tmp_path / "r.md").read_bytes()
+
+
+def test_a_failed_write_leaves_no_folder_it_made(tmp_path):
+    """The folders made for the outputs go again when a file cannot be
+    written ("nothing written"): none of them is left behind empty; a
+    folder that was there before stays."""
+    from rapidcomp.atomic import write_all
+    (tmp_path / "kept").mkdir()
+    (tmp_path / "blocker").write_text("a file, not a folder")
+    with pytest.raises(OSError):
+        write_all([(tmp_path / "kept" / "new" / "deep" / "o.mod", b"MODULE"),
+                   (tmp_path / "blocker" / "r.md", b"# r")])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["blocker", "kept"]
+    assert list((tmp_path / "kept").iterdir()) == []

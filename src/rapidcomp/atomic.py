@@ -35,12 +35,18 @@ def write_all(files: list[tuple[Path, bytes | Chunked]]) -> None:
     file's data are bytes, or an object whose chunks() gives them in
     pieces (a report rendered as it is written)."""
     temps: list[tuple[str, Path]] = []
+    # The folders made for the files, outermost first: taken away again
+    # when a file fails (no empty output folders left behind).
+    made: list[Path] = []
     # mkstemp creates 0600 files; a written file gets what open() would give.
     mode = 0o666 & ~_umask()
+    done = False
     try:
         for path, data in files:
             try:
+                missing = [d for d in (path.parent, *path.parent.parents) if not d.exists()]
                 path.parent.mkdir(parents=True, exist_ok=True)
+                made += reversed(missing)
                 fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp",
                                            dir=path.parent)
                 temps.append((tmp, path))
@@ -59,7 +65,13 @@ def write_all(files: list[tuple[Path, bytes | Chunked]]) -> None:
                 os.replace(tmp, path)
             except OSError as exc:
                 raise OSError(exc.errno, exc.strerror, str(path)) from None
+        done = True
     finally:
         for tmp, _ in temps:
             if os.path.exists(tmp):
                 os.unlink(tmp)
+        for d in reversed(made) if not done else ():
+            try:
+                d.rmdir()               # (only if empty: nothing of anyone else's)
+            except OSError:
+                pass
