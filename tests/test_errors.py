@@ -51,6 +51,15 @@ def test_caret_points_at_column():
     ("MODULE m\nPROC p()\n IF x THEN\n ENDPROC\nENDMODULE\n", "4:2", "ELSE, ELSEIF or ENDIF"),
     ("MODULE m\n VAR num x := 1 @ 2;\nENDMODULE\n", "2:17", "unexpected character '@'"),
     ("MODULE m\n VAR num if := 1;\nENDMODULE\n", "2:10", "unexpected 'if'; expected an identifier"),
+    # (What the controller does not load: a name of more than 32
+    # characters, a name declared twice in a module or a routine.)
+    ("MODULE m\n VAR num a23456789012345678901234567890123 := 1;\nENDMODULE\n", "2:10",
+     "the name a23456789012345678901234567890123 has 33 characters: the controller loads names "
+     "of at most 32"),
+    ("MODULE m\n PROC P()\n ENDPROC\n VAR num p;\nENDMODULE\n", "4:10",
+     "p is declared twice in module m (first at line 2): the controller does not load it"),
+    ("MODULE m\n PROC q()\n  VAR num a;\n  VAR num A;\n ENDPROC\nENDMODULE\n", "4:11",
+     "A is declared twice in routine q (first at line 3)"),
     # (Not the lexer's names of its own tokens: FAST_DECL is a declaration.)
     ("MODULE m\n PROC main()\n ENDPROC\n", "4:1",
      "unexpected end of file; expected a declaration, ALIAS, ENDMODULE, FUNC, PROC, RECORD, "

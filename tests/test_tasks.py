@@ -358,3 +358,32 @@ def test_a_pers_declared_without_a_value_takes_the_one_another_module_gives(tmp_
     out = [(tmp_path / f"{n}_out" / "A.mod").read_text().splitlines()[2:] for n in ("alone",
                                                                                 "two")]
     assert out[0] == out[1] and out[0] != (tmp_path / "two" / "A.mod").read_text().splitlines()[2:]
+
+
+@pytest.mark.parametrize("a, b, refused", [
+    ("PROC Pick()\n    ENDPROC", "PROC Pick()\n    ENDPROC", True),
+    ("VAR num n:=1;", "VAR num n:=2;", True),
+    ("VAR num Pick:=1;", "PROC pick()\n    ENDPROC", True),
+    ("PERS num n:=1;", "PERS string n:=\"\";", True),
+    ("PERS num n:=1;", "PERS num n:=1;", False),
+    ("LOCAL PROC Pick()\n    ENDPROC", "PROC Pick()\n    ENDPROC", False),
+])
+def test_a_global_name_in_two_modules_of_a_task_is_bad_input(tmp_path, a, b, refused):
+    """The controller loads a task whose global names are each declared
+    once (PERS of one type are one shared object; LOCAL ones are their
+    module's): any other clash is bad input naming both places, nothing
+    written."""
+    task = tmp_path / "cell"
+    task.mkdir()
+    (task / "A.mod").write_text(f"MODULE A\n    {a}\n    PROC main()\n        MoveAbsJ "
+                                "[[0,0,0,0,30,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,fine,tool0;\n"
+                                "    ENDPROC\nENDMODULE\n")
+    (task / "B.mod").write_text(f"MODULE B\n    {b}\nENDMODULE\n")
+    r = run("fix", task, "--profile", WARM, "-o", tmp_path / "out")
+    if refused:
+        assert r.exit_code == 2, r.output
+        assert "B.mod:2: " in r.output and "is declared globally in two modules (also " \
+            in r.output and "A.mod:2)" in r.output, r.output
+        assert not (tmp_path / "out").exists()
+    else:
+        assert r.exit_code == 0, r.output

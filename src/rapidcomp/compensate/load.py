@@ -70,6 +70,7 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
                                  "once (the controller refuses to load it twice); give the "
                                  "program file (.pgf) or a folder without the copy",
                                  pf.line(m.node.name_span))
+    _one_global_each(source, files)
     mine = {os.path.realpath(source.root / rel) for rel in source.modules}
     context = [parse_file(m) for m in with_modules if os.path.realpath(m) not in mine]
     # (An ALIAS of one module types the data of every other.)
@@ -84,6 +85,33 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
     origin = source.input.parent.name if source.kind == "pgf" else source.input.name
     return Task(source.task or source.name, tuple(files), tuple(context), tuple(observers),
                 source.base_moved_by, origin, source.event_routines, source.entry)
+
+
+def _one_global_each(source: TaskSource, files) -> None:
+    """A global name declared in two modules of a task (data, routines;
+    PERS of one type excepted: one shared object) is refused, as the
+    controller refuses to load the task."""
+    seen: dict[str, tuple] = {}
+    for pf in files:
+        for m in pf.modules:
+            found = [(r.node.name, "routine", None, r.node.span, r.node.scope)
+                     for r in m.routines]
+            found += [(d.name, d.storage, d.type, d.node.name_span, d.scope)
+                      for d in m.declarations if d.routine is None]
+            for name, kind, type_, span, scope in found:
+                if (scope or "").upper() == "LOCAL":
+                    continue
+                first = seen.setdefault(name.lower(), (pf, kind, type_, span))
+                if first[0] is pf:
+                    continue            # (in one module: the parse said it)
+                if kind == first[1] == "PERS" and type_ == first[2]:
+                    continue
+                other = f"{_shown(source, first[0].source.display_path)}:{first[0].line(first[3])}"
+                raise InputError(_shown(source, pf.source.display_path),
+                                 f"{name} is declared globally in two modules (also {other}): "
+                                 "the controller does not load the task (make one LOCAL, or "
+                                 "give the program file (.pgf) without the other)",
+                                 pf.line(span))
 
 
 def _parse(source: TaskSource, rel: str):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import time
 
 from dataclasses import replace
@@ -257,7 +258,47 @@ def with_task_aliases(files: list[ParsedFile]) -> list[ParsedFile]:
     return out
 
 
+# The longest name the controller loads (RAPID identifiers: 32 characters).
+MAX_NAME = 32
+
+
+def _check_names(source: SourceText, node: A.ModuleNode) -> None:
+    """What the controller refuses to load in a module's names: one longer
+    than MAX_NAME characters; two module-level declarations (data or
+    routines) of one name, or two of one routine's data."""
+    def at(name: str, span) -> int:
+        # (The name after its keyword, or its FUNC's type, or ALIAS's type:
+        # not the same letters inside PROC.)
+        m = re.compile(rf"(?:PROC|TRAP|RECORD|FUNC\s+\w+|ALIAS\s+\w+)\s+({re.escape(name)})\b",
+                       re.IGNORECASE).search(source.text, span.start, span.end)
+        return m.start(1) if m else span.start
+
+    def check(name: str, start: int, seen: dict, where: str) -> None:
+        if len(name) > MAX_NAME:
+            raise source.error(start, f"the name {name[:40]}{'...' if len(name) > 40 else ''} "
+                               f"has {len(name)} characters: the controller loads names of "
+                               f"at most {MAX_NAME}")
+        first = seen.setdefault(name.lower(), start)
+        if first != start:
+            raise source.error(start, f"{name} is declared twice {where} (first at line "
+                               f"{source.position(first)[0]}): the controller does not load it")
+
+    check(node.name, node.name_span.start, {}, "")
+    names: dict = {}
+    for item in node.items:
+        if isinstance(item, A.DataDecl):
+            check(item.name, item.name_span.start, names, f"in module {node.name}")
+        elif isinstance(item, A.Routine):
+            check(item.name, at(item.name, item.span), names, f"in module {node.name}")
+            own: dict = {}
+            for d in item.decls:
+                check(d.name, d.name_span.start, own, f"in routine {item.name}")
+        elif isinstance(item, (A.RecordDecl, A.AliasDecl)):
+            check(item.name, at(item.name, item.span), {}, "")
+
+
 def _build_module(source: SourceText, node: A.ModuleNode, known=None) -> Module:
+    _check_names(source, node)
     consts = _const_ints(node)
     alias_of = _followed(_own_aliases(node))
     decls = []
