@@ -93,3 +93,19 @@ def test_a_failed_write_leaves_no_folder_it_made(tmp_path):
                    (tmp_path / "blocker" / "r.md", b"# r")])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["blocker", "kept"]
     assert list((tmp_path / "kept").iterdir()) == []
+
+
+def test_a_reader_that_goes_does_not_stop_the_command(tmp_path):
+    """`rapidcomp fix ... | head -c5`: the reader goes after five bytes;
+    the command still writes its files and ends with its own exit code
+    (click's exit 1 said some targets were not compensated), silently."""
+    fixtures = ROOT / "fixtures"
+    p = subprocess.Popen([sys.executable, "-m", "rapidcomp", "fix", str(fixtures / "cubes.mod"),
+                          "--profile", str(fixtures / "warm.csv"), "--limit", "J5=-120:120",
+                          "-o", str(tmp_path / "o.mod")],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert p.stdout.read(5) == b"cubes"
+    p.stdout.close()
+    err = p.stderr.read()
+    assert p.wait() == 0 and err == b"", err
+    assert (tmp_path / "o.mod").exists() and (tmp_path / "o.md").exists()

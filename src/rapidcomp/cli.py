@@ -46,6 +46,43 @@ class _Group(click.Group):
                                  "levels deep, more than rapidcomp follows; nothing written"))
 
 
+class _Unheard:
+    """stdout whose reader may go (`rapidcomp fix ... | head`): what is
+    left to say then is dropped, and the command runs to its end, its
+    files written and its exit code its own (click would end it at once
+    with exit 1, which says some targets were not compensated)."""
+
+    def __init__(self, stream):
+        self._stream = stream
+        self._gone = False
+
+    def write(self, text):
+        if not self._gone:
+            try:
+                return self._stream.write(text)
+            except BrokenPipeError:
+                self._went()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self._gone:
+            try:
+                self._stream.flush()
+            except BrokenPipeError:
+                self._went()
+
+    def _went(self) -> None:
+        self._gone = True
+        # (What the stream still holds, and Python's own flush at exit, go
+        # to /dev/null: no "Exception ignored" on the terminal.)
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, self._stream.fileno())
+        os.close(null)
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
 def run() -> None:
     """The `rapidcomp` command (and `python -m rapidcomp`): main() in a
     process of its own, set up for it (process.py: no cyclic collector, one
@@ -56,6 +93,8 @@ def run() -> None:
     or coverage tool, ends the usual way."""
     from .process import own
     own()
+    if sys.stdout is not None:
+        sys.stdout = _Unheard(sys.stdout)
     try:
         main()
     except SystemExit as exc:
