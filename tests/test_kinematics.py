@@ -329,6 +329,8 @@ _J = '<joint name="{}" type="revolute">'
     ('lower="-1.5707963268" upper="1.9198621772"', 'lower="1.9" upper="-1.5"',
      "J2: its lower limit 108.862 deg is not below its upper limit"),
     ('<mass value="1.0"/>', '<mass value="-1.0"/>', "mass -1 kg is not a mass"),
+    ('lower="-1.5707963268" upper="1.9198621772"', 'lower="-1e300" upper="1e300"',
+     "J2: its limits -5.72958e+301..5.72958e+301 deg are not within -720..720 deg"),
     ('ixx="0.01"', 'ixx="-5"', "J1: its link's inertial is not a body's"),
     ('<origin xyz="0 0 0"/><inertia', '<origin xyz="0 0 1e9"/><inertia',
      "J1: its link's inertial is not a body's"),

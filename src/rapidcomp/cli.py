@@ -546,6 +546,12 @@ def _warmup_campaign(times, thermal_effects, tau_heat, sensors=(), tau_cool=None
                 (lag is not None and not (math.isfinite(lag) and 0 < lag <= 100_000)):
             raise RapidcompError(f"--sensor {spec}: expected temp_NAME:T_COLD:T_WARM[:TAU] "
                                  "(deg C, minutes)")
+        # (A reading below absolute zero is no temperature; a rise within
+        # the simulated sensor's noise, 0.05 deg C, tells nothing.)
+        if min(cold, warm) < -273.15 or abs(warm - cold) < 0.1:
+            raise RapidcompError(f"--sensor {spec}: expected temperatures (deg C, above "
+                                 "-273.15) that rise from T_COLD to a T_WARM 0.1 deg C or more "
+                                 "away")
         parsed.append((parts[0].lower(), cold, warm, lag))
     if tau_cool is not None and not (math.isfinite(tau_cool) and 0 < tau_cool <= 100_000):
         raise RapidcompError(f"--tau-cool {tau_cool:g}: minutes, more than 0")

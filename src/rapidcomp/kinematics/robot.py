@@ -266,6 +266,11 @@ def checked_limits(robot: RobotModel, shown: str) -> RobotModel:
             raise InputError(shown, f"joint {name}: its lower limit {lo:g} deg is not below its "
                              f"upper limit {hi:g} deg (give its range with --limit "
                              f"{name}=LOWER:UPPER)")
+        # (As --limit takes them: two turns each way is every arm's most.)
+        if not -720 <= lo < hi <= 720:
+            raise InputError(shown, f"joint {name}: its limits {lo:g}..{hi:g} deg are not "
+                             "within -720..720 deg (give its range with --limit "
+                             f"{name}=LOWER:UPPER)")
     return robot
 
 
