@@ -140,3 +140,20 @@ def test_a_payloads_centre_of_mass_is_bounded_as_payload_is(com, ok):
         parse_profile(text, "p.csv")
     assert exc.value.format().startswith("p.csv:3: the payload's centre of mass [")
     assert "is not within 2000 mm of the flange" in exc.value.format()
+
+
+def test_a_file_without_its_header_says_so():
+    """The first row holds numbers: the header is missing (not "column 0
+    is named twice")."""
+    with pytest.raises(InputError) as exc:
+        parse_profile("J1,0,0,0,0,0,0\nJ2,0,0,0,0,0,0\n", "p.csv")
+    assert exc.value.format().startswith("p.csv:1: no header: this row holds numbers; "
+                                         "expected the header joint,")
+
+
+def test_a_profile_that_is_no_regular_file_is_named_so(tmp_path):
+    from click.testing import CliRunner
+    from rapidcomp.cli import main
+    r = CliRunner().invoke(main, ["fix", str(FIXTURES / "cubes.mod"), "--profile", "/dev/zero",
+                                  "-o", str(tmp_path / "o.mod")])
+    assert r.exit_code == 2 and "/dev/zero: not a regular file" in r.output, r.output

@@ -404,7 +404,9 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
         raise RapidcompError("--no-report and --report: give one of them")
     for p in [profile] + list(with_modules):
         if not os.path.isfile(p):
-            raise RapidcompError(f"{p}: no such file")
+            raise RapidcompError(f"{p}: " + ("not a regular file (a pipe or a device: give the "
+                                             "file itself)" if os.path.exists(p)
+                                             else "no such file"))
     groups = [(program, tasks_of(program, tuple(tasks))) for program in programs]
     n_tasks = sum(len(ts) for _, ts in groups)
     if n_tasks > 1 and (report or json_path):

@@ -62,6 +62,11 @@ def header_and_rows(text: str, source: str, required, what: str = "file", known=
         raise InputError(source, f"empty {what}; expected the header " + ",".join(required), 1)
     head_line, header = numbered[0]
     header = [h.strip().lower() for h in header]
+    # (A file without its header: the first row is numbers.)
+    if any(c not in header for c in required) and any(
+            _NUMBER.fullmatch(h) for h in header):
+        raise InputError(source, f"no header: this row holds numbers; expected the header "
+                         + ",".join(required) + " first", head_line)
     # A column named twice: which one is meant cannot be told (one would
     # be read and the other silently not).
     for k, h in enumerate(header):
