@@ -748,6 +748,18 @@ def test_the_moves_a_position_read_measures_are_the_ones_before_it():
                                    "\n        fr"), decls)
     assert {k: s for k, (s, _) in rows.items()} == {
         8: "compensated", 10: "compensated", 14: "untouched"}, rows
+    # A CRobT() in a TRAP may run after any move: no move is followed.
+    trapped = _statuses("""        MoveL p1, v500, fine, tool0;
+        MoveL p2, v500, fine, tool0;
+        fr := [pHere.trans, [1,0,0,0]];
+        PDispSet fr;
+        MoveL p2, v200, fine, tool0;
+        PDispOff;
+""", decls + "    TRAP tHit\n        pHere := CRobT();\n    ENDTRAP\n")
+    assert {k: s for k, (s, _) in trapped.items()} == {
+        11: "untouched", 12: "untouched", 15: "untouched"}, trapped
+    assert "(M0.mod:8, its CRobT() in an interrupt routine or an error handler) may read " \
+        "where any move leaves the robot" in trapped[11][1]
     other = parse_text("MODULE T2\n    PERS robtarget pShared;\n    PROC main()\n        "
                        "pShared := CRobT(\\TaskName:=\"T_ROB1\");\n    ENDPROC\nENDMODULE\n",
                        "T2.mod")

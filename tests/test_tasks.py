@@ -387,3 +387,14 @@ def test_a_global_name_in_two_modules_of_a_task_is_bad_input(tmp_path, a, b, ref
         assert not (tmp_path / "out").exists()
     else:
         assert r.exit_code == 0, r.output
+
+
+def test_two_modules_of_one_program_file_that_clash_are_refused_as_two_files_are(tmp_path):
+    """An old .prg holds several modules: a global name in two of them is
+    the same clash as in two files."""
+    prg = tmp_path / "cell.prg"
+    prg.write_text("MODULE A\n    VAR num n:=1;\n    PROC main()\n    ENDPROC\nENDMODULE\n"
+                   "MODULE B\n    VAR num n:=2;\nENDMODULE\n")
+    r = run("check", prg, "--profile", WARM)
+    assert r.exit_code == 2 and "n is declared globally in two modules (also " in r.output, \
+        r.output

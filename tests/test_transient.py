@@ -511,3 +511,15 @@ def test_a_support_module_of_another_program_is_refused_before_the_work(tmp_path
                                   "-o", str(tmp_path / "out.mod")])
     assert r.exit_code == 2 and "exists and is not this support module" in r.output, r.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["rcThermal.sys"]
+
+
+def test_signal_names_only_the_predefined_ones_are_refused():
+    """RAPID's predefined speed, zone and stop data are fixed lists: v7,
+    z2, err_temp or stoptimeJ2 are names an analog input may have."""
+    from rapidcomp.compensate.transient import _check_signal
+    from rapidcomp.errors import RapidcompError
+    for name in ("v7", "z2", "err_temp", "stoptimeJ2", "aiTemp", "vlin15"):
+        _check_signal(name)
+    for name in ("v100", "z50", "fine", "vrot10", "inpos50", "ERRNO", "TRUE", "MoveL", "Offs"):
+        with pytest.raises(RapidcompError):
+            _check_signal(name)

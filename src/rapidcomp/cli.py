@@ -60,19 +60,23 @@ class _Unheard:
         if not self._gone:
             try:
                 return self._stream.write(text)
-            except BrokenPipeError:
-                self._went()
+            except OSError as exc:
+                self._went(exc)
         return len(text)
 
     def flush(self) -> None:
         if not self._gone:
             try:
                 self._stream.flush()
-            except BrokenPipeError:
-                self._went()
+            except OSError as exc:
+                self._went(exc)
 
-    def _went(self) -> None:
+    def _went(self, exc: OSError) -> None:
         self._gone = True
+        if not isinstance(exc, BrokenPipeError):
+            # (stdout on a full disk: said once, on stderr.)
+            sys.stderr.write(f"rapidcomp: stdout: cannot write: {exc.strerror or exc}; the "
+                             "rest of the summary is not said\n")
         # (What the stream still holds, and Python's own flush at exit, go
         # to /dev/null: no "Exception ignored" on the terminal.)
         null = os.open(os.devnull, os.O_WRONLY)
@@ -548,12 +552,10 @@ def _warmup_campaign(times, thermal_effects, tau_heat, sensors=(), tau_cool=None
                 (lag is not None and not (math.isfinite(lag) and 0 < lag <= 100_000)):
             raise RapidcompError(f"--sensor {spec}: expected temp_NAME:T_COLD:T_WARM[:TAU] "
                                  "(deg C, minutes)")
-        # (A reading below absolute zero is no temperature; a rise within
-        # the simulated sensor's noise, 0.05 deg C, tells nothing.)
-        if min(cold, warm) < -273.15 or abs(warm - cold) < 0.1:
+        # (A reading below absolute zero is no temperature.)
+        if min(cold, warm) < -273.15:
             raise RapidcompError(f"--sensor {spec}: expected temperatures (deg C, above "
-                                 "-273.15) that rise from T_COLD to a T_WARM 0.1 deg C or more "
-                                 "away")
+                                 "-273.15)")
         parsed.append((parts[0].lower(), cold, warm, lag))
     if tau_cool is not None and not (math.isfinite(tau_cool) and 0 < tau_cool <= 100_000):
         raise RapidcompError(f"--tau-cool {tau_cool:g}: minutes, more than 0")

@@ -388,9 +388,33 @@ class _Walker:
                     continue
                 self.reads.add(id(s))
                 if (id(rt.node) in interrupted or id(s) in handlers) and not self.flow.anywhere:
-                    self.flow.anywhere = at
+                    self.flow.anywhere = f"{at}, in an interrupt routine or an error handler"
+        if self.reads and not self.flow.anywhere:
+            # A position read a displacement may be made of, where it may
+            # run after any move: an interrupt routine, an error handler,
+            # another task (CRobT(\\TaskName:=...)).
+            self.flow.anywhere = self._read_anywhere(interrupted)
         if self.flow.measured:
             self.unknown = State(BOTH, BOTH, BOTH | {MEASURED}, BOTH, None)
+
+    def _read_anywhere(self, interrupted: set) -> str | None:
+        """Where a position read runs after any move (see _find_measured),
+        or None."""
+        for rt in self.routines:
+            handlers = {id(s) for s in _statements_in([h.body for h in rt.node.handlers])}
+            inside = rt.node.kind == "TRAP" or id(rt.node) in interrupted
+            for s in statements(rt.node):
+                if (inside or id(s) in handlers) and _position_read(s) is not None:
+                    return (f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}, its "
+                            f"{_position_read(s)}() in an interrupt routine or an error "
+                            "handler")
+        for pf in getattr(self.resolver, "observers", ()):
+            m = POSITION_READ.search(_STRING_OR_COMMENT.sub(
+                lambda x: " " * len(x.group()), pf.source.text))
+            if m is not None:
+                return (f"{pf.source.display_path}:{pf.source.position(m.start())[0]}, "
+                        f"another task's {m.group().rstrip('( ')}()")
+        return None
 
     def _read_here(self, s, st: State, rt: _Routine, what: str = "") -> None:
         """The moves that may have left the robot where statement s is read

@@ -101,8 +101,8 @@ def _one_global_each(source: TaskSource, files) -> None:
             for name, kind, type_, span, scope in found:
                 if (scope or "").upper() == "LOCAL":
                     continue
-                first = seen.setdefault(name.lower(), (pf, kind, type_, span))
-                if first[0] is pf:
+                first = seen.setdefault(name.lower(), (pf, kind, type_, span, m))
+                if first[4] is m:
                     continue            # (in one module: the parse said it)
                 if kind == first[1] == "PERS" and type_ == first[2]:
                     continue

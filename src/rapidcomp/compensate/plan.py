@@ -87,8 +87,8 @@ class Plan:
             if u.reason is not None:
                 return u
             if anywhere:
-                return replace(u, reason=f"a program displacement set at run time ({anywhere}, "
-                               "in an interrupt routine or an error handler) may read where "
+                return replace(u, reason=f"a program displacement set at run time ({anywhere}) "
+                               "may read where "
                                "any move leaves the robot: compensated, the displacement "
                                "would change with it; left as written")
             if u.key in read_by:

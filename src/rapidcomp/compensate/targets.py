@@ -870,7 +870,11 @@ class Resolver:
                 return Unresolved(f"{what} {expr.name} is not an array", True)
             return Unresolved(f"{what} {expr.name} has no literal value "
                               f"({d.issue or 'run-time data'})")
-        if len(index) != len(dims) or not all(1 <= i <= n for i, n in zip(index, dims)):
+        if len(index) != len(dims):
+            pf = next(f for f in self.files if any(m is module for m in f.modules))
+            raise pf.source.error(sel[0].span.start, f"{expr.name} has {len(dims)} dimensions, "
+                                  f"indexed with {len(index)}")
+        if not all(1 <= i <= n for i, n in zip(index, dims)):
             # (As a target's index beyond its array: the controller stops
             # there with ERR_INDEX.)
             pf = next(f for f in self.files if any(m is module for m in f.modules))
@@ -1906,6 +1910,8 @@ class Resolver:
         """A target no given module declares: name the tool and work object
         of the move too when they are missing as well."""
         names = [_missing_name(first.reason)]
+        if _loop_indexed(motion, motion.tool, motion.wobj) is not None:
+            return first
         for what in (self.tool(motion.tool, module, motion.routine),
                      self.wobj(motion.wobj, module, motion.routine)):
             if isinstance(what, Unresolved) and what.reason.endswith(f"({MISSING_HINT})"):

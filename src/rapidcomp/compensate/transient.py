@@ -30,7 +30,6 @@ output is, on the robot deformed by s . profile.
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -155,9 +154,15 @@ GLOBAL_NAMES = ("rcS", "rcLastDay", "rcLastMin", "rcTauHeat", "rcTauCool", "rcGa
 CALLED = ("CDate", "CTime", "StrToVal", "StrPart", "Exp", "NOrient", "TPWrite", "AInput")
 # Predefined data no analog input is named like: tools, loads, the speed
 # and zone data every system has, and the system's variables.
-_PREDEFINED_DATA = ("tool0", "wobj0", "load0", "pi", "errno", "intno", "fine", "vmax")
-_PREDEFINED_PATTERN = re.compile(r"(?:v|vrot|vlin|z)\d+|err_\w+|inpos\d+|stoptime\w*|"
-                                 r"fllwtime\w*", re.IGNORECASE)
+_PREDEFINED_DATA = frozenset((
+    "tool0", "wobj0", "load0", "pi", "errno", "intno", "fine", "vmax",
+    *(f"v{n}" for n in (5, 10, 20, 30, 40, 50, 60, 80, 100, 150, 200, 300, 400, 500, 600, 800,
+                        1000, 1500, 2000, 2500, 3000, 4000, 5000, 6000, 7000)),
+    *(f"vrot{n}" for n in (1, 2, 5, 10, 20, 50, 100)),
+    *(f"vlin{n}" for n in (10, 20, 50, 100, 200, 500, 1000)),
+    *(f"z{n}" for n in (0, 1, 5, 10, 15, 20, 30, 40, 50, 60, 80, 100, 150, 200)),
+    "inpos20", "inpos50", "inpos100", "stoptime0_5", "stoptime1_0", "stoptime1_5",
+    "fllwtime0_5", "fllwtime1_0", "fllwtime1_5"))
 
 
 def _check_signal(name: str) -> None:
@@ -170,7 +175,7 @@ def _check_signal(name: str) -> None:
     lower = name.lower()
     if name.upper() in engine().reserved or lower in ("true", "false"):
         what = "a word RAPID reserves"
-    elif lower in _PREDEFINED_DATA or _PREDEFINED_PATTERN.fullmatch(name):
+    elif lower in _PREDEFINED_DATA:
         what = "a predefined data name (speed, zone, tool, load data, a system variable)"
     elif lower in BUILTIN_FUNCTIONS or lower in BUILTIN_INSTRUCTIONS or motion_spec(name):
         what = "a predefined routine's name"
