@@ -217,6 +217,9 @@ class _Walker:
         # the robot (_reads_position).
         self.reads: set = set()
         self._position_read: bool | None = None
+        # Whether one of those is a frame or an \\ExeP that may be made of a
+        # position read (CRobT()...): then each read is one (walk()).
+        self.made_of_reads = False
         # id(statement) -> the position read its expressions call, or None.
         self.position_reads: dict = {}
         self.called: dict[int, tuple[str, ...]] = {}   # id(routine node) -> names it calls
@@ -387,9 +390,11 @@ class _Walker:
                 if not self._reads_position(s):
                     continue
                 self.reads.add(id(s))
+                if not (s.name.lower() == "pdispon" and _arg(s, "exep") is None):
+                    self.made_of_reads = True
                 if (id(rt.node) in interrupted or id(s) in handlers) and not self.flow.anywhere:
                     self.flow.anywhere = f"{at}, in an interrupt routine or an error handler"
-        if self.reads and not self.flow.anywhere:
+        if self.made_of_reads and not self.flow.anywhere:
             # A position read a displacement may be made of, where it may
             # run after any move: an interrupt routine, an error handler,
             # another task (CRobT(\\TaskName:=...)).
@@ -618,7 +623,7 @@ class _Walker:
                     fcalls = self.functions[id(s)] = _function_calls(s)
                 for name in fcalls:
                     st = self.function(name, s, st, frame)
-                if self.reads and st.last:
+                if self.made_of_reads and st.last:
                     read = self.position_reads.get(id(s), False)
                     if read is False:
                         read = self.position_reads[id(s)] = _position_read(s)
