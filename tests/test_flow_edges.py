@@ -748,6 +748,17 @@ def test_the_moves_a_position_read_measures_are_the_ones_before_it():
                                    "\n        fr"), decls)
     assert {k: s for k, (s, _) in rows.items()} == {
         8: "compensated", 10: "compensated", 14: "untouched"}, rows
+    # A PDispOn without \\ExeP reads where the robot is itself: a CRobT()
+    # elsewhere is not what it reads (the move before it is compensated).
+    itself = _statuses("""        MoveL p1, v500, fine, tool0;
+        pHere := CRobT();
+        MoveL p2, v500, fine, tool0;
+        PDispOn p2, tool0;
+        MoveL p1, v200, fine, tool0;
+        PDispOff;
+""", "    VAR robtarget pHere;\n")
+    assert {k: s for k, (s, _) in itself.items()} == {
+        7: "compensated", 9: "untouched", 11: "compensated"}, itself
     # A CRobT() in a TRAP may run after any move: no move is followed.
     trapped = _statuses("""        MoveL p1, v500, fine, tool0;
         MoveL p2, v500, fine, tool0;
