@@ -34,7 +34,8 @@ from ..kinematics.frames import DEG
 from ..kinematics.ik import IKBatch, Solver, Status, Warn, reusing
 from .flow import OFF, ON, PROGRAM_START, State
 from .plan import Plan, line_ranges
-from .targets import IDENTITY_POSE, UNKNOWN_TOOL, TargetUse, flange_stack, stacked_poses
+from .targets import (IDENTITY_POSE, UNKNOWN_TOOL, UNKNOWN_TOOL_MEANS, TargetUse, flange_stack,
+                      stacked_poses)
 
 # Two solutions closer than this (deg, Euclidean) are the same solution.
 SAME_DEG = 1e-6
@@ -858,7 +859,7 @@ class Solving:
         for i in left:
             u = uses[i]
             if u.kind == "jointtarget" and u.tool is None and picks.failure[i] is None:
-                why = next(n.split(": its errors")[0] for n in u.notes
+                why = next(n.removesuffix(UNKNOWN_TOOL_MEANS) for n in u.notes
                            if n.startswith(UNKNOWN_TOOL))
                 picks.failure[i] = (f"at the wrist singularity (J5 {self.nominal.q_deg[i][4]:.2f}"
                                     " deg) only the tool centre point's position can be held "

@@ -61,6 +61,8 @@ MISSING_HINT = ("give the whole task: its folder, program file or backup, or the
 # the wrist singularity, where only one point's position is held exact
 # (solve.py fails those).
 UNKNOWN_TOOL = "its tool is not known"
+UNKNOWN_TOOL_MEANS = (": its errors are measured at the flange (its joints reach the flange's "
+                      "whole pose, so the tool's too)")
 AXES = "abcdef"
 # A transient output's targets (transient.py), evaluated at a thermal state.
 _STATE_FUNCS = frozenset((FUNC_J.lower(), FUNC_R.lower()))
@@ -862,7 +864,7 @@ class Resolver:
         dims = d.dims
         if None in dims:
             return Unresolved(f"{what} {expr.name} is an array whose size is not a literal")
-        if not d.dims or type(d.value) is not tuple or not all(
+        if not dims or type(d.value) is not tuple or not all(
                 isinstance(v, cls) for v in d.value):
             if d.type != cls.__name__.lower():
                 return Unresolved(f"{expr.name} is a {d.type}, not {what} data", True)
@@ -871,13 +873,13 @@ class Resolver:
             return Unresolved(f"{what} {expr.name} has no literal value "
                               f"({d.issue or 'run-time data'})")
         if len(index) != len(dims):
-            pf = next(f for f in self.files if any(m is module for m in f.modules))
-            raise pf.source.error(sel[0].span.start, f"{expr.name} has {len(dims)} dimensions, "
-                                  f"indexed with {len(index)}")
+            raise self._file_of(module).source.error(
+                sel[0].span.start, f"{expr.name} has {len(dims)} dimensions, indexed with "
+                f"{len(index)}")
         if not all(1 <= i <= n for i, n in zip(index, dims)):
             # (As a target's index beyond its array: the controller stops
             # there with ERR_INDEX.)
-            pf = next(f for f in self.files if any(m is module for m in f.modules))
+            pf = self._file_of(module)
             shown = ",".join(map(str, index))
             at = next((e.span.start for e, i, n in zip(sel[0].indices, index, dims)
                        if not 1 <= i <= n), sel[0].span.start)
@@ -895,6 +897,10 @@ class Resolver:
         self._assigned[id(e)] = (e, {None: self.home[id(d)]})
         self._elements[id(e)] = f"{d.name.lower()}{{{','.join(map(str, index))}}}"
         return e
+
+    def _file_of(self, module) -> ParsedFile:
+        """The file holding a module (for a message's place)."""
+        return next(f for f in self.files if any(m is module for m in f.modules))
 
     def site_map(self) -> dict:
         """Tool and work object names whose every assignment is a literal
@@ -1367,9 +1373,7 @@ class Resolver:
             hit = self._pairs.get(key)
             if hit is None:
                 before = len(self._notes)
-                tool = (Unresolved(sites[0]) if type(sites[0]) is str else
-                        self._tool(t, module, routine, sites[0]) if sites[0] is not None
-                        else self.tool(t, module, routine))
+                tool = self._tool_at(t, module, routine, sites[0])
                 wobj = None if type(tool) is Unresolved else (
                     Unresolved(sites[1]) if type(sites[1]) is str else
                     self._wobj(w, module, routine, sites[1]) if sites[1] is not None
@@ -1407,7 +1411,11 @@ class Resolver:
             return looped
         sites = (self._sites(motion, module) if self.writes.literal or self.site_names
                  else None)
-        site = None if sites is None else sites[0]
+        return self._tool_at(t, module, routine, None if sites is None else sites[0])
+
+    def _tool_at(self, t, module, routine: str, site):
+        """tool() of a move whose tool the site (_sites: the assignments,
+        why not known, or None) describes."""
         if type(site) is str:
             return Unresolved(site)
         if site is not None:
@@ -2229,9 +2237,7 @@ class Resolver:
             # flange's whole pose elsewhere, whatever the tool).
             tool = self._tool_of(motion, module)
             if type(tool) is Unresolved:
-                self._notes.append(f"{UNKNOWN_TOOL} ({tool.reason}): its errors are measured "
-                                   "at the flange (its joints reach the flange's whole pose, "
-                                   "so the tool's too)")
+                self._notes.append(f"{UNKNOWN_TOOL} ({tool.reason}){UNKNOWN_TOOL_MEANS}")
                 tool = None
             return TargetUse(motion, role, label, line, kind, None, None, None, joints, None,
                              src, tool, env=envt, file=pf, module=module,
