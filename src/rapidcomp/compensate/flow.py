@@ -37,7 +37,6 @@ where --start says the robot is; RESUME: where an error stopped it).
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field, replace
 
 from ..construct import maker
@@ -59,9 +58,6 @@ MEASURED = "measured"
 # with one (a PDispSet frame, an \ExeP) changes when a move before it is
 # compensated.
 POSITION_READERS = frozenset(("crobt", "cpos", "cjointt"))
-POSITION_READ = re.compile(r"\b(?:CRobT|CPos|CJointT)\s*\(", re.IGNORECASE)
-# A RAPID string or comment, where a function's name is no call.
-_STRING_OR_COMMENT = re.compile(r'"(?:[^"\n]|"")*"|!.*')
 # Not moves, in State.last: the program starts here (the robot is where
 # --start says, else unknown), and: where an error stopped the robot.
 PROGRAM_START = ("program start",)
@@ -413,12 +409,10 @@ class _Walker:
                     return (f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}, its "
                             f"{_position_read(s)}() in an interrupt routine or an error "
                             "handler")
-        for pf in getattr(self.resolver, "observers", ()):
-            m = POSITION_READ.search(_STRING_OR_COMMENT.sub(
-                lambda x: " " * len(x.group()), pf.source.text))
-            if m is not None:
-                return (f"{pf.source.display_path}:{pf.source.position(m.start())[0]}, "
-                        f"another task's {m.group().rstrip('( ')}()")
+        hit = _first_position_read(getattr(self.resolver, "observers", ()))
+        if hit is not None:
+            pf, s, name = hit
+            return f"{pf.source.display_path}:{pf.line(s.span)}, another task's {name}()"
         return None
 
     def _read_here(self, s, st: State, rt: _Routine, what: str = "") -> None:
@@ -441,10 +435,9 @@ class _Walker:
             return True
         if self._position_read is None:
             # (Another task's too: PERS data are shared, and CRobT() takes
-            # \\TaskName. Not in a comment or a string.)
-            self._position_read = any(
-                POSITION_READ.search(_STRING_OR_COMMENT.sub("", pf.source.text))
-                for pf in (*self.files, *getattr(self.resolver, "observers", ())))
+            # \\TaskName.)
+            self._position_read = _first_position_read(
+                (*self.files, *getattr(self.resolver, "observers", ()))) is not None
         return self._position_read
 
     def _set_at_run_time(self, s: A.ProcCall, rt: _Routine) -> str | None:
@@ -871,6 +864,19 @@ def _heads(s) -> tuple:
     if t is A.Simple:
         return (s.expr,)
     return ()
+
+
+def _first_position_read(files) -> tuple | None:
+    """(file, statement, the function's name as written) of the first
+    CRobT(), CPos() or CJointT() a routine of the files calls, or None."""
+    for pf in files:
+        for m in pf.modules:
+            for r in m.routines:
+                for s in statements(r.node):
+                    name = _position_read(s)
+                    if name is not None:
+                        return pf, s, name
+    return None
 
 
 def _position_read(s) -> str | None:
