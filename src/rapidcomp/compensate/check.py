@@ -45,7 +45,7 @@ def _check(task, solver, track, start, base) -> CheckResult:
     solved = solve(plan, solver, start)
     # fix's groups (with its default --emit): an array element that cannot
     # be compensated fails its array there, and check says so too.
-    gs = groups(plan, solved, "auto")
+    gs = groups(plan, solved, "auto", solver.options.wrist_fallback_deg)
     group_of = {u.key: g for g in gs for u in g.uses}
     rows = use_rows(plan, solved, group_of=group_of, statuses=(OK, FAILED))
     return CheckResult(task.name, rows, tuple(plan.notes()))

@@ -111,7 +111,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # The uses grouped as far as their nominal solutions decide, while the
     # deformed robot's IK is made beside (solve.Solving).
     solving = Solving(plan, solver, start)
-    gs = P.grouping(plan, solving, mode)
+    gs = P.grouping(plan, solving, mode, solver.options.wrist_fallback_deg)
     # The plan's notes made meanwhile too: past the groups nothing reads the
     # flow (printing and verifying the values read the plan's uses and
     # resolver; the rows its uses and track).

@@ -183,20 +183,23 @@ def element_label(g: Group, k) -> str:
     return f"{g.decl.name}{{{','.join(map(str, multi_index(k, g.decl.dims)))}}}"
 
 
-def groups(plan: Plan, solved: Solved, mode: str) -> list[Group]:
+def groups(plan: Plan, solved: Solved, mode: str,
+           wrist_deg: float = IKOptions.wrist_fallback_deg) -> list[Group]:
     """Uses that share one written value. FOR-walked array uses form one
     group per array (one value per element); any other use joins it when
     its solution there is the same, else groups by its own solution (a
     target reached on two solutions needs two values)."""
-    gs = grouping(plan, solved, mode)
+    gs = grouping(plan, solved, mode, wrist_deg)
     settle(gs, solved, plan, mode)
     return gs
 
 
-def grouping(plan: Plan, solved: Solved | Solving, mode: str) -> list[Group]:
+def grouping(plan: Plan, solved: Solved | Solving, mode: str,
+             wrist_deg: float = IKOptions.wrist_fallback_deg) -> list[Group]:
     """groups() as far as the nominal solutions decide them (a Solving's
     uses, rows, nominal solutions and picks: made while the deformed
-    robot's IK is under way); settle() completes them."""
+    robot's IK is under way); settle() completes them. wrist_deg: the
+    solver's IKOptions.wrist_fallback_deg."""
     file_index = plan.file_index
     by_key: dict = {}
     out: list[Group] = []
@@ -215,7 +218,7 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str) -> list[Group]:
     # joints reach the flange's whole pose), except near J5 = 0, where the
     # wrist fallback holds the tool's point exact: there the tool is part
     # of what one written value serves.
-    wrist = np.abs(np.nan_to_num(q_all[:, 4], nan=180.0)) < IKOptions().wrist_fallback_deg
+    wrist = np.abs(np.nan_to_num(q_all[:, 4], nan=180.0)) < wrist_deg
     kept = _one_statement(loop_first, modes)
     for u, row, m in zip(loop_first, rows, modes):
         src = u.source

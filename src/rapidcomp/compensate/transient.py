@@ -97,6 +97,7 @@ def make_transient(tau_heat: float | None, tau_cool: float | None, gap: float | 
         if name.lower() in {n.lower() for n in GLOBAL_NAMES} or not _parses_as_signal(name):
             raise RapidcompError(f"--temperature {temperature}: {name!r} is a RAPID reserved "
                                  "word or a name of the support module, not a signal name")
+        _check_signal(name)
         try:
             cold, warm = float(parts[1]), float(parts[2])
         except ValueError:
@@ -166,14 +167,14 @@ _PREDEFINED_DATA = frozenset((
 
 
 def _check_signal(name: str) -> None:
-    """RapidcompError where an analog input cannot have this name: a word
-    RAPID reserves (TRUE, IF, ...), a predefined data name (v100, fine,
-    tool0, pi, ERRNO, ...), a predefined routine's (MoveL, AInput, ...):
-    the support module's AInput(name) would not load."""
-    from ..rapid.grammar import engine
+    """RapidcompError where an analog input cannot have this name, past
+    _parses_as_signal (which refuses the reserved words a name cannot be):
+    TRUE and FALSE (they parse, as values), a predefined data name (v100,
+    fine, tool0, pi, ERRNO, ...), a predefined routine's (MoveL, AInput,
+    ...): the support module's AInput(name) would not load."""
     from ..rapid.motions import BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS, motion_spec
     lower = name.lower()
-    if name.upper() in engine().reserved or lower in ("true", "false"):
+    if lower in ("true", "false"):
         what = "a word RAPID reserves"
     elif lower in _PREDEFINED_DATA:
         what = "a predefined data name (speed, zone, tool, load data, a system variable)"
@@ -201,8 +202,6 @@ def check_names(task, tr: Transient | None = None) -> None:
                 "--transient already? Compensate the original program)")
     called = {n.lower(): n for n in CALLED}
     signal = tr.signal.lower() if tr is not None and tr.signal else None
-    if signal is not None:
-        _check_signal(tr.signal)
     for pf in task.files + task.context:
         for m in pf.modules:
             declared = [(r.node.name, r.node.scope, f"a {r.kind}", r.node.span)
