@@ -30,7 +30,7 @@ from rapidcomp.compensate.plan import Plan, Task
 from rapidcomp.construct import maker, twin
 from rapidcomp.rapid import ast as A
 from rapidcomp.rapid.grammar import engine
-from rapidcomp.rapid.model import Motion
+from rapidcomp.rapid.model import Motion, Roles
 from rapidcomp.rapid.parse import parse_file, parse_text
 from rapidcomp.rapid.values import RobTarget, decode
 from rapidcomp.source import SourceText
@@ -66,8 +66,8 @@ def test_maker_makes_what_the_class_makes():
     cases = [(A.Arg, ("pos", None, A.Ref("p1", (), span), span)),
              (A.Ref, ("p1", (), span)), (A.NumAgg, ("[1,2]", span)),
              (A.ProcCall, ("MoveL", (), span, True)),
-             (Motion, ("MoveL", None, span, "Path", (), (), (), None, None, None, None, (),
-                       False))]
+             (Motion, ("MoveL", None, span, "Path", (), (), (),
+                       Roles((), -1, -1, -1, -1, (), False)))]
     for cls, values in cases:
         made = maker(cls)(*values)
         assert type(made) is cls and made == cls(*values)

@@ -21,7 +21,10 @@ def test_written_function_makes_the_loops_nodes():
             assert [a.span for a in got] == [a.span for a in want]
 
 
-def test_a_text_used_often_gets_its_function_and_the_parse_is_the_same():
+def test_a_text_read_often_gets_its_function_and_the_nodes_are_the_same():
+    """A move's arguments after its first are made each time they are
+    read (A.TailArgs): by the loop at first, by the written function once
+    the text was read COMPILE_AFTER times; the same nodes either way."""
     n = B.COMPILE_AFTER + 10
     lines = ["MODULE M"] + ["  PROC p()"]
     lines += [f"    MoveL [[{i},0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
@@ -31,15 +34,36 @@ def test_a_text_used_often_gets_its_function_and_the_parse_is_the_same():
     B._TAILS.clear()
     first = parse_text(text, "m.mod")
     (tail,) = [t for k, t in B._TAILS.items() if "wobj_q" in k]
-    assert tail.make is not None          # written after COMPILE_AFTER uses
-    again = parse_text(text, "m.mod")     # every call made by the written function
-    assert again.modules == first.modules
-    motions = again.modules[0].motions
-    assert len(motions) == n
+    motions = first.modules[0].motions
+    assert len(motions) == n and tail.make is None   # (nothing read yet)
+    by_loop = [tuple(m.args) for m in motions]
+    assert tail.make is not None          # written after COMPILE_AFTER reads
+    assert [tuple(m.args) for m in motions] == by_loop
+    assert parse_text(text, "m.mod").modules == first.modules
     for m in motions:                     # the spans lie on the text they name
         assert text[m.wobj.span.start:m.wobj.span.end] == "wobj_q"
         (v,) = m.optional
         assert (v.name, v.value.value, text[v.span.start:v.span.end]) == ("V", 7.0, "\\V:=7")
+
+
+def test_tail_args_read_as_the_tuple_of_their_nodes():
+    """A.TailArgs is read as the tuple of its Arg nodes: each value alone
+    (value(j)) is the node's, and it compares, hashes and copies (pickle)
+    as that tuple."""
+    import pickle
+
+    from rapidcomp.rapid import ast as A
+    for tail in TAILS:
+        t = B._Tail(tail)
+        first = A.Ref("p1", (), A.Span(3, 5))
+        args = A.TailArgs(first, t, 5)
+        nodes = (A.Arg("pos", None, first, A.Span(3, 5)),) + t.nodes(5)
+        assert len(args) == len(nodes) and tuple(args) == nodes and args == nodes
+        assert nodes == args and hash(args) == hash(nodes)
+        assert list(reversed(args)) == list(reversed(nodes)) and args[-1] == nodes[-1]
+        assert [args.value(j) for j in range(len(args))] == [a.value for a in nodes]
+        assert pickle.loads(pickle.dumps(args)) == nodes
+        assert type(pickle.loads(pickle.dumps(args))) is tuple
 
 
 def test_distinct_texts_are_never_written_as_functions():
@@ -47,3 +71,34 @@ def test_distinct_texts_are_never_written_as_functions():
     for i in range(50):
         B._fast_tail(f"\\ID:={i},v200,fine,tool0;").nodes(0)
     assert all(t.make is None for t in B._TAILS.values())
+
+
+def test_a_cam_moves_parse_keeps_no_node_per_argument():
+    """Issue #14, memory: what the parse keeps of a CAM move is its call,
+    its motion and its target (call, span, arguments, first value and its
+    span, motion, target and the tuple of them, and an inline target's
+    decoded value), not a node per argument: at most 9 objects a move, in
+    the marginal count of objects the collector tracks (the parse before
+    this kept 22.5: speed, zone, tool and \\WObj as Arg, Ref and Span
+    each)."""
+    import gc
+
+    def cam(n):
+        lines = ["MODULE CAM", "  PROC Path()"]
+        lines += [f"    MoveL [[{500 + i % 7},{i % 11},{400 + i % 13}],[1,0,0,0],[0,0,0,0],"
+                  "[9E9,9E9,9E9,9E9,9E9,9E9]],v100,z1,tSpindle\\WObj:=wobj0;" for i in range(n)]
+        lines += [f"    MoveL p{i},v100,z1,tSpindle\\WObj:=wobj0;" for i in range(n)]
+        return "\n".join(lines + ["  ENDPROC", "ENDMODULE", ""])
+
+    def kept(n):
+        text = cam(n)
+        gc.collect()
+        before = len(gc.get_objects())
+        pf = parse_text(text, "cam.mod")
+        gc.collect()
+        assert len(pf.module.motions) == 2 * n
+        return len(gc.get_objects()) - before
+
+    kept(200)                                # (what a first parse makes once)
+    per_move = (kept(2000) - kept(1000)) / 2000
+    assert per_move <= 9, per_move

@@ -34,12 +34,14 @@ ENDMODULE
 
 
 def _general(root):
-    """refs.nodes as it walked every node: each dataclass's fields."""
+    """refs.nodes as it walked every node: each dataclass's fields (a
+    call's arguments read as their tuple where they are made when read,
+    A.TailArgs)."""
     stack = [root]
     while stack:
         node = stack.pop()
         t = type(node)
-        if t is tuple or t is list:
+        if t is tuple or t is list or t is A.TailArgs:
             stack.extend(node)
         elif not (t is A.NumAgg or node is None or t in (str, int, float, bool)):
             yield node

@@ -845,12 +845,15 @@ def _within(a: State, b: State) -> bool:
 
 
 def _heads(s) -> tuple:
-    """The expressions a statement evaluates itself (not its bodies)."""
+    """The expressions a statement evaluates itself (not its bodies) that
+    may call a function."""
     t = type(s)
     if t is A.Assign:
         return (s.target, s.value)
     if t is A.ProcCall:
-        return s.args
+        # (A plain call's arguments are names and literals: nothing a caller
+        # of this looks for, calls; a CAM move's are made when read.)
+        return () if s.plain else s.args
     if t is A.LateCall:
         return (s.proc, s.args)
     if t is A.If:

@@ -359,10 +359,10 @@ def place(plan: Plan, gs: list[Group]) -> None:
         for m in pf.modules:
             for name, rs in plan.resolver.usages[id(m)].refs.items():
                 if name in needed:
-                    refs.setdefault(name, set()).update((fi, r.span) for r in rs)
+                    refs.setdefault(name, set()).update((fi, start) for start in rs)
             for d in m.declarations:
                 decl_count[d.name.lower()] = decl_count.get(d.name.lower(), 0) + 1
-    consumed = {(u.key[0], u.source.ref.span)
+    consumed = {(u.key[0], u.source.ref.span.start)
                 for g in gs if g.mode == "absj" and g.failure is None and g.decl is not None
                 for u in g.uses}
     by_decl: dict[int, list[Group]] = {}
@@ -387,7 +387,7 @@ def place(plan: Plan, gs: list[Group]) -> None:
             continue
         d = writable[0].decl
         name = d.name.lower()
-        mine = {(u.key[0], u.source.ref.span) for g in decl_groups if g.mode != "absj"
+        mine = {(u.key[0], u.source.ref.span.start) for g in decl_groups if g.mode != "absj"
                 for u in g.uses}
         exclusive = (file_index[id(writable[0].src.home)] < plan.n_written
                      and decl_count.get(name) == 1

@@ -524,8 +524,11 @@ def parse_track(specs) -> tuple[tuple[int, np.ndarray], ...]:
 
 def _name_or_node(expr):
     """A plain name's text (the same data wherever it is written), else
-    the node's identity."""
-    return expr.name if type(expr) is A.Ref and not expr.selectors else id(expr)
+    where the expression is (a move's tool is made when asked, A.TailArgs:
+    no identity to key by); None for none."""
+    if expr is None:
+        return None
+    return expr.name if type(expr) is A.Ref and not expr.selectors else expr.span
 
 
 # An Offs's rotation (a RelTool's before its angles), one array for all

@@ -10,6 +10,8 @@ import re
 from dataclasses import dataclass
 from typing import NamedTuple, Union
 
+from ..construct import maker
+
 
 class Span(NamedTuple):
     start: int
@@ -169,6 +171,67 @@ class Placeholder:
 Expr = Union[Num, Str, Bool, Agg, NumAgg, Ref, Call, Unary, Binary, Paren, Placeholder]
 
 
+@dataclass(frozen=True, slots=True, eq=False)
+class TailArgs:
+    """The arguments of a call lexed as one token (a CAM move), read as a
+    tuple of Arg nodes: the first argument's value node kept (`first`; its
+    Arg, positional and of the same span, made when read), those after it
+    made from their text each time they are read (`tail`, the parse's
+    object for that text, which every call written with it shares:
+    ",v100,z1,tool1\\WObj:=wobj1;" 1e5 times; `at`, where it starts here).
+    Kept, they were 14 of a move's 22 objects, ~1 KB: a CAM program's 1e5
+    moves, ~110 MB from the parse to the end of the job (issue #14). A copy
+    (pickle) is the tuple."""
+
+    first: Expr
+    tail: object                 # rapid/build.py's _Tail: nodes(at), value(at, j), size
+    at: int
+
+    def nodes(self) -> tuple[Arg, ...]:
+        first = self.first
+        return (_new_arg("pos", None, first, first.span),) + self.tail.nodes(self.at)
+
+    def value(self, j: int):
+        """Argument j's value node (made alone where it is in the tail)."""
+        return self.first if j == 0 else self.tail.value(self.at, j - 1)
+
+    def __iter__(self):
+        return iter(self.nodes())
+
+    def __reversed__(self):
+        return reversed(self.nodes())
+
+    def __len__(self) -> int:
+        return 1 + self.tail.size
+
+    def __getitem__(self, j):
+        return self.nodes()[j]
+
+    def __eq__(self, other) -> bool:
+        if type(other) is TailArgs or type(other) is tuple:
+            return self.nodes() == tuple(other)
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(self.nodes())
+
+    def __add__(self, other):
+        return self.nodes() + tuple(other)
+
+    def __radd__(self, other):
+        return tuple(other) + self.nodes()
+
+    def __repr__(self) -> str:
+        return repr(self.nodes())
+
+    def __reduce__(self):
+        return tuple, (self.nodes(),)
+
+
+# (TailArgs' first Arg, made as its class makes it: construct.py.)
+_new_arg = maker(Arg)
+
+
 # ----------------------------------------------------------------- statements
 
 @dataclass(frozen=True, slots=True)
@@ -181,7 +244,7 @@ class Assign:
 @dataclass(frozen=True, slots=True)
 class ProcCall:
     name: str
-    args: tuple[Arg, ...]
+    args: "tuple[Arg, ...] | TailArgs"      # (TailArgs: a call lexed as one token)
     span: Span
     # Every argument a plain name or a literal (refs.plain_args), decided
     # once by the builder: a CAM move is asked three times.

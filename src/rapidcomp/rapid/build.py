@@ -41,8 +41,9 @@ _FAST_NUM = re.compile(r"[-+]?(?:[0-9]{1,30}(?:\.[0-9]{0,30})?|\.[0-9]{1,30})(?!
 # The nodes of one-token statements and declarations, made as their classes
 # make them (construct.py; a CAM program's 1e5 moves have ~15 each).
 _span = partial(tuple.__new__, Span)
-_arg, _ref, _num, _call, _decl, _numagg, _func = (
-    maker(c) for c in (A.Arg, A.Ref, A.Num, A.ProcCall, A.DataDecl, A.NumAgg, A.Call))
+_arg, _ref, _num, _call, _decl, _numagg, _func, _tail_args = (
+    maker(c) for c in (A.Arg, A.Ref, A.Num, A.ProcCall, A.DataDecl, A.NumAgg, A.Call,
+                       A.TailArgs))
 
 # The arguments after a FAST_CALL's first, by their text: a CAM program
 # repeats ",v100,z1,tool1\\WObj:=wobj1;" 1e5 times. Lexed once; the names'
@@ -57,9 +58,10 @@ COMPILE_AFTER = 256
 
 class _Tail:
     """The arguments in `tail`, a FAST_CALL's text after its first: nodes(at)
-    makes their Arg nodes for the text found at offset `at`."""
+    makes their Arg nodes for the text found at offset `at`, value(at, j)
+    the value node of the j-th alone (A.TailArgs reads them so)."""
 
-    __slots__ = ("items", "uses", "make")
+    __slots__ = ("items", "uses", "make", "size")
 
     def __init__(self, tail: str):
         items = []
@@ -77,6 +79,7 @@ class _Tail:
                               m.start(2), m.end(2), is_num,
                               signed(val) if is_num else None))
         self.items = tuple(items)
+        self.size = len(items)
         self.uses = 0
         self.make = None
 
@@ -102,6 +105,19 @@ class _Tail:
                 value = _num(num, val, vspan) if is_num else _ref(val, (), vspan)
                 args.append(_arg("optval", opt, value, _span((at + s0, at + e0))))
         return tuple(args)
+
+    def value(self, at: int, j: int):
+        """The value node nodes(at)[j] holds (None for an \\Opt alone), made
+        as nodes() makes it."""
+        opt, val, word, s0, e0, s2, e2, is_num, num = self.items[j]
+        if word is not None:
+            return _ref(word, (), _span((at + s0, at + e0)))
+        if opt is None:
+            return _num(num, val, _span((at + s0, at + e0)))
+        if val is None:
+            return None
+        vspan = _span((at + s2, at + e2))
+        return _num(num, val, vspan) if is_num else _ref(val, (), vspan)
 
 
 _NUMBER_START = frozenset("+-.0123456789")
@@ -471,8 +487,9 @@ class NodeBuilder:
             args = [_arg("pos", None, _ref(first.group(3), (), span), span)]
             pos = end
         # (Plain by construction: names, a numeric aggregate, numbers, \Opt,
-        # \Opt:=name or number.)
-        return _call(name, (*args, *_fast_tail(text[pos:]).nodes(base + pos)),
+        # \Opt:=name or number. The arguments after the first made when
+        # read: A.TailArgs.)
+        return _call(name, _tail_args(args[0].value, _fast_tail(text[pos:]), base + pos),
                      _span((base, base + len(text))), True)
 
     def fast_decl(self, c):

@@ -7,6 +7,7 @@ spans through the SourceText, so the model never goes stale against it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from ..source import SourceText
 from . import ast as A
@@ -37,6 +38,21 @@ class TargetArg:
     issue: str | None       # why an inline aggregate could not be decoded
 
 
+class Roles(NamedTuple):
+    """Which argument of a move is which (index into its args, -1: none):
+    a function of the arguments' kinds and names alone, shared by every
+    move written alike (parse.py)."""
+
+    targets: tuple[tuple[str, int], ...]   # (role, index) of "to", "cir", "search"
+    speed: int
+    zone: int
+    tool: int
+    wobj: int
+    optional: tuple[int, ...]   # optional arguments other than \WObj
+    # The move names its target parameter (`MoveL ToPoint:=p10,...`).
+    to_point: bool
+
+
 @dataclass(frozen=True, slots=True)
 class Motion:
     instruction: str        # as written
@@ -44,20 +60,51 @@ class Motion:
     span: Span
     routine: str
     loops: tuple[Loop, ...]
-    args: tuple[A.Arg, ...]
+    # (A.TailArgs where the move was lexed as one token: speed, zone, tool
+    # and work object made when asked, not kept.)
+    args: "tuple[A.Arg, ...] | A.TailArgs"
     targets: tuple[TargetArg, ...]
-    speed: A.Expr | None
-    zone: A.Expr | None
-    tool: A.Expr | None
-    wobj: A.Expr | None
-    optional: tuple[A.Arg, ...]  # optional arguments other than \WObj
-    # The move names its target parameter (`MoveL ToPoint:=p10,...`).
-    to_point: bool = False
+    roles: Roles
 
     @property
     def name_span(self) -> Span:
         """The instruction's name, where its statement starts."""
         return Span(self.span.start, self.span.start + len(self.instruction))
+
+    def _value(self, j: int):
+        if j < 0:
+            return None
+        args = self.args
+        return args[j].value if type(args) is tuple else args.value(j)
+
+    @property
+    def speed(self) -> A.Expr | None:
+        return self._value(self.roles.speed)
+
+    @property
+    def zone(self) -> A.Expr | None:
+        return self._value(self.roles.zone)
+
+    @property
+    def tool(self) -> A.Expr | None:
+        return self._value(self.roles.tool)
+
+    @property
+    def wobj(self) -> A.Expr | None:
+        return self._value(self.roles.wobj)
+
+    @property
+    def optional(self) -> tuple[A.Arg, ...]:
+        """Optional arguments other than \\WObj."""
+        js = self.roles.optional
+        if not js:
+            return ()
+        args = tuple(self.args)
+        return tuple(args[j] for j in js)
+
+    @property
+    def to_point(self) -> bool:
+        return self.roles.to_point
 
 
 @dataclass(frozen=True, slots=True)

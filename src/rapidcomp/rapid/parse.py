@@ -17,7 +17,7 @@ from . import predecode
 from .build import NumberOutOfRange
 from .grammar import compiled, engine
 from .lalr import LexFailure, ParseFailure
-from .model import Declaration, Loop, Module, Motion, ParsedFile, RoutineInfo, TargetArg
+from .model import Declaration, Loop, Module, Motion, ParsedFile, Roles, RoutineInfo, TargetArg
 from .motions import motion_spec
 from .values import DECODED_TYPES, DecodeIssue, decode, decode_array
 
@@ -137,44 +137,75 @@ _TARGET_ROLES = frozenset(("to", "cir", "search"))
 
 def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops,
             known=None) -> Motion:
-    roles = spec.roles
-    n_roles = len(roles)
-    slots = {}                      # role -> the value of its argument (dict(zip): the last)
+    args = call.args
+    if type(args) is tuple:
+        shape = tuple((a.kind, a.name.lower() if a.name else None) for a in args)
+    else:
+        # (A move lexed as one token: its shape is its shared tail's, its
+        # nodes not made.)
+        shape = args.tail
+    roles = _ROLES.get((spec, shape))
+    if roles is None:
+        kinds = shape if type(args) is tuple else tuple(
+            (a.kind, a.name.lower() if a.name else None) for a in args)
+        roles = _roles_of(spec, kinds)
+        if len(_ROLES) >= 4096:        # bounded: many programs in one process
+            _ROLES.clear()
+        _ROLES[(spec, shape)] = roles
     targets = []
-    wobj = None
+    for role, j in roles.targets:
+        value = args[j].value if type(args) is tuple else args.value(j)
+        decoded = issue = None
+        if role != "search" and isinstance(value, (A.Agg, A.NumAgg)):
+            t = "jointtarget" if spec.joint_space else "robtarget"
+            try:
+                decoded = decode(t, value, f"inline {t}", known)
+            except DecodeIssue as exc:
+                if exc.illegal:
+                    raise source.error(exc.span.start, f"{exc.reason} (the {t} of "
+                                       f"{call.name})") from None
+                issue = exc.reason
+        targets.append(_new_target(role, value, decoded, issue))
+    return _new_motion(call.name, spec, call.span, routine, tuple(loops), args,
+                       tuple(targets), roles)
+
+
+# Roles of the arguments of the moves parsed: (spec, shape) -> Roles. The
+# shape of a move lexed as one token is its shared tail (build._Tail: its
+# first argument is positional); of any other, every argument's kind and
+# lower-case name.
+_ROLES: dict = {}
+
+
+def _roles_of(spec, kinds: tuple) -> Roles:
+    """Which argument is which, from each argument's (kind, lower-case
+    name): positional (or named) ones take the spec's roles in order (a
+    role given twice: the last), \\WObj the work object, other optional
+    ones are optional."""
+    roles = spec.roles
+    slots = {}
+    targets = []
+    wobj = -1
     optional = []
     to_point = False
     k = 0
-    for a in call.args:
-        kind = a.kind
+    for j, (kind, name) in enumerate(kinds):
         if kind == "pos" or kind == "named":
-            if kind == "named" and a.name.lower() == "topoint":
+            if kind == "named" and name == "topoint":
                 to_point = True
-            if k < n_roles:
+            if k < len(roles):
                 role = roles[k]
-                value = a.value
-                slots[role] = value
+                slots[role] = j
                 if role in _TARGET_ROLES:
-                    decoded = issue = None
-                    if role != "search" and isinstance(value, (A.Agg, A.NumAgg)):
-                        t = "jointtarget" if spec.joint_space else "robtarget"
-                        try:
-                            decoded = decode(t, value, f"inline {t}", known)
-                        except DecodeIssue as exc:
-                            if exc.illegal:
-                                raise source.error(exc.span.start, f"{exc.reason} (the {t} of "
-                                                   f"{call.name})") from None
-                            issue = exc.reason
-                    targets.append(_new_target(role, value, decoded, issue))
+                    targets.append((role, j))
             k += 1
-        elif (kind == "optval" or kind == "cond") and a.name.lower() == "wobj":
-            wobj = a.value
+        elif (kind == "optval" or kind == "cond") and name == "wobj":
+            wobj = j
         else:
-            optional.append(a)
+            optional.append(j)
     get = slots.get
-    return _new_motion(call.name, spec, call.span, routine, tuple(loops), call.args,
-                       tuple(targets), get("speed"), get("zone"), get("tool"), wobj,
-                       tuple(optional), to_point)
+    return Roles(tuple(targets), get("speed", -1), get("zone", -1), get("tool", -1), wobj,
+                 tuple(optional), to_point)
 
 
 def _walk(source, stmts, routine: str, loops: list, out: list, cond: int = 0,

@@ -8,6 +8,7 @@ reference of the module, which this walk collects once.
 
 from __future__ import annotations
 
+from array import array
 from dataclasses import dataclass, field, fields
 
 from . import ast as A
@@ -32,7 +33,10 @@ def _field_names(cls: type) -> tuple[str, ...]:
 
 @dataclass(frozen=True)
 class Usage:
-    refs: dict[str, list[A.Ref]]          # lower-case name -> every reference
+    # lower-case name -> where each reference starts (offsets: a CAM
+    # program's 1e5 moves name the same speed, zone, tool and work object;
+    # their nodes are made when read, A.TailArgs)
+    refs: dict[str, array]
     writes: dict[str, list[A.Span]]       # lower-case name -> assignments / search results
     calls: tuple = ()                     # ProcCall/LateCall/Call: arguments may be written
                                           # (see writes.py)
@@ -49,7 +53,7 @@ def nodes(root, plain_calls: bool = False):
     while stack:
         node = stack.pop()
         t = type(node)
-        if t is tuple or t is list:
+        if t is tuple or t is list or t is A.TailArgs:
             stack.extend(node)
         elif t is A.Ref:      # the commonest nodes first, their fields known
             yield node
@@ -98,7 +102,7 @@ def plain_args(args) -> bool:
 
 
 def usage(module: A.ModuleNode) -> Usage:
-    refs: dict[str, list[A.Ref]] = {}
+    refs: dict[str, array] = {}
     writes: dict[str, list[A.Span]] = {}
     assigns: dict[str, list[A.Assign]] = {}
     parts: dict[str, list[A.Assign]] = {}
@@ -106,7 +110,7 @@ def usage(module: A.ModuleNode) -> Usage:
     for node in nodes(module.items, plain_calls=True):
         t = type(node)
         if t is A.Ref:
-            refs.setdefault(node.name.lower(), []).append(node)
+            _referred(refs, node)
         elif t is A.Arg:      # (the next commonest: its value comes as a node of its own)
             continue
         elif t is A.Assign:
@@ -123,7 +127,7 @@ def usage(module: A.ModuleNode) -> Usage:
                 for arg in reversed(node.args):
                     v = arg.value
                     if type(v) is A.Ref:
-                        refs.setdefault(v.name.lower(), []).append(v)
+                        _referred(refs, v)
             spec = motion_spec(node.name)
             if spec is None:
                 calls.append(node)
@@ -132,6 +136,13 @@ def usage(module: A.ModuleNode) -> Usage:
         elif t is A.LateCall or t is A.Call:
             calls.append(node)
     return Usage(refs, writes, tuple(calls), assigns, parts)
+
+
+def _referred(refs: dict, ref: A.Ref) -> None:
+    starts = refs.get(ref.name.lower())
+    if starts is None:
+        starts = refs[ref.name.lower()] = array("q")
+    starts.append(ref.span.start)
 
 
 def _search_writes(node: A.ProcCall, spec, writes: dict) -> None:
