@@ -61,7 +61,7 @@ class _Tail:
     makes their Arg nodes for the text found at offset `at`, value(at, j)
     the value node of the j-th alone (A.TailArgs reads them so)."""
 
-    __slots__ = ("items", "uses", "make", "size")
+    __slots__ = ("items", "uses", "make", "size", "names")
 
     def __init__(self, tail: str):
         items = []
@@ -80,6 +80,12 @@ class _Tail:
                               signed(val) if is_num else None))
         self.items = tuple(items)
         self.size = len(items)
+        # The data names among them, lower case, and where each starts (from
+        # `at`), last first: where refs.usage finds a move's references
+        # without making its nodes.
+        self.names = tuple((val.lower(), s2) if word is None else (word.lower(), s0)
+                           for opt, val, word, s0, e0, s2, e2, is_num, num in reversed(items)
+                           if word is not None or (val is not None and not is_num))
         self.uses = 0
         self.make = None
 

@@ -123,8 +123,20 @@ def usage(module: A.ModuleNode) -> Usage:
         elif t is A.ProcCall:
             if node.plain:
                 # (A CAM move, 1e5 of them: its references, in the order the
-                # walk gives them, read here.)
-                for arg in reversed(node.args):
+                # walk gives them, read here; those after its first where
+                # its text has them, A.TailArgs, no node made.)
+                args = node.args
+                if type(args) is A.TailArgs:
+                    at = args.at
+                    for name, start in args.tail.names:
+                        starts = refs.get(name)
+                        if starts is None:
+                            starts = refs[name] = array("q")
+                        starts.append(at + start)
+                    if type(args.first) is A.Ref:
+                        _referred(refs, args.first)
+                    args = ()
+                for arg in reversed(args):
                     v = arg.value
                     if type(v) is A.Ref:
                         _referred(refs, v)
