@@ -218,6 +218,57 @@ def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, 
         assert made.count("absj_literals_of") >= 3 and made.count("_joint_rows") >= 3
 
 
+@pytest.mark.parametrize("mode", ["robtarget", "absj"])
+def test_a_transient_cam_module_is_written_and_reported_as_without_a_helper(
+        mode, helped, monkeypatch):
+    """Transient: in blocks of a few literals, every other block's
+    correction literals formatted by the helper (records.pose_literals);
+    the same output, rows and report."""
+    from rapidcomp.compensate import edit as E
+    from rapidcomp.compensate.load import load_state_solvers
+    from rapidcomp.compensate.transient import Transient
+    monkeypatch.setattr(E, "PREPARE_BLOCK", 37)
+    made = _spy(monkeypatch)
+    warm = str(FIXTURES / "warm.csv")
+    solver = load_solver(warm, None, False)
+    states = load_state_solvers(warm, None, False)
+    for text in (cam_variants.bench_module(300, 3, ""), cam_variants.not_called(5)):
+        def run():
+            result = fix(Task("cam.mod", (parse_text(text, "cam.mod"),)), solver, mode,
+                         output_names={"cam.mod": "out.mod"},
+                         transient=(Transient(45.0, 45.0, 2.0), states))
+            return result.modules, result.rows, result.notes, report.markdown(result,
+                                                                              {"mode": mode})
+        with monkeypatch.context() as m:
+            m.setattr(side, "enabled", False)
+            with side.helping(1):
+                alone = run()
+        with side.helping(1):
+            got = run()
+        assert got == alone and alone[1].column("status").count("compensated") > 100
+    if mode == "robtarget":
+        assert made.count("pose_literals") >= 3
+
+
+def test_pose_literals_are_each_correction_formatted_alone():
+    """records.pose_literals formats a block of corrections as
+    Values.pose_literal formats one (numbers.mm, numbers.fmt with the
+    quaternion's decimals), including -0.0, tiny and rounding cases."""
+    import numpy as np
+
+    from rapidcomp.rewrite import numbers
+    from rapidcomp.rewrite.records import pose_literals
+    rng = np.random.default_rng(7)
+    d = np.concatenate([rng.normal(0, 0.2, (50, 3)),
+                        [[-0.0, 1e-9, -0.00049999], [0.0005, -0.0005, 123.4565]]])
+    dq = np.concatenate([rng.normal(0, 1e-4, (50, 4)),
+                         [[-0.0, 5e-10, -5e-10, 1.0], [0.25, -0.125, 1e-7, -1e-7]]])
+    want = ["[[" + ",".join(numbers.mm(float(v)) for v in d[j]) + "],["
+            + ",".join(numbers.fmt(float(v), numbers.QUAT_DECIMALS) for v in dq[j]) + "]]"
+            for j in range(len(d))]
+    assert pose_literals(d, dq) == want
+
+
 def test_number_cells_are_the_cells_of_each_row():
     """The cells made ahead (report.number_cells, from the solved numbers)
     are those a row writes of its own numbers (report._row), on every

@@ -101,13 +101,13 @@ class Values:
                              + (np.array([np.array_equal(got[2], record.conf)]),), 0)
         return got
 
-    def _pose_dqs(self, items: list, values) -> None:
-        """pose_dq and pose_literal of each (group, element) of `items`
-        (reached elements; values: their robtarget values' stacks, as
-        _robtarget_values makes them), as arrays: the same arithmetic
-        elementwise (a norm as np.linalg.norm takes one vector's, row_dots;
-        a sign decided near 0 by the one product itself), each literal's
-        numbers formatted in one batch."""
+    def _pose_stacks(self, items: list, values) -> tuple:
+        """pose_dq of each (group, element) of `items` (reached elements;
+        values: their robtarget values' stacks, as _robtarget_values makes
+        them), as arrays (d, dq, conf, whether each keeps its written
+        confdata): the same arithmetic elementwise (a norm as
+        np.linalg.norm takes one vector's, row_dots; a sign decided near 0
+        by the one product itself)."""
         R, p, conf = values
         recs = [self.source(g, k).record for g, k in items]
         n = len(items)
@@ -124,21 +124,17 @@ class Values:
         # (Whether each keeps its written confdata: RobTarget.conf's ints.)
         kept = (conf == np.array([r.values[7:11] for r in recs], float).reshape(n, 4).astype(
             int)).all(axis=1)
-        stacks = (d, dq, conf, kept)
-        mm = numbers.fmt_many(d.ravel().tolist(), numbers.MM_DECIMALS)
-        qs = numbers.fmt_many(dq.ravel().tolist(), numbers.QUAT_DECIMALS)
-        # (One entry per element: its row of the stacks and its literal.)
-        for j, (g, k) in enumerate(items):
-            self._values[("pose dq", id(g), k)] = (
-                stacks, j, "[[" + ",".join(mm[3 * j:3 * j + 3]) + "],["
-                + ",".join(qs[4 * j:4 * j + 4]) + "]]")
+        return d, dq, conf, kept
 
     def conf_kept(self, g: Group, k) -> bool:
         """Transient: pose_dq(g, k)'s confdata is the written one."""
-        _, _, conf = self.pose_dq(g, k)
-        got = self._values.get(("pose dq", id(g), k))
-        if got is None:                  # (an element no move reaches)
-            return np.array_equal(conf, self.source(g, k).record.conf)
+        key = ("pose dq", id(g), k)
+        got = self._values.get(key)
+        if got is None:                  # (not prepared: made now)
+            _, _, conf = self.pose_dq(g, k)
+            got = self._values.get(key)
+            if got is None:              # (an element no move reaches)
+                return np.array_equal(conf, self.source(g, k).record.conf)
         stacks, j = got[:2]
         return bool(stacks[3][j])
 
@@ -216,12 +212,23 @@ class Values:
         if transient:
             items = [(g, k) for g in gs if g.failure is None and g.mode == "rob"
                      for k in g.elements if (id(g), k) not in self._values]
-            for at in range(0, len(items), PREPARE_BLOCK):
-                block = items[at:at + PREPARE_BLOCK]
-                values = self._robtarget_values(block)
+            made: list = []             # (block, its stacks), as their literals come
+
+            def corrections():
+                for at in range(0, len(items), PREPARE_BLOCK):
+                    block = items[at:at + PREPARE_BLOCK]
+                    values = self._robtarget_values(block)
+                    for j, (g, k) in enumerate(block):
+                        self._values[(id(g), k)] = (values, j)
+                    stacks = self._pose_stacks(block, values)
+                    made.append((block, stacks))
+                    yield stacks[:2]
+            # (Every other block's literals formatted by the job's helper:
+            # side.py.)
+            for literals in side.alternate(records.pose_literals, corrections()):
+                block, stacks = made.pop(0)
                 for j, (g, k) in enumerate(block):
-                    self._values[(id(g), k)] = (values, j)
-                self._pose_dqs(block, values)
+                    self._values[("pose dq", id(g), k)] = (stacks, j, literals[j])
             return
         items = [(g, k) for g in gs if g.failure is None and g.mode == "rob"
                  for k in g.elements if ("texts", id(g), k) not in self._values]

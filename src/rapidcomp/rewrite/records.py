@@ -289,6 +289,17 @@ def absj_literals_of(q_deg: np.ndarray, axes: list[str]) -> list[str]:
     return [f"[[{j}],[{e}]]" for j, e in zip(joints, axes)]
 
 
+def pose_literals(d: np.ndarray, dq: np.ndarray) -> list[str]:
+    """The pose literals [[dx,dy,dz],[dq1,dq2,dq3,dq4]] of transient
+    corrections (d (n, 3) mm, dq (n, 4)), numbers formatted in one batch: a
+    function of numbers, which a CAM program's job hands to its helper for
+    every other block (side.py)."""
+    mm = numbers.fmt_many(np.asarray(d, float).ravel().tolist(), numbers.MM_DECIMALS)
+    qs = numbers.fmt_many(np.asarray(dq, float).ravel().tolist(), numbers.QUAT_DECIMALS)
+    return ["[[" + ",".join(mm[3 * j:3 * j + 3]) + "],[" + ",".join(qs[4 * j:4 * j + 4]) + "]]"
+            for j in range(len(d))]
+
+
 def absj_texts(q_deg, source: RobTarget) -> list[str]:
     """Field texts of the jointtarget that replaces a robtarget: new joints,
     the robtarget's external axes as written."""
