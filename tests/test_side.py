@@ -183,6 +183,16 @@ def test_the_golden_cases_are_written_as_reviewed_with_a_helper(helped, monkeypa
     assert made.count("columns_diff") >= len(FIX_CASES) + len(TASK_CASES) - 1
 
 
+def _alone_and_helped(run, monkeypatch) -> tuple:
+    """run() inside helping() without a helper, then with one."""
+    with monkeypatch.context() as m:
+        m.setattr(side, "enabled", False)
+        with side.helping(1):
+            alone = run()
+    with side.helping(1):
+        return alone, run()
+
+
 @pytest.mark.parametrize("mode", ["absj", "robtarget", "auto"])
 def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, monkeypatch):
     """In blocks of a few literals (a CAM program's 1e5 in blocks of 8192):
@@ -202,12 +212,7 @@ def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, 
                          output_names={"cam.mod": "out.mod"})
             return (result.modules, result.rows, report.markdown(result, {"mode": mode}),
                     report.as_json(result, {"mode": mode}))
-        with monkeypatch.context() as m:
-            m.setattr(side, "enabled", False)
-            with side.helping(1):
-                alone = run()
-        with side.helping(1):
-            got = run()
+        alone, got = _alone_and_helped(run, monkeypatch)
         assert got == alone
     assert made and None not in made
     assert "columns_diff" in made
@@ -239,12 +244,7 @@ def test_a_transient_cam_module_is_written_and_reported_as_without_a_helper(
                          transient=(Transient(45.0, 45.0, 2.0), states))
             return result.modules, result.rows, result.notes, report.markdown(result,
                                                                               {"mode": mode})
-        with monkeypatch.context() as m:
-            m.setattr(side, "enabled", False)
-            with side.helping(1):
-                alone = run()
-        with side.helping(1):
-            got = run()
+        alone, got = _alone_and_helped(run, monkeypatch)
         assert got == alone and alone[1].column("status").count("compensated") > 100
     if mode == "robtarget":
         assert made.count("pose_literals") >= 3
