@@ -180,8 +180,9 @@ class TailArgs:
     object for that text, which every call written with it shares:
     ",v100,z1,tool1\\WObj:=wobj1;" 1e5 times; `at`, where it starts here).
     Kept, they were 14 of a move's 22 objects, ~1 KB: a CAM program's 1e5
-    moves, ~110 MB from the parse to the end of the job (issue #14). A copy
-    (pickle) is the tuple."""
+    moves, ~110 MB from the parse to the end of the job (issue #14). Nodes
+    made at each read are equal, not the same objects: nothing may be keyed
+    by their id(). A copy (pickle) is the tuple."""
 
     first: Expr
     tail: object                 # rapid/build.py's _Tail: nodes(at), value(at, j), size

@@ -82,10 +82,9 @@ class _Tail:
         self.size = len(items)
         # The data names among them, lower case, and where each starts (from
         # `at`), last first: where refs.usage finds a move's references
-        # without making its nodes.
-        self.names = tuple((val.lower(), s2) if word is None else (word.lower(), s0)
-                           for opt, val, word, s0, e0, s2, e2, is_num, num in reversed(items)
-                           if word is not None or (val is not None and not is_num))
+        # without making its nodes (the values' nodes made once, at 0).
+        values = [self.value(0, j) for j in reversed(range(self.size))]
+        self.names = tuple((v.name.lower(), v.span.start) for v in values if type(v) is A.Ref)
         self.uses = 0
         self.make = None
 
