@@ -1872,7 +1872,8 @@ class Resolver:
             key = id(d)
             src = _source(d.value, d, self.home[key], None, False, expr, expr, None, None,
                           None, self.home_module[key])
-            label = pf.source.text[expr.span.start:expr.span.end]
+            # (A plain name is its text: the Ref's own string, not a copy per use.)
+            label = expr.name
         tool, wobj = self._tool_wobj(motion, module)
         if type(tool) is Unresolved or type(wobj) is Unresolved:
             return None
