@@ -112,3 +112,44 @@ def test_every_field_is_written_under_its_own_name(monkeypatch):
     got = json.loads(json_target(UseRow(**values)))
     assert list(got) == list(FIELDS)
     assert got == {k: list(v) if type(v) is tuple else v for k, v in values.items()}
+
+
+def test_a_block_of_targets_is_written_as_each_alone():
+    """report._json_block (a chunk of the report's targets, a column at a
+    time) writes what json_target writes of each row, on seeded random
+    blocks of the rows above (a text column with few values, confdata
+    shared between rows, (1, 0) beside (1.0, 0), -0.0 beside 0.0, odd
+    kinds anywhere: the block then goes row by row)."""
+    from rapidcomp.compensate.rows import BASE_FIELDS
+    rnd = random.Random(11)
+    shared = [(0, -1, 1, 0), (1.0, 0, 0, 0), (1, 0, 0, 0), (-0.0, 0, 0, 1), (0, 0, 0, 1)]
+    fast = 0
+
+    def joints():
+        return tuple(rnd.choice(FLOATS + [rnd.uniform(-400, 400)]) for _ in range(6))
+    for _ in range(300):
+        rows = []
+        clean = rnd.random() < 0.5          # (a CAM block: the kinds each field holds)
+        for _ in range(rnd.choice([1, 2, 17, 60])):
+            r = _row(rnd)
+            if clean:
+                r = UseRow(**{**r.as_dict(), "line": rnd.randint(1, 10 ** 5),
+                              "nominal_deg": joints(), "compensated_deg": joints(),
+                              "delta_deg": _maybe(rnd, joints),
+                              "error_um": rnd.choice(FLOATS), "error_deg": None,
+                              "residual_um": rnd.choice(FLOATS), "residual_deg": 1.5,
+                              "conf_before": rnd.choice(shared),
+                              "conf_after": rnd.choice(shared + [None]),
+                              "warnings": rnd.choice([(), ("w",), (TEXTS[1], TEXTS[7])])})
+            rows.append(r)
+        parts = [(tuple(getattr(r, f) for f in BASE_FIELDS),
+                  (r.nominal_deg, r.compensated_deg, r.delta_deg)) for r in rows]
+        try:
+            want = [json_target(r) for r in rows]
+        except TypeError:
+            with pytest.raises(TypeError):
+                report._json_block(parts)
+            continue
+        assert report._json_block(parts) == want
+        fast += not any(_other(r) for r in rows)
+    assert fast > 30, fast

@@ -322,8 +322,8 @@ def _json_pieces(result: FixResult, meta: dict) -> Iterator[str]:
     yield head[:-2] + ',\n  "targets": [\n    '
     rows = result.rows
     for at in range(0, len(rows), CHUNK_TARGETS):
-        piece = ",\n    ".join([_json_parts(b, *q) for b, q in rows.parts(
-            range(at, min(at + CHUNK_TARGETS, len(rows))))])
+        piece = ",\n    ".join(_json_block(rows.parts(
+            range(at, min(at + CHUNK_TARGETS, len(rows))))))
         yield piece if at == 0 else ",\n    " + piece
     yield "\n  ]\n}\n"
 
@@ -413,6 +413,55 @@ def _json_parts(b: tuple, qn, qc, dq) -> str:
             _array(b[13], _text), _text(b[14]))
     except _Other:
         return _json_target(*b[:7], qn, qc, dq, *b[7:])
+
+
+def _json_block(parts: list[tuple]) -> list[str]:
+    """_json_parts of each of `parts` (Rows.parts: (fields but the joints,
+    joints)), made a column at a time: a text column's distinct values
+    encoded once (a CAM report's 1e5 rows name a few files, instructions,
+    statuses and actions), a confdata or warnings column's distinct
+    objects once (a row's are shared: one per confdata), the rest value by
+    value; then each row's template. A value the template does not write:
+    the block row by row (_json_parts, the encoder where it must)."""
+    if not parts:
+        return []
+    bs = [b for b, _ in parts]
+    try:
+        cols = list(zip(*bs))
+        texts = [_distinct(cols[k], _text) if k != 1 else list(map(_number, cols[1]))
+                 for k in range(7)]
+        joints = [[_reals(q[n]) for _, q in parts] for n in range(3)]
+        numbers = [list(map(_number, cols[k])) for k in range(7, 11)]
+        confs = [_same_objects(cols[k], _number) for k in (11, 12)]
+        warnings = _same_objects(cols[13], _text)
+        reason = _distinct(cols[14], _text)
+    except _Other:
+        return [_json_parts(b, *q) for b, q in parts]
+    return [_TARGET % row for row in zip(*texts, *joints, *numbers, *confs, warnings, reason)]
+
+
+def _distinct(col, encode) -> list[str]:
+    """encode() of each value of a text column, each distinct value once
+    (equal values of a text column have one text: a str equals no other
+    kind; one that is not hashable is not a text)."""
+    try:
+        memo = {x: encode(x) for x in set(col)}
+    except TypeError:
+        raise _Other from None
+    return list(map(memo.__getitem__, col))
+
+
+def _same_objects(col, item) -> list[str]:
+    """_array(x, item) of each value of a column, once per object (not per
+    equal value: (1, 0) and (1.0, 0) are equal, their texts are not)."""
+    memo: dict = {}
+    out = []
+    for x in col:
+        t = memo.get(id(x))
+        if t is None:
+            t = memo[id(x)] = _array(x, item)
+        out.append(t)
+    return out
 
 
 def _json_target(file, line, instruction, target, status, rule, action, nominal_deg,
