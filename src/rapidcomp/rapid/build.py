@@ -39,7 +39,7 @@ _INF = float("inf")
 _FAST_NUM = re.compile(r"[-+]?(?:[0-9]{1,30}(?:\.[0-9]{0,30})?|\.[0-9]{1,30})(?![\w.])")
 
 # The nodes of one-token statements and declarations, made as their classes
-# make them (construct.py; a CAM program's 1e5 moves have ~15 each).
+# make them (construct.py; a CAM program's 1e5 moves and 5e4 declarations).
 _span = partial(tuple.__new__, Span)
 _arg, _ref, _num, _call, _decl, _numagg, _func, _tail_args = (
     maker(c) for c in (A.Arg, A.Ref, A.Num, A.ProcCall, A.DataDecl, A.NumAgg, A.Call,
@@ -471,30 +471,27 @@ class NodeBuilder:
             # The aggregate ends at the statement's last ']' (nothing after
             # it has brackets).
             end = text.rindex("]") + 1
-            span = _span((base + pos, base + end))
-            args = [_arg("pos", None, _numagg(text[pos:end], span), span)]
+            first = _numagg(text[pos:end], _span((base + pos, base + end)))
             pos = end
         elif text[pos] in _NUMBER_START:
             # A number (WaitTime 0.2;).
-            node, pos = _fast_number(text, base, pos)
-            args = [_arg("pos", None, node, node.span)]
+            first, pos = _fast_number(text, base, pos)
         else:
-            first = _FAST_ITEM.match(text, pos)      # a name
-            end = first.end()
+            word = _FAST_ITEM.match(text, pos)      # a name
+            end = word.end()
             if text[end] == "(":
                 # A function of names and numeric aggregates (rcTcR(p, p_dq)).
                 func, end = _fast_func(text, base, pos, end)
-                args = [_arg("pos", None, func, func.span)]
                 pos = end
-                every = (*args, *_fast_tail(text[pos:]).nodes(base + pos))
+                every = (_arg("pos", None, func, func.span),
+                         *_fast_tail(text[pos:]).nodes(base + pos))
                 return _call(name, every, _span((base, base + len(text))), plain_args(every))
-            span = _span((base + pos, base + end))
-            args = [_arg("pos", None, _ref(first.group(3), (), span), span)]
+            first = _ref(word.group(3), (), _span((base + pos, base + end)))
             pos = end
         # (Plain by construction: names, a numeric aggregate, numbers, \Opt,
-        # \Opt:=name or number. The arguments after the first made when
-        # read: A.TailArgs.)
-        return _call(name, _tail_args(args[0].value, _fast_tail(text[pos:]), base + pos),
+        # \Opt:=name or number. The first argument's value node kept, the
+        # arguments after it made when read: A.TailArgs.)
+        return _call(name, _tail_args(first, _fast_tail(text[pos:]), base + pos),
                      _span((base, base + len(text))), True)
 
     def fast_decl(self, c):
