@@ -523,3 +523,27 @@ def test_signal_names_only_the_predefined_ones_are_refused():
     for name in ("v100", "z50", "fine", "vrot10", "inpos50", "ERRNO", "TRUE", "MoveL", "Offs"):
         with pytest.raises(RapidcompError):
             _check_signal(name)
+
+
+def test_a_large_modules_words_are_read_as_its_parse_found_them(monkeypatch):
+    """check_names reads a module's words where its parse found them
+    (rapid/predecode.py, a large module's): a support module's name in a
+    comment or a string is refused there as in a small module's text, and
+    a module without one passes."""
+    from rapidcomp.compensate.plan import Task
+    from rapidcomp.compensate.transient import check_names
+    from rapidcomp.rapid import predecode as PD
+    monkeypatch.setattr(PD, "PREDECODE_FROM", 0)
+    monkeypatch.setattr(PD, "enabled", True)
+    move = "    MoveL [[500,0,400],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,z1,tool0;\n"
+    for extra, clash in (("    ! see RCTCR before\n", "rcTcR"),
+                         ('    TPWrite "rcThermals rcTcRx";\n', None),
+                         ('    TPWrite "s rcTcJ";\n', "rcTcJ")):
+        text = "MODULE M\n  PROC p()\n" + move * 3 + extra + "  ENDPROC\nENDMODULE\n"
+        pf = parse_text(text, "m.mod")
+        assert pf.words is not None
+        if clash is None:
+            check_names(Task("m.mod", (pf,)))
+            continue
+        with pytest.raises(RapidcompError, match=f"uses {clash}, a name of the transient"):
+            check_names(Task("m.mod", (pf,)))

@@ -194,7 +194,9 @@ def check_names(task, tr: Transient | None = None) -> None:
     than signalai (the module's AInput(signal) would not load)."""
     taken = {n.lower(): n for n in GLOBAL_NAMES}
     for pf in task.files:
-        clash = sorted(taken[w] for w in NameAllocator([pf.source.text]).taken & set(taken))
+        # (A large module's words as its parse found them: predecode.py.)
+        clash = sorted(taken[w] for w in NameAllocator([pf.source.text], [pf.words]).taken
+                       & set(taken))
         if clash:
             raise RapidcompError(
                 f"{pf.source.display_path}: uses {', '.join(clash)}, a name of the transient "
