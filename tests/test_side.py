@@ -227,12 +227,15 @@ def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, 
 def test_a_transient_cam_module_is_written_and_reported_as_without_a_helper(
         mode, helped, monkeypatch):
     """Transient: in blocks of a few literals, every other block's
-    correction literals formatted by the helper (records.pose_literals);
-    the same output, rows and report."""
+    correction literals formatted by the helper (records.pose_literals),
+    and every other block's residuals at a thermal state checked there
+    (verify._state_residuals); the same output, rows and report."""
     from rapidcomp.compensate import edit as E
+    from rapidcomp.compensate import verify as V
     from rapidcomp.compensate.load import load_state_solvers
     from rapidcomp.compensate.transient import Transient
     monkeypatch.setattr(E, "PREPARE_BLOCK", 37)
+    monkeypatch.setattr(V, "VERIFY_BLOCK", 41)
     made = _spy(monkeypatch)
     warm = str(FIXTURES / "warm.csv")
     solver = load_solver(warm, None, False)
@@ -248,6 +251,7 @@ def test_a_transient_cam_module_is_written_and_reported_as_without_a_helper(
         assert got == alone and alone[1].column("status").count("compensated") > 100
     if mode == "robtarget":
         assert made.count("pose_literals") >= 3
+    assert made.count("_state_residuals") >= 10
 
 
 def test_pose_literals_are_each_correction_formatted_alone():

@@ -402,3 +402,28 @@ def test_declarations_after_the_module_line_are_read_again(head, solvers, monkey
     assert len(fast_seen) == len(slow_seen) == 1 and fast.failed == 0
     assert fast.modules[0].text.startswith(head + "\n    LOCAL CONST jointtarget jHome_dq")
     _same(fast, fast_seen, slow, slow_seen, "auto")
+
+
+def test_a_joint_value_beyond_its_bound_leaves_the_check_to_the_output_parsed_again(
+        solvers, monkeypatch):
+    """A MoveAbsJ's value at a state beyond a joint's bound: the numbers
+    read do not serve (verify_states_relexed gives None, whichever block
+    and state it is found in) and the output parsed again is checked: the
+    same result as where they serve."""
+    from rapidcomp.compensate import verify as V
+    solver, state_solvers = solvers
+    tr = (Transient(45.0, 45.0, 2.0), state_solvers)
+    want = F.fix(_task("cam"), solver, "absj", transient=tr)
+    gave = []
+    real = F.verify_states_relexed
+
+    def spy(*args):
+        got = real(*args)
+        gave.append(got is None)
+        return got
+    monkeypatch.setattr(V, "VERIFY_BLOCK", 5)
+    monkeypatch.setattr(V, "MAX_JOINT_DEG", 1e-9)     # (every joint value beyond it)
+    monkeypatch.setattr(F, "verify_states_relexed", spy)
+    got = F.fix(_task("cam"), solver, "absj", transient=tr)
+    assert gave == [True]
+    assert got.modules == want.modules and got.rows == want.rows and got.notes == want.notes

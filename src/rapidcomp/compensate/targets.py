@@ -485,6 +485,49 @@ def flange_pose(base, wobj, target, tool):
                         invert_pose(tool))
 
 
+def unit_parts(v: np.ndarray, float32: bool):
+    """(unit quaternions (n, 4), positions (n, 3), confdata (n, 4), ok
+    (n,)) of robtargets' values v (n, >= 11) as a resolver reads them
+    (float32: one that verifies), with the arithmetic of one target: the
+    sums of squares in its order, math.sqrt's correctly rounded root as
+    np.sqrt, then unit_wxyz's ** 0.5 on Python floats. ok: no check of
+    _confdata, _quaternion or _position stops or notes it."""
+    conf = v[:, 7:11]
+    qp = v[:, :7].astype(np.float32).astype(float) if float32 else v[:, :7]
+    # Contiguous, as poses() of one stack them: a product's bits may
+    # depend on the layout of its operands.
+    p, q = np.ascontiguousarray(qp[:, :3]), np.ascontiguousarray(qp[:, 3:7])
+    w, x, y, z = q.T
+    norm = np.sqrt(w * w + x * x + y * y + z * z)
+    ok = ((norm > 1e-6) & np.all(np.floor(conf) == conf, axis=1)
+          & np.all(np.abs(conf[:, :3]) <= MAX_QUADRANT, axis=1)
+          & (conf[:, 3] >= 0) & (conf[:, 3] <= 7))
+    if not float32:
+        ok &= (np.abs(norm - 1.0) <= QUAT_TOLERANCE) & np.all(np.abs(p) <= MAX_POSITION_MM,
+                                                             axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):   # (a zero one is not ok)
+        q = np.where((np.abs(norm - 1.0) > 1e-12)[:, None], q / norm[:, None], q)
+        w, x, y, z = q.T
+        q = q / np.array([s ** 0.5 for s in (w * w + x * x + y * y + z * z).tolist()])[:, None]
+    return q, p, conf, ok
+
+
+def robtarget_flanges(v: np.ndarray, base, wobj, tool, float32: bool, offs=None):
+    """(R, p, conf, ok) of robtargets' values v (n, 17) through stacks of
+    their bases, work objects and tools (each (R (n, 3, 3), p (n, 3))), as
+    poses() composes them: base_M_flange of each, its confdata, and
+    whether no check would stop or note it (unit_parts). offs: (rows,
+    displacements) of Offs uses, added to their positions as poses() adds
+    them (_relative)."""
+    q, p, conf, ok = unit_parts(v, float32)
+    R = unit_quat_matrices(q)
+    if offs is not None:
+        rows, d = offs
+        p[rows] = p[rows] + d
+    Rf, pf = flange_poses(base, wobj, (R, p), tool)
+    return Rf, pf, conf, ok
+
+
 def parse_base(values) -> tuple | None:
     """`--base X,Y,Z,Q1,Q2,Q3,Q4`: world_M_base, mm and a quaternion in
     RAPID order (w, x, y, z)."""
@@ -1701,30 +1744,9 @@ class Resolver:
             object.__setattr__(u, "row", i)
 
     def _unit_parts(self, v: np.ndarray):
-        """(unit quaternions (n, 4), positions (n, 3), confdata (n, 4), ok
-        (n,)) of robtargets' values v (n, >= 11) as this resolver reads
-        them (float32 when it verifies), with the arithmetic of one target:
-        the sums of squares in its order, math.sqrt's correctly rounded
-        root as np.sqrt, then unit_wxyz's ** 0.5 on Python floats. ok: no
-        check of _confdata, _quaternion or _position stops or notes it."""
-        conf = v[:, 7:11]
-        qp = v[:, :7].astype(np.float32).astype(float) if self.float32 else v[:, :7]
-        # Contiguous, as poses() of one stack them: a product's bits may
-        # depend on the layout of its operands.
-        p, q = np.ascontiguousarray(qp[:, :3]), np.ascontiguousarray(qp[:, 3:7])
-        w, x, y, z = q.T
-        norm = np.sqrt(w * w + x * x + y * y + z * z)
-        ok = ((norm > 1e-6) & np.all(np.floor(conf) == conf, axis=1)
-              & np.all(np.abs(conf[:, :3]) <= MAX_QUADRANT, axis=1)
-              & (conf[:, 3] >= 0) & (conf[:, 3] <= 7))
-        if not self.float32:
-            ok &= (np.abs(norm - 1.0) <= QUAT_TOLERANCE) & np.all(np.abs(p) <= MAX_POSITION_MM,
-                                                                 axis=1)
-        with np.errstate(divide="ignore", invalid="ignore"):   # (a zero one is not ok)
-            q = np.where((np.abs(norm - 1.0) > 1e-12)[:, None], q / norm[:, None], q)
-            w, x, y, z = q.T
-            q = q / np.array([s ** 0.5 for s in (w * w + x * x + y * y + z * z).tolist()])[:, None]
-        return q, p, conf, ok
+        """unit_parts of v as this resolver reads values (float32 when it
+        verifies)."""
+        return unit_parts(v, self.float32)
 
     def _checked_parts(self, pending: list) -> tuple[np.ndarray, np.ndarray]:
         """_confdata and _target_parts of every pending use, as arrays (q
@@ -2164,13 +2186,9 @@ class Resolver:
         composes them; a row a check would stop or note (not ok) is left
         out. offs: (rows, displacements) of Offs uses, added to their
         positions as poses() adds them (_relative)."""
-        q, p, conf, ok = self._unit_parts(v)
-        R = unit_quat_matrices(q)
-        if offs is not None:
-            rows, d = offs
-            p[rows] = p[rows] + d
-        Rf, pf = flange_poses(stacked_poses([self.base] * len(done)), stacked_poses(wobjs),
-                              (R, p), stacked_poses(tools))
+        Rf, pf, conf, ok = robtarget_flanges(v, stacked_poses([self.base] * len(done)),
+                                             stacked_poses(wobjs), stacked_poses(tools),
+                                             self.float32, offs)
         keep = np.flatnonzero(ok)
         return ([done[k] for k in keep.tolist()], Rf[keep], pf[keep],
                 conf[keep].astype(int))

@@ -36,7 +36,8 @@ from ..rapid.values import (JOINTTARGET_FRAME, NUM_MAX, ROBTARGET_FRAME, DecodeI
 from ..rapid.values import relex as relex_record
 from .plan import Plan
 from .solve import Solved, tcp_of
-from .targets import MAX_JOINT_DEG, Resolver, Unresolved, Written
+from .targets import (MAX_JOINT_DEG, Resolver, Unresolved, Written, robtarget_flanges,
+                      stacked_poses)
 from .transient import FUNC_J, FUNC_R, states_values
 
 # Literals decoded at once by relex (their field texts alive together).
@@ -1102,55 +1103,106 @@ def verify_states_relexed(plan: Plan, solved: Solved, keys: list, calls: Calls,
         tools[n], wobjs[n] = tool[1], wobj[1]
     states = tuple(solvers)
     um, deg = np.empty((len(solvers), len(rows))), np.empty((len(solvers), len(rows)))
-    # (VERIFY_BLOCK uses at a time, as verify() checks them: their arrays
-    # alive for one block.)
-    for first in range(0, len(rows), VERIFY_BLOCK):
-        sl = slice(first, first + VERIFY_BLOCK)
-        block, picked, block_uses = rows[sl], np.array(at[sl], np.int64), uses[sl]
-        js = joint[sl]
-        rob = np.flatnonzero(~js).tolist()
-        jts = np.flatnonzero(js).tolist()
-        q = np.empty((len(block), 6))
-        # A MoveAbsJ's joints at each state, as the controller stores them
-        # (a value beyond a joint's bound: the output parsed again says so).
-        q_joint = None
-        if jts:
-            # (A move turned into MoveAbsJ: its new cold value's; else its
-            # jointtarget's.)
-            cold = calls.cold[picked[jts]]
-            for m, n in enumerate(jts):
-                if np.isnan(cold[m, 0]):
-                    cold[m] = block_uses[n].source.record.values[:6]
-            q_joint = states_values(cold, calls.dq[picked[jts], :6], states, True).astype(float)
-            if not (np.abs(q_joint) <= MAX_JOINT_DEG).all():
-                return None
-        # A robtarget's pose at each state, through its tool and work object,
-        # and the joints the ideal controller gives it.
-        by_state = None
-        if rob:
-            cold = np.array([block_uses[n].source.record.values for n in rob],
-                            float).reshape(-1, 17)
-            by_state = states_values(cold[:, :7], calls.dq[picked[rob]], states, False)
-            values = np.empty((len(rob), 17))
-            values[:, 7:] = cold[:, 7:]
-            rob_rows = [block[n] for n in rob]
-            # (What every state's check shares, as _residuals makes it.)
-            closest = _closest(solved, rob_rows)
-        R_want, p_want, tcp = solved.R[block], solved.p[block], tcp_of(block_uses)
-        for n, solver in enumerate(solvers.values()):
+    made: list = []                 # (state, block's slice, its robtarget rows), in order
+
+    def parts():
+        """_state_residuals' arguments of each block at each state, each
+        part its own arrays (the next is made before one is checked)."""
+        # (VERIFY_BLOCK uses at a time, as verify() checks them: their
+        # arrays alive for a block.)
+        for first in range(0, len(rows), VERIFY_BLOCK):
+            sl = slice(first, first + VERIFY_BLOCK)
+            block, picked, block_uses = rows[sl], np.array(at[sl], np.int64), uses[sl]
+            js = joint[sl]
+            rob = np.flatnonzero(~js).tolist()
+            jts = np.flatnonzero(js).tolist()
+            # A MoveAbsJ's joints at each state, as the controller stores
+            # them (a value beyond a joint's bound: the output parsed again
+            # says so).
+            q_joint = None
             if jts:
-                q[jts] = q_joint[n]
+                # (A move turned into MoveAbsJ: its new cold value's; else
+                # its jointtarget's.)
+                cold = calls.cold[picked[jts]]
+                for m, n in enumerate(jts):
+                    if np.isnan(cold[m, 0]):
+                        cold[m] = block_uses[n].source.record.values[:6]
+                q_joint = states_values(cold, calls.dq[picked[jts], :6], states,
+                                        True).astype(float)
+                if not (np.abs(q_joint) <= MAX_JOINT_DEG).all():
+                    raise _Unserved
+            # A robtarget's pose at each state, through its tool and work
+            # object, and the joints the ideal controller gives it.
+            by_state = cold = None
+            closest, prev = [], None
+            rob_rows = [block[n] for n in rob]
             if rob:
-                values[:, :7] = by_state[n]
-                done, R, p, conf = res._flanges(list(range(len(rob))), values,
-                                                [tools[first + m] for m in rob],
-                                                [wobjs[first + m] for m in rob])
-                if len(done) != len(rob):
-                    return None
-                q[rob] = _ideal_joints(solved, solver, rob_rows, R, p, conf, *closest)
-            err_p, err_r = solver.deformed_pose_error(q * DEG, R_want, p_want, tcp)
-            um[n, sl], deg[n, sl] = err_p * 1000, err_r / DEG
+                cold = np.array([block_uses[n].source.record.values for n in rob],
+                                float).reshape(-1, 17)
+                by_state = states_values(cold[:, :7], calls.dq[picked[rob]], states, False)
+                # (What every state's check shares, as _residuals makes it.)
+                closest, prev = _closest(solved, rob_rows)
+            poses = (res.base, [tools[first + m] for m in rob], [wobjs[first + m] for m in rob])
+            R_want, p_want, tcp = solved.R[block], solved.p[block], tcp_of(block_uses)
+            for n, solver in enumerate(solvers.values()):
+                q = np.empty((len(block), 6))
+                if jts:
+                    q[jts] = q_joint[n]
+                values = None
+                if rob:
+                    values = np.empty((len(rob), 17))
+                    values[:, 7:] = cold[:, 7:]
+                    values[:, :7] = by_state[n]
+                made.append((n, sl, rob_rows))
+                yield (solver, values, poses, q, rob, R_want, p_want, tcp, closest, prev)
+    # (Every other part checked by the job's helper, side.py, while this
+    # process checks the one before: its IK's threads and this process's
+    # own work leave a core free for much of a part.)
+    try:
+        for got in side.alternate(_state_residuals, parts()):
+            n, sl, rob_rows = made.pop(0)
+            if got is None:
+                return None
+            if type(got[0]) is str:
+                u = solved.uses[rob_rows[got[1]]]
+                raise InternalError(f"{u.file.source.display_path}:{u.line}: the ideal "
+                                    "controller finds no solution for the written target of "
+                                    f"{u.label}")
+            um[n, sl], deg[n, sl] = got
+    except _Unserved:
+        return None
     return [u.key for u in uses], um, deg
+
+
+class _Unserved(Exception):
+    """A value the numbers read do not serve (the output is parsed again)."""
+
+
+def _state_residuals(solver: Solver, values, poses, q, rob: list, R_want, p_want, tcp,
+                     closest: list, prev) -> tuple | None:
+    """One thermal state's residuals (um, deg) of a block of uses: the
+    ideal controller's joints of its robtargets' values (rows `rob` of q;
+    poses: the base and each one's tool and work object), the others'
+    joints as q holds them, on the robot deformed to that state (solver).
+    None where a check would stop or note a value; ("no solution", k)
+    where the controller finds none for rob[k]. A function of numbers
+    (verify_states_relexed hands every other block and state to the job's
+    helper)."""
+    if rob:
+        base, tools, wobjs = poses
+        Rf, pf, conf, ok = robtarget_flanges(values, stacked_poses([base] * len(rob)),
+                                             stacked_poses(wobjs), stacked_poses(tools), True)
+        if not ok.all():
+            return None
+        # (As Resolver._flanges gives them: each row kept taken.)
+        keep = np.flatnonzero(ok)
+        got = _ideal(solver, Rf[keep], pf[keep], conf[keep].astype(int), closest, prev)
+        bad = np.flatnonzero(np.isnan(got).any(axis=1))
+        if len(bad):
+            return "no solution", int(bad[0])
+        q[rob] = got
+    err_p, err_r = solver.deformed_pose_error(q * DEG, R_want, p_want, tcp)
+    return err_p * 1000, err_r / DEG
 
 
 def _resolver(plan: Plan, out_files: dict, written: Written | None,
@@ -1258,15 +1310,23 @@ def _closest(solved: Solved, rob: list) -> tuple[list, np.ndarray | None]:
                      else None)
 
 
+def _ideal(solver: Solver, R, p, conf, closest: list, prev) -> np.ndarray:
+    """The joints the ideal controller gives robtargets (R, p, conf): by
+    their confdata, or (closest, prev: _closest) the solution closest to
+    the previous move's; NaN where it finds none."""
+    got = solver.solve_nominal(R, p, conf).q_deg
+    if closest:
+        got = got.copy()
+        got[closest] = solver.closest(solver.candidates(R[closest], p[closest]), prev)
+    return got
+
+
 def _ideal_joints(solved: Solved, solver: Solver, rob: list, R, p, conf, closest: list,
                   prev) -> np.ndarray:
     """The joints the ideal controller gives the written robtargets (R, p,
     conf) of solved rows `rob`: by their confdata, or (closest, prev:
     _closest) the solution closest to the previous move's."""
-    got = solver.solve_nominal(R, p, conf).q_deg
-    if closest:
-        got = got.copy()
-        got[closest] = solver.closest(solver.candidates(R[closest], p[closest]), prev)
+    got = _ideal(solver, R, p, conf, closest, prev)
     for n in np.flatnonzero(np.isnan(got).any(axis=1))[:1].tolist():
         u = solved.uses[rob[n]]
         raise InternalError(f"{u.file.source.display_path}:{u.line}: the ideal "
