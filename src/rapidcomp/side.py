@@ -6,7 +6,8 @@ is a function of numbers and texts alone: needed only later (the report's
 number cells of every target, known once the joints are solved, written
 with the report; the diff of a module, known once its output is printed),
 or in blocks that follow one another (the new texts of 8192 literals, the
-numbers of 8192 literals read back: alternate() hands every other block).
+numbers of 8192 literals read back, a transient output's residuals of 8192
+uses at one thermal state: alternate() hands every other block).
 run(fn, *args) hands such a call to the helper and returns at once; get()
 then gives what fn(*args) returns, made by the helper, or here when there
 is no helper or it failed. The result is the same either way: the same
