@@ -405,10 +405,10 @@ class _Walker:
             handlers = {id(s) for s in _statements_in([h.body for h in rt.node.handlers])}
             inside = rt.node.kind == "TRAP" or id(rt.node) in interrupted
             for s in statements(rt.node):
-                if (inside or id(s) in handlers) and _position_read(s) is not None:
+                read = _position_read(s) if inside or id(s) in handlers else None
+                if read is not None:
                     return (f"{rt.pf.source.display_path}:{rt.pf.line(s.span)}, its "
-                            f"{_position_read(s)}() in an interrupt routine or an error "
-                            "handler")
+                            f"{read}() in an interrupt routine or an error handler")
         hit = _first_position_read(getattr(self.resolver, "observers", ()))
         if hit is not None:
             pf, s, name = hit

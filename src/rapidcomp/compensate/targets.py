@@ -1201,6 +1201,9 @@ class Resolver:
         routine assigns the data, the components it assigns among them.
         None when neither is such data (the common case: memoised
         lookups)."""
+        # (No literal assignment, and none the plan found: no site map made.)
+        if not (self.writes.literal or self.site_names):
+            return None
         sites = self.site_map()
         if not sites:
             return None
@@ -1407,8 +1410,7 @@ class Resolver:
         looped = _loop_indexed(motion, t, w)
         if looped is not None:
             return looped, None
-        sites = (self._sites(motion, module) if self.writes.literal or self.site_names
-                 else None)
+        sites = self._sites(motion, module)
         if sites is not None:
             # (Data the routine assigns: once per assignment it takes, and
             # per name where the move names it plainly, as _memo: a RoboDK
@@ -1455,8 +1457,7 @@ class Resolver:
         looped = _loop_indexed(motion, t)
         if looped is not None:
             return looped
-        sites = (self._sites(motion, module) if self.writes.literal or self.site_names
-                 else None)
+        sites = self._sites(motion, module)
         return self._tool_at(t, module, routine, None if sites is None else sites[0])
 
     def _tool_at(self, t, module, routine: str, site):

@@ -233,6 +233,11 @@ class TailArgs:
 _new_arg = maker(Arg)
 
 
+def arg_value(args: "tuple[Arg, ...] | TailArgs", j: int):
+    """The value node of a call's argument j (of TailArgs, made alone)."""
+    return args[j].value if type(args) is tuple else args.value(j)
+
+
 # ----------------------------------------------------------------- statements
 
 @dataclass(frozen=True, slots=True)

@@ -72,10 +72,7 @@ class Motion:
         return Span(self.span.start, self.span.start + len(self.instruction))
 
     def _value(self, j: int):
-        if j < 0:
-            return None
-        args = self.args
-        return args[j].value if type(args) is tuple else args.value(j)
+        return None if j < 0 else A.arg_value(self.args, j)
 
     @property
     def speed(self) -> A.Expr | None:

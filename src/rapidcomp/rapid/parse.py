@@ -154,7 +154,7 @@ def _motion(source: SourceText, call: A.ProcCall, spec, routine: str, loops,
         _ROLES[(spec, shape)] = roles
     targets = []
     for role, j in roles.targets:
-        value = args[j].value if type(args) is tuple else args.value(j)
+        value = A.arg_value(args, j)
         decoded = issue = None
         if role != "search" and isinstance(value, (A.Agg, A.NumAgg)):
             t = "jointtarget" if spec.joint_space else "robtarget"
