@@ -102,3 +102,44 @@ def test_a_cam_moves_parse_keeps_no_node_per_argument():
     kept(200)                                # (what a first parse makes once)
     per_move = (kept(2000) - kept(1000)) / 2000
     assert per_move <= 9, per_move
+
+
+def test_moves_sharing_a_tail_resolve_their_own_routines_tool_without_its_nodes(monkeypatch):
+    """A move lexed as one token resolves its tool and work object once per
+    (module, routine, tail) (targets.Resolver._tool_wobj): not from nodes
+    made for each move, and each routine's own data where a routine
+    declares a tool of the same name (RAPID looks in the routine first).
+    Expected tools written here by hand: the tframe's x of each."""
+    from rapidcomp.compensate.plan import Plan, Task
+
+    def module(name, x_by_routine, n):
+        lines = [f"MODULE {name}", "  PERS tooldata tCut := [TRUE,[[0,0,100],[1,0,0,0]],"
+                 "[1,[0,0,1],[1,0,0,0],0,0,0]];"]
+        for r, x in x_by_routine.items():
+            lines.append(f"  PROC {r}()")
+            if x is not None:
+                lines.append(f"    VAR tooldata tCut := [TRUE,[[{x},0,100],[1,0,0,0]],"
+                             "[1,[0,0,1],[1,0,0,0],0,0,0]];")
+            lines += [f"    MoveL [[{400 + i},0,400],[0,0,1,0],[0,0,0,0],"
+                      "[9E9,9E9,9E9,9E9,9E9,9E9]],v100,z1,tCut\\WObj:=wobj0;" for i in range(n)]
+            lines.append("  ENDPROC")
+        return "\n".join(lines + ["ENDMODULE", ""])
+
+    n = 50
+    B._TAILS.clear()
+    a = parse_text(module("A", {"r1": None, "r2": 7, "r3": 9}, n), "a.mod")
+    b = parse_text(module("B", {"r1": 11}, n), "b.mod")
+    made = []
+    value = B._Tail.value
+    monkeypatch.setattr(B._Tail, "value", lambda self, at, j: made.append(j) or value(self, at, j))
+    plan = Plan(Task("t", (a, b)))
+    want = {("a.mod", "r1"): 0.0, ("a.mod", "r2"): 7.0, ("a.mod", "r3"): 9.0,
+            ("b.mod", "r1"): 11.0}
+    got = {}
+    for u in plan.uses:
+        assert u.reason is None
+        got.setdefault((u.file.source.display_path, u.motion.routine), set()).add(
+            float(u.tool[1][1][0]))
+    assert got == {k: {x} for k, x in want.items()}
+    # One resolution per (module, routine): tool and work object, not 2 per move.
+    assert len(made) <= 2 * len(want) < 2 * len(plan.uses)

@@ -682,6 +682,8 @@ class Resolver:
         self.written = written if written is not None else Written({}, [], np.empty((0, 17)), [])
         self._memos: dict = {}
         self._pairs: dict = {}                  # _tool_wobj's
+        # _tool_wobj's of a move lexed as one token, by its shared tail.
+        self._tails: dict = {}
         self._records: dict | None = None       # _component_type's: RECORD name -> components
         # Tools and work objects a routine assigns literals to (site_map).
         self._site_map: dict | None = None
@@ -1406,6 +1408,27 @@ class Resolver:
         where the tool is not; by one lookup where the move names both by
         a plain name (a CAM program's 1e5 moves name the same two), with
         the notes their resolution gave."""
+        args = motion.args
+        if type(args) is A.TailArgs and not motion.loops and not (
+                self.writes.literal or self.site_names):
+            # (A CAM program's 1e5 moves share a few tails, ",v100,z1,tool1
+            # \WObj:=wobj1;": the same tool and work object in one routine,
+            # looked up without making their nodes from the text of each.
+            # Keyed by the tail itself, which the entry keeps alive, and the
+            # roles, which say which of its arguments is which.)
+            key = (id(module), motion.routine, motion.roles, args.tail)
+            hit = self._tails.get(key)
+            if hit is None:
+                before = len(self._notes)
+                tool, wobj = self._tool_wobj_of(motion, module)
+                self._tails[key] = (tool, wobj, tuple(self._notes[before:]))
+                return tool, wobj
+            if hit[2]:
+                self._notes.extend(hit[2])
+            return hit[0], hit[1]
+        return self._tool_wobj_of(motion, module)
+
+    def _tool_wobj_of(self, motion, module) -> tuple:
         t, w, routine = motion.tool, motion.wobj, motion.routine
         looped = _loop_indexed(motion, t, w)
         if looped is not None:
