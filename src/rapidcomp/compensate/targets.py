@@ -684,6 +684,7 @@ class Resolver:
         self._pairs: dict = {}                  # _tool_wobj's
         # _tool_wobj's of a move lexed as one token, by its shared tail.
         self._tails: dict = {}
+        self._confs: dict = {}                  # _plain_use's: confdata numbers -> ints
         self._records: dict | None = None       # _component_type's: RECORD name -> components
         # Tools and work objects a routine assigns literals to (site_map).
         self._site_map: dict | None = None
@@ -1924,7 +1925,13 @@ class Resolver:
         if type(tool) is Unresolved or type(wobj) is Unresolved:
             return None
         record = src.record
-        u = _use(motion, t.role, label, line, "robtarget", None, None, self._one(record.conf),
+        # (A CAM program's 1e5 confdata are a few values: each made once,
+        # keyed by its numbers as written; equal numbers, equal ints.)
+        written = record.values[7:11]
+        conf = self._confs.get(written)
+        if conf is None:
+            conf = self._confs[written] = self._one(record.conf)
+        u = _use(motion, t.role, label, line, "robtarget", None, None, conf,
                  None, None, src, tool, wobj, (), False, pf, module,
                  self._one(record.ext, True), index + (t.role, ()), tuple(notes))
         self._pending.append((u, src, pf, self.base, wobj[1], tool[1]))
