@@ -337,7 +337,11 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
     if g is not None:
         if g.mode == "absj" and u.motion.spec.name == "MoveL":
             warnings = warnings + _LINEAR
-        elif g.mode == "rob" and mode is not None and u.motion.spec.name.lower() in ABSJ_FROM[mode]:
+        elif g.mode == "rob" and mode is not None and (u.motion.roles.optional or
+                                                         u.motion.roles.to_point) \
+                and u.motion.spec.name.lower() in ABSJ_FROM[mode]:
+            # (Neither an optional argument nor ToPoint:=, a CAM program's
+            # 1e5 moves: nothing to say, asked of their roles alone.)
             extra = ", ".join(["\\" + a.name for a in u.motion.optional
                                if a.name.lower() not in ABSJ_OPTIONALS])
             why = [f"{extra} has no MoveAbsJ equivalent"] if extra else []
@@ -346,7 +350,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
                            "not rewrite as MoveAbsJ's ToJointPos:=")
             if why:
                 warnings = warnings + (f"kept as {u.motion.instruction}: " + "; ".join(why),)
-        if u.key in g.kept:
+        if g.kept and u.key in g.kept:
             warnings = warnings + (f"kept as {u.motion.instruction}: in another iteration of its "
                                    "loop this statement must stay a robtarget move, and one "
                                    "statement cannot be both",)
