@@ -209,13 +209,17 @@ def test_a_cam_module_is_written_and_reported_as_without_a_helper(mode, helped, 
                  cam_variants.not_called(5), cam_variants.broken_runs(6)):
         def run():
             result = fix(Task("cam.mod", (parse_text(text, "cam.mod"),)), solver, mode,
-                         output_names={"cam.mod": "out.mod"})
+                         output_names={"cam.mod": "out.mod"}, json=True)
             return (result.modules, result.rows, report.markdown(result, {"mode": mode}),
                     report.as_json(result, {"mode": mode}))
         alone, got = _alone_and_helped(run, monkeypatch)
         assert got == alone
+        kinds = {r.status for r in alone[1]}
+        assert kinds == {"compensated"} or "not compensated" in kinds
     assert made and None not in made
     assert "columns_diff" in made
+    # (The JSON report's number texts of each module: json=True.)
+    assert made.count("json_cells") == 5
     assert made.count("_nominal_and_candidates") == made.count("_solve_deformed") == 5
     if mode != "absj":
         assert made.count("plain_block") >= 5 and made.count("_wanted_values") >= 5
@@ -271,6 +275,71 @@ def test_pose_literals_are_each_correction_formatted_alone():
             + ",".join(numbers.fmt(float(v), numbers.QUAT_DECIMALS) for v in dq[j]) + "]]"
             for j in range(len(d))]
     assert pose_literals(d, dq) == want
+
+
+def test_json_cells_are_the_texts_each_row_writes():
+    """The JSON texts made ahead (report.json_cells, from the solved
+    numbers) are those each row writes of its own numbers: every row's
+    target text made with them (_json_block_made) is json_target's of the
+    row (the encoder's, tested against json.dumps elsewhere), on CAM
+    modules with rows not compensated, with no joints, with nominal joints
+    only, and with a value of another kind (the encoder's way)."""
+    from rapidcomp.compensate.plan import Plan
+    import numpy as np
+
+    from rapidcomp.compensate.rows import Rows, use_rows
+    from rapidcomp.compensate.solve import solve
+    solver = load_solver(str(FIXTURES / "warm.csv"), None, False)
+    codes = set()
+    for text in (cam_variants.bench_module(200, 7, ""), cam_variants.broken_runs(8),
+                 cam_variants.not_called(9)):
+        plan = Plan(Task("cam.mod", (parse_text(text, "cam.mod"),)))
+        solved = solve(plan, solver)
+        at: list = []
+        rows = use_rows(plan, solved, at=at)
+        made = report.json_cells(solved.nominal.q_deg, solved.deformed.q_deg, solved.err_p,
+                                 solved.err_r)
+        made = [None if i is None else made[i] for i in at]
+        ks = range(len(rows))
+        want = [report.json_target(r) for r in rows]
+        assert report._json_block_made(rows, ks, made) == want
+        # A value of another kind (here a numpy float as a residual): None,
+        # the block goes the encoder's way.
+        odd = Rows([b[:9] + (np.float32(1.5),) + b[10:] for b in rows._base], rows._codes,
+                   rows._joints)
+        assert report._json_block_made(odd, ks, made) is None
+
+
+def test_the_golden_cases_json_reports_are_the_same_with_texts_made_ahead(helped, monkeypatch):
+    """fix(json=True) with a helper: each row's JSON number texts made
+    there (report.json_cells); the report the same as without a helper,
+    on every golden case: rows with no joints, with nominal joints only,
+    with all three."""
+    made = _spy(monkeypatch)
+    codes = set()
+    # (And joints at J2's bound: the compensated ones beyond it, the rows
+    # not compensated with their nominal joints only.)
+    at_bound = ("MODULE Lim\n  PROC Path()\n" + "".join(
+        f"    MoveAbsJ [[{j1},10,10,0,45,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,fine,tool0;\n"
+        for j1 in (30, -30, 0)) + "    MoveAbsJ [[0,5,10,0,45,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
+        "v100,fine,tool0;\n  ENDPROC\nENDMODULE\n")
+    cases = [(GOLDEN / "fix" / case / "before.mod").read_text(encoding="utf-8") for case in
+             sorted(FIX_CASES)] + [at_bound]
+    settings = [FIX_CASES[case][1:] for case in sorted(FIX_CASES)] + [("auto", ["J2=-90:10"])]
+    for case, text, (mode, limits) in zip(sorted(FIX_CASES) + ["at J2's bound"], cases,
+                                          settings):
+        solver = load_solver(str(FIXTURES / "warm.csv"), None, False, limits)
+
+        def run():
+            result = fix(Task("before.mod", (parse_text(text, "before.mod"),)), solver, mode,
+                         output_names={"before.mod": "after.mod"}, json=True)
+            return result.rows, report.as_json(result, {"mode": mode})
+        alone, got = _alone_and_helped(run, monkeypatch)
+        assert got == alone, case
+        rows = alone[0]
+        codes |= {(c >= 0) + (c >= 0 and c & 1) for c in map(rows.code, range(len(rows)))}
+    assert made.count("json_cells") == len(FIX_CASES) + 1
+    assert codes == {0, 1, 2}           # no joints, nominal joints only, all three
 
 
 def test_number_cells_are_the_cells_of_each_row():

@@ -67,6 +67,10 @@ class FixResult:
     # (report.number_cells), made beside the job (side.py); None: made
     # when the report is written.
     cells: tuple[str | None, ...] | None = field(default=None, compare=False, repr=False)
+    # Each row's JSON text from its nominal joints to its error
+    # (report.json_cells), made beside the job where a JSON report is
+    # wanted; None: made when the report is written.
+    json_cells: tuple[str | None, ...] | None = field(default=None, compare=False, repr=False)
 
     @property
     def failed(self) -> int:
@@ -85,7 +89,7 @@ class FixResult:
 
 def fix(task: Task, solver: Solver, mode: str = "auto", timings: dict | None = None,
         track=(), output_names: dict | None = None, start=None, base=None,
-        transient=None) -> FixResult:
+        transient=None, json: bool = False) -> FixResult:
     """Compensate the modules of `task` (its context modules supply data
     only). Targets that cannot be compensated keep their text and are
     listed with the reason; whether to write such an output is the caller's
@@ -94,14 +98,15 @@ def fix(task: Task, solver: Solver, mode: str = "auto", timings: dict | None = N
     shows for the output; base: world_M_base (R, p) of the robot, default
     the identity. transient: (Transient, {s: Solver of the robot deformed
     by s . profile}) writes the correction for the run-time thermal state
-    (transient.py), verified at every s."""
+    (transient.py), verified at every s. json: a JSON report will be
+    written (its numbers' texts are made beside the job, side.py)."""
     with paused():
         return _fix(task, solver, mode, timings, track, output_names or {}, start, base,
-                    transient)
+                    transient, json)
 
 
 def _fix(task, solver, mode, timings, track, output_names, start, base,
-         transient=None) -> FixResult:
+         transient=None, json: bool = False) -> FixResult:
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}")
     clock = _Clock(timings)
@@ -241,6 +246,13 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         name = pf.source.display_path
         diffs[fi] = side.run(columns_diff, pf.source.text, handed_off(file_edits[fi]), name,
                              output_names.get(name, name))
+    # The JSON report's number texts, made beside the job after that diff,
+    # while this process makes the rows and writes the Markdown report.
+    jcells = None
+    if json and side.helps():
+        from .report import json_cells                # (report.py imports this module)
+        jcells = side.run(json_cells, solved.nominal.q_deg, solved.deformed.q_deg,
+                          solved.err_p, solved.err_r)
     group_of = {u.key: g for g in gs for u in g.uses}
     # What each stage made per target is not needed past it (1e5 targets:
     # hundreds of MB): the edited literals as written, the output parsed
@@ -253,7 +265,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # (What malloc holds free handed back before the rows' 1e5 tuples are
     # made: in the command's own process, process.py.)
     release()
-    at: list | None = [] if cells is not None else None
+    at: list | None = [] if cells is not None or jcells is not None else None
     rows = use_rows(plan, solved, group_of=group_of, actions=actions, verified=verified,
                     mode=mode, written_conf=written_conf, at=at)
     notes = plan_notes + _notes(rows, gs)
@@ -269,7 +281,12 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     if cells is not None:
         made = cells.get()
         cells = tuple(None if i is None else made[i] for i in at)
-        made = at = None
+        made = None
+    if jcells is not None:
+        made = jcells.get()
+        jcells = tuple(None if i is None else made[i] for i in at)
+        made = None
+    at = None
     modules = []
     for fi, pf in enumerate(task.files):
         es = file_edits.get(fi, [])
@@ -280,7 +297,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         modules.append(ModuleOutput(name, texts.get(fi, pf.source.text),
                                     es if type(es) is EditColumns else tuple(es), tuple(diff)))
     clock("report")
-    return FixResult(mode, task.name, tuple(modules), rows, tuple(notes), cells)
+    return FixResult(mode, task.name, tuple(modules), rows, tuple(notes), cells, jcells)
 
 
 def _verify_states(plan, solved, keys, out_files, solvers, calls=None,

@@ -173,7 +173,7 @@ def _run_helped(spec: JobSpec, src: TaskSource, progress: Progress) -> JobOutcom
         transient = (spec.transient, load_state_solvers(spec.profile, spec.robot, spec.force,
                                                         spec.limits))
     result = fix(task, solver, spec.mode, track=parse_track(spec.track), output_names=names,
-                 start=spec.start, base=base, transient=transient)
+                 start=spec.start, base=base, transient=transient, json=bool(spec.json))
     if src.notes:
         result = replace(result, notes=src.notes + result.notes)
     progress.stage("writing")

@@ -321,9 +321,11 @@ def _json_pieces(result: FixResult, meta: dict) -> Iterator[str]:
         return
     yield head[:-2] + ',\n  "targets": [\n    '
     rows = result.rows
+    made = result.json_cells
     for at in range(0, len(rows), CHUNK_TARGETS):
-        piece = ",\n    ".join(_json_block(rows.parts(
-            range(at, min(at + CHUNK_TARGETS, len(rows))))))
+        ks = range(at, min(at + CHUNK_TARGETS, len(rows)))
+        block = _json_block_made(rows, ks, made) if made is not None else None
+        piece = ",\n    ".join(block if block is not None else _json_block(rows.parts(ks)))
         yield piece if at == 0 else ",\n    " + piece
     yield "\n  ]\n}\n"
 
@@ -338,6 +340,13 @@ _STR = json.encoder.encode_basestring_ascii         # (ensure_ascii, as the enco
 _TARGET = "{\n" + ",\n".join(f'      "{name}": %s' for name in FIELDS) + "\n    }"
 _ITEMS = ",\n        "
 _INF = float("inf")
+# A target's text from its nominal joints to its error (FIELDS[7:12]), the
+# numbers the solve gives (json_cells: made beside the job), and the
+# template that takes it whole in their place.
+_MIDDLE = ",\n".join(f'      "{name}": %s' for name in FIELDS[7:12])
+_TARGET_MADE = "{\n" + ",\n".join([*(f'      "{name}": %s' for name in FIELDS[:7]), "%s",
+                                    *(f'      "{name}": %s' for name in FIELDS[12:])]) + "\n    }"
+assert FIELDS[7:12] == ("nominal_deg", "compensated_deg", "delta_deg", "error_um", "error_deg")
 
 
 class _Other(Exception):
@@ -438,6 +447,43 @@ def _json_block(parts: list[tuple]) -> list[str]:
     except _Other:
         return [_json_parts(b, *q) for b, q in parts]
     return [_TARGET % row for row in zip(*texts, *joints, *numbers, *confs, warnings, reason)]
+
+
+def json_cells(qn_deg, qc_deg, err_p, err_r) -> list[str]:
+    """Of each solved target (Solved's q_deg rows, err_p, err_r): its JSON
+    text from its nominal joints to its error (_MIDDLE), as json_target
+    writes them for a row with all three joints (rows.number_columns,
+    which the rows take too: the same numbers; a joints row with a NaN is
+    null). A CAM report has 1e5: made beside the job (side.py) while it
+    makes the rows and writes the Markdown report."""
+    return [_MIDDLE % (_reals(a), _reals(b), _reals(c), _number(e), _number(d))
+            for a, b, c, e, d in zip(*number_columns(qn_deg, qc_deg, err_p, err_r))]
+
+
+def _json_block_made(rows: Rows, ks: range, made) -> list[str] | None:
+    """_json_block of rows ks, each row's text from its nominal joints to
+    its error taken from `made` (json_cells of its solved row: made[k] of
+    row k) where the row has all three joints, else made here; None where
+    a value is not of the kinds the template writes (the caller's
+    _json_block: the encoder where it must)."""
+    bs = [rows.base(k) for k in ks]
+    middles = [made[k] if rows.code(k) & 1 and rows.code(k) >= 0 else None for k in ks]
+    try:
+        for n in [n for n, m in enumerate(middles) if m is None]:
+            (b, q), = rows.parts([ks[n]])
+            middles[n] = _MIDDLE % (_reals(q[0]), _reals(q[1]), _reals(q[2]), _number(b[7]),
+                                    _number(b[8]))
+        cols = list(zip(*bs))
+        texts = [_distinct(cols[k], _text) if k != 1 else list(map(_number, cols[1]))
+                 for k in range(7)]
+        numbers = [list(map(_number, cols[k])) for k in (9, 10)]
+        confs = [_same_objects(cols[k], _number) for k in (11, 12)]
+        warnings = _same_objects(cols[13], _text)
+        reason = _distinct(cols[14], _text)
+    except _Other:
+        return None
+    return [_TARGET_MADE % row
+            for row in zip(*texts, middles, *numbers, *confs, warnings, reason)]
 
 
 def _distinct(col, encode) -> list[str]:

@@ -236,6 +236,11 @@ class Rows(Sequence):
         at = _AT[name]
         return [b[at] for b in self._base]
 
+    def code(self, k: int) -> int:
+        """Where row k's joints are (-1: none; 2i: solved row i's nominal
+        joints only; 2i + 1: all three)."""
+        return self._codes[k]
+
     def base(self, k: int) -> tuple:
         """Row k's fields but its joints (BASE_FIELDS)."""
         return self._base[k]
