@@ -3,6 +3,8 @@ made by the generic loop for a text's first uses, then by a function
 written for that text. Both must make the very same nodes (a parse's
 result may not depend on how often a text was seen before)."""
 
+import pytest
+
 from rapidcomp.rapid import build as B
 from rapidcomp.rapid.parse import parse_text
 
@@ -143,3 +145,35 @@ def test_moves_sharing_a_tail_resolve_their_own_routines_tool_without_its_nodes(
     assert got == {k: {x} for k, x in want.items()}
     # One resolution per (module, routine): tool and work object, not 2 per move.
     assert len(made) <= 2 * len(want) < 2 * len(plan.uses)
+
+
+@pytest.mark.parametrize("main", [False, True])
+def test_fixing_a_cam_module_makes_no_node_of_its_moves_tails(main, monkeypatch):
+    """fix of a CAM module (Path entered from outside, or called from main:
+    every MoveL turned into MoveAbsJ) reads the tool and work object of
+    its moves once per shared tail (resolve, verify, the notes): the count
+    of tail nodes made is the same for 150 moves as for 300."""
+    import sys
+    from pathlib import Path
+
+    from rapidcomp.compensate.fix import fix
+    from rapidcomp.compensate.load import load_solver
+    from rapidcomp.compensate.plan import Task
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+    from fix import cam_module
+    solver = load_solver(str(Path(__file__).resolve().parents[1] / "fixtures" / "warm.csv"),
+                         None, False)
+    made = []
+    value, nodes = B._Tail.value, B._Tail.nodes
+    monkeypatch.setattr(B._Tail, "value", lambda self, at, j: made.append(j) or value(self, at, j))
+    monkeypatch.setattr(B._Tail, "nodes", lambda self, at: made.append(at) or nodes(self, at))
+    counts = {}
+    for n in (150, 300):
+        for mode in ("absj", "robtarget"):
+            pf = parse_text(cam_module(n, main=main), "c.mod")
+            made.clear()
+            result = fix(Task("c.mod", (pf,)), solver, mode)
+            assert result.failed == 0
+            counts[(n, mode)] = len(made)
+    assert counts[(150, "absj")] == counts[(300, "absj")] <= 8
+    assert counts[(150, "robtarget")] == counts[(300, "robtarget")] <= 8

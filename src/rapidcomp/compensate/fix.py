@@ -404,13 +404,21 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
     # (a TCP calibration, a user frame redefined on the FlexPendant).
     frames: dict[str, str] = {}         # (RAPID's names: one whatever their case)
     assigned = False                    # (some as a routine assigns them: RoboDK's)
+    # (Moves lexed as one token name their tool and work object in their
+    # shared tail: read once per tail, not made from the text of each of a
+    # CAM program's 1e5 moves.)
+    tails: set = set()
     for g in gs:
         if g.mode == "absj" and g.failure is None:
             for u in g.uses:
                 if u.kind == "robtarget":
-                    for ref in (u.motion.tool, u.motion.wobj):
-                        if type(ref) is A.Ref and ref.name.lower() not in ("tool0", "wobj0"):
-                            frames.setdefault(ref.name.lower(), ref.name)
+                    m = u.motion
+                    if type(m.args) is not A.TailArgs or (m.roles, m.args.tail) not in tails:
+                        if type(m.args) is A.TailArgs:
+                            tails.add((m.roles, m.args.tail))
+                        for ref in (m.tool, m.wobj):
+                            if type(ref) is A.Ref and ref.name.lower() not in ("tool0", "wobj0"):
+                                frames.setdefault(ref.name.lower(), ref.name)
                     assigned = assigned or any("@" in x[0] for x in (u.tool, u.wobj) if x)
     if frames:
         notes.append("the moves turned into MoveAbsJ go to joints computed with "
