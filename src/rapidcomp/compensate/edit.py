@@ -515,28 +515,32 @@ class Editor:
         right after the last declaration of the line.
         Returns (file, offset, line break, indentation, in a routine)."""
         fi, module = g.home
-        text = self.text(fi)
-        node = None                  # the declaration it goes after
         if g.decl is not None and g.src.home_module is module:
-            span, in_routine = g.decl.span, g.decl.routine is not None
-            indent = _indent(text, span.start)
-            node = g.decl.node
-        else:
-            key = ("last data", id(module))
-            if key not in self._per_module:      # once per module, not per target
-                last = None
-                for item in module.node.items:
-                    if isinstance(item, A.DataDecl):
-                        last = item
-                    elif isinstance(item, A.Routine):
-                        break
-                self._per_module[key] = last
-            last = self._per_module[key]
+            span = g.decl.span
+            return self._after(fi, module, span, g.decl.node,
+                               _indent(self.text(fi), span.start), g.decl.routine is not None)
+        # (After the module's last data declaration: one place per file and
+        # module, found once; a CAM program's 5e4 inline targets turned
+        # into MoveAbsJ each declare a jointtarget there.)
+        key = ("anchor", fi, id(module))
+        found = self._per_module.get(key)
+        if found is None:
+            last = None
+            for item in module.node.items:
+                if isinstance(item, A.DataDecl):
+                    last = item
+                elif isinstance(item, A.Routine):
+                    break
             span = last.span if last is not None else module.node.name_span
-            indent = _indent(text, span.start) if last is not None else (
-                _indent(text, span.start) + "    ")
-            in_routine = False
-            node = last
+            indent = _indent(self.text(fi), span.start) + ("" if last is not None else "    ")
+            found = self._per_module[key] = self._after(fi, module, span, last, indent, False)
+        return found
+
+    def _after(self, fi: int, module, span, node, indent: str, in_routine: bool
+               ) -> tuple[int, int, str, str, bool]:
+        """_anchor's place at the end of the line of `span` (declaration
+        `node`'s, or the MODULE line's where node is None)."""
+        text = self.text(fi)
         end, nl = _line_end(text, span.end)
         if node is not None:
             # (`CONST robtarget p:=[...]; n:=1;` or `...; PROC main()`: after
