@@ -308,6 +308,10 @@ def test_json_cells_are_the_texts_each_row_writes():
         odd = Rows([b[:9] + (np.float32(1.5),) + b[10:] for b in rows._base], rows._codes,
                    rows._joints)
         assert report._json_block_made(odd, ks, made) is None
+    # No solved target: nothing made ahead, whatever the arrays' shape.
+    for shape in ((0, 6), (0,), (0, 0)):
+        empty = np.zeros(shape)
+        assert report.json_cells(empty, empty, np.zeros(0), np.zeros(0)) == []
 
 
 def test_the_golden_cases_json_reports_are_the_same_with_texts_made_ahead(helped, monkeypatch):

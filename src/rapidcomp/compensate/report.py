@@ -449,13 +449,16 @@ def _json_block(parts: list[tuple]) -> list[str]:
     return [_TARGET % row for row in zip(*texts, *joints, *numbers, *confs, warnings, reason)]
 
 
-def json_cells(qn_deg, qc_deg, err_p, err_r) -> list[str]:
+def json_cells(qn_deg, qc_deg, err_p, err_r) -> list[str | None]:
     """Of each solved target (Solved's q_deg rows, err_p, err_r): its JSON
     text from its nominal joints to its error (_MIDDLE), as json_target
     writes them for a row with all three joints (rows.number_columns,
     which the rows take too: the same numbers; a joints row with a NaN is
     null). A CAM report has 1e5: made beside the job (side.py) while it
-    makes the rows and writes the Markdown report."""
+    makes the rows and writes the Markdown report. None where the joints
+    are not rows of six (the report makes those texts)."""
+    if np.ndim(qn_deg) != 2 or np.shape(qn_deg)[1] != 6:
+        return [None] * len(qn_deg)
     return [_MIDDLE % (_reals(a), _reals(b), _reals(c), _number(e), _number(d))
             for a, b, c, e, d in zip(*number_columns(qn_deg, qc_deg, err_p, err_r))]
 
