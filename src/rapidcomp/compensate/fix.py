@@ -131,7 +131,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         # off the peak, which is the printing's and the verification's).
         solved = replace(solved, flange_R=None, flange_p=None)
     clock("solve")
-    cells = None
+    cells = jcells = None
     # The flow's per-use states go before the values are printed and
     # verified (1e5 targets: ~50 MB off the peak; a later use of them fails
     # loudly).
@@ -151,6 +151,10 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
             from .report import number_cells         # (report.py imports this module)
             cells = side.run(number_cells, solved.nominal.q_deg, solved.deformed.q_deg,
                              solved.err_p, solved.err_r)
+            if json:
+                from .report import json_cells
+                jcells = side.run(json_cells, solved.nominal.q_deg, solved.deformed.q_deg,
+                                  solved.err_p, solved.err_r)
         P.place(plan, gs)
         P.fill_slots(plan, solver, gs)
         editor = Editor(plan, values, transient is not None)
@@ -246,13 +250,6 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         name = pf.source.display_path
         diffs[fi] = side.run(columns_diff, pf.source.text, handed_off(file_edits[fi]), name,
                              output_names.get(name, name))
-    # The JSON report's number texts, made beside the job after that diff,
-    # while this process makes the rows and writes the Markdown report.
-    jcells = None
-    if json and side.helps():
-        from .report import json_cells                # (report.py imports this module)
-        jcells = side.run(json_cells, solved.nominal.q_deg, solved.deformed.q_deg,
-                          solved.err_p, solved.err_r)
     group_of = {u.key: g for g in gs for u in g.uses}
     # What each stage made per target is not needed past it (1e5 targets:
     # hundreds of MB): the edited literals as written, the output parsed
