@@ -277,32 +277,38 @@ def test_pose_literals_are_each_correction_formatted_alone():
     assert pose_literals(d, dq) == want
 
 
+def _cam_rows(texts):
+    """(solved, rows, each row's solved row) of each CAM module text, as
+    check's plan, solve and rows make them."""
+    from rapidcomp.compensate.plan import Plan
+    from rapidcomp.compensate.rows import use_rows
+    from rapidcomp.compensate.solve import solve
+    solver = load_solver(str(FIXTURES / "warm.csv"), None, False)
+    for text in texts:
+        plan = Plan(Task("cam.mod", (parse_text(text, "cam.mod"),)))
+        solved = solve(plan, solver)
+        at: list = []
+        rows = use_rows(plan, solved, at=at)
+        yield solved, rows, at
+
+
 def test_json_cells_are_the_texts_each_row_writes():
     """The JSON texts made ahead (report.json_cells, from the solved
     numbers) are those each row writes of its own numbers: every row's
     target text made with them (_json_block_made) is json_target's of the
     row (the encoder's, tested against json.dumps elsewhere), on CAM
-    modules with rows not compensated, with no joints, with nominal joints
-    only, and with a value of another kind (the encoder's way)."""
-    from rapidcomp.compensate.plan import Plan
+    modules; a value of another kind goes the encoder's way."""
     import numpy as np
 
-    from rapidcomp.compensate.rows import Rows, use_rows
-    from rapidcomp.compensate.solve import solve
-    solver = load_solver(str(FIXTURES / "warm.csv"), None, False)
-    codes = set()
-    for text in (cam_variants.bench_module(200, 7, ""), cam_variants.broken_runs(8),
-                 cam_variants.not_called(9)):
-        plan = Plan(Task("cam.mod", (parse_text(text, "cam.mod"),)))
-        solved = solve(plan, solver)
-        at: list = []
-        rows = use_rows(plan, solved, at=at)
+    from rapidcomp.compensate.rows import Rows
+    for solved, rows, at in _cam_rows((cam_variants.bench_module(200, 7, ""),
+                                       cam_variants.broken_runs(8),
+                                       cam_variants.not_called(9))):
         made = report.json_cells(solved.nominal.q_deg, solved.deformed.q_deg, solved.err_p,
                                  solved.err_r)
         made = [None if i is None else made[i] for i in at]
         ks = range(len(rows))
-        want = [report.json_target(r) for r in rows]
-        assert report._json_block_made(rows, ks, made) == want
+        assert report._json_block_made(rows, ks, made) == [report.json_target(r) for r in rows]
         # A value of another kind (here a numpy float as a residual): None,
         # the block goes the encoder's way.
         odd = Rows([b[:9] + (np.float32(1.5),) + b[10:] for b in rows._base], rows._codes,
@@ -350,16 +356,9 @@ def test_number_cells_are_the_cells_of_each_row():
     """The cells made ahead (report.number_cells, from the solved numbers)
     are those a row writes of its own numbers (report._row), on every
     solved row of CAM modules: the function the helper runs, run here."""
-    from rapidcomp.compensate.plan import Plan
-    from rapidcomp.compensate.rows import use_rows
-    from rapidcomp.compensate.solve import solve
-    solver = load_solver(str(FIXTURES / "warm.csv"), None, False)
     checked = 0
-    for text in (cam_variants.bench_module(200, 7, ""), cam_variants.broken_runs(8)):
-        plan = Plan(Task("cam.mod", (parse_text(text, "cam.mod"),)))
-        solved = solve(plan, solver)
-        at: list = []
-        rows = use_rows(plan, solved, at=at)
+    for solved, rows, at in _cam_rows((cam_variants.bench_module(200, 7, ""),
+                                       cam_variants.broken_runs(8))):
         cells = report.number_cells(solved.nominal.q_deg, solved.deformed.q_deg, solved.err_p,
                                     solved.err_r)
         assert len(at) == len(rows)
