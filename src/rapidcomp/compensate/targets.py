@@ -1182,6 +1182,12 @@ class Resolver:
             return self.home[id(d)]
         return hit[1].get(part, hit[1][None])
 
+    def _assigned_anywhere(self) -> bool:
+        """Whether a routine may assign a tool or work object a literal
+        (this task's writes, or the names the plan found so): else no
+        move's tool or work object depends on where the move is."""
+        return bool(self.writes.literal or self.site_names)
+
     def _sites(self, motion, module) -> tuple | None:
         """For a move's tool and work object, each the assignments whose
         values make the one it uses ((ParsedFile, Assign), in order), why
@@ -1205,7 +1211,7 @@ class Resolver:
         None when neither is such data (the common case: memoised
         lookups)."""
         # (No literal assignment, and none the plan found: no site map made.)
-        if not (self.writes.literal or self.site_names):
+        if not self._assigned_anywhere():
             return None
         sites = self.site_map()
         if not sites:
@@ -1410,23 +1416,14 @@ class Resolver:
         a plain name (a CAM program's 1e5 moves name the same two), with
         the notes their resolution gave."""
         args = motion.args
-        if type(args) is A.TailArgs and not motion.loops and not (
-                self.writes.literal or self.site_names):
+        if type(args) is A.TailArgs and not motion.loops and not self._assigned_anywhere():
             # (A CAM program's 1e5 moves share a few tails, ",v100,z1,tool1
             # \WObj:=wobj1;": the same tool and work object in one routine,
             # looked up without making their nodes from the text of each.
             # Keyed by the tail itself, which the entry keeps alive, and the
             # roles, which say which of its arguments is which.)
-            key = (id(module), motion.routine, motion.roles, args.tail)
-            hit = self._tails.get(key)
-            if hit is None:
-                before = len(self._notes)
-                tool, wobj = self._tool_wobj_of(motion, module)
-                self._tails[key] = (tool, wobj, tuple(self._notes[before:]))
-                return tool, wobj
-            if hit[2]:
-                self._notes.extend(hit[2])
-            return hit[0], hit[1]
+            return self._noted(self._tails, (id(module), motion.routine, motion.roles, args.tail),
+                               lambda: self._tool_wobj_of(motion, module))
         return self._tool_wobj_of(motion, module)
 
     def _tool_wobj_of(self, motion, module) -> tuple:
@@ -1442,37 +1439,36 @@ class Resolver:
             # nodes, which live as long as the parse.)
             key = (id(module), routine, _name_or_node(t), _name_or_node(w),
                    *(id(site[-1][1]) if type(site) is tuple else site for site in sites))
-            hit = self._pairs.get(key)
-            if hit is None:
-                before = len(self._notes)
+
+            def pair():
                 tool = self._tool_at(t, module, routine, sites[0])
-                wobj = None if type(tool) is Unresolved else (
+                return tool, None if type(tool) is Unresolved else (
                     Unresolved(sites[1]) if type(sites[1]) is str else
                     self._wobj(w, module, routine, sites[1]) if sites[1] is not None
                     else self.wobj(w, module, routine))
-                # (What their resolution noted, said for every move that
-                # takes them: a quaternion normalised.)
-                self._pairs[key] = (tool, wobj, tuple(self._notes[before:]))
-                return tool, wobj
-            if hit[2]:
-                self._notes.extend(hit[2])
-            return hit[0], hit[1]
+            return self._noted(self._pairs, key, pair)
         if type(t) is not A.Ref or type(w) is not A.Ref or t.selectors or w.selectors:
             tool = self.tool(t, module, routine)
             return tool, (None if type(tool) is Unresolved else self.wobj(w, module, routine))
-        key = (id(module), routine, t.name, w.name)
-        hit = self._pairs.get(key)
-        if hit is not None:
-            if hit[2]:
-                self._notes.extend(hit[2])
-            return hit[0], hit[1]
-        before = len(self._notes)
-        tool = self.tool(t, module, routine)
-        if type(tool) is Unresolved:
-            return tool, None
-        wobj = self.wobj(w, module, routine)
-        self._pairs[key] = (tool, wobj, tuple(self._notes[before:]))
-        return tool, wobj
+
+        def pair():
+            tool = self.tool(t, module, routine)
+            return tool, None if type(tool) is Unresolved else self.wobj(w, module, routine)
+        return self._noted(self._pairs, (id(module), routine, t.name, w.name), pair)
+
+    def _noted(self, table: dict, key, make):
+        """make()'s result, made once per key of `table`; the notes its
+        making gave (a quaternion normalised) said again at each later
+        call, for every move that takes it."""
+        hit = table.get(key)
+        if hit is None:
+            before = len(self._notes)
+            result = make()
+            table[key] = (result, tuple(self._notes[before:]))
+            return result
+        if hit[1]:
+            self._notes.extend(hit[1])
+        return hit[0]
 
     def _tool_of(self, motion, module):
         """tool() of a move as _tool_wobj resolves it, without its work
