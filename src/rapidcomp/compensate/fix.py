@@ -275,14 +275,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     plan = solved = gs = actions = group_of = written_conf = verified = None
     release()
     # (The cells taken from the helper into what those freed.)
-    if cells is not None:
-        made = cells.get()
-        cells = tuple(None if i is None else made[i] for i in at)
-        made = None
-    if jcells is not None:
-        made = jcells.get()
-        jcells = tuple(None if i is None else made[i] for i in at)
-        made = None
+    cells, jcells = (None if p is None else _by_row(p.get(), at) for p in (cells, jcells))
     at = None
     modules = []
     for fi, pf in enumerate(task.files):
@@ -295,6 +288,12 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
                                     es if type(es) is EditColumns else tuple(es), tuple(diff)))
     clock("report")
     return FixResult(mode, task.name, tuple(modules), rows, tuple(notes), cells, jcells)
+
+
+def _by_row(made: list, at: list) -> tuple:
+    """Each report row's entry of `made` (one per solved row; at: each
+    row's solved row, None for a use not solved)."""
+    return tuple(None if i is None else made[i] for i in at)
 
 
 def _verify_states(plan, solved, keys, out_files, solvers, calls=None,

@@ -434,19 +434,29 @@ def _json_block(parts: list[tuple]) -> list[str]:
     the block row by row (_json_parts, the encoder where it must)."""
     if not parts:
         return []
-    bs = [b for b, _ in parts]
     try:
-        cols = list(zip(*bs))
-        texts = [_distinct(cols[k], _text) if k != 1 else list(map(_number, cols[1]))
-                 for k in range(7)]
         joints = [[_reals(q[n]) for _, q in parts] for n in range(3)]
-        numbers = [list(map(_number, cols[k])) for k in range(7, 11)]
-        confs = [_same_objects(cols[k], _number) for k in (11, 12)]
-        warnings = _same_objects(cols[13], _text)
-        reason = _distinct(cols[14], _text)
+        head, numbers, tail = _base_columns([b for b, _ in parts], range(7, 11))
     except _Other:
         return [_json_parts(b, *q) for b, q in parts]
-    return [_TARGET % row for row in zip(*texts, *joints, *numbers, *confs, warnings, reason)]
+    return [_TARGET % row for row in zip(*head, *joints, *numbers, *tail)]
+
+
+def _base_columns(bs: list[tuple], numbered) -> tuple[list, list, list]:
+    """The JSON texts of rows' fields but their joints (Rows.base), a
+    column at a time: (the seven before the joints, the numbers of the
+    columns `numbered`, the four after the numbers: confdata before and
+    after, warnings, reason). A text column's distinct values are encoded
+    once, a confdata or warnings column's distinct objects once, the rest
+    value by value; _Other where a value is not of the kinds the template
+    writes."""
+    cols = list(zip(*bs))
+    head = [_distinct(cols[k], _text) if k != 1 else list(map(_number, cols[1]))
+            for k in range(7)]
+    numbers = [list(map(_number, cols[k])) for k in numbered]
+    tail = [*(_same_objects(cols[k], _number) for k in (11, 12)),
+            _same_objects(cols[13], _text), _distinct(cols[14], _text)]
+    return head, numbers, tail
 
 
 def json_cells(qn_deg, qc_deg, err_p, err_r) -> list[str | None]:
@@ -470,23 +480,17 @@ def _json_block_made(rows: Rows, ks: range, made) -> list[str] | None:
     a value is not of the kinds the template writes (the caller's
     _json_block: the encoder where it must)."""
     bs = [rows.base(k) for k in ks]
-    middles = [made[k] if rows.code(k) & 1 and rows.code(k) >= 0 else None for k in ks]
+    # (A code 2i + 1: all three joints of solved row i; -1 or 2i: not.)
+    middles = [made[k] if c >= 0 and c & 1 else None for k, c in zip(ks, map(rows.code, ks))]
     try:
         for n in [n for n, m in enumerate(middles) if m is None]:
             (b, q), = rows.parts([ks[n]])
             middles[n] = _MIDDLE % (_reals(q[0]), _reals(q[1]), _reals(q[2]), _number(b[7]),
                                     _number(b[8]))
-        cols = list(zip(*bs))
-        texts = [_distinct(cols[k], _text) if k != 1 else list(map(_number, cols[1]))
-                 for k in range(7)]
-        numbers = [list(map(_number, cols[k])) for k in (9, 10)]
-        confs = [_same_objects(cols[k], _number) for k in (11, 12)]
-        warnings = _same_objects(cols[13], _text)
-        reason = _distinct(cols[14], _text)
+        head, numbers, tail = _base_columns(bs, (9, 10))
     except _Other:
         return None
-    return [_TARGET_MADE % row
-            for row in zip(*texts, middles, *numbers, *confs, warnings, reason)]
+    return [_TARGET_MADE % row for row in zip(*head, middles, *numbers, *tail)]
 
 
 def _distinct(col, encode) -> list[str]:
