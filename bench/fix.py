@@ -21,6 +21,9 @@ two modules in one call (`fix a.mod b.mod -o DIR`, one worker process per
 core), and `fix --transient` end to end at 1e4 and the largest size.
 Goal: 100k targets end to end <= 10 s, <= 1 GB. Peaks are printed in MiB
 (ru_maxrss, of the command's own process): 1 GB is 954 MiB, 1 GiB 1024 MiB.
+Each end-to-end run also prints the cores it used: the CPU seconds of the
+command, its threads and the processes it forked and reaped (the parse's
+child, the job's helper, the pool's workers), per second of wall time.
 
 Targets are reachable by construction: random joint vectors in the front
 workspace, nominal FK through a 150 mm spindle tool, written with 3
@@ -149,27 +152,40 @@ def installed_env(cache: str) -> dict:
 
 def cli(path: str, out: str, *extra: str, env: dict | None = None) -> dict:
     """`rapidcomp fix` end to end in a process of its own, as a user runs it
-    (start-up included): seconds and that process's peak memory."""
+    (start-up included): see timed()."""
+    return timed([sys.executable, "-m", "rapidcomp", "fix", path, "--profile", str(PROFILE),
+                  "--emit", "absj", "-o", out, "-q", *extra], env)
+
+
+def timed(cmd: list[str], env: dict | None) -> dict:
+    """cmd run to its end: seconds, that process's peak memory, and the
+    cores it used (wait4's CPU time counts the children it reaped)."""
     t = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "rapidcomp", "fix", path, "--profile",
-                             str(PROFILE), "--emit", "absj", "-o", out, "-q", *extra], env=env)
+    proc = subprocess.Popen(cmd, env=env)
     _, status, usage = os.wait4(proc.pid, 0)
     seconds = time.perf_counter() - t
     proc.returncode = os.waitstatus_to_exitcode(status)
     if proc.returncode:
-        raise SystemExit(f"rapidcomp fix exited with {proc.returncode}")
-    return {"s": seconds, "peak_MiB": usage.ru_maxrss / 1024}
+        raise SystemExit(f"{' '.join(cmd[2:4])} exited with {proc.returncode}")
+    return {"s": seconds, "peak_MiB": usage.ru_maxrss / 1024,
+            "cores": (usage.ru_utime + usage.ru_stime) / seconds}
 
 
 RUNS = 3
 
 
 def _runs(runs: list[dict]) -> str:
-    """The median of runs' seconds, each run's, and the largest peak."""
-    s = sorted(r["s"] for r in runs)
+    """The median of runs' seconds, each run's, the largest peak, and the
+    cores the median run used."""
+    s = sorted(runs, key=lambda r: r["s"])
     each = ", ".join(f"{r['s']:.2f}" for r in runs)
-    return (f"median {s[len(s) // 2]:.2f} s ({each}), "
-            f"peak {max(r['peak_MiB'] for r in runs):.0f} MiB")
+    median = s[len(s) // 2]
+    return (f"median {median['s']:.2f} s ({each}), "
+            f"peak {max(r['peak_MiB'] for r in runs):.0f} MiB, {_cores(median)}")
+
+
+def _cores(r: dict) -> str:
+    return f"{r['cores']:.2f} cores"
 
 
 def main() -> None:
@@ -219,12 +235,12 @@ def main() -> None:
         c = cli(str(path), str(Path(tmp) / "cam_comp.mod"), env=env)
     print(f"1 module x {n} targets, `rapidcomp fix --emit absj` end to end (start-up with "
           f"its bytecode compiled, as installed; reading, report, writing): {_runs(r)}; "
-          f"with --json too: {j['s']:.2f} s, peak {j['peak_MiB']:.0f} MiB")
+          f"with --json too: {j['s']:.2f} s, peak {j['peak_MiB']:.0f} MiB, {_cores(j)}")
     print(f"the same with Path called from main (every MoveL -> MoveAbsJ on a jointtarget "
           f"of its own, read again): {_runs(m)}")
     print(f"the same with one declared target also moved to with Offs (one of its two uses "
           f"written as a copy of its own, read again): {c['s']:.2f} s, "
-          f"peak {c['peak_MiB']:.0f} MiB")
+          f"peak {c['peak_MiB']:.0f} MiB, {_cores(c)}")
     # Two modules in one call: the process pool uses both cores.
     n //= 2
     with tempfile.TemporaryDirectory() as tmp:
@@ -236,17 +252,13 @@ def main() -> None:
             paths.append(str(path))
         cmd = [sys.executable, "-m", "rapidcomp", "fix", *paths, "--profile", str(PROFILE),
                "-o", str(Path(tmp) / "out"), "-q"]
-        t = time.perf_counter()
-        subprocess.run(cmd, check=True, env=env)
-        both = time.perf_counter() - t
-        t = time.perf_counter()
-        for path in paths:
-            subprocess.run([sys.executable, "-m", "rapidcomp", "fix", path, "--profile",
-                            str(PROFILE), "-o", str(Path(tmp) / "seq.mod"), "-q"], check=True,
-                           env=env)
-        seq = time.perf_counter() - t
-    print(f"2 modules x {n} targets, one call (2 workers): {both:.2f} s; "
-          f"one after the other: {seq:.2f} s (CLI, incl. start-up and writing)")
+        both = timed(cmd, env)
+        seq = [timed([sys.executable, "-m", "rapidcomp", "fix", path, "--profile",
+                      str(PROFILE), "-o", str(Path(tmp) / "seq.mod"), "-q"], env)
+               for path in paths]
+    print(f"2 modules x {n} targets, one call (2 workers): {both['s']:.2f} s, "
+          f"{_cores(both)}; one after the other: {sum(r['s'] for r in seq):.2f} s (CLI, incl. "
+          "start-up and writing)")
     # Transient compensation (warm-up and pauses: rcTcJ/rcTcR written, the
     # output verified at every thermal state), once per size.
     with tempfile.TemporaryDirectory() as tmp:
@@ -258,7 +270,7 @@ def main() -> None:
                     "45", env=env)
             print(f"`rapidcomp fix --transient --tau-heat 45` end to end, 1 module x {n} "
                   f"targets (Path called by nothing: rcTcR): {r['s']:.2f} s, "
-                  f"peak {r['peak_MiB']:.0f} MiB")
+                  f"peak {r['peak_MiB']:.0f} MiB, {_cores(r)}")
 
 
 if __name__ == "__main__":
