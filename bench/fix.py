@@ -153,20 +153,21 @@ def installed_env(cache: str) -> dict:
 def cli(path: str, out: str, *extra: str, env: dict | None = None) -> dict:
     """`rapidcomp fix` end to end in a process of its own, as a user runs it
     (start-up included): see timed()."""
-    return timed([sys.executable, "-m", "rapidcomp", "fix", path, "--profile", str(PROFILE),
-                  "--emit", "absj", "-o", out, "-q", *extra], env)
+    return timed([path, "--profile", str(PROFILE), "--emit", "absj", "-o", out, "-q", *extra],
+                 env)
 
 
-def timed(cmd: list[str], env: dict | None) -> dict:
-    """cmd run to its end: seconds, that process's peak memory, and the
-    cores it used (wait4's CPU time counts the children it reaped)."""
+def timed(args: list[str], env: dict | None) -> dict:
+    """`rapidcomp fix ARGS` run to its end: seconds, that process's peak
+    memory, and the cores it used (wait4's CPU time counts the children it
+    reaped)."""
     t = time.perf_counter()
-    proc = subprocess.Popen(cmd, env=env)
+    proc = subprocess.Popen([sys.executable, "-m", "rapidcomp", "fix", *args], env=env)
     _, status, usage = os.wait4(proc.pid, 0)
     seconds = time.perf_counter() - t
     proc.returncode = os.waitstatus_to_exitcode(status)
     if proc.returncode:
-        raise SystemExit(f"{' '.join(cmd[2:4])} exited with {proc.returncode}")
+        raise SystemExit(f"rapidcomp fix exited with {proc.returncode}")
     return {"s": seconds, "peak_MiB": usage.ru_maxrss / 1024,
             "cores": (usage.ru_utime + usage.ru_stime) / seconds}
 
@@ -250,12 +251,10 @@ def main() -> None:
             path = Path(tmp) / f"cam{k}.mod"
             path.write_text(cam_module(n, seed=k + 1, name=f"CAM_{k}"))
             paths.append(str(path))
-        cmd = [sys.executable, "-m", "rapidcomp", "fix", *paths, "--profile", str(PROFILE),
-               "-o", str(Path(tmp) / "out"), "-q"]
-        both = timed(cmd, env)
-        seq = [timed([sys.executable, "-m", "rapidcomp", "fix", path, "--profile",
-                      str(PROFILE), "-o", str(Path(tmp) / "seq.mod"), "-q"], env)
-               for path in paths]
+        both = timed([*paths, "--profile", str(PROFILE), "-o", str(Path(tmp) / "out"), "-q"],
+                     env)
+        seq = [timed([path, "--profile", str(PROFILE), "-o", str(Path(tmp) / "seq.mod"), "-q"],
+                     env) for path in paths]
     print(f"2 modules x {n} targets, one call (2 workers): {both['s']:.2f} s, "
           f"{_cores(both)}; one after the other: {sum(r['s'] for r in seq):.2f} s (CLI, incl. "
           "start-up and writing)")
