@@ -21,6 +21,7 @@ import pytest
 
 from cam_variants import VARIANTS, bench_module, jointtarget, robtarget, targets
 from rapidcomp.compensate import fix as F
+from rapidcomp.compensate import place as P
 from rapidcomp.compensate import report
 from rapidcomp.compensate import solve as S
 from rapidcomp.compensate import targets as T
@@ -616,10 +617,17 @@ def test_plain_declarations_read_as_the_lexer_reads_them():
 def _slow(monkeypatch):
     """Every shortcut that can be switched off, off."""
     _token_by_token(monkeypatch)
+    _groups_only(monkeypatch)
     monkeypatch.setattr(T.Resolver, "_plain_moves", lambda self: False)
     monkeypatch.setattr(S._Chooser, "QUICK", False)
     monkeypatch.setattr(V, "_plain_declared", lambda eng, pieces, *how: None)
     monkeypatch.setattr(V, "_plain_numaggs", lambda lits: False)
+
+
+def _groups_only(monkeypatch):
+    """fix's groups a Group each, no Singles (what check groups)."""
+    real = P.grouping
+    monkeypatch.setattr(P, "grouping", lambda *a, **k: real(*a, **{**k, "singles": False}))
 
 
 @pytest.mark.parametrize("mode", ["auto", "absj", "robtarget"])

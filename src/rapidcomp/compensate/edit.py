@@ -9,7 +9,6 @@ indentation and line break). Nothing else of the text changes.
 from __future__ import annotations
 
 import re
-from dataclasses import replace
 
 import numpy as np
 
@@ -23,7 +22,7 @@ from ..rapid import ast as A
 from ..rapid.values import RobTarget
 from ..rewrite import numbers, records
 from ..rewrite.names import NameAllocator
-from .place import Group, element_label, multi_index, writable
+from .place import Group, Singles, element_label, multi_index, writable
 from .plan import Plan
 from .solve import Solved
 from .targets import Source, base_pose, named_part, stacked_poses, wobj_targets
@@ -46,10 +45,8 @@ class Values:
         self.tol = quadrant_tol_deg
         self._values: dict = {}
 
-    def source(self, g: Group, k) -> Source:
-        if k is None or k == g.src.element:
-            return g.src
-        return replace(g.src, record=g.decl.value[k], element=k)
+    def source(self, g: Group | Singles, k) -> Source:
+        return g.source(k)
 
     def joints(self, g: Group, k) -> np.ndarray:
         if k in g.slots:
@@ -182,15 +179,18 @@ class Values:
             out.append(rows[j])
         return out
 
-    def _unsupervised(self, gs: list[Group]) -> list[bool]:
-        """Whether every use of each group runs without configuration
-        supervision (once per group: an array group is given once per
-        element)."""
+    def _unsupervised(self, items: list) -> list[bool]:
+        """Whether every use of each (group, element) runs without
+        configuration supervision (once per group: an array group is given
+        once per element; a single's one use, its element's)."""
         s = self.solved
         kind, row = s.picks.kind, s.row
         out = []
         seen: dict = {}
-        for g in gs:
+        for g, k in items:
+            if type(g) is Singles:
+                out.append(kind[g.rows[k]] == "closest")
+                continue
             uses = g.uses
             if len(uses) == 1:
                 # (One use: its row is the group's one row.)
@@ -315,10 +315,11 @@ class Values:
         srcs = [self.source(g, k) for g, k in items]
         n = len(items)
         resolver = self.plan.resolver
+        frames = [g.frames(k) for g, k in items]
         R, p = wobj_targets(stacked_poses([resolver.world_M_base(src.record) for src in srcs]),
-                            stacked_poses([g.wobj[1] for g, _ in items]),
+                            stacked_poses([wobj[1] for _, wobj in frames]),
                             (s.flange_R[rows], s.flange_p[rows]),
-                            stacked_poses([g.tool[1] for g, _ in items]))
+                            stacked_poses([tool[1] for tool, _ in frames]))
         for j, src in enumerate(srcs):
             if src.call is not None:
                 R[j], p[j] = base_pose(src, (R[j], p[j]))
@@ -332,7 +333,7 @@ class Values:
         # controller does not read it).
         keep = quadrant_miss(q[:, [0, 3, 5]], written[:, :3]) <= self.tol
         conf[:, :3] = np.where(keep, written[:, :3], conf[:, :3])
-        off = np.array(self._unsupervised([g for g, _ in items]), bool).reshape(n)
+        off = np.array(self._unsupervised(items), bool).reshape(n)
         conf[off] = written[off]
         return R, p, conf
 
@@ -403,9 +404,9 @@ def _named_conf(src: Source, texts) -> str | None:
             "supervision (a confdata of its own, written in the target, would serve)")
 
 
-def _why(g: Group, k) -> str:
+def _why(g: Group | Singles, k) -> str:
     """What an edit of element k's fields says it is for."""
-    return f"{element_label(g, k)} compensated"
+    return f"{element_label(g, None if type(g) is Singles else k)} compensated"
 
 
 def _style(word: str, like: str) -> str:
@@ -617,7 +618,10 @@ class Editor:
                                    lambda g, k: self.values.literal(g, k, texts.get(k)))
 
     # -------------------------------------------------------- per group
-    def apply(self, g: Group) -> None:
+    def apply(self, g: Group | Singles) -> None:
+        if type(g) is Singles:
+            self._apply_singles(g)
+            return
         if self.transient:
             self._apply_transient(g)
             return
@@ -707,6 +711,38 @@ class Editor:
             else:
                 self.edit(u.key[0], src.ref.span, new_ref, f"{u.label} -> {new_ref}")
                 self.actions[u.key] = f"new {type_name} {new_ref.split('{')[0]}"
+
+    def _apply_singles(self, s: Singles) -> None:
+        """apply() of each element of s as of the Group of its one use: its
+        inline literal's numbers rewritten (or left as written where no
+        number changes), or its move turned into MoveAbsJ on an inline
+        jointtarget. (Its literal is its use's alone, and a literal of
+        numbers names no confdata: nothing here fails.)"""
+        vals, actions = self.values, self.actions
+        if s.mode == "absj":
+            for n, u in enumerate(s.uses):
+                literal = vals.literal(s, n)
+                called = self._to_absj(u, literal)
+                self.converted[u.key] = (u, literal, None, called)
+                actions[u.key] = self._said(
+                    f"{u.motion.instruction} -> MoveAbsJ, inline jointtarget")
+            return
+        fields, lists = self.fields, self.field_lists
+        for n, u in enumerate(s.uses):
+            texts, changes = vals.field_edits(s, n)
+            if not changes:
+                actions[u.key] = "unchanged (the change is below the written precision)"
+                continue
+            record = u.source.record
+            fi = u.key[0]
+            key = (fi, record.span.start)
+            if key in fields:
+                raise InternalError(f"{self.plan.files[fi].source.display_path}: a literal "
+                                    f"read by one use is written twice (offset "
+                                    f"{record.span.start})")
+            fields[key] = (record, texts)
+            lists.append((fi, changes))
+            actions[u.key] = "inline robtarget rewritten"
 
     # -------------------------------------------------------- transient
     def _dq_literal(self, g: Group, k) -> str:

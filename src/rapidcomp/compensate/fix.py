@@ -116,7 +116,10 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # The uses grouped as far as their nominal solutions decide, while the
     # deformed robot's IK is made beside (solve.Solving).
     solving = Solving(plan, solver, start)
-    gs = P.grouping(plan, solving, mode, solver.options.wrist_fallback_deg)
+    # (Inline literals read by one use alone are Singles, not a Group
+    # each: a CAM program's 1e5; transient mode writes Groups only.)
+    gs = P.grouping(plan, solving, mode, solver.options.wrist_fallback_deg,
+                    singles=transient is None)
     # The plan's notes made meanwhile too: past the groups nothing reads the
     # flow (printing and verifying the values read the plan's uses and
     # resolver; the rows its uses and track).
@@ -168,9 +171,11 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         # verification); a retry prepares them again.
         # (Only where a robtarget is written: a CAM program's 1e5 MoveAbsJ,
         # none; rows.use_rows reads a use not in it as none written.)
-        done = [(g, u) for g in gs if g.failure is None and g.mode == "rob" for u in g.uses]
-        written_conf = dict(zip([u.key for _, u in done],
-                                values.confs([(g, u.source.element) for g, u in done])))
+        done = [(g, n if type(g) is P.Singles else u.source.element, u)
+                for g in gs if g.failure is None and g.mode == "rob"
+                for n, u in enumerate(g.uses)]
+        written_conf = dict(zip([u.key for _, _, u in done],
+                                values.confs([(g, k) for g, k, _ in done])))
         values.forget()
         # (The new declarations are in the edits now, as texts of their own:
         # 1e5 MoveL turned into MoveAbsJ, ~18 MB of them twice.)
@@ -357,7 +362,8 @@ def _transient_notes(tr, state_errors: dict) -> list[str]:
 def _missed(solved, gs, verified) -> dict:
     """Groups with a use whose written value misses its pose beyond the
     bound (the orientation bound widened by what a wrist-singular MoveAbsJ
-    leaves over): group -> (use, um, deg)."""
+    leaves over): group -> (use, um, deg). An element of Singles that
+    misses is taken out of it into gs as the Group of its own it is."""
     # A use misses only beyond both bounds' floors: where none does (a CAM
     # program's 1e5 uses), no group needs looking at.
     if not any(um > VERIFY_UM or deg > VERIFY_DEG for um, deg in verified.values()):
@@ -367,8 +373,23 @@ def _missed(solved, gs, verified) -> dict:
     # use: the same division of the same doubles.)
     lefts = (solved.deformed.residual_rad.astype(float) / DEG).tolist()
     row = solved.row
-    for g in gs:
+    for g in list(gs):
         if g.failure is not None:
+            continue
+        if type(g) is P.Singles:
+            # (Each a Group of its own, as it would be: that one fails.)
+            missed = {}
+            for n, u in enumerate(g.uses):
+                um, deg = verified[u.key]
+                if um > VERIFY_UM or deg > max(VERIFY_DEG, lefts[g.rows[n]] + VERIFY_DEG):
+                    missed[n] = (u, um, deg)
+            for n, got in missed.items():
+                one = g.single(n, placed=True)
+                gs.append(one)
+                out[one] = got
+            g.drop(missed)
+            if not g.uses:
+                gs.remove(g)
             continue
         for u in g.uses:
             um, deg = verified[u.key]

@@ -17,13 +17,14 @@ reached on two configurations needs two values). Placement:
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
 import numpy as np
 
 from ..errors import InputError
 from ..kinematics.ik import IKOptions, Solver, Warn
+from ..rapid import ast as A
 from ..rapid.model import Declaration, Module
 from .plan import Plan
 from .solve import Solved, Solving, same_joints, solve_slots
@@ -80,6 +81,69 @@ class Group:
     @property
     def home_module(self) -> Module:
         return self.home[1]
+
+    def source(self, k) -> Source:
+        """Element k's source (the group's own, or an array element's)."""
+        if k is None or k == self.src.element:
+            return self.src
+        return replace(self.src, record=self.decl.value[k], element=k)
+
+    def frames(self, k) -> tuple:
+        """(tool, wobj) element k is written for: the group's."""
+        return self.tool, self.wobj
+
+
+@dataclass(eq=False, slots=True)
+class Singles:
+    """Inline literals of numbers each read by one use alone, not in a FOR
+    loop, nor in Offs/RelTool (a CAM program's 1e5 moves), that compensate
+    without failing: what a Group of one use each would be, held as columns
+    (issue #14: no Group per target). Element n is uses[n] (its row in
+    Solved rows[n]); written inline like such a group (Editor.apply). A
+    use that fails (its solve, the wrist singularity, its verification)
+    becomes a Group of its own (settle, single), which says why as a Group
+    does; `groups(singles=False)` makes every one a Group (check, and the
+    tests that compare the two)."""
+
+    mode: str                        # "absj" or "rob", as Group.mode
+    uses: list = field(default_factory=list)
+    rows: list = field(default_factory=list)
+    # As a Group placed inline, nothing failed, no name or slot written.
+    failure: None = None
+    placement: str | None = "inline"
+    names: Mapping = field(default_factory=lambda: NONE)
+    slots: Mapping = field(default_factory=lambda: NONE)
+    array: bool = False
+    decl: None = None
+    kept: frozenset = frozenset()
+
+    @property
+    def elements(self) -> range:
+        return range(len(self.uses))
+
+    def source(self, n: int) -> Source:
+        return self.uses[n].source
+
+    def frames(self, n: int) -> tuple:
+        u = self.uses[n]
+        return u.tool, u.wobj
+
+    def single(self, n: int, placed: bool = False) -> Group:
+        """Element n as the Group of its one use grouping() makes; placed:
+        as settle() and place() leave it (it compensates, inline)."""
+        u = self.uses[n]
+        g = Group(self.mode, u.source, u.tool, u.wobj, (u.key[0], u.module))
+        g.uses.append(u)
+        g.rows_seen[None] = self.rows[n]
+        if placed:
+            g.elements, g.rows, g.placement = [None], g.rows_seen, "inline"
+        return g
+
+    def drop(self, ns) -> None:
+        """Without elements ns."""
+        gone = set(ns)
+        self.uses = [u for n, u in enumerate(self.uses) if n not in gone]
+        self.rows = [r for n, r in enumerate(self.rows) if n not in gone]
 
 
 def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int) -> str:
@@ -184,18 +248,22 @@ def element_label(g: Group, k) -> str:
 
 
 def groups(plan: Plan, solved: Solved, mode: str,
-           wrist_deg: float = IKOptions.wrist_fallback_deg) -> list[Group]:
+           wrist_deg: float = IKOptions.wrist_fallback_deg,
+           singles: bool = False) -> list[Group | Singles]:
     """Uses that share one written value. FOR-walked array uses form one
     group per array (one value per element); any other use joins it when
     its solution there is the same, else groups by its own solution (a
-    target reached on two solutions needs two values)."""
-    gs = grouping(plan, solved, mode, wrist_deg)
+    target reached on two solutions needs two values). singles: the
+    inline literals read by one use alone that compensate are Singles
+    (one per mode), not a Group each."""
+    gs = grouping(plan, solved, mode, wrist_deg, singles)
     settle(gs, solved, plan, mode)
     return gs
 
 
 def grouping(plan: Plan, solved: Solved | Solving, mode: str,
-             wrist_deg: float = IKOptions.wrist_fallback_deg) -> list[Group]:
+             wrist_deg: float = IKOptions.wrist_fallback_deg,
+             singles: bool = False) -> list[Group | Singles]:
     """groups() as far as the nominal solutions decide them (a Solving's
     uses, rows, nominal solutions and picks: made while the deformed
     robot's IK is under way); settle() completes them. wrist_deg: the
@@ -220,8 +288,17 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
     # of what one written value serves.
     wrist = np.abs(np.nan_to_num(q_all[:, 4], nan=180.0)) < wrist_deg
     kept = _one_statement(loop_first, modes)
+    alone = {"absj": Singles("absj"), "rob": Singles("rob")} if singles else None
     for u, row, m in zip(loop_first, rows, modes):
         src = u.source
+        if alone is not None and src.decl is None and type(src.ref) is A.NumAgg \
+                and m != "joint" and src.call is None and not src.by_loop and not u.env:
+            # (Its own literal, which no other use reads: a Group of its
+            # own, as a column of Singles.)
+            s = alone[m]
+            s.uses.append(u)
+            s.rows.append(row)
+            continue
         if src.decl is not None and file_index[id(src.home)] < plan.n_written:
             home = (file_index[id(src.home)], src.home_module)
         else:
@@ -248,17 +325,31 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
         g.rows_seen.setdefault(src.element, row)
         if u.key in kept:
             g.kept = g.kept | {u.key}
+    if alone is not None:
+        out += [s for s in alone.values() if s.uses]
     return out
 
 
 def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
     """Each group's elements, rows and failure, and whether a new
-    declaration of it is LOCAL (groups() past grouping())."""
+    declaration of it is LOCAL (groups() past grouping()). An element of
+    Singles that fails is taken out of it into gs as the Group of its own
+    it is (gs changes: a Singles left empty goes)."""
     # Whether each row is solved, and needs a J4/J6 split at the wrist
     # singularity (_elements, _wrist: as Python values at once).
     ok = solved.oks()
     left = ((solved.deformed.warnings.astype(np.int64) & _LEFT) != 0).tolist()
+    # A single that fails is a Group of its own, which says why.
+    for s in [g for g in gs if type(g) is Singles]:
+        failed = [n for n, i in enumerate(s.rows)
+                  if not ok[i] or (left[i] and s.mode == "rob")]
+        gs += [s.single(n) for n in failed]
+        s.drop(failed)
+        if not s.uses:
+            gs.remove(s)
     for g in gs:
+        if type(g) is Singles:
+            continue
         _elements(g, solved, ok, left)
         if g.failure is None and g.mode == "rob":
             _wrist(g, solved, left, plan, mode)

@@ -23,7 +23,7 @@ from collections import Counter
 import numpy as np
 
 from ..edits import EditColumns, apply_edits
-from .place import Group
+from .place import Group, Singles
 from .plan import Plan
 
 
@@ -35,7 +35,8 @@ def take_back(plan: Plan, gs: list[Group], failed: list[Group], file_edits: dict
     `failed` has its failure set; the others' are as they were written."""
     # How many groups read each declaration and each inline aggregate (once,
     # not per group taken back: a CAM program may have thousands).
-    sharing = Counter(_literal_key(h) for h in gs)
+    # (A Singles' literals are each read by one use alone: none counted.)
+    sharing = Counter(_literal_key(h) for h in gs if type(h) is not Singles)
     spans: dict[int, list[tuple[int, int]]] = {}
     for g in failed:
         literals = _own_literals(plan, g, sharing)
