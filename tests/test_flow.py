@@ -674,3 +674,40 @@ def test_join_of_states_is_their_flags_and_last_moves_united():
         twin = State(*(None if v is None else frozenset(v) for v in
                        (b.confj, b.confl, b.pdisp, b.eoffs, b.last)))
         assert b.join(twin) is b
+
+
+def test_a_backward_handler_runs_under_a_displacement_only_where_one_may_be_on():
+    """Stepping backwards may come at any point of the program: a BACKWARD
+    handler's move runs with supervision and the position unknown, and
+    under program displacement only where something may switch one on (a
+    PDispOn, or a call not known statically); where nothing can, none is
+    assumed there either, as the entry's note says. Its singular robtarget
+    is then refused for what does keep it from MoveAbsJ (the position
+    before it), not for a displacement no module can set."""
+    home = f"[[515,0,712],[0.707107,0,0.707107,0],[0,0,0,0],{EXT}]"
+
+    def reason(extra: str) -> str:
+        t = task(f"""MODULE A
+    CONST robtarget pHome:={home};
+    PROC main()
+        MoveJ pHome, v100, fine, tool0;
+        routine1;{extra}
+    ENDPROC
+    PROC routine1()
+        MoveAbsJ [[0,0,0,0,30,0],{EXT}], v100, fine, tool0;
+    BACKWARD
+        MoveL pHome, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+        rows = [r for r in fix(t, SOLVER, "absj").rows if r.instruction == "MoveL"]
+        assert len(rows) == 1 and rows[0].status == "not compensated"
+        assert "J4/J6 split a robtarget cannot carry" in rows[0].reason
+        return rows[0].reason.split("itself)", 1)[1]
+    displaced = (": a MoveAbsJ can, but not here: program displacement may be active here (a "
+                 "MoveAbsJ would ignore it): kept a robtarget move")
+    none = reason("")
+    assert "displacement" not in none
+    assert none.startswith(": a MoveAbsJ can, but not here: ConfL\\Off and the robot's "
+                           "position before this move is not known here")
+    assert reason("\n        PDispOn \\ExeP:=pHome, pHome, tool0;\n        PDispOff;") == displaced
+    assert reason("\n        %\"rout\" + \"ine2\"%;") == displaced

@@ -206,6 +206,8 @@ class _Walker:
         # What nothing is known of: as UNKNOWN, and where the task sets
         # program displacement at run time, that too (run()).
         self.unknown = UNKNOWN
+        # The state a BACKWARD or UNDO handler runs in (run()).
+        self.stepped = UNKNOWN
         # id(PDispOn/PDispSet statement) -> why its displacement is set at
         # run time (_find_measured, which sees every one before the walk).
         self.run_time: dict = {}
@@ -266,12 +268,15 @@ class _Walker:
     def run(self) -> Flow:
         called = set()
         names = set()
+        unknown_calls = False
         for rt in self.routines:
             for name in self.called_names(rt.node):
                 names.add(name)
                 c = self.callee(rt.module, name)
                 if c is not None and c is not rt:
                     called.add(id(c.node))
+                elif c is None and not self.known(rt, name):
+                    unknown_calls = True
         has_pdisp = bool(names & DISPLACEMENT_ON)
         has_eoffs = self.track and bool(names & TRACK_OFFSET_ON)
         if has_pdisp:
@@ -281,6 +286,13 @@ class _Walker:
         entry = State(BOTH, BOTH, self.unknown.pdisp if has_pdisp else _OFF,
                       BOTH if has_eoffs else _OFF, frozenset((PROGRAM_START,)))
         self.flow.entry = replace(entry, last=None)
+        # Stepping backwards may come at any point of the program: a
+        # BACKWARD or UNDO handler's moves run with supervision and the
+        # robot's position unknown, and a displacement where anything may
+        # switch one on (something does, or a call not known statically
+        # may); where nothing can, none (as at entry).
+        self.stepped = (self.unknown if unknown_calls else
+                        State(BOTH, BOTH, entry.pdisp, entry.eoffs, None))
         main = next((rt for rt in self.routines if rt.fi < self.n_written
                      and rt.node.kind == "PROC"
                      and rt.node.name.lower() == self.resolver.entry.lower()), None)
@@ -530,8 +542,9 @@ class _Walker:
         for h in rt.node.handlers:
             if h.kind != "ERROR":
                 # BACKWARD and UNDO run only when stepping backwards or
-                # leaving the routine: their moves in the unknown state.
-                self.walk(h.body, self.unknown, {}, _Frame(rt, stack))
+                # leaving the routine: their moves in the state that may
+                # hold anywhere (run()).
+                self.walk(h.body, self.stepped, {}, _Frame(rt, stack))
         handlers = [h for h in rt.node.handlers if h.kind == "ERROR"]
         floor = None
         labels: dict = {}
