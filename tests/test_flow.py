@@ -280,15 +280,23 @@ ENDMODULE""")
     assert u.blocked and "declared globally more than once (M0.mod:3, M1.mod:3)" in u.reason
 
 
-def test_missing_tool_only_is_named():
+def test_a_missing_tool_is_named_with_its_missing_work_object():
+    """Both named at once (as a missing target is with them), so that the
+    declaring modules are given at once, not found one run at a time; a
+    work object that is declared (wobj0 here) is not named."""
     t = task(f"""MODULE A
     PROC main()
         MoveL {P1}, v100, fine, tGun\\WObj:=wTable;
+        MoveL {P1}, v100, fine, tGun;
     ENDPROC
 ENDMODULE""")
-    r = rows_of(t)[3]
-    assert r.status == "not compensated"
-    assert r.reason.startswith("tool tGun is not declared in the given modules (give the whole task")
+    rows = rows_of(t)
+    both, alone = rows[3], rows[4]
+    assert both.status == alone.status == "not compensated"
+    assert both.reason.startswith("tool tGun and work object wTable are not declared in the "
+                                  "given modules (give the whole task")
+    assert alone.reason.startswith("tool tGun is not declared in the given modules (give the "
+                                   "whole task")
 
 
 def test_an_element_reached_on_two_configurations_gets_two_values():
