@@ -170,3 +170,31 @@ def test_a_target_a_search_writes_is_assigned_at_run_time(tmp_path):
                                          (7, "pk", "untouched")]
     assert rows[0][3] is None and rows[1][3] is None
     assert rows[2][3].startswith("pk is assigned at run time (search.mod:6)")
+
+
+def test_a_pose_the_warm_robot_does_not_reach_at_a_singularity_says_which(tmp_path):
+    """A MoveAbsJ home with the arm stretched out (J3 = -90 on the IRB 140)
+    and J5 = 0: the warm robot's solve does not converge there, and the
+    reason names both singularities (a public program's home position,
+    which said only "did not converge"); one at neither converges."""
+    mod = tmp_path / "home.mod"
+    mod.write_text("""MODULE H
+  CONST jointtarget jHome:=[[0,0,-90,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  CONST jointtarget jUp:=[[0,0,-90,0,30,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  CONST jointtarget jBent:=[[0,10,20,0,30,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  PROC main()
+    MoveAbsJ jHome,v500,z100,tool0;
+    MoveAbsJ jUp,v500,z100,tool0;
+    MoveAbsJ jBent,v500,z100,tool0;
+  ENDPROC
+ENDMODULE
+""")
+    r = run(mod, "--profile", PROFILE)
+    assert r.exit_code == 1, r.output
+    lines = {int(x.split()[0]): x for x in r.output.splitlines()
+             if x.strip()[:1].isdigit() and "MoveAbsJ" in x}
+    elbow = "the elbow singularity (the arm stretched out)"
+    assert "did not converge (residual" in lines[6]
+    assert f"the pose is at {elbow} and the wrist singularity (J5 ~ 0), where" in lines[6]
+    assert f"the pose is at {elbow}, where a small change" in lines[7]
+    assert "compensable" in lines[8] and "not compensable" not in lines[8]

@@ -106,6 +106,23 @@ class IKResult:
     warnings: tuple[str, ...]
 
 
+def _near(bits: int) -> str:
+    """Where a solve that did not converge was: the singularities near its
+    last joints (at the elbow's, the arm stretched out, a pose moves the
+    joints far for a small change of the arm: the deformed robot may reach
+    it only by a large J2/J3 change, or not at all)."""
+    near = [what for bit, what in ((Warn.SHOULDER_SINGULAR, "the shoulder singularity (the "
+                                    "wrist centre near axis 1)"),
+                                   (Warn.ELBOW_SINGULAR, "the elbow singularity (the arm "
+                                    "stretched out)"),
+                                   (Warn.WRIST_SINGULAR, "the wrist singularity (J5 ~ 0)"))
+            if bits & bit]
+    if not near:
+        return ""
+    return (": the pose is at " + " and ".join(near) + ", where a small change of the arm "
+            "needs a large one of the joints")
+
+
 @dataclass(frozen=True, eq=False)
 class IKBatch:
     """Results of N targets as arrays; `result(i)` gives the i-th object."""
@@ -150,7 +167,7 @@ class IKBatch:
         if s == Status.JOINT_LIMIT:
             return f"J{j + 1} beyond its limit by {d:.4f} deg"
         if s == Status.NOT_CONVERGED:
-            return f"did not converge (residual {d:.3g} mm)"
+            return f"did not converge (residual {d:.3g} mm)" + _near(int(self.warnings[i]))
         if s == Status.JOINT_JUMP:
             near = (j in (3, 5) and self.q_deg is not None and not np.isnan(self.q_deg[i, 4])
                     and abs(self.q_deg[i, 4]) < 5.0)
