@@ -258,6 +258,8 @@ def test_unwritable_output_is_a_clean_error(tmp_path):
     r = CliRunner().invoke(main, ["fix", str(FIXTURES / "paper_front.mod"), "--profile",
                                   str(WARM), "-o", str(blocker / "x.mod")])
     assert r.exit_code == 2 and "cannot write" in r.output and str(blocker) in r.output
+    # (What is wrong with the path, not the OS's "File exists".)
+    assert f"cannot write: {blocker} is a file, not a folder; nothing written" in r.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file.txt"]
 
 

@@ -398,3 +398,25 @@ def test_two_modules_of_one_program_file_that_clash_are_refused_as_two_files_are
     r = run("check", prg, "--profile", WARM)
     assert r.exit_code == 2 and "n is declared globally in two modules (also " in r.output, \
         r.output
+
+
+def test_a_task_folder_holding_fix_output_says_so(tmp_path):
+    """`fix` on a program file writes PROGRAM_comp beside it, inside the
+    task's folder: `fix` on the folder then meets every module twice and
+    refuses (the controller would), naming the output folder as what to
+    move; a module copied twice elsewhere is refused without that hint."""
+    glue = tmp_path / "glue"
+    shutil.copytree(TASKS / "glue", glue)
+    r = run("fix", glue / "Glue.pgf", "--profile", WARM, "--allow-partial")
+    assert r.exit_code in (0, 1) and (glue / "Glue_comp").is_dir(), r.output
+    r = run("check", glue, "--profile", WARM)
+    assert r.exit_code == 2, r.output
+    assert ("a task holds each module once (the controller refuses to load it twice); give "
+            "the program file (.pgf) or a folder without the copy (Glue_comp is named as "
+            "`rapidcomp fix` names its output: move it out of the task's folder)") in r.output
+    shutil.rmtree(glue / "Glue_comp")
+    (glue / "spare").mkdir()
+    shutil.copy(glue / "GlueData.mod", glue / "spare" / "GlueData.mod")
+    r = run("check", glue, "--profile", WARM)
+    assert r.exit_code == 2 and "give the program file (.pgf) or a folder without the copy\n" \
+        in r.output.replace("\r", ""), r.output

@@ -32,7 +32,13 @@ def _write(files) -> None:
         write_all([(Path(p), data) for p, data in files])
     except OSError as exc:
         where = exc.filename or "output"
-        _fail(RapidcompError(f"{where}: cannot write: {exc.strerror or exc}; nothing written"))
+        why = exc.strerror or str(exc)
+        # (A folder of the path that is a file: makedirs says "File exists".)
+        blocking = next((str(p) for p in Path(str(where)).parents
+                         if p.exists() and not p.is_dir()), None) if exc.filename else None
+        if blocking is not None:
+            why = f"{blocking} is a file, not a folder"
+        _fail(RapidcompError(f"{where}: cannot write: {why}; nothing written"))
 
 
 class _Group(click.Group):

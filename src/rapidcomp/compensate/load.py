@@ -6,6 +6,7 @@ Shared by `check` and `fix`; errors are InputError/RapidcompError."""
 from __future__ import annotations
 
 import os
+from pathlib import PurePath
 
 from ..errors import InputError, RapidcompError
 from ..rapid.task import TaskSource, tasks_of
@@ -65,10 +66,17 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
         for m in pf.modules:
             first = seen.setdefault(m.name.lower(), pf.source.display_path)
             if first != pf.source.display_path:
+                # (A folder `fix` wrote inside the task: a .pgf's output is
+                # PROGRAM_comp beside it.)
+                output = next((part for path in (first, pf.source.display_path)
+                               for part in PurePath(path).parts[:-1]
+                               if part.lower().endswith("_comp")), None)
                 raise InputError(_shown(source, pf.source.display_path),
                                  f"module {m.name} is also in {first}: a task holds each module "
                                  "once (the controller refuses to load it twice); give the "
-                                 "program file (.pgf) or a folder without the copy",
+                                 "program file (.pgf) or a folder without the copy"
+                                 + (f" ({output} is named as `rapidcomp fix` names its output: "
+                                    "move it out of the task's folder)" if output else ""),
                                  pf.line(m.node.name_span))
     _one_global_each(source, files)
     mine = {os.path.realpath(source.root / rel) for rel in source.modules}
