@@ -719,3 +719,23 @@ ENDMODULE""")
                            "position before this move is not known here")
     assert reason("\n        PDispOn \\ExeP:=pHome, pHome, tool0;\n        PDispOff;") == displaced
     assert reason("\n        %\"rout\" + \"ine2\"%;") == displaced
+
+
+def test_of_as_many_uses_the_plain_one_keeps_the_declaration():
+    """A target read plainly by one move and in Offs by another: two values
+    of as many uses. The declaration is edited in place for the plain use
+    (its name keeps the value it is read for) and the Offs use reads a copy
+    named for the call, in whichever order the moves come."""
+    for first, second in ((0, 1), (1, 0)):
+        moves = ["MoveL p1, v100, fine, tool0;", "MoveL Offs(p1, 0, 0, 20), v100, fine, tool0;"]
+        t = task(f"""MODULE A
+    CONST robtarget p1:={P1};
+    PROC main()
+        {moves[first]}
+        {moves[second]}
+    ENDPROC
+ENDMODULE""")
+        rows = rows_of(t, "robtarget")
+        plain, offs = (rows[4], rows[5]) if first == 0 else (rows[5], rows[4])
+        assert plain.action == "robtarget p1 rewritten in place"
+        assert offs.action == "new robtarget p1_offs_c"

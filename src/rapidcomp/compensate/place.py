@@ -485,7 +485,10 @@ def place(plan: Plan, gs: list[Group]) -> None:
                      and name not in plan.resolver.shared
                      and all(g.failure is None for g in decl_groups)
                      and refs.get(name, set()) - consumed == mine)
-        writable.sort(key=lambda g: -len(g.uses))
+        # (The most uses; of as many, one that reads it plainly, not in
+        # Offs/RelTool: the declaration keeps the value its name is read
+        # for, and the copy is named for the call.)
+        writable.sort(key=lambda g: (-len(g.uses), g.src.call is not None))
         for n, g in enumerate(writable):
             g.placement = "in place" if exclusive and n == 0 else "new"
 
