@@ -340,7 +340,10 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
         if not quiet:
             src = o.spec.source
             what = r.program if not src.is_folder else f"{src.input} ({r.program})"
-            click.echo(f"{what} -> {o.spec.output} ({r.mode})")
+            # (Where nothing will be written, the first line says so too:
+            # the reason follows on stderr.)
+            held = "; not written" if failed and not allow_partial else ""
+            click.echo(f"{what} -> {o.spec.output} ({r.mode}{held})")
             for line in summary_lines(r):
                 click.echo(f"  {line}")
             for note in r.notes:
