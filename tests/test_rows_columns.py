@@ -62,6 +62,15 @@ def test_rows_read_by_column_are_the_rows(path, mode, solver, solver_115):
             seen.add((r.status, r.nominal_deg is None, r.compensated_deg is None))
         for name in BASE_FIELDS:
             assert rows.column(name) == [getattr(r, name) for r in made]
+        # Blocks of fields, as the reports take them: a range, a list of
+        # consecutive rows, rows apart or out of order, none.
+        n = len(made)
+        bases = [tuple(getattr(r, f) for f in BASE_FIELDS) for r in made]
+        for ks in (range(n), range(1, n, 2), list(range(1, n - 1)), [n - 1, 0],
+                   [0, n - 1], [], range(0)):
+            assert rows.bases(ks) == [bases[k] for k in ks], ks
+        # (No tuple of fields kept per row: a column per field.)
+        assert not hasattr(rows, "_base") and len(rows._cols) == len(BASE_FIELDS)
         assert summary(rows) == summary(made)
         if result.cells is not None:
             for k, r in enumerate(made):

@@ -216,7 +216,13 @@ def _table(rows: Rows, ks: list[int], cells, transient: bool = False) -> Iterato
            "conf before | conf after | notes |",
            "|---:|---|---|---|---|---|---|---|---|---:|---:|---:|---|---|---|"]
     yield from out
-    yield from (_row_of(rows, k, cells[k]) for k in ks)
+    # (Each block's fields taken from the columns at once.)
+    for at in range(0, len(ks), _TABLE_BLOCK):
+        block = ks[at:at + _TABLE_BLOCK]
+        yield from (_row_of(rows, k, cells[k], b) for k, b in zip(block, rows.bases(block)))
+
+
+_TABLE_BLOCK = 4096
 
 
 # A row with every number (a CAM report has 1e5): two % operations, the same
@@ -256,12 +262,14 @@ _AT_CONF_BEFORE, _AT_CONF_AFTER, _AT_WARNINGS, _AT_REASON = (BASE_FIELDS.index(f
 assert BASE_FIELDS[1:7] == ("line", "instruction", "target", "status", "rule", "action")
 
 
-def _row_of(rows: Rows, k: int, cells: str | None = None) -> str:
-    """_row(rows[k], cells), read from the row's fields where it has every
-    number (no UseRow nor tuples of joints made: a CAM report's 1e5)."""
+def _row_of(rows: Rows, k: int, cells: str | None = None, b: tuple | None = None) -> str:
+    """_row(rows[k], cells), read from the row's fields (b: rows.base(k),
+    when the caller has it) where it has every number (no UseRow nor
+    tuples of joints made: a CAM report's 1e5)."""
     if not rows.full(k):
         return _row_general(rows[k])
-    b = rows.base(k)
+    if b is None:
+        b = rows.base(k)
     if cells is None:
         qn, qc, dq = rows.joints(k)
         cells = _CELLS % (*qn, *qc, *dq, b[_AT_ERROR_UM], b[_AT_ERROR_DEG])
@@ -479,7 +487,7 @@ def _json_block_made(rows: Rows, ks: range, made) -> list[str] | None:
     row k) where the row has all three joints, else made here; None where
     a value is not of the kinds the template writes (the caller's
     _json_block: the encoder where it must)."""
-    bs = [rows.base(k) for k in ks]
+    bs = rows.bases(ks)
     # (A code 2i + 1: all three joints of solved row i; -1 or 2i: not.)
     middles = [made[k] if c >= 0 and c & 1 else None for k, c in zip(ks, map(rows.code, ks))]
     try:

@@ -133,27 +133,31 @@ assert FIELDS[7:10] == _JOINTS
 
 
 class Rows(Sequence):
-    """Every use's row, in text order, as a result holds them: per row its
-    fields but the joints (a tuple), and where its joints are in the
-    solved numbers' rounded arrays (one int: -1 none, 2i the nominal
-    joints of solved row i only, 2i + 1 all three). A row is a UseRow
-    made when asked for; no tuple of joints is kept per row (a CAM
-    program's 1e5 rows: ~75 MB), and the reports read the columns
-    (column(), base(), joints(), values()). A slice is a list of rows."""
+    """Every use's row, in text order, as a result holds them: its fields
+    but the joints as columns (BASE_FIELDS, a list each), and where each
+    row's joints are in the solved numbers' rounded arrays (one int: -1
+    none, 2i the nominal joints of solved row i only, 2i + 1 all three).
+    A row is a UseRow made when asked for; nothing is kept per row (a CAM
+    program's 1e5 rows: no tuple of joints, ~75 MB, nor of fields, ~18
+    MB), and the reports read the columns (column(), bases(), joints(),
+    values()). A slice is a list of rows."""
 
     def __init__(self, base: list[tuple], codes: list[int], joints: tuple):
-        self._base, self._codes, self._joints = base, codes, joints
+        """base: each row's fields but the joints (BASE_FIELDS), kept as
+        columns."""
+        self._cols = tuple(map(list, zip(*base))) if base else tuple([] for _ in BASE_FIELDS)
+        self._codes, self._joints = codes, joints
         self._full: list[bool] | None = None
 
     def __len__(self) -> int:
-        return len(self._base)
+        return len(self._codes)
 
     def __getitem__(self, k):
         if isinstance(k, slice):
-            return self._rows(range(*k.indices(len(self._base))))
+            return self._rows(range(*k.indices(len(self))))
         if k < 0:
-            k += len(self._base)
-        if not 0 <= k < len(self._base):
+            k += len(self)
+        if not 0 <= k < len(self):
             raise IndexError("row index out of range")
         return self._row(k)
 
@@ -162,8 +166,8 @@ class Rows(Sequence):
         return hash(tuple(self))
 
     def __iter__(self):
-        for at in range(0, len(self._base), _BLOCK):
-            yield from self._rows(range(at, min(at + _BLOCK, len(self._base))))
+        for at in range(0, len(self), _BLOCK):
+            yield from self._rows(range(at, min(at + _BLOCK, len(self))))
 
     def _rows(self, ks) -> list[UseRow]:
         """The rows ks (UseRow)."""
@@ -190,8 +194,7 @@ class Rows(Sequence):
                          nan[at].tolist()))
         (qn, qn_nan), (qc, qc_nan), (dq, dq_nan) = made
         out = []
-        for n, (k, code) in enumerate(zip(ks, codes)):
-            b = self._base[k]
+        for n, (b, code) in enumerate(zip(self.bases(ks), codes)):
             if code < 0:
                 q = (None, None, None)
             elif code & 1:
@@ -227,14 +230,14 @@ class Rows(Sequence):
         return self._joint(0, i), None, None
 
     def _row(self, k: int) -> UseRow:
-        b = self._base[k]
+        b = self.base(k)
         return _new_row(b[0], b[1], b[2], b[3], b[4], b[5], b[6], *self.joints(k), b[7], b[8],
                         b[9], b[10], b[11], b[12], b[13], b[14])
 
     def column(self, name: str) -> list:
-        """Every row's value of field `name` (not a joints field)."""
-        at = _AT[name]
-        return [b[at] for b in self._base]
+        """Every row's value of field `name` (not a joints field), as a
+        list of its own."""
+        return list(self._cols[_AT[name]])
 
     def code(self, k: int) -> int:
         """Where row k's joints are (-1: none; 2i: solved row i's nominal
@@ -243,7 +246,21 @@ class Rows(Sequence):
 
     def base(self, k: int) -> tuple:
         """Row k's fields but its joints (BASE_FIELDS)."""
-        return self._base[k]
+        return tuple([c[k] for c in self._cols])
+
+    def bases(self, ks) -> list[tuple]:
+        """base(k) of each of rows ks, made a column at a time (a
+        contiguous range, as the reports ask for blocks, by slices)."""
+        if type(ks) is not range:
+            ks = list(ks)
+            if not ks:
+                return []
+            if ks[-1] - ks[0] + 1 != len(ks) or any(b <= a for a, b in zip(ks, ks[1:])):
+                return list(zip(*[[c[k] for k in ks] for c in self._cols]))
+            ks = range(ks[0], ks[-1] + 1)
+        if ks.step != 1:
+            return list(zip(*[[c[k] for k in ks] for c in self._cols]))
+        return list(zip(*[c[ks.start:ks.stop] for c in self._cols]))
 
     def full(self, k: int) -> bool:
         """Row k has all three joints, six each, none a NaN, and its error
@@ -263,9 +280,9 @@ class Rows(Sequence):
             at = np.where(ok, codes >> 1, 0)
             for _, nan in self._joints:
                 ok &= ~nan[at]
-        e, d, r = _AT["error_um"], _AT["error_deg"], _AT["residual_um"]
-        return [bool(o) and b[e] is not None and b[d] is not None and b[r] is not None
-                for o, b in zip(ok.tolist(), self._base)]
+        e, d, r = (self._cols[_AT[name]] for name in ("error_um", "error_deg", "residual_um"))
+        return [bool(o) and x is not None and y is not None and z is not None
+                for o, x, y, z in zip(ok.tolist(), e, d, r)]
 
 
 def displacement_warning(um_per_mm: float, track: bool = False) -> str:
