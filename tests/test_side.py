@@ -311,7 +311,7 @@ def test_json_cells_are_the_texts_each_row_writes():
         assert report._json_block_made(rows, ks, made) == [report.json_target(r) for r in rows]
         # A value of another kind (here a numpy float as a residual): None,
         # the block goes the encoder's way.
-        odd = Rows([b[:9] + (np.float32(1.5),) + b[10:] for b in rows._base], rows._codes,
+        odd = Rows([b[:9] + (np.float32(1.5),) + b[10:] for b in rows.bases(ks)], rows._codes,
                    rows._joints)
         assert report._json_block_made(odd, ks, made) is None
     # No solved target: nothing made ahead, whatever the arrays' shape.

@@ -387,7 +387,8 @@ def _missed(solved, gs, verified) -> dict:
                 one = g.single(n, placed=True)
                 gs.append(one)
                 out[one] = got
-            g.drop(missed)
+            if missed:
+                g.drop(missed)
             if not g.uses:
                 gs.remove(g)
             continue

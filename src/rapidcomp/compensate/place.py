@@ -343,8 +343,9 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
     for s in [g for g in gs if type(g) is Singles]:
         failed = [n for n, i in enumerate(s.rows)
                   if not ok[i] or (left[i] and s.mode == "rob")]
-        gs += [s.single(n) for n in failed]
-        s.drop(failed)
+        if failed:
+            gs += [s.single(n) for n in failed]
+            s.drop(failed)
         if not s.uses:
             gs.remove(s)
     for g in gs:
