@@ -327,3 +327,34 @@ def test_a_quaternion_off_unit_length_is_normalised_with_a_warning(tmp_path):
     rows = json.loads((tmp_path / "r.json").read_text())["targets"]
     warned = [w for row in rows for w in row["warnings"] if "quaternion norm" in w]
     assert warned and "p4 (bad.mod:9): quaternion norm 1.004092, not 1" in warned[0]
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes are POSIX")
+def test_a_pipe_given_for_a_file_is_refused_not_waited_on(tmp_path):
+    """A FIFO named as a module, program file, measurement or URDF (a
+    `mkfifo`, a process substitution): exit 2 naming it, at once (reading
+    it waited for a writer forever). Run as a process with a time limit,
+    so that a regression fails instead of hanging the suite."""
+    import subprocess
+    import sys
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    for name, args in (
+            ("m.mod", ["inspect", "{p}"]),
+            ("m.mod", ["fix", "{p}", "--profile", str(WARM)]),
+            ("p.pgf", ["check", "{p}", "--profile", str(WARM)]),
+            ("m.csv", ["discover", "{p}"]),
+            ("arm.urdf", ["check", str(FIXTURES / "cubes.mod"), "--profile", str(WARM),
+                          "--robot", "{p}"])):
+        p = tmp_path / name
+        if p.exists():
+            p.unlink()
+        os.mkfifo(p)
+        r = subprocess.run([sys.executable, "-m", "rapidcomp",
+                            *[a.format(p=p) for a in args]], capture_output=True, text=True,
+                           timeout=60, cwd=tmp_path)
+        assert r.returncode == 2, (args, r.stderr)
+        assert f"{name}: not a regular file (a pipe or a device: give the file itself)" \
+            in r.stderr, (args, r.stderr)
+        assert "Traceback" not in r.stderr
+        p.unlink()

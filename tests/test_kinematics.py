@@ -325,7 +325,11 @@ _J = '<joint name="{}" type="revolute">'
     ('<origin xyz="0.38 0 0" rpy="0 0 0"/>', '<origin xyz="0 0 0" rpy="0 0 0"/>',
      "J3 to J5 has no length"),
     ('<origin xyz="0 0 0.36" rpy="0 0 0"/>', '<origin xyz="0 0 1e39" rpy="0 0 0"/>',
-     "is not within 100 m"),
+     "arm.urdf:9: joint J3: its origin [0, 0, 1e+39] m is not within 100 m"),
+    # (The flange's frame too: a number no arm has made its IK singular.)
+    ('<origin xyz="0.065 0 0"', '<origin xyz="0.065 -9E+09 0"',
+     "arm.urdf:17: the flange frame tool0: its origin [0.065, -9e+09, 0] m is not within "
+     "100 m of the last joint"),
     ('lower="-1.5707963268" upper="1.9198621772"', 'lower="1.9" upper="-1.5"',
      "J2: its lower limit 108.862 deg is not below its upper limit"),
     ('<mass value="1.0"/>', '<mass value="-1.0"/>', "mass -1 kg is not a mass"),

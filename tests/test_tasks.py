@@ -281,6 +281,24 @@ def test_a_program_file_error_names_its_modules_line(tmp_path):
     assert r.exit_code == 2 and "P.pgf:3: module . listed here" in r.output, r.output
 
 
+@pytest.mark.parametrize("declared, says", [
+    ("ISO-2147483648-1", "P.pgf:1: not a program file (XML: unknown encoding: "
+                         "ISO-2147483648-1); expected the encoding a controller writes"),
+    ("utf-16", "P.pgf:1:31: not a program file (XML: encoding specified in XML declaration is "
+               "incorrect)"),
+])
+def test_a_program_file_in_an_encoding_it_is_not_is_bad_input(tmp_path, declared, says):
+    """An XML declaration naming an encoding Python does not know (a digit
+    changed in ISO-8859-1), or one its bytes are not: exit 2 with the
+    line, not the XML parser's traceback."""
+    (tmp_path / "P.pgf").write_bytes(f'<?xml version="1.0" encoding="{declared}" ?>\n'
+                                     "<Program>\n    <Module>A.mod</Module>\n</Program>\n"
+                                     .encode())
+    r = run("check", tmp_path / "P.pgf", "--profile", WARM)
+    assert r.exit_code == 2 and says in r.output, r.output
+    assert "Traceback" not in r.output
+
+
 def test_a_compensated_program_is_recognised(tmp_path):
     """Compensating rapidcomp's own output adds the correction twice: the
     names it gives its values (jt_..., ..._c) are recognised and said."""

@@ -8,6 +8,8 @@ no newline translation is done, CRLF, LF and mixed files survive unchanged.
 from __future__ import annotations
 
 import bisect
+import os
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -110,9 +112,23 @@ def decode_bytes(data: bytes, display_path: str) -> SourceText:
     raise InputError(display_path, "cannot decode as UTF-8, cp1252 or latin-1")
 
 
+def not_a_file(path: str | Path, shown: str | None = None) -> None:
+    """Bad input where `path` is a FIFO, a device or a socket, which reading
+    would wait on forever or read without end (a folder, a missing or
+    unreadable file: the reader's own error says so)."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return
+    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        raise InputError(shown if shown is not None else str(path),
+                         "not a regular file (a pipe or a device: give the file itself)")
+
+
 def read_source(path: str | Path, display_path: str | None = None) -> SourceText:
     path = Path(path)
     shown = display_path if display_path is not None else str(path)
+    not_a_file(path, shown)
     try:
         data = path.read_bytes()
     except OSError as exc:

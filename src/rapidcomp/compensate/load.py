@@ -19,7 +19,7 @@ def load_robot(robot: str | None, limits=()):
     from ..kinematics.robot import checked_limits, irb140, load_urdf, override_limits
     if robot is None or robot.lower() == "irb140":
         return override_limits(irb140(), limits)
-    if not os.path.isfile(robot):
+    if not os.path.exists(robot):
         raise RapidcompError(f"--robot {robot}: not a built-in robot (irb140) and no such URDF "
                              "file")
     model = load_urdf(robot)

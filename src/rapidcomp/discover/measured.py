@@ -25,6 +25,7 @@ import numpy as np
 
 from ..csvtable import header_and_rows, number
 from ..errors import InputError
+from ..source import not_a_file
 
 JOINT_COLUMNS = ("j1", "j2", "j3", "j4", "j5", "j6")
 COLUMNS = ("point",) + JOINT_COLUMNS + ("x", "y", "z")
@@ -113,6 +114,7 @@ def parse_table(text: str, source: str, columns, numeric, min_rows: int):
 
 def read_text(path: str | Path) -> str:
     path = Path(path)
+    not_a_file(path)
     try:
         return path.read_text(encoding="utf-8-sig")
     except OSError as exc:

@@ -45,6 +45,7 @@ import pinocchio as pin
 
 from ..csvtable import header_and_rows, number
 from ..errors import InputError
+from ..source import not_a_file
 from .frames import DEG, rpy_angles, rpy_matrix
 from .gravity import NO_PAYLOAD, GravityModel, Payload
 from .jointmap import JointMap
@@ -292,6 +293,7 @@ def read_profile(path: str | Path, force: bool = False, joint_names=None) -> The
     if not str(path):
         raise InputError("--profile", "no file named: expected a profile CSV")
     path = Path(path)
+    not_a_file(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
     except OSError as exc:

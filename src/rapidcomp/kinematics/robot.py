@@ -22,6 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InputError
+from ..source import not_a_file
 from .frames import DEG, MM_PER_M, rot_y
 
 FLANGE_FRAME = "tool0"
@@ -127,6 +128,7 @@ def _urdf_xml(path: Path) -> str:
     """The URDF's XML as text, in whatever encoding it declares (Pinocchio
     reads bytes as UTF-8: a Latin-1 name failed as Python decoded it); its
     XML errors with their line and column."""
+    not_a_file(path)
     try:
         data = path.read_bytes()
     except OSError as exc:
@@ -141,6 +143,30 @@ def _urdf_xml(path: Path) -> str:
         raise InputError(str(path), f"not a URDF: expected a <robot> element, found <{root.tag}>",
                          1)
     return ET.tostring(root, encoding="unicode")
+
+
+def _bad_joint(path: Path, joint: str, message: str) -> InputError:
+    """Bad input at the URDF's element of `joint` (its line where found)."""
+    return InputError(str(path), message, _element_line(path, joint))
+
+
+def _element_line(path: Path, name: str, child: bool = False) -> int | None:
+    """The line of the URDF's <joint name="name"> (child: of the joint
+    whose <child link="name"/>; else of <link name="name"> where no joint
+    has that name), None where it is not found."""
+    try:
+        text = path.read_bytes().decode("utf-8", "replace")
+    except OSError:
+        return None
+    q = re.escape(name)
+    pats = ([rf'<joint\b[^>]*>(?:(?!</joint>).)*?<child\s+link\s*=\s*["\']{q}["\']']
+            if child else [rf'<joint\s[^>]*\bname\s*=\s*["\']{q}["\']',
+                           rf'<link\s[^>]*\bname\s*=\s*["\']{q}["\']'])
+    for pat in pats:
+        m = re.search(pat, text, re.S)
+        if m is not None:
+            return text.count("\n", 0, m.start()) + 1
+    return None
 
 
 def _heard(fn, *args) -> tuple:
@@ -206,32 +232,32 @@ def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
         raise InputError(str(path), f"expected a serial arm of 6 revolute joints, "
                                     f"found {model.njoints - 1} joints with nq={model.nq}")
     for i in range(1, model.njoints):
+        name = model.names[i]
         kind = model.joints[i].shortname()
         if kind not in _REVOLUTE:
             what = ("prismatic" if "Prismatic" in kind or kind[-2:] in ("PX", "PY", "PZ")
                     else kind)
-            raise InputError(str(path), f"joint {model.names[i]} is {what}: expected a serial "
-                                        "arm of 6 revolute joints")
+            raise _bad_joint(path, name, f"joint {name} is {what}: expected a serial arm of 6 "
+                             "revolute joints")
         if model.parents[i] != i - 1:
-            raise InputError(str(path), f"joint {model.names[i]} does not follow "
-                                        f"{model.names[i - 1]}: expected a serial arm of 6 "
-                                        "revolute joints")
+            raise _bad_joint(path, name, f"joint {name} does not follow {model.names[i - 1]}: "
+                             "expected a serial arm of 6 revolute joints")
         t = np.asarray(model.jointPlacements[i].translation, float)
         if not (np.isfinite(t).all() and np.abs(t).max() <= MAX_LINK_M):
-            raise InputError(str(path), f"joint {model.names[i]}: its origin "
-                                        f"[{', '.join(f'{v:g}' for v in t)}] m is not within "
-                                        f"{MAX_LINK_M:g} m of the joint before it")
+            raise _bad_joint(path, name, f"joint {name}: its origin "
+                             f"[{', '.join(f'{v:g}' for v in t)}] m is not within "
+                             f"{MAX_LINK_M:g} m of the joint before it")
         mass = float(model.inertias[i].mass)
         if not (math.isfinite(mass) and mass >= 0):
-            raise InputError(str(path), f"joint {model.names[i]}: its link's mass {mass:g} kg "
-                                        "is not a mass")
+            raise _bad_joint(path, name, f"joint {name}: its link's mass {mass:g} kg is not a "
+                             "mass")
         inertia = np.asarray(model.inertias[i].inertia, float)
         com = np.asarray(model.inertias[i].lever, float)
         if not (np.isfinite(inertia).all() and np.isfinite(com).all()
                 and np.abs(com).max() <= MAX_LINK_M):
-            raise InputError(str(path), f"joint {model.names[i]}: its link's inertial is not a "
-                                        "body's (expected finite numbers and a centre of mass "
-                                        f"within {MAX_LINK_M:g} m)")
+            raise _bad_joint(path, name, f"joint {name}: its link's inertial is not a body's "
+                             "(expected finite numbers and a centre of mass within "
+                             f"{MAX_LINK_M:g} m)")
     for i in range(1, model.njoints):
         p = model.jointPlacements[i]
         model.jointPlacements[i] = pin.SE3(p.rotation, p.translation * MM_PER_M)
@@ -255,6 +281,13 @@ def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
     if model.frames[fid].parentJoint != model.njoints - 1:
         raise InputError(str(path), f"the flange frame {model.frames[fid].name} does not hang "
                                     f"on the last joint {model.names[model.njoints - 1]}")
+    t = np.asarray(model.frames[fid].placement.translation, float) / MM_PER_M
+    if not (np.isfinite(t).all() and np.abs(t).max() <= MAX_LINK_M):
+        name = model.frames[fid].name
+        raise InputError(str(path), f"the flange frame {name}: its origin "
+                                    f"[{', '.join(f'{v:g}' for v in t)}] m is not within "
+                                    f"{MAX_LINK_M:g} m of the last joint",
+                         _element_line(path, name, True) or _element_line(path, name))
     lower = tuple(float(x) / DEG for x in model.lowerPositionLimit)
     upper = tuple(float(x) / DEG for x in model.upperPositionLimit)
     return RobotModel(model.name or path.stem, model, fid, lower, upper)

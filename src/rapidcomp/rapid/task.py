@@ -26,6 +26,7 @@ from pathlib import Path
 from ..csvtable import number
 from ..errors import InputError, RapidcompError
 from ..kinematics.frames import MM_PER_M
+from ..source import not_a_file
 
 MODULE_SUFFIXES = (".mod", ".modx", ".sys", ".prg")
 # A folder holding this many module files is not a task someone meant.
@@ -123,6 +124,7 @@ def tasks_of(path: str | Path, task_names: tuple[str, ...] = (),
 def _pgf(p: Path, shown: str) -> TaskSource:
     """<Program><Module>Name.mod</Module>...</Program>, module paths
     relative to the .pgf's folder."""
+    not_a_file(p, shown)
     try:
         data = p.read_bytes()
     except OSError as exc:
@@ -133,6 +135,11 @@ def _pgf(p: Path, shown: str) -> TaskSource:
         line, col = exc.position
         what = re.sub(r": line \d+, column \d+$", "", str(exc))
         raise InputError(shown, f"not a program file (XML: {what})", line, col + 1) from None
+    except (LookupError, ValueError) as exc:
+        # (The XML declaration names an encoding Python does not know, or
+        # one its bytes are not.)
+        raise InputError(shown, f"not a program file (XML: {exc}); expected the encoding a "
+                         "controller writes (UTF-8 or ISO-8859-1)", 1) from None
     if root.tag != "Program":
         raise InputError(shown, f"expected a <Program> element, found <{root.tag}>", 1)
     text = data.decode("utf-8", "replace")
