@@ -265,6 +265,9 @@ def test_cli_simulate_bad_effect():
     assert "axis_tilt:J2 takes 2 number(s): rx_deg, rz_deg" in r.stderr
     r = _run("simulate", "-o", "x.csv", "--effect", "joint_wobble:J2=1")
     assert r.returncode == 2 and "unknown effect 'joint_wobble:J2'" in r.stderr
+    # (A play of negative width, as a negative compliance: no robot has it.)
+    r = _run("simulate", "-o", "x.csv", "--effect", "backlash:J2=-0.01")
+    assert r.returncode == 2 and "--effect backlash:J2=-0.01: a backlash is >= 0" in r.stderr
 
 
 def test_detectability_predicts_what_discover_names():

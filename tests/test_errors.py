@@ -60,6 +60,18 @@ def test_caret_points_at_column():
      "p is declared twice in module m (first at line 2): the controller does not load it"),
     ("MODULE m\n PROC q()\n  VAR num a;\n  VAR num A;\n ENDPROC\nENDMODULE\n", "4:11",
      "A is declared twice in routine q (first at line 3)"),
+    # (A number no RAPID type holds, in an aggregate of numbers, which is
+    # one token: in a declaration, a move's argument, an assignment, an
+    # array, by exponent or by digits.)
+    ("MODULE m\n CONST speeddata vX := [1E999,500,5000,1000];\nENDMODULE\n", "2:25",
+     "number 1E999 is out of range (a num holds +-3.4E38, a dnum +-1.8E308)"),
+    ("MODULE m\n PROC p()\n  MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
+     "[1E999,500,5000,1000],fine,tool0;\n ENDPROC\nENDMODULE\n", "3:66", "number 1E999 is out"),
+    ("MODULE m\n PROC p()\n  j := [[0,0,0,0,30,0],[9E9,9E9,9E9,9E9,9E9,1e400]];\n ENDPROC\n"
+     "ENDMODULE\n", "3:45", "number 1e400 is out of range"),
+    ("MODULE m\n VAR num a{2} := [-1E999, 0];\nENDMODULE\n", "2:20", "number 1E999 is out"),
+    ("MODULE m\n VAR num a{2} := [1" + "0" * 310 + ", 0];\nENDMODULE\n", "2:19",
+     "number 10000000000000000000... (311 characters) is out of range"),
     # (Not the lexer's names of its own tokens: FAST_DECL is a declaration.)
     ("MODULE m\n PROC main()\n ENDPROC\n", "4:1",
      "unexpected end of file; expected a declaration, ALIAS, ENDMODULE, FUNC, PROC, RECORD, "

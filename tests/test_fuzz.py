@@ -169,8 +169,10 @@ BAD = [
     (["fix", "{mod:[0.707107,0,0.707107,0],[-1,-1,0,1]=>[0,0,0,0],[-1,-1,0,1]}", "--profile",
       "{warm}"], 2, "is not a rotation (norm 0)"),
     (["fix", "{mod:[-1,-1,0,1]=>[-1,-1,0,9]}", "--profile", "{warm}"], 2, "cfx is 9, expected 0..7"),
+    # (A three-digit exponent: an aggregate of numbers, each read on its
+    # own, not one token: the field is named.)
     (["fix", "{mod:[-1,-1,0,1]=>[-1,-1,0,1e308]}", "--profile", "{warm}"], 2,
-     "component 1e308 is beyond what a RAPID num holds"),
+     "p4.robconf.cfx is 1e308, beyond what a RAPID num holds"),
     (["fix", "{mod:[400,-150,250]=>[400,-150,3E38]}", "--profile", "{warm}"], 2,
      "mm is beyond 100000 mm of the robot"),
     (["fix", "{mod:[400,-150,250]=>[400,-150]}", "--profile", "{warm}"], 2,
@@ -179,8 +181,10 @@ BAD = [
      "walks 9000000000 iterations"),
     (["fix", "{mod:FOR i FROM 1 TO NROW=>FOR i FROM 1 TO 4}", "--profile", "{warm}"], 2,
      "index 4 of pRow is outside 1..3"),
+    # (Beyond every RAPID type, a dnum too: refused where it is read, as a
+    # number in any aggregate of numbers is.)
     (["fix", "{mod:[400,-150,250]=>[400,-150,1E999]}", "--profile", "{warm}"], 2,
-     "component 1E999 is beyond what a RAPID num holds"),
+     "number 1E999 is out of range (a num holds +-3.4E38, a dnum +-1.8E308)"),
     (["fix", "{mod:TO NROW DO=>TO 1E999 DO}", "--profile", "{warm}"], 2,
      "number 1E999 is out of range"),
     (["check", "{paper}", "--profile", "{badprofile}"], 2, "unknown joint 'J9'"),
@@ -305,6 +309,19 @@ def test_utf16_modules_are_read_and_written_as_they_came(tmp_path):
     assert data.startswith(b"\xff\xfe")
     out = data.decode("utf-16-le")
     assert out.startswith("\ufeffMODULE PaperFront") and out != "\ufeff" + text
+
+
+def test_a_utf32_module_is_named_so(tmp_path):
+    """UTF-32's byte order mark begins as UTF-16's: such a module is
+    refused as UTF-32 (it was read as UTF-16 and refused at its first NUL
+    character, which said nothing of why)."""
+    for encoding in ("utf-32", "utf-32-be"):
+        prog = tmp_path / "u32.mod"
+        prog.write_bytes("\ufeffMODULE M\nENDMODULE\n".encode(encoding))
+        r = CliRunner().invoke(main, ["inspect", str(prog)])
+        assert r.exit_code == 2
+        assert "u32.mod:1:1: UTF-32 text (its byte order mark): expected RAPID source text" \
+            in r.output, r.output
 
 
 def test_a_spreadsheet_profile_with_semicolons_and_decimal_commas_is_read(tmp_path):

@@ -157,3 +157,38 @@ def test_a_profile_that_is_no_regular_file_is_named_so(tmp_path):
     r = CliRunner().invoke(main, ["fix", str(FIXTURES / "cubes.mod"), "--profile", "/dev/zero",
                                   "-o", str(tmp_path / "o.mod")])
     assert r.exit_code == 2 and "/dev/zero: not a regular file" in r.output, r.output
+
+
+def test_a_value_in_a_column_the_header_leaves_unnamed_is_refused():
+    """A spreadsheet's trailing ',' leaves a column unnamed: empty, it is
+    no column; a value in it was silently dropped (a 0.5 meant for some
+    column): refused at its row. The measurements' reader likewise, and
+    its note of ignored columns names no blank one."""
+    from rapidcomp.discover.measured import parse_measured
+    head = "joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg,\n"
+    prof = parse_profile(head + "J3,0,0,0,0,0,0.001,\n", "w.csv")
+    assert prof.get("J3").r_deg[2] == 0.001
+    with pytest.raises(InputError) as exc:
+        parse_profile(head + "J2,0,0,0,0,0,0,\nJ3,0,0,0,0,0,0,0.5\n", "w.csv")
+    assert exc.value.format().startswith(
+        "w.csv:3: a value (0.5) in column 8, which the header leaves unnamed: name the "
+        "column, or remove the value")
+    rows = "".join(f"P{i},0,{i},{i},0,30,0,{600 + i},0,{500 + i},\n" for i in range(8))
+    got = parse_measured("point,j1,j2,j3,j4,j5,j6,x,y,z,\n" + rows, "m.csv")
+    assert got.ignored_columns == ()
+    with pytest.raises(InputError) as exc:
+        parse_measured("point,j1,j2,j3,j4,j5,j6,x,y,z,\n" + rows.replace(",\n", ",7\n", 1),
+                       "m.csv")
+    assert exc.value.format().startswith("m.csv:2: a value (7) in column 11, which the header")
+
+
+def test_a_value_just_past_a_bound_is_said_with_the_digits_that_tell():
+    """Rounded to the message's usual digits, 5.0000001 mm read "5.000 mm
+    exceeds 5.0 mm": past a bound, as many digits as tell it from it."""
+    head = "joint,dx_mm,dy_mm,dz_mm,rx_deg,ry_deg,rz_deg\n"
+    for row, says in (("J2,5.0000001,0,0,0,0,0", "J2 shift of 5.0000001 mm exceeds 5.0 mm"),
+                      ("J2,6,0,0,0,0,0", "J2 shift of 6.000 mm exceeds 5.0 mm"),
+                      ("J2,0,0,0,0,0,1.0000001", "J2 rotation of 1.0000001 deg exceeds 1.0 deg")):
+        with pytest.raises(InputError) as exc:
+            parse_profile(head + row + "\n", "w.csv")
+        assert exc.value.format().startswith(f"w.csv:2: {says} ("), exc.value.format()

@@ -94,6 +94,13 @@ def test_default_output_is_beside_the_input_and_never_inside_it(tmp_path):
     r = run("fix", cell, "--profile", WARM, "-o", cell / "out")
     assert r.exit_code == 2 and "is inside the input folder" in r.output
     assert {p.name: p.read_bytes() for p in cell.iterdir()} == before
+    # Nor its reports: a .mod report there was read back as a module of the
+    # task next time (and refused: '#' is no RAPID).
+    for option, name in (("--report", "r.mod"), ("--json", "r.json")):
+        r = run("fix", cell, "--profile", WARM, "-o", tmp_path / "out", option, cell / name)
+        assert r.exit_code == 2 and f"{name}: is inside the input folder" in r.output, r.output
+        assert {p.name: p.read_bytes() for p in cell.iterdir()} == before
+        assert not (tmp_path / "out").exists()
 
 
 def test_several_tasks_use_a_folder_and_refuse_one_report_name(tmp_path):

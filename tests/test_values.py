@@ -121,8 +121,9 @@ def test_non_literal_inline_target_is_reported_not_guessed():
      "inline robtarget.trans has 2 components, expected 3"),
     ("[[0,0,0],[1,0,0,0],[0,0,0,\"a\"],[9E9,9E9,9E9,9E9,9E9,9E9]]", 33,
      "inline robtarget.robconf.cfx is not a number"),
+    # (Past every RAPID type: the parser's own word, at the number.)
     ("[[0,0,1E999],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]", 13,
-     "component 1E999 is beyond what a RAPID num holds"),
+     "number 1E999 is out of range (a num holds +-3.4E38, a dnum +-1.8E308)"),
     ("[[0,0,0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E40]]", 57,
      "component 9E40 is beyond what a RAPID num holds"),
 ])

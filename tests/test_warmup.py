@@ -252,3 +252,31 @@ def test_a_sensor_that_is_no_temperature_is_refused(tmp_path, sensor):
                    "30", "--sensor", sensor, cwd=tmp_path)
     assert r.returncode == 2 and f"--sensor {sensor}: expected temperatures" in r.stderr
     assert not (tmp_path / "m.csv").exists()
+
+
+@pytest.mark.parametrize("sensors, says", [
+    (("temp_m:20:40", "temp_m:20:40"), "--sensor temp_m:20:40: temp_m is given twice"),
+    (("temp_m:20:40", "TEMP_M:20:45"), "--sensor TEMP_M:20:45: temp_m is given twice"),
+    (("temp_:20:40",), "--sensor temp_:20:40: expected temp_NAME (letters, digits, '_')"),
+    (("temp_a,b:20:40",), "--sensor temp_a,b:20:40: expected temp_NAME"),
+])
+def test_a_sensor_whose_column_cannot_be_read_back_is_refused(tmp_path, sensors, says):
+    """One column per sensor, named temp_NAME: two of one name (which
+    discover then refused: a column named twice), or no name, exit 2 here,
+    nothing written."""
+    args = [a for s in sensors for a in ("--sensor", s)]
+    r = _rapidcomp("simulate", "-o", tmp_path / "m.csv", "--times", "0,10,20", "--tau-heat",
+                   "30", *args, cwd=tmp_path)
+    assert r.returncode == 2 and says in r.stderr, r.stderr
+    assert not (tmp_path / "m.csv").exists()
+
+
+def test_a_bad_thermal_effect_is_named_by_its_own_option(tmp_path):
+    """--thermal-effect's values are checked as --effect's, and the message
+    names the option given (it said --effect)."""
+    r = _rapidcomp("simulate", "-o", tmp_path / "m.csv", "--times", "0,10,20", "--tau-heat",
+                   "30", "--thermal-effect", "joint_offset:J2=nan", cwd=tmp_path)
+    assert r.returncode == 2, r.stderr
+    assert "--thermal-effect joint_offset:J2=nan: joint_offset:J2 takes 1 number(s)" in r.stderr
+    assert "--effect joint_offset" not in r.stderr
+    assert not (tmp_path / "m.csv").exists()

@@ -479,6 +479,16 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
                 if real in seen or real in inputs:
                     raise RapidcompError(f"{path}: would overwrite an input or another output")
                 seen.add(real)
+            # (A report too: a file in the input folder is read back as part
+            # of the task, or copied with it, next time.)
+            for path in (rep, json_path):
+                real = os.path.realpath(path) if path is not None else None
+                inside = next((f for f in folders if real is not None
+                               and real.startswith(f + os.sep)), None)
+                if inside is not None:
+                    raise RapidcompError(f"{path}: is inside the input folder "
+                                         f"{os.path.relpath(inside)}; write the report beside "
+                                         "it")
             specs.append(JobSpec(t, out, rep, json_path, profile, robot, tuple(with_modules),
                                  emit, force, tuple(limits), tuple(track), start, base,
                                  transient=transient))
@@ -565,7 +575,17 @@ def _warmup_campaign(times, thermal_effects, tau_heat, sensors=(), tau_cool=None
         if min(cold, warm) < -273.15:
             raise RapidcompError(f"--sensor {spec}: expected temperatures (deg C, above "
                                  "-273.15)")
-        parsed.append((parts[0].lower(), cold, warm, lag))
+        name = parts[0].lower()
+        # (Its column's name: temp_ and a name; one column per sensor,
+        # which discover reads back. A flat one, T_COLD = T_WARM, is a
+        # sensor too: the room's.)
+        if name == "temp_" or not name.replace("_", "").isalnum():
+            raise RapidcompError(f"--sensor {spec}: expected temp_NAME (letters, digits, '_') "
+                                 "as the column's name")
+        if any(name == p[0] for p in parsed):
+            raise RapidcompError(f"--sensor {spec}: {name} is given twice (one column per "
+                                 "sensor)")
+        parsed.append((name, cold, warm, lag))
     if tau_cool is not None and not (math.isfinite(tau_cool) and 0 < tau_cool <= 100_000):
         raise RapidcompError(f"--tau-cool {tau_cool:g}: minutes, more than 0")
     return ts, tuple(thermal_effects), tau_heat, tuple(parsed), stands, tau_cool

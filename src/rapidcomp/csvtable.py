@@ -77,6 +77,15 @@ def header_and_rows(text: str, source: str, required, what: str = "file", known=
     if unknown:
         raise InputError(source, f"unknown column {', '.join(unknown)}; a {what}'s columns are "
                          + ", ".join(known), head_line)
+    # A column the header leaves unnamed (a spreadsheet's trailing ','):
+    # empty, it is no column; a value in it is meant for one, which cannot
+    # be told (it was silently dropped).
+    for k in [k for k, h in enumerate(header) if not h]:
+        for line, r in numbered[1:]:
+            if len(r) > k and r[k].strip():
+                raise InputError(source, f"a value ({r[k].strip()}) in column {k + 1}, which "
+                                 "the header leaves unnamed: name the column, or remove the "
+                                 "value", line)
     missing = [c for c in required if c not in header]
     if missing:
         found = ", ".join(h for h in header if h) or "nothing"

@@ -86,6 +86,12 @@ def decode_bytes(data: bytes, display_path: str) -> SourceText:
     """Decode a module: UTF-16 with its byte order mark (RobotStudio can
     save modules so), else UTF-8 first, then cp1252, then latin-1
     (reported)."""
+    if data.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):
+        # (Its byte order mark begins as UTF-16's: read so, every character
+        # was followed by a NUL.)
+        raise InputError(display_path, "UTF-32 text (its byte order mark): expected RAPID source "
+                         "text in UTF-8, cp1252, latin-1 or UTF-16, as a controller or "
+                         "RobotStudio saves it", 1, 1)
     for bom, encoding in ((b"\xff\xfe", "utf-16-le"), (b"\xfe\xff", "utf-16-be")):
         if data.startswith(bom):
             try:

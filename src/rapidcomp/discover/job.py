@@ -369,7 +369,7 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
             raise RapidcompError(f"--times: {len(times)} rounds of {len(q)} points make "
                                  f"{len(times) * len(q)} rows; a campaign file holds at most "
                                  f"{MAX_ROWS} (fewer rounds or points)")
-        thermal = parse_effect_values(cat, thermal_specs, force)
+        thermal = parse_effect_values(cat, thermal_specs, force, "--thermal-effect")
         for e in thermal:
             if e.kind not in THERMAL_KINDS:
                 raise RapidcompError(f"--thermal-effect {e.id}: heat does not change a "

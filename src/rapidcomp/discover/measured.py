@@ -73,7 +73,7 @@ def parse_table(text: str, source: str, columns, numeric, min_rows: int):
     """Rows of a CSV with a header holding `columns` (any order, extra
     columns ignored): (names, values (N, len(numeric)), lines, ignored)."""
     header, body = header_and_rows(text, source, columns)
-    ignored = tuple(h for h in header if h not in columns)
+    ignored = tuple(h for h in header if h and h not in columns)
     index = {c: header.index(c) for c in columns}
     names, values, lines = [], [], []
     seen: dict[str, int] = {}

@@ -36,13 +36,15 @@ from .stats import chi2_ppf, ncx2_lambda_for_power
 POWER = 0.9
 
 
-def parse_effect_values(effects, specs, force: bool = False) -> dict[Effect, np.ndarray]:
-    """`--effect ID=V[,V...]` options, values in the parameters' user units
-    (within what a real robot has, plausible.py, unless force)."""
+def parse_effect_values(effects, specs, force: bool = False,
+                        option: str = "--effect") -> dict[Effect, np.ndarray]:
+    """`--effect ID=V[,V...]` options (`option`: the option's name, as the
+    messages say it), values in the parameters' user units (within what a
+    real robot has, plausible.py, unless force)."""
     out: dict[Effect, np.ndarray] = {}
     for spec in specs:
         if "=" not in spec:
-            raise RapidcompError(f"--effect {spec}: expected ID=VALUE[,VALUE...]")
+            raise RapidcompError(f"{option} {spec}: expected ID=VALUE[,VALUE...]")
         eid, text = spec.split("=", 1)
         e = find(effects, eid.strip())
         try:
@@ -50,21 +52,26 @@ def parse_effect_values(effects, specs, force: bool = False) -> dict[Effect, np.
         except ValueError:
             vals = []
         if len(vals) != e.size or not all(math.isfinite(v) for v in vals):
-            raise RapidcompError(f"--effect {spec}: {e.id} takes {e.size} number(s): "
+            raise RapidcompError(f"{option} {spec}: {e.id} takes {e.size} number(s): "
                                  + ", ".join(e.params))
         if e.kind == "gravity_compliance" and vals[0] < 0:
-            raise RapidcompError(f"--effect {spec}: a compliance is >= 0")
+            raise RapidcompError(f"{option} {spec}: a compliance is >= 0")
+        # (A dead band's width: each joint lags behind the way it moved,
+        # never ahead of it.)
+        if e.kind == "backlash" and vals[0] < 0:
+            raise RapidcompError(f"{option} {spec}: a backlash is >= 0 (the width of the gear's "
+                                 "play)")
         user = dict(zip(e.params, vals))
         why = implausible(e, user, first=True)
         if why is not None and not force:
-            raise RapidcompError(f"--effect {spec}: {why}; --force simulates it anyway")
+            raise RapidcompError(f"{option} {spec}: {why}; --force simulates it anyway")
         why = implausible(e, user, first=True, factor=FORCE_FACTOR) if force else None
         if why is not None:
-            raise RapidcompError(f"--effect {spec}: {why.replace('a real robot', '--force')}; "
+            raise RapidcompError(f"{option} {spec}: {why.replace('a real robot', '--force')}; "
                                  f"--force allows {FORCE_FACTOR:g} times the bound of a real "
                                  "robot, no more")
         if e in out:
-            raise RapidcompError(f"--effect {spec}: {e.id} given twice")
+            raise RapidcompError(f"{option} {spec}: {e.id} given twice")
         out[e] = e.internal(vals)
     return out
 

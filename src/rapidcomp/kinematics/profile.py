@@ -262,9 +262,14 @@ def _marks(text: str, source: str) -> tuple[float | None, float | None, bool]:
     return taus.get("tau_heat_min"), taus.get("tau_cool_min"), static
 
 
-def _amount(x: float) -> str:
-    """A number for a message: three decimals, or four digits when huge."""
-    return f"{x:.3f}" if abs(x) < 1e6 else f"{x:.4g}"
+def _amount(x: float, limit: float | None = None, spec: str | None = None) -> str:
+    """A number for a message: three decimals, or four digits when huge
+    (spec: that format instead); past `limit`, as many digits as tell it
+    from the limit (5.0000001 is not "5.000 mm exceeds 5.0 mm")."""
+    text = format(x, spec) if spec else f"{x:.3f}" if abs(x) < 1e6 else f"{x:.4g}"
+    if limit is not None and abs(float(text)) <= limit:
+        return repr(float(x))
+    return text
 
 
 def _check_size(source, line, key, d, r, extra, factor: float = 1.0) -> None:
@@ -274,17 +279,21 @@ def _check_size(source, line, key, d, r, extra, factor: float = 1.0) -> None:
             f"--force allows {FORCE_FACTOR:g} times the bound of a real robot, no more")
     limit = (MAX_FRAME_SHIFT_MM if key in ("base", "flange") else MAX_SHIFT_MM) * factor
     if math.hypot(*d) > limit:
-        raise InputError(source, f"{key} shift of {_amount(math.hypot(*d))} mm exceeds "
+        raise InputError(source, f"{key} shift of {_amount(math.hypot(*d), limit)} mm exceeds "
                          f"{limit} mm (thermal shifts are microns; {hint})", line)
     rot = max(abs(a) for a in (*r, extra["offset_deg"]))
     if rot > MAX_ROTATION_DEG * factor:
-        raise InputError(source, f"{key} rotation of {rot:.6g} deg "
+        raise InputError(source, f"{key} rotation of "
+                         f"{_amount(rot, MAX_ROTATION_DEG * factor, '.6g')} deg "
                          f"exceeds {MAX_ROTATION_DEG * factor} deg ({hint})", line)
     if abs(extra["scale"]) > MAX_SCALE * factor:
-        raise InputError(source, f"{key} scale of {extra['scale']:.6g} exceeds "
+        raise InputError(source, f"{key} scale of "
+                         f"{_amount(extra['scale'], MAX_SCALE * factor, '.6g')} exceeds "
                          f"{MAX_SCALE * factor} ({hint})", line)
     if extra["compliance_deg_per_nm"] > MAX_COMPLIANCE_DEG_PER_NM * factor:
-        raise InputError(source, f"{key} compliance of {extra['compliance_deg_per_nm']:.6g} "
+        most = MAX_COMPLIANCE_DEG_PER_NM * factor
+        raise InputError(source, f"{key} compliance of "
+                         f"{_amount(extra['compliance_deg_per_nm'], most, '.6g')} "
                          "deg/N m "
                          f"exceeds {MAX_COMPLIANCE_DEG_PER_NM * factor} ({hint})", line)
 
