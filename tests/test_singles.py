@@ -6,15 +6,14 @@ solve, the wrist singularity or their verification (each such one then a
 Group of its own, which says why). Oracle: fix with a Group for every use
 (grouping(singles=False), the grouping `check` makes)."""
 
-import json
 from pathlib import Path
 
 import pytest
 
 from cam_variants import EXT, VARIANTS, bench_module
+from test_takeback import _same, missing
 from rapidcomp.compensate import fix as F
 from rapidcomp.compensate import place as P
-from rapidcomp.compensate import report
 from rapidcomp.compensate.load import load_solver
 from rapidcomp.compensate.plan import Task
 from rapidcomp.rapid.parse import parse_text
@@ -53,8 +52,7 @@ def solver():
 def _fix(text: str, name: str, solver, mode: str, monkeypatch, singles: bool,
          miss_every: int = 0):
     """(fix's result, [(Groups, Singles' elements) settle left, per round]);
-    miss_every: every such use verification sees (in the first round's
-    order) made to miss by 5 um."""
+    miss_every: every such use made to miss by 5 um (test_takeback.missing)."""
     left: list = []
     real_settle = P.settle
 
@@ -67,28 +65,10 @@ def _fix(text: str, name: str, solver, mode: str, monkeypatch, singles: bool,
         real = P.grouping
         monkeypatch.setattr(P, "grouping", lambda *a, **k: real(*a, **{**k, "singles": False}))
     if miss_every:
-        chosen: set = set()
-        real_verify = F.verify
-
-        def verify(*args):
-            out = real_verify(*args)
-            if not chosen:
-                chosen.update(sorted(out)[::miss_every])
-            return {k: (5.0, v[1]) if k in chosen else v for k, v in out.items()}
-        monkeypatch.setattr(F, "verify", verify)
+        missing(monkeypatch, miss_every)
     result = F.fix(Task(name, (parse_text(text, name + ".mod"),)), solver, mode)
     monkeypatch.undo()
     return result, left
-
-
-def _same(a, b, mode):
-    assert [m.text for m in a.modules] == [m.text for m in b.modules]
-    assert a.edits == b.edits
-    assert [m.diff for m in a.modules] == [m.diff for m in b.modules]
-    assert a.rows == b.rows and a.notes == b.notes and a.summary() == b.summary()
-    meta = {"mode": mode}
-    assert report.markdown(a, meta) == report.markdown(b, meta)
-    assert json.loads(report.as_json(a, meta)) == json.loads(report.as_json(b, meta))
 
 
 @pytest.mark.parametrize("miss_every", [0, 7])

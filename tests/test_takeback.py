@@ -45,19 +45,25 @@ def _task(name: str) -> Task:
     return Task(name, (pf,))
 
 
-def _run(task, solver, mode, monkeypatch, every: int, second_round: bool):
-    """fix with every `every`-th use verification sees (in the first
-    round's order) made to miss by 5 um; second_round: take_back declines.
-    Returns (result, rounds placed)."""
+def missing(monkeypatch, every: int) -> None:
+    """fix's verification made to see every `every`-th use it checks first
+    (in the order of their keys: the same uses however they are grouped)
+    miss by 5 um."""
     chosen: set = set()
     real_verify = F.verify
 
     def verify(*args):
         out = real_verify(*args)
         if not chosen:
-            chosen.update(list(out)[::every])
+            chosen.update(sorted(out)[::every])
         return {k: (5.0, v[1]) if k in chosen else v for k, v in out.items()}
     monkeypatch.setattr(F, "verify", verify)
+
+
+def _run(task, solver, mode, monkeypatch, every: int, second_round: bool):
+    """fix with every `every`-th use made to miss (missing); second_round:
+    take_back declines. Returns (result, rounds placed)."""
+    missing(monkeypatch, every)
     real_back = F.take_back
     monkeypatch.setattr(F, "take_back", (lambda *a: None) if second_round else real_back)
     rounds = []
