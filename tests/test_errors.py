@@ -72,6 +72,12 @@ def test_caret_points_at_column():
     ("MODULE m\n VAR num a{2} := [-1E999, 0];\nENDMODULE\n", "2:20", "number 1E999 is out"),
     ("MODULE m\n VAR num a{2} := [1" + "0" * 310 + ", 0];\nENDMODULE\n", "2:19",
      "number 10000000000000000000... (311 characters) is out of range"),
+    # (Past a dnum by digits and exponent together, each within the token's
+    # bounds alone: 1E349, 1E309.)
+    ("MODULE m\n CONST speeddata vX := [1" + "0" * 250 + "E99,500,5000,1000];\nENDMODULE\n",
+     "2:25", "number 10000000000000000000... (254 characters) is out of range"),
+    ("MODULE m\n VAR num a{2} := [" + "9" * 300 + "E9, 0];\nENDMODULE\n", "2:19",
+     "number 99999999999999999999... (302 characters) is out of range"),
     # (Not the lexer's names of its own tokens: FAST_DECL is a declaration.)
     ("MODULE m\n PROC main()\n ENDPROC\n", "4:1",
      "unexpected end of file; expected a declaration, ALIAS, ENDMODULE, FUNC, PROC, RECORD, "

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import sys
 
 import click
@@ -483,12 +484,11 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
             # of the task, or copied with it, next time.)
             for path in (rep, json_path):
                 real = os.path.realpath(path) if path is not None else None
-                inside = next((f for f in folders if real is not None
-                               and real.startswith(f + os.sep)), None)
-                if inside is not None:
-                    raise RapidcompError(f"{path}: is inside the input folder "
-                                         f"{os.path.relpath(inside)}; write the report beside "
-                                         "it")
+                if real is not None and any(real.startswith(f + os.sep) for f in folders):
+                    given = ", ".join(p for p, ts_ in groups
+                                      if ts_[0].kind in ("folder", "backup"))
+                    raise RapidcompError(f"{path}: is inside the input folder {given}; write "
+                                         "the report beside it")
             specs.append(JobSpec(t, out, rep, json_path, profile, robot, tuple(with_modules),
                                  emit, force, tuple(limits), tuple(track), start, base,
                                  transient=transient))
@@ -579,7 +579,7 @@ def _warmup_campaign(times, thermal_effects, tau_heat, sensors=(), tau_cool=None
         # (Its column's name: temp_ and a name; one column per sensor,
         # which discover reads back. A flat one, T_COLD = T_WARM, is a
         # sensor too: the room's.)
-        if name == "temp_" or not name.replace("_", "").isalnum():
+        if not re.fullmatch(r"temp_[a-z0-9_]+", name):
             raise RapidcompError(f"--sensor {spec}: expected temp_NAME (letters, digits, '_') "
                                  "as the column's name")
         if any(name == p[0] for p in parsed):

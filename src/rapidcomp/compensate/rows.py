@@ -255,10 +255,11 @@ class Rows(Sequence):
             ks = list(ks)
             if not ks:
                 return []
-            if ks[-1] - ks[0] + 1 != len(ks) or any(b <= a for a, b in zip(ks, ks[1:])):
+            if ks[0] < 0 or ks[-1] - ks[0] + 1 != len(ks) or any(
+                    b <= a for a, b in zip(ks, ks[1:])):
                 return list(zip(*[[c[k] for k in ks] for c in self._cols]))
             ks = range(ks[0], ks[-1] + 1)
-        if ks.step != 1:
+        if ks.step != 1 or ks.start < 0 or ks.stop < 0:
             return list(zip(*[[c[k] for k in ks] for c in self._cols]))
         return list(zip(*[c[ks.start:ks.stop] for c in self._cols]))
 

@@ -159,7 +159,8 @@ def _element_line(path: Path, name: str, child: bool = False) -> int | None:
     except OSError:
         return None
     q = re.escape(name)
-    pats = ([rf'<joint\b[^>]*>(?:(?!</joint>).)*?<child\s+link\s*=\s*["\']{q}["\']']
+    pats = ([rf'<joint\b[^>]*[^/>]>(?:(?!</joint>|<joint\b).)*?'
+             rf'<child\s+link\s*=\s*["\']{q}["\']']
             if child else [rf'<joint\s[^>]*\bname\s*=\s*["\']{q}["\']',
                            rf'<link\s[^>]*\bname\s*=\s*["\']{q}["\']'])
     for pat in pats:

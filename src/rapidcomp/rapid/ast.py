@@ -47,7 +47,8 @@ class Agg:
 
 # (The grammar's _N: a number's digits split one way only, so a pattern
 # that fails after many numbers is not tried again at every split.)
-NUMBER_RE = re.compile(r"[+-]?(?:[0-9]{1,300}(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]{1,2})?")
+NUMBER_RE = re.compile(r"[+-]?(?:[0-9]{1,200}(?:\.[0-9]*)?|\.[0-9]+)"
+                       r"(?:[eE][+-]?(?:0*[1-9][0-9]?|0+))?")
 _TOKEN_RE = re.compile(r"\[|\]|" + NUMBER_RE.pattern)
 
 

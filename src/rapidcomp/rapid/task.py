@@ -255,6 +255,7 @@ def _read_bytes(path: Path, shown: str | None = None) -> bytes | None:
     exists but cannot be read is bad input."""
     if not path.exists():
         return None
+    not_a_file(path, _shown_cfg(path, shown))
     try:
         return path.read_bytes()
     except OSError as exc:
