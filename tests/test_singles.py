@@ -36,11 +36,36 @@ FAILING = f"""MODULE Odd
 ENDMODULE
 """
 
+# The same as declarations, each read by its move alone (a Single, edited
+# in place) but pF, which two moves read (a Group: no Single reads what
+# another use reads) and the PERS pP (in place all the same), with a
+# --with-like second module's target read once (the caller's module is
+# not where it is declared: a Group, a copy).
+DECLARED = f"""MODULE Decl
+  CONST robtarget pA:=[[600,100,500],[0,0,1,0],[0,0,0,0],{EXT}];
+  CONST robtarget pH:=[[515,0,712],[0.707107,0,0.707107,0],[0,0,0,0],{EXT}];
+  CONST robtarget pB:=[[600,-100,500],[0,0,1,0],[-1,0,-1,0],{EXT}];
+  CONST robtarget pFar:=[[2600,0,500],[0,0,1,0],[0,0,0,0],{EXT}];
+  CONST robtarget pF:=[[600,0,450],[0,0,1,0],[0,0,0,0],{EXT}];
+  PERS robtarget pP:=[[550,50,550],[0,0,1,0],[0,0,0,0],{EXT}];
+  PROC main()
+    MoveL pA,v100,z1,tool0;
+    MoveL pH,v100,fine,tool0;
+    MoveL pB,v100,z1,tool0;
+    MoveL pFar,v100,z1,tool0;
+    MoveL pF,v100,z1,tool0;
+    MoveL Offs(pF,0,0,10),v100,z1,tool0;
+    MoveJ pP,v100,z1,tool0;
+  ENDPROC
+ENDMODULE
+"""
+
 PROGRAMS = {
     **{name: make(3) for name, make in VARIANTS.items()},
     "cam": bench_module(300, 6, ""),
     "cam_confoff": bench_module(300, 6, "    ConfL\\Off;\n"),
     "failing": FAILING,
+    "declared": DECLARED,
 }
 
 
@@ -82,7 +107,9 @@ def test_singles_write_what_a_group_each_writes(name, mode, miss_every, solver, 
     # The inline uses were Singles, not a Group each (the oracle's were).
     assert whole[0][1] == 0
     singles = left[0][1]
-    assert singles >= (3 if name == "failing" else 40)
+    # (As MoveAbsJ a declared target is a new jointtarget: a Group; the
+    # PERS one stays a robtarget move, a Single.)
+    assert singles >= {"failing": 3, "declared": 1}.get(name, 40)
     assert left[0][0] + singles == whole[0][0]
     if miss_every:
         # Some missed and were taken back or placed again as Groups.
@@ -104,3 +131,57 @@ def test_a_single_that_fails_is_a_group_of_its_own_that_says_why(solver, monkeyp
     assert left == [(3, 3)]
     text = got.modules[0].text
     assert "[[515,0,712],[0.707107,0,0.707107,0]" in text and "[[2600,0,500]" in text
+
+
+def test_a_declaration_its_move_alone_reads_is_a_single_edited_in_place(solver, monkeypatch):
+    """pA, pB and pP (PERS) are each read by one move: Singles, written in
+    place as a Group of their move would be; pH (the wrist) and pFar fail
+    and are Groups of their own that say why; pF, read by two moves, is
+    two Groups (the plain one in place, the Offs one a copy)."""
+    got, left = _fix(DECLARED, "declared", solver, "robtarget", monkeypatch, True)
+    rows = got.rows
+    assert [r.status for r in rows] == ["compensated", "not compensated", "compensated",
+                                        "not compensated", "compensated", "compensated",
+                                        "compensated"]
+    assert [rows[k].action for k in (0, 2, 4, 5, 6)] == [
+        "robtarget pA rewritten in place", "robtarget pB rewritten in place",
+        "robtarget pF rewritten in place", "new robtarget pF_offs_c",
+        "robtarget pP rewritten in place"]
+    assert "J4/J6 split a robtarget cannot carry" in rows[1].reason
+    assert "out of reach" in rows[3].reason
+    # pA, pB, pP Singles; pH, pFar (failed) and pF's two Groups.
+    assert left == [(4, 3)]
+
+
+def test_a_declaration_in_another_module_is_edited_where_it_is(solver, monkeypatch):
+    """A task of two modules: the targets declared in the data module, read
+    once each by the moves of the other: Singles, each literal edited in
+    the data module, as Groups edit them (a Single's literal is in its
+    declaration's file, not its move's)."""
+    data = "MODULE Data\n" + "".join(
+        f"  CONST robtarget p{i}:=[[{560 + 10 * i},{20 * i},500],[0,0,1,0],[0,0,0,0],"
+        f"{EXT}];\n" for i in range(6)) + "ENDMODULE\n"
+    main = ("MODULE Main\n  PROC main()\n" + "".join(
+        f"    MoveL p{i},v100,z1,tool0;\n" for i in range(6)) + "  ENDPROC\nENDMODULE\n")
+
+    def run(singles):
+        real_settle, left = P.settle, []
+
+        def settle(gs, *args):
+            real_settle(gs, *args)
+            left.append(sum(len(g.uses) for g in gs if type(g) is P.Singles))
+        monkeypatch.setattr(P, "settle", settle)
+        if not singles:
+            real = P.grouping
+            monkeypatch.setattr(P, "grouping",
+                                lambda *a, **k: real(*a, **{**k, "singles": False}))
+        task = Task("cell", (parse_text(main, "Main.mod"), parse_text(data, "Data.mod")))
+        result = F.fix(task, solver, "robtarget")
+        monkeypatch.undo()
+        return result, left
+    (got, left), (want, _) = run(True), run(False)
+    _same(got, want, "robtarget")
+    assert left == [6]
+    assert got.modules[0].text == main and got.modules[1].text != data
+    assert [r.action for r in got.rows] == [f"robtarget p{i} rewritten in place"
+                                            for i in range(6)]

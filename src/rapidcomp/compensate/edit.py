@@ -406,7 +406,10 @@ def _named_conf(src: Source, texts) -> str | None:
 
 def _why(g: Group | Singles, k) -> str:
     """What an edit of element k's fields says it is for."""
-    return f"{element_label(g, None if type(g) is Singles else k)} compensated"
+    if type(g) is Singles:
+        return (f"{g.uses[k].source.decl.name} compensated" if g.declared
+                else "inline target compensated")
+    return f"{element_label(g, k)} compensated"
 
 
 def _style(word: str, like: str) -> str:
@@ -728,13 +731,16 @@ class Editor:
                     f"{u.motion.instruction} -> MoveAbsJ, inline jointtarget")
             return
         fields, lists = self.fields, self.field_lists
+        file_index = self.plan.file_index
         for n, u in enumerate(s.uses):
             texts, changes = vals.field_edits(s, n)
             if not changes:
                 actions[u.key] = "unchanged (the change is below the written precision)"
                 continue
-            record = u.source.record
-            fi = u.key[0]
+            src = u.source
+            record = src.record
+            # (A declaration's literal is in its own file.)
+            fi = file_index[id(src.home)] if s.declared else u.key[0]
             key = (fi, record.span.start)
             if key in fields:
                 raise InternalError(f"{self.plan.files[fi].source.display_path}: a literal "
@@ -742,7 +748,8 @@ class Editor:
                                     f"{record.span.start})")
             fields[key] = (record, texts)
             lists.append((fi, changes))
-            actions[u.key] = "inline robtarget rewritten"
+            actions[u.key] = (f"robtarget {src.decl.name} rewritten in place" if s.declared
+                              else "inline robtarget rewritten")
 
     # -------------------------------------------------------- transient
     def _dq_literal(self, g: Group, k) -> str:

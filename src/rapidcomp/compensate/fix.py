@@ -218,7 +218,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
             verified, state_errors = _verify_states(plan, solved, keys, out_files,
                                                     transient[1], calls, texts)
         clock("verify")
-        missed = _missed(solved, gs, verified)
+        missed = _missed(solved, gs, verified, plan.file_index)
         if not missed:
             break
         for g, (u, um, deg) in missed.items():
@@ -359,7 +359,7 @@ def _transient_notes(tr, state_errors: dict) -> list[str]:
             "target is in its row)."]
 
 
-def _missed(solved, gs, verified) -> dict:
+def _missed(solved, gs, verified, file_index: dict) -> dict:
     """Groups with a use whose written value misses its pose beyond the
     bound (the orientation bound widened by what a wrist-singular MoveAbsJ
     leaves over): group -> (use, um, deg). An element of Singles that
@@ -384,7 +384,7 @@ def _missed(solved, gs, verified) -> dict:
                 if um > VERIFY_UM or deg > max(VERIFY_DEG, lefts[g.rows[n]] + VERIFY_DEG):
                     missed[n] = (u, um, deg)
             for n, got in missed.items():
-                one = g.single(n, placed=True)
+                one = g.single(n, file_index, placed=True)
                 gs.append(one)
                 out[one] = got
             if missed:

@@ -108,7 +108,11 @@ class Singles:
     mode: str                        # "absj" or "rob", as Group.mode
     uses: list = field(default_factory=list)
     rows: list = field(default_factory=list)
-    # As a Group placed inline, nothing failed, no name or slot written.
+    # Declared targets each read by its one use (rob: edited in place), not
+    # inline literals.
+    declared: bool = False
+    # As a Group placed inline (declared: in place), nothing failed, no
+    # name or slot written.
     failure: None = None
     placement: str | None = "inline"
     names: Mapping = field(default_factory=lambda: NONE)
@@ -128,15 +132,20 @@ class Singles:
         u = self.uses[n]
         return u.tool, u.wobj
 
-    def single(self, n: int, placed: bool = False) -> Group:
-        """Element n as the Group of its one use grouping() makes; placed:
-        as settle() and place() leave it (it compensates, inline)."""
+    def single(self, n: int, file_index: dict, placed: bool = False) -> Group:
+        """Element n as the Group of its one use grouping() makes
+        (file_index: Plan.file_index); placed: as settle() and place()
+        leave it (it compensates: inline, or in place)."""
         u = self.uses[n]
-        g = Group(self.mode, u.source, u.tool, u.wobj, (u.key[0], u.module))
+        src = u.source
+        home = ((file_index[id(src.home)], src.home_module) if self.declared
+                else (u.key[0], u.module))
+        g = Group(self.mode, src, u.tool, u.wobj, home)
         g.uses.append(u)
         g.rows_seen[None] = self.rows[n]
         if placed:
-            g.elements, g.rows, g.placement = [None], g.rows_seen, "inline"
+            g.elements, g.rows = [None], g.rows_seen
+            g.placement = self.placement
         return g
 
     def drop(self, ns) -> None:
@@ -288,17 +297,28 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
     # of what one written value serves.
     wrist = np.abs(np.nan_to_num(q_all[:, 4], nan=180.0)) < wrist_deg
     kept = _one_statement(loop_first, modes)
-    alone = {"absj": Singles("absj"), "rob": Singles("rob")} if singles else None
+    alone = ({"absj": Singles("absj"), "rob": Singles("rob"),
+              "decl": Singles("rob", declared=True, placement="in place")}
+             if singles else None)
+    once = _read_once(plan) if singles else frozenset()
     for u, row, m in zip(loop_first, rows, modes):
         src = u.source
-        if alone is not None and src.decl is None and type(src.ref) is A.NumAgg \
-                and m != "joint" and src.call is None and not src.by_loop and not u.env:
-            # (Its own literal, which no other use reads: a Group of its
-            # own, as a column of Singles.)
-            s = alone[m]
-            s.uses.append(u)
-            s.rows.append(row)
-            continue
+        if alone is not None and m != "joint" and src.call is None and not src.by_loop \
+                and not u.env:
+            if src.decl is None and type(src.ref) is A.NumAgg:
+                # (Its own literal, which no other use reads: a Group of
+                # its own, as a column of Singles.)
+                s = alone[m]
+            elif m == "rob" and id(src.decl) in once and src.element is None:
+                # (A declaration nothing else reads: edited in place, as
+                # place() places a Group of its one use.)
+                s = alone["decl"]
+            else:
+                s = None
+            if s is not None:
+                s.uses.append(u)
+                s.rows.append(row)
+                continue
         if src.decl is not None and file_index[id(src.home)] < plan.n_written:
             home = (file_index[id(src.home)], src.home_module)
         else:
@@ -330,6 +350,25 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
     return out
 
 
+def _read_once(plan: Plan) -> frozenset:
+    """id() of each robtarget declaration one reference in the task reads
+    (the move's own), declared once, in a written module, not shared with
+    another task: place() edits it in place for that move's group."""
+    count: dict[str, int] = {}
+    decls: dict[str, list] = {}
+    for fi, pf in enumerate(plan.files):
+        for m in pf.modules:
+            for name, rs in plan.resolver.usages[id(m)].refs.items():
+                count[name] = count.get(name, 0) + len(rs)
+            for d in m.declarations:
+                decls.setdefault(d.name.lower(), []).append((fi, d))
+    shared = plan.resolver.shared
+    return frozenset(id(ds[0][1]) for name, ds in decls.items()
+                     if len(ds) == 1 and ds[0][0] < plan.n_written
+                     and ds[0][1].type == "robtarget" and count.get(name) == 1
+                     and name not in shared)
+
+
 def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
     """Each group's elements, rows and failure, and whether a new
     declaration of it is LOCAL (groups() past grouping()). An element of
@@ -344,7 +383,7 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
         failed = [n for n, i in enumerate(s.rows)
                   if not ok[i] or (left[i] and s.mode == "rob")]
         if failed:
-            gs += [s.single(n) for n in failed]
+            gs += [s.single(n, plan.file_index) for n in failed]
             s.drop(failed)
         if not s.uses:
             gs.remove(s)
@@ -462,6 +501,8 @@ def place(plan: Plan, gs: list[Group]) -> None:
         if g.decl is not None:
             by_decl.setdefault(id(g.decl), []).append(g)
     for g in gs:
+        if type(g) is Singles:
+            continue          # (placed as made: inline, or in place)
         # (A new dict only where the round before wrote one: two empty dicts
         # per group, 1e5 groups, otherwise.)
         g.placement = None
