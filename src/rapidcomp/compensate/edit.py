@@ -46,6 +46,10 @@ class Values:
         self._values: dict = {}
 
     def source(self, g: Group | Singles, k) -> Source:
+        # (A group's own source asked of it directly: asked several times
+        # for each of 1e5 values.)
+        if type(g) is Group and (k is None or k == g.src.element):
+            return g.src
         return g.source(k)
 
     def joints(self, g: Group, k) -> np.ndarray:
