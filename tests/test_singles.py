@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from cam_variants import EXT, VARIANTS, bench_module
+from cam_variants import EXT, HEAD, VARIANTS, bench_module
 from test_takeback import _same, missing
 from rapidcomp.compensate import fix as F
 from rapidcomp.compensate import place as P
@@ -185,3 +185,54 @@ def test_a_declaration_in_another_module_is_edited_where_it_is(solver, monkeypat
     assert got.modules[0].text == main and got.modules[1].text != data
     assert [r.action for r in got.rows] == [f"robtarget p{i} rewritten in place"
                                             for i in range(6)]
+
+
+def test_new_names_come_in_the_order_groups_make_them(solver, monkeypatch):
+    """A declared target its move alone reads and turns into MoveAbsJ makes
+    a new jointtarget (jt_<name>) as a Group of its move does, and in the
+    same order among the groups: here the Single's jt_p1_offs and the
+    Group's for Offs(p1, ...) (jt_ + p1 + _offs) want one name, and the
+    move first in the program gets it, in either order."""
+    for single_first in (True, False):
+        moves = ["MoveL p1_offs,v100,fine,tool0;", "MoveL Offs(p1,0,0,10),v100,fine,tool0;"]
+        if not single_first:
+            moves.reverse()
+        text = f"""MODULE Names
+  CONST robtarget p1:=[[600,0,450],[0,0,1,0],[0,0,0,0],{EXT}];
+  CONST robtarget p1_offs:=[[600,100,500],[0,0,1,0],[0,0,0,0],{EXT}];
+  PROC main()
+    {moves[0]}
+    {moves[1]}
+  ENDPROC
+ENDMODULE
+"""
+        got, left = _fix(text, "names", solver, "absj", monkeypatch, True)
+        want, _ = _fix(text, "names", solver, "absj", monkeypatch, False)
+        _same(got, want, "absj")
+        assert left == [(1, 1)]
+        assert [r.action for r in got.rows] == ["MoveL -> MoveAbsJ jt_p1_offs",
+                                                "MoveL -> MoveAbsJ jt_p1_offs_2"]
+
+
+def test_a_name_is_said_as_the_first_move_spells_it(solver, monkeypatch):
+    """The note on moves turned into MoveAbsJ names their work object as
+    the first of them spells it (RAPID's names are one whatever their
+    case), as a Group each would: here a Single's move (WPART) before a
+    Group's (wPart), and the other way round."""
+    for single_first in (True, False):
+        moves = [f"MoveL [[600,50,500],[0,0,1,0],[0,0,0,0],{EXT}],v100,fine,tSpindle"
+                 "\\WObj:=WPART;",
+                 "MoveL p1,v100,fine,tSpindle\\WObj:=wPart;",
+                 "MoveL p1,v100,z1,tSpindle\\WObj:=wPart;"]
+        if not single_first:
+            moves = moves[1:] + moves[:1]
+        text = ("MODULE Spell\n" + "\n".join(HEAD) + "\n"
+                f"  CONST robtarget p1:=[[560,0,450],[0,0,1,0],[0,0,0,0],{EXT}];\n"
+                "  PROC main()\n" + "".join(f"    {m}\n" for m in moves)
+                + "  ENDPROC\nENDMODULE\n")
+        got, left = _fix(text, "spell", solver, "absj", monkeypatch, True)
+        want, _ = _fix(text, "spell", solver, "absj", monkeypatch, False)
+        _same(got, want, "absj")
+        assert left == [(1, 1)]
+        said = next(n for n in got.notes if n.startswith("the moves turned into MoveAbsJ"))
+        assert ("WPART" if single_first else "wPart") in said, said

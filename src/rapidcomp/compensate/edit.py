@@ -719,12 +719,33 @@ class Editor:
                 self.edit(u.key[0], src.ref.span, new_ref, f"{u.label} -> {new_ref}")
                 self.actions[u.key] = f"new {type_name} {new_ref.split('{')[0]}"
 
+    def apply_new(self, s: Singles, n: int) -> None:
+        """apply() of element n of Singles whose elements each make a new
+        name and declaration: as the Group of its one use, made for the
+        call (its literal the one prepared for the element), in the order
+        place.apply_order gives."""
+        g = s.single(n, self.plan.file_index, placed=True)
+        vals = self.values._values
+        # (The group's key while it lives: an id is reused once it is gone.)
+        key = ("absj", id(g), None)
+        prepared = vals.get(("absj", id(s), n))
+        if prepared is not None:
+            vals[key] = prepared
+        try:
+            self.apply(g)
+        finally:
+            vals.pop(key, None)
+
     def _apply_singles(self, s: Singles) -> None:
         """apply() of each element of s as of the Group of its one use: its
         inline literal's numbers rewritten (or left as written where no
         number changes), or its move turned into MoveAbsJ on an inline
         jointtarget. (Its literal is its use's alone, and a literal of
         numbers names no confdata: nothing here fails.)"""
+        if s.ordered:
+            for n in s.elements:
+                self.apply_new(s, n)
+            return
         vals, actions = self.values, self.actions
         if s.mode == "absj":
             for n, u in enumerate(s.uses):

@@ -161,8 +161,12 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         P.place(plan, gs)
         P.fill_slots(plan, solver, gs)
         editor = Editor(plan, values, transient is not None)
-        for g in gs:
-            if g.failure is None:
+        # (In the groups' order: new names and declarations are made in it;
+        # an element of Singles that makes one, at its place among them.)
+        for g in P.apply_order(gs):
+            if type(g) is tuple:
+                editor.apply_new(*g)
+            elif g.failure is None:
                 editor.apply(g)
         file_edits = editor.file_edits()
         # The confdata written, as ints, for the rows (once per use here,
@@ -426,18 +430,17 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
     # shared tail: read once per tail, not made from the text of each of a
     # CAM program's 1e5 moves.)
     tails: set = set()
-    for g in gs:
-        if g.mode == "absj" and g.failure is None:
-            for u in g.uses:
-                if u.kind == "robtarget":
-                    m = u.motion
-                    if type(m.args) is not A.TailArgs or (m.roles, m.args.tail) not in tails:
-                        if type(m.args) is A.TailArgs:
-                            tails.add((m.roles, m.args.tail))
-                        for ref in (m.tool, m.wobj):
-                            if type(ref) is A.Ref and ref.name.lower() not in ("tool0", "wobj0"):
-                                frames.setdefault(ref.name.lower(), ref.name)
-                    assigned = assigned or any("@" in x[0] for x in (u.tool, u.wobj) if x)
+    # (In the order of a Group each: a name's first spelling is said.)
+    for g, u in P.uses_in_order(gs):
+        if g.mode == "absj" and g.failure is None and u.kind == "robtarget":
+            m = u.motion
+            if type(m.args) is not A.TailArgs or (m.roles, m.args.tail) not in tails:
+                if type(m.args) is A.TailArgs:
+                    tails.add((m.roles, m.args.tail))
+                for ref in (m.tool, m.wobj):
+                    if type(ref) is A.Ref and ref.name.lower() not in ("tool0", "wobj0"):
+                        frames.setdefault(ref.name.lower(), ref.name)
+            assigned = assigned or any("@" in x[0] for x in (u.tool, u.wobj) if x)
     if frames:
         notes.append("the moves turned into MoveAbsJ go to joints computed with "
                      + ", ".join(frames[k] for k in sorted(frames))

@@ -71,6 +71,10 @@ class Group:
     # Uses kept robtarget moves because other iterations of their statement
     # must stay ones (_one_statement).
     kept: frozenset = frozenset()
+    # Where its first use is among the uses grouping() walks: the groups'
+    # order, which the editor keeps (new names and declarations are made in
+    # it).
+    first: int = 0
     # src.decl (asked of every group again and again: a field, not a
     # property).
     decl: Declaration | None = field(init=False)
@@ -108,8 +112,10 @@ class Singles:
     mode: str                        # "absj" or "rob", as Group.mode
     uses: list = field(default_factory=list)
     rows: list = field(default_factory=list)
-    # Declared targets each read by its one use (rob: edited in place), not
-    # inline literals.
+    at: list = field(default_factory=list)     # each one's Group.first
+    # Declared targets each read by its one use (rob: edited in place;
+    # absj: a new jointtarget, made in the groups' order), not inline
+    # literals.
     declared: bool = False
     # As a Group placed inline (declared: in place), nothing failed, no
     # name or slot written.
@@ -140,12 +146,13 @@ class Singles:
         src = u.source
         home = ((file_index[id(src.home)], src.home_module) if self.declared
                 else (u.key[0], u.module))
-        g = Group(self.mode, src, u.tool, u.wobj, home)
+        g = Group(self.mode, src, u.tool, u.wobj, home, first=self.at[n])
         g.uses.append(u)
         g.rows_seen[None] = self.rows[n]
         if placed:
             g.elements, g.rows = [None], g.rows_seen
             g.placement = self.placement
+            g.local = u.module is home[1]
         return g
 
     def drop(self, ns) -> None:
@@ -153,6 +160,40 @@ class Singles:
         gone = set(ns)
         self.uses = [u for n, u in enumerate(self.uses) if n not in gone]
         self.rows = [r for n, r in enumerate(self.rows) if n not in gone]
+        self.at = [a for n, a in enumerate(self.at) if n not in gone]
+
+    @property
+    def ordered(self) -> bool:
+        """Its elements are written in the groups' order (Editor.apply, in
+        apply_order): each makes a new name and declaration."""
+        return self.declared and self.mode == "absj"
+
+
+def uses_in_order(gs: list) -> list:
+    """(group or Singles, use) of every use of gs, group by group as the
+    groups come (by Group.first), each element of Singles at its own
+    place among them: the order of a Group each (what is said first of
+    them is what a Group each says first)."""
+    items = [(g.first, 0, [(g, u) for u in g.uses]) for g in gs if type(g) is not Singles]
+    items += [(a, 1, [(s, u)]) for s in gs if type(s) is Singles
+              for a, u in zip(s.at, s.uses)]
+    items.sort(key=lambda x: (x[0], x[1]))
+    return [pair for _, _, pairs in items for pair in pairs]
+
+
+def apply_order(gs: list) -> list:
+    """gs as the editor writes them: the groups in order, each element of
+    Singles that makes a new name and declaration among them at its place
+    (as (Singles, n)), the other Singles after them (what they write does
+    not depend on the order)."""
+    ordered = [s for s in gs if type(s) is Singles and s.ordered]
+    rest = [g for g in gs if not (type(g) is Singles and g.ordered)]
+    if not ordered:
+        return rest
+    items = [(g.first, 0, g) for g in rest if type(g) is not Singles]
+    items += [(a, 1, (s, n)) for s in ordered for n, a in enumerate(s.at)]
+    items.sort(key=lambda x: (x[0], x[1]))
+    return [x[2] for x in items] + [g for g in rest if type(g) is Singles]
 
 
 def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int) -> str:
@@ -298,10 +339,11 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
     wrist = np.abs(np.nan_to_num(q_all[:, 4], nan=180.0)) < wrist_deg
     kept = _one_statement(loop_first, modes)
     alone = ({"absj": Singles("absj"), "rob": Singles("rob"),
-              "decl": Singles("rob", declared=True, placement="in place")}
+              "rob decl": Singles("rob", declared=True, placement="in place"),
+              "absj decl": Singles("absj", declared=True, placement="new")}
              if singles else None)
     once = _read_once(plan) if singles else frozenset()
-    for u, row, m in zip(loop_first, rows, modes):
+    for at, (u, row, m) in enumerate(zip(loop_first, rows, modes)):
         src = u.source
         if alone is not None and m != "joint" and src.call is None and not src.by_loop \
                 and not u.env:
@@ -309,15 +351,17 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
                 # (Its own literal, which no other use reads: a Group of
                 # its own, as a column of Singles.)
                 s = alone[m]
-            elif m == "rob" and id(src.decl) in once and src.element is None:
-                # (A declaration nothing else reads: edited in place, as
-                # place() places a Group of its one use.)
-                s = alone["decl"]
+            elif id(src.decl) in once and src.element is None:
+                # (A declaration nothing else reads: edited in place, or
+                # a new jointtarget next to it, as place() places a Group
+                # of its one use.)
+                s = alone[m + " decl"]
             else:
                 s = None
             if s is not None:
                 s.uses.append(u)
                 s.rows.append(row)
+                s.at.append(at)
                 continue
         if src.decl is not None and file_index[id(src.home)] < plan.n_written:
             home = (file_index[id(src.home)], src.home_module)
@@ -339,7 +383,7 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
                 key = base + (q_keys[row],)
         g = by_key.get(key)
         if g is None:
-            g = by_key[key] = Group(m, src, u.tool, u.wobj, home)
+            g = by_key[key] = Group(m, src, u.tool, u.wobj, home, first=at)
             out.append(g)
         g.uses.append(u)
         g.rows_seen.setdefault(src.element, row)
