@@ -9,6 +9,7 @@ indentation and line break). Nothing else of the text changes.
 from __future__ import annotations
 
 import re
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -51,6 +52,20 @@ class Values:
         if type(g) is Group and (k is None or k == g.src.element):
             return g.src
         return g.source(k)
+
+    @contextmanager
+    def lent(self, s: Singles, n: int, g: Group):
+        """Within: the MoveAbsJ literal prepared for element n of s is that
+        of g, the Group of its one use made for the while (Singles.single;
+        its key only while it lives: an id is reused once it is gone)."""
+        key = ("absj", id(g), None)
+        prepared = self._values.get(("absj", id(s), n))
+        if prepared is not None:
+            self._values[key] = prepared
+        try:
+            yield
+        finally:
+            self._values.pop(key, None)
 
     def joints(self, g: Group, k) -> np.ndarray:
         if k in g.slots:
@@ -725,16 +740,8 @@ class Editor:
         call (its literal the one prepared for the element), in the order
         place.apply_order gives."""
         g = s.single(n, self.plan.file_index, placed=True)
-        vals = self.values._values
-        # (The group's key while it lives: an id is reused once it is gone.)
-        key = ("absj", id(g), None)
-        prepared = vals.get(("absj", id(s), n))
-        if prepared is not None:
-            vals[key] = prepared
-        try:
+        with self.values.lent(s, n, g):
             self.apply(g)
-        finally:
-            vals.pop(key, None)
 
     def _apply_singles(self, s: Singles) -> None:
         """apply() of each element of s as of the Group of its one use: its
@@ -743,9 +750,10 @@ class Editor:
         jointtarget. (Its literal is its use's alone, and a literal of
         numbers names no confdata: nothing here fails.)"""
         if s.ordered:
-            for n in s.elements:
-                self.apply_new(s, n)
-            return
+            # (Each element's new name and declaration come at its place
+            # among the groups: place.apply_order gives it to apply_new.)
+            raise InternalError("Singles making new declarations are written one by one, in "
+                                "the groups' order")
         vals, actions = self.values, self.actions
         if s.mode == "absj":
             for n, u in enumerate(s.uses):

@@ -377,31 +377,24 @@ def _missed(solved, gs, verified, file_index: dict) -> dict:
     # use: the same division of the same doubles.)
     lefts = (solved.deformed.residual_rad.astype(float) / DEG).tolist()
     row = solved.row
+
+    def miss(u) -> tuple | None:
+        um, deg = verified[u.key]
+        if um > VERIFY_UM or deg > max(VERIFY_DEG, lefts[row[u.key]] + VERIFY_DEG):
+            return u, um, deg
+        return None
     for g in list(gs):
         if g.failure is not None:
             continue
         if type(g) is P.Singles:
             # (Each a Group of its own, as it would be: that one fails.)
-            missed = {}
-            for n, u in enumerate(g.uses):
-                um, deg = verified[u.key]
-                if um > VERIFY_UM or deg > max(VERIFY_DEG, lefts[g.rows[n]] + VERIFY_DEG):
-                    missed[n] = (u, um, deg)
-            for n, got in missed.items():
-                one = g.single(n, file_index, placed=True)
-                gs.append(one)
-                out[one] = got
-            if missed:
-                g.drop(missed)
-            if not g.uses:
-                gs.remove(g)
+            missed = [(n, got) for n, got in enumerate(map(miss, g.uses)) if got is not None]
+            ones = P.split_off(gs, g, [n for n, _ in missed], file_index, placed=True)
+            out.update(zip(ones, [got for _, got in missed]))
             continue
-        for u in g.uses:
-            um, deg = verified[u.key]
-            left = lefts[row[u.key]]
-            if um > VERIFY_UM or deg > max(VERIFY_DEG, left + VERIFY_DEG):
-                out[g] = (u, um, deg)
-                break
+        got = next((x for x in map(miss, g.uses) if x is not None), None)
+        if got is not None:
+            out[g] = got
     return out
 
 

@@ -169,16 +169,28 @@ class Singles:
         return self.declared and self.mode == "absj"
 
 
+def _interleaved(gs: list, singles) -> list:
+    """The Groups of gs by Group.first, each element (s, n) of the Singles
+    `singles` at its own place among them (Singles.at): the order of a
+    Group each."""
+    items = [(g.first, 0, g) for g in gs if type(g) is not Singles]
+    items += [(a, 1, (s, n)) for s in singles for n, a in enumerate(s.at)]
+    items.sort(key=lambda x: (x[0], x[1]))
+    return [x[2] for x in items]
+
+
 def uses_in_order(gs: list) -> list:
     """(group or Singles, use) of every use of gs, group by group as the
-    groups come (by Group.first), each element of Singles at its own
-    place among them: the order of a Group each (what is said first of
-    them is what a Group each says first)."""
-    items = [(g.first, 0, [(g, u) for u in g.uses]) for g in gs if type(g) is not Singles]
-    items += [(a, 1, [(s, u)]) for s in gs if type(s) is Singles
-              for a, u in zip(s.at, s.uses)]
-    items.sort(key=lambda x: (x[0], x[1]))
-    return [pair for _, _, pairs in items for pair in pairs]
+    groups come, each element of Singles at its own place among them: the
+    order of a Group each (what is said first of them is what a Group
+    each says first)."""
+    out = []
+    for x in _interleaved(gs, [s for s in gs if type(s) is Singles]):
+        if type(x) is tuple:
+            out.append((x[0], x[0].uses[x[1]]))
+        else:
+            out += [(x, u) for u in x.uses]
+    return out
 
 
 def apply_order(gs: list) -> list:
@@ -190,10 +202,20 @@ def apply_order(gs: list) -> list:
     rest = [g for g in gs if not (type(g) is Singles and g.ordered)]
     if not ordered:
         return rest
-    items = [(g.first, 0, g) for g in rest if type(g) is not Singles]
-    items += [(a, 1, (s, n)) for s in ordered for n, a in enumerate(s.at)]
-    items.sort(key=lambda x: (x[0], x[1]))
-    return [x[2] for x in items] + [g for g in rest if type(g) is Singles]
+    return _interleaved(rest, ordered) + [g for g in rest if type(g) is Singles]
+
+
+def split_off(gs: list, s: Singles, ns, file_index: dict, placed: bool = False) -> list[Group]:
+    """Elements ns of s taken out of it into gs as the Groups of their own
+    they are (Singles.single; a Singles left empty leaves gs); those
+    Groups."""
+    out = [s.single(n, file_index, placed) for n in ns]
+    if out:
+        gs += out
+        s.drop(ns)
+    if not s.uses:
+        gs.remove(s)
+    return out
 
 
 def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int) -> str:
@@ -394,20 +416,28 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
     return out
 
 
+def _declarations(plan: Plan) -> dict[str, list]:
+    """Every declaration of the task by lower-case name: (file index,
+    Declaration) of each."""
+    out: dict[str, list] = {}
+    for fi, pf in enumerate(plan.files):
+        for m in pf.modules:
+            for d in m.declarations:
+                out.setdefault(d.name.lower(), []).append((fi, d))
+    return out
+
+
 def _read_once(plan: Plan) -> frozenset:
     """id() of each robtarget declaration one reference in the task reads
     (the move's own), declared once, in a written module, not shared with
     another task: place() edits it in place for that move's group."""
     count: dict[str, int] = {}
-    decls: dict[str, list] = {}
-    for fi, pf in enumerate(plan.files):
+    for pf in plan.files:
         for m in pf.modules:
             for name, rs in plan.resolver.usages[id(m)].refs.items():
                 count[name] = count.get(name, 0) + len(rs)
-            for d in m.declarations:
-                decls.setdefault(d.name.lower(), []).append((fi, d))
     shared = plan.resolver.shared
-    return frozenset(id(ds[0][1]) for name, ds in decls.items()
+    return frozenset(id(ds[0][1]) for name, ds in _declarations(plan).items()
                      if len(ds) == 1 and ds[0][0] < plan.n_written
                      and ds[0][1].type == "robtarget" and count.get(name) == 1
                      and name not in shared)
@@ -424,13 +454,8 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
     left = ((solved.deformed.warnings.astype(np.int64) & _LEFT) != 0).tolist()
     # A single that fails is a Group of its own, which says why.
     for s in [g for g in gs if type(g) is Singles]:
-        failed = [n for n, i in enumerate(s.rows)
-                  if not ok[i] or (left[i] and s.mode == "rob")]
-        if failed:
-            gs += [s.single(n, plan.file_index) for n in failed]
-            s.drop(failed)
-        if not s.uses:
-            gs.remove(s)
+        split_off(gs, s, [n for n, i in enumerate(s.rows)
+                          if not ok[i] or (left[i] and s.mode == "rob")], plan.file_index)
     for g in gs:
         if type(g) is Singles:
             continue
@@ -529,14 +554,12 @@ def place(plan: Plan, gs: list[Group]) -> None:
     # (not those of speed, zone, tool: a CAM program has 1e5 of each).
     needed = {g.decl.name.lower() for g in gs if g.decl is not None}
     refs: dict[str, set] = {}
-    decl_count: dict[str, int] = {}
     for fi, pf in enumerate(plan.files):
         for m in pf.modules:
             for name, rs in plan.resolver.usages[id(m)].refs.items():
                 if name in needed:
                     refs.setdefault(name, set()).update((fi, start) for start in rs)
-            for d in m.declarations:
-                decl_count[d.name.lower()] = decl_count.get(d.name.lower(), 0) + 1
+    declared = _declarations(plan)
     consumed = {(u.key[0], u.source.ref.span.start)
                 for g in gs if g.mode == "absj" and g.failure is None and g.decl is not None
                 for u in g.uses}
@@ -567,7 +590,7 @@ def place(plan: Plan, gs: list[Group]) -> None:
         mine = {(u.key[0], u.source.ref.span.start) for g in decl_groups if g.mode != "absj"
                 for u in g.uses}
         exclusive = (file_index[id(writable[0].src.home)] < plan.n_written
-                     and decl_count.get(name) == 1
+                     and len(declared.get(name, ())) == 1
                      and name not in plan.resolver.shared
                      and all(g.failure is None for g in decl_groups)
                      and refs.get(name, set()) - consumed == mine)
