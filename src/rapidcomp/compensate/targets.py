@@ -1967,27 +1967,18 @@ class Resolver:
             envs = [{**e, lp.var.lower(): v} for e in envs for v in values]
         return envs
 
-    def _both_missing(self, tool: Unresolved, motion, module) -> Unresolved:
-        """A move's tool not declared in the given modules, and its work
-        object (which the tool's failure leaves unresolved) not either:
-        both named, so that the declaring modules are given at once."""
-        hint = f"({MISSING_HINT})"
-        if not tool.reason.endswith(hint) or _loop_indexed(motion, motion.wobj) is not None:
-            return tool
-        wobj = self.wobj(motion.wobj, module, motion.routine)
-        if not (type(wobj) is Unresolved and wobj.reason.endswith(hint)):
-            return tool
-        return Unresolved(f"{_missing_name(tool.reason)} and {_missing_name(wobj.reason)} are "
-                          f"not declared in the given modules {hint}", True)
-
-    def _all_missing(self, first: Unresolved, module, motion) -> Unresolved:
-        """A target no given module declares: name the tool and work object
-        of the move too when they are missing as well."""
+    def _all_missing(self, first: Unresolved, module, motion,
+                     tool: bool = True) -> Unresolved:
+        """A target no given module declares (tool=False: the move's tool):
+        name the tool (tool) and work object of the move too when they are
+        missing as well, so that the declaring modules are given at once."""
+        if not first.reason.endswith(f"({MISSING_HINT})"):
+            return first
         names = [_missing_name(first.reason)]
         if _loop_indexed(motion, motion.tool, motion.wobj) is not None:
             return first
-        for what in (self.tool(motion.tool, module, motion.routine),
-                     self.wobj(motion.wobj, module, motion.routine)):
+        for what in ((self.tool(motion.tool, module, motion.routine),) if tool else ()) + (
+                self.wobj(motion.wobj, module, motion.routine),):
             if isinstance(what, Unresolved) and what.reason.endswith(f"({MISSING_HINT})"):
                 names.append(_missing_name(what.reason))
         if len(names) == 1:
@@ -2309,7 +2300,7 @@ class Resolver:
             return fail(Unresolved("not a robtarget", True))
         tool, wobj = self._tool_wobj(motion, module)
         if isinstance(tool, Unresolved):
-            return fail(self._both_missing(tool, motion, module))
+            return fail(self._all_missing(tool, module, motion, tool=False))
         if isinstance(wobj, Unresolved):
             return fail(wobj)
         base = self.world_M_base(src.record)
