@@ -361,14 +361,24 @@ def test_the_flow_of_plain_calls_is_that_of_any_call():
     """The flow walks a plain move without its function-call memo; the
     states, order and notes are those of the same program walked without."""
     def rebuilt(pf):
+        # (The routines the flow walks too, not only the module's node.)
         return dataclasses.replace(pf, modules=tuple(
-            dataclasses.replace(m, node=_not_plain(m.node)) for m in pf.modules))
-    for task in _tasks():
+            dataclasses.replace(m, node=_not_plain(m.node), routines=tuple(
+                dataclasses.replace(r, node=_not_plain(r.node)) for r in m.routines))
+            for m in pf.modules))
+    from test_flow_runs import PROGRAMS     # (runs entered again: by RETRY, GOTO, cycles)
+    runs = 0
+    for task in _tasks() + [Task(n, (parse_text(t, n),)) for n, t in sorted(PROGRAMS.items())]:
         fast = Plan(task).flow
         slow = Plan(dataclasses.replace(task, files=tuple(map(rebuilt, task.files)),
                                         context=tuple(map(rebuilt, task.context)))).flow
         assert fast.order == slow.order and fast.notes == slow.notes
-        assert fast.before == slow.before and fast.entry == slow.entry
+        assert fast.before.keys() == slow.before.keys() and fast.entry == slow.entry
+        # (A run's moves share one state, their last the move before each.)
+        assert {k: fast.state(k) for k in fast.before} == slow.before
+        assert not slow.previous
+        runs += len(fast.previous)
+    assert runs > 1000
 
 
 def test_the_references_of_plain_calls_are_those_of_any_call():

@@ -47,6 +47,10 @@ PROGRAMS = {
     "retry": _module(["Path;"], MOVES + ["ERROR", "  RETRY;"]),
     "loop": _module(["WHILE TRUE DO", "  Path;", "  ConfJ\\Off;", "ENDWHILE"], MOVES),
     "twice": _module(["Path;", "Path;"], MOVES),
+    # A TRAP switching supervision: every state widened, a run's shared one
+    # once.
+    "trap": _module(["Path;"], MOVES).replace(
+        "ENDMODULE", "  TRAP t1\n    ConfL\\Off;\n  ENDTRAP\nENDMODULE"),
     "cam": cam_module(200, seed=3, main=True),
     "cam_loose": cam_module(200, seed=4),
 }

@@ -62,6 +62,11 @@ POSITION_READERS = frozenset(("crobt", "cpos", "cjointt"))
 # --start says, else unknown), and: where an error stopped the robot.
 PROGRAM_START = ("program start",)
 RESUME = ("resume",)
+# State.last of a move inside a run of plain moves (_Walker._moves): the
+# move just before it in the run, Flow.previous[its key]. The run's moves
+# share one State (a CAM program's 1e5: not a State and a set each); read
+# through Flow.state/Flow.last, never as a set of keys.
+AFTER = frozenset((("the move before",),))
 # A call whose routine is not known statically (in the names of calls).
 LATE = "%late-bound call%"
 # Statement visits (loops unrolled, routines walked per call site) beyond
@@ -86,7 +91,9 @@ class State:
                 and self.confj == other.confj and self.pdisp == other.pdisp
                 and self.eoffs == other.eoffs):
             return self
-        last = None if self.last is None or other.last is None else self.last | other.last
+        # (Equal sets kept as they are: AFTER stays AFTER.)
+        last = (None if self.last is None or other.last is None else
+                self.last if self.last == other.last else self.last | other.last)
         return State(self.confj | other.confj, self.confl | other.confl,
                      self.pdisp | other.pdisp, self.eoffs | other.eoffs, last)
 
@@ -149,6 +156,28 @@ class Flow:
     # read where any move left it (in a TRAP or an error handler), or "".
     read_by: dict = field(default_factory=dict)
     anywhere: str = ""
+    # Use key -> the use just before it, where its state's last is AFTER.
+    previous: dict = field(default_factory=dict)
+
+    def state(self, key) -> State:
+        """The state before use `key`, its last a set of keys."""
+        st = self.before.get(key, self.entry)
+        return st if st.last is not AFTER else st.with_last(frozenset((self.previous[key],)))
+
+    def held(self, key) -> State:
+        """state(key) as held: its last may be AFTER (last() reads it)."""
+        return self.before.get(key, self.entry)
+
+    def last(self, key, st: State) -> frozenset | None:
+        """st.last, st the state held before use `key`."""
+        return frozenset((self.previous[key],)) if st.last is AFTER else st.last
+
+    def one_before(self, key, st: State):
+        """The one key in last(key, st), or None (none, several, unknown)."""
+        last = st.last
+        if last is AFTER:
+            return self.previous[key]
+        return next(iter(last)) if last is not None and len(last) == 1 else None
 
 
 _NO_NAMES = frozenset()
@@ -362,9 +391,14 @@ class _Walker:
         # a displacement set at run time before stays possible).
         widen = {k: (self.unknown.pdisp if on else _OFF) if k == "pdisp" else BOTH
                  for k in switched}
+        # (A state shared by a run's uses stays shared: widened once.)
+        widened: dict = {}
         for key, st in self.flow.before.items():
-            self.flow.before[key] = replace(st, **{k: getattr(st, k) | v
-                                                   for k, v in widen.items()})
+            got = widened.get(id(st))
+            if got is None:
+                got = widened[id(st)] = (st, replace(st, **{k: getattr(st, k) | v
+                                                           for k, v in widen.items()}))
+            self.flow.before[key] = got[1]
         self.flow.entry = replace(self.flow.entry, **{k: getattr(self.flow.entry, k) | v
                                                       for k, v in widen.items()})
         what = {"confj": "ConfJ", "confl": "ConfL", "pdisp": "program displacement",
@@ -803,8 +837,13 @@ class _Walker:
         entered = st
         fi = rt.fi
         written = fi < self.n_written
-        index, names, reach = self.motion_index, self.target_names, self._reach
+        index, names, reach, after = self.motion_index, self.target_names, self._reach, \
+            self._after
         n = len(stmts)
+        # The run's first use is reached as any; each after it in the state
+        # `inner` (its flags, last AFTER: the use before it).
+        inner = prev = None
+        tail = False
         while i < n:
             s = stmts[i]
             if type(s) is not A.ProcCall or not s.plain:
@@ -817,10 +856,35 @@ class _Walker:
                 raise _TooLarge
             mi = index[(fi, s.span.start)]
             for role, _ in names[(fi, mi)]:
-                st = reach((fi, mi, role, ()), st, written)
+                key = (fi, mi, role, ())
+                if inner is None:
+                    st = reach(key, st, written)
+                    if written:
+                        inner = st.with_last(AFTER)
+                else:
+                    after(key, prev, inner)
+                    tail = True
+                prev = key
             i += 1
+        if tail:
+            st = st.with_last(frozenset((prev,)))
         self.runs[(id(stmts), start)] = (entered, i, st)
         return i, st
+
+    def _after(self, key: tuple, prev: tuple, inner: State) -> None:
+        """_reach() of a use inside a run of plain moves, `prev` the use
+        before it, `inner` the run's flags with last AFTER."""
+        flow = self.flow
+        old = flow.before.get(key)
+        if old is None:
+            flow.order.append(key)
+            flow.before[key] = inner
+            flow.previous[key] = prev
+        elif old is not inner:
+            # (A use's previous is the statement before it: the same in
+            # every run it is inside of.)
+            flow.before[key] = old.join(inner if old.last is AFTER
+                                        else inner.with_last(frozenset((prev,))))
 
     def _reach(self, key: tuple, st: State, written: bool) -> State:
         """The use `key` reached in state st (joined with the states it was
@@ -833,6 +897,9 @@ class _Walker:
             self.flow.order.append(key)
             before[key] = st
         else:
+            if old.last is AFTER:
+                # (Reached inside a run before, here not: its last as a set.)
+                old = old.with_last(frozenset((self.flow.previous.pop(key),)))
             before[key] = old.join(st)
         return st.with_last(frozenset((key,)))
 

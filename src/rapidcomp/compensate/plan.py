@@ -142,7 +142,20 @@ class Plan:
     def state(self, u: TargetUse) -> State:
         """The motion state before a use (where the flow never reached it:
         as entered from outside)."""
+        return self.flow.state(u.key)
+
+    def state_held(self, u: TargetUse) -> State:
+        """state(u) as the flow holds it: a run's moves share one, its last
+        read by last() and one_before()."""
         return self.flow.before.get(u.key, self.flow.entry)
+
+    def last(self, u: TargetUse, st: State) -> frozenset | None:
+        """The uses that may have run last before u (st: state_held(u))."""
+        return self.flow.last(u.key, st)
+
+    def one_before(self, u: TargetUse, st: State):
+        """The one key in last(u, st), or None."""
+        return self.flow.one_before(u.key, st)
 
     def may_be_displaced(self, u: TargetUse) -> bool:
         # (state(u)'s, asked of every move: without the call.)

@@ -32,7 +32,7 @@ from .. import side
 from ..kinematics.conf import confdata
 from ..kinematics.frames import DEG
 from ..kinematics.ik import IKBatch, Solver, Status, Warn, reusing
-from .flow import OFF, ON, PROGRAM_START, State
+from .flow import AFTER, OFF, ON, PROGRAM_START, State
 from .plan import Plan, line_ranges
 from .targets import (IDENTITY_POSE, UNKNOWN_TOOL, UNKNOWN_TOOL_MEANS, TargetUse, flange_stack,
                       stacked_poses)
@@ -252,7 +252,7 @@ class _Chooser:
         self.states: list = [None] * n
         for i in self.order:
             if uses[i].kind == "robtarget":
-                self.states[i] = plan.state(uses[i])
+                self.states[i] = plan.state_held(uses[i])
         scale = (solver.joint_map.scale if solver.joint_map is not None else np.zeros(6))
         self.scaled = [j for j in (0, 3, 5) if scale[j] != 0]
         need = self._needing_guess()
@@ -298,8 +298,8 @@ class _Chooser:
             u = self.uses[i]
             if OFF not in st.supervision(u.motion.spec.interpolation) and u.role != "cir":
                 continue
-            if st.last is not None and len(st.last) == 1:
-                (pk,) = st.last
+            pk = self.plan.one_before(u, st)
+            if pk is not None:
                 pred1[i] = self.rows.get(pk, -1)
             need.append(i)
         self.pred1 = np.array(pred1)
@@ -384,8 +384,9 @@ class _Chooser:
         ok = self.by_conf.success.tolist()
         for i, k in self.rob_row.items():
             st = self.states[i]
+            # (pred1 is a row only where one move runs before: one_before.)
             if (st is None or self.pred1_l[i] < 0 or not self.off_ok[i]
-                    or self.uses[i].role == "cir" or st.last is None or len(st.last) != 1):
+                    or self.uses[i].role == "cir"):
                 continue
             sup = st.supervision(self.uses[i].motion.spec.interpolation)
             if OFF not in sup:
@@ -621,11 +622,11 @@ class _Chooser:
         u = self.uses[i]
         flag = _flag(u)
         if st is None:
-            st = self.plan.state(u)
+            st = self.plan.state_held(u)
         if u.role == "cir":
             # The circle point is passed on the way from the previous move:
             # its configuration follows from there, its confdata is not read.
-            sols, why = self._follow(i, st.last, flag)
+            sols, why = self._follow(i, self.plan.last(u, st), flag)
             if not sols:
                 return [], _fail(why)
             return self._one(sols, "circle point: closest to {where}", flag)
@@ -633,7 +634,7 @@ class _Chooser:
         if OFF not in sup:
             p = self._by_conf(i, f"confdata ({flag}\\On)")
             return ([p] if p.q is not None else []), p
-        off, off_fail = self._follow(i, st.last, flag)
+        off, off_fail = self._follow(i, self.plan.last(u, st), flag)
         if ON not in sup:
             if not off:
                 return [], _fail(off_fail)
@@ -665,6 +666,7 @@ class _Chooser:
         pred1, spec_l, off_spec, off_is_spec = (self.pred1_l, self.spec_l, self.off_spec,
                                                 self.off_is_spec)
         by_conf, rob_row, taken = self.by_conf, self.rob_row, self.taken
+        previous = self.plan.flow.previous
         # (Their joints written into q after the loop, as _set writes them:
         # the supervision-off solution (case 1), the confdata's (2, 3).)
         off_rows: list[int] = []
@@ -674,9 +676,10 @@ class _Chooser:
             if st is None:            # (a MoveAbsJ)
                 continue
             last = st.last
-            if last is not None and len(last) == 1:
-                # (One move before: a CAM program's 1e5.)
-                j = rows.get(next(iter(last)))
+            if last is AFTER or (last is not None and len(last) == 1):
+                # (One move before: a CAM program's 1e5, each the one before
+                # it in its run.)
+                j = rows.get(previous[uses[i].key] if last is AFTER else next(iter(last)))
                 if j is not None:
                     edges.append((j, i))
                     if j not in chosen:
