@@ -135,6 +135,56 @@ def one(n: int, main: bool = False) -> dict:
             "peak_MiB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
 
 
+def census(n: int) -> dict:
+    """The Python objects the collector tracks (class instances, tuples,
+    lists, dicts, sets; not numbers or strings) alive at the end of each
+    stage of fix on n targets (Path called by nothing), per target, less
+    those alive before the parse: the total and the classes with at least
+    0.5 per target. Issue #14's deliverable 3 counted: what a target leaves
+    behind at each stage. In this process, without the job's helper."""
+    import gc
+    from collections import Counter
+
+    from rapidcomp.compensate import fix as fixing
+    from rapidcomp.compensate import report
+    from rapidcomp.compensate.load import load_solver
+    from rapidcomp.compensate.plan import Task
+    from rapidcomp.rapid.grammar import engine
+    from rapidcomp.rapid.parse import parse_text
+    text = cam_module(n)
+    engine()
+    solver = load_solver(str(PROFILE), None, False)
+    out: dict[str, dict] = {}
+
+    def classes() -> Counter:
+        gc.collect()
+        return Counter(type(o).__qualname__ for o in gc.get_objects())
+
+    before = classes()
+
+    def count(stage: str) -> None:
+        now = classes()
+        per = {k: (v - before.get(k, 0)) / n for k, v in now.items()}
+        out[stage] = {"total": sum(per.values()),
+                      "by": sorted(((round(v, 1), k) for k, v in per.items() if v >= 0.5),
+                                   reverse=True)}
+
+    class Clock(fixing._Clock):
+        def __call__(self, stage: str) -> None:
+            super().__call__(stage)
+            count(stage)
+
+    fixing._Clock = Clock
+    pf = parse_text(text, "cam.mod")
+    count("parse")
+    result = fixing.fix(Task("cam.mod", (pf,)), solver, "absj", {},
+                        output_names={"cam.mod": "cam_comp.mod"})
+    for _ in report.markdown(result, {"mode": "absj"}, pieces=True):
+        pass
+    count("report")
+    return out
+
+
 def installed_env(cache: str) -> dict:
     """The environment of a command as installed: its modules' bytecode
     compiled (pip compiles it when it installs a package; an editable
@@ -194,9 +244,13 @@ def main() -> None:
     ap.add_argument("--sizes", default="1000,10000,100000")
     ap.add_argument("--one", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--main", action="store_true", help=argparse.SUPPRESS)   # (with --one)
+    ap.add_argument("--census", type=int, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.one:
         print(json.dumps(one(args.one, args.main)))
+        return
+    if args.census:
+        print(json.dumps(census(args.census)))
         return
     stages = ["parse", "resolve", "solve", "print", "re-lex", "verify", "report"]
     for main, shape in ((False, "Path called by nothing: supervision not known, each MoveL "
@@ -270,6 +324,16 @@ def main() -> None:
             print(f"`rapidcomp fix --transient --tau-heat 45` end to end, 1 module x {n} "
                   f"targets (Path called by nothing: rcTcR): {r['s']:.2f} s, "
                   f"peak {r['peak_MiB']:.0f} MiB, {_cores(r)}")
+    # What each target leaves behind at each stage's end.
+    n = min(10000, max(int(s) for s in args.sizes.split(",")))
+    got = json.loads(subprocess.run([sys.executable, __file__, "--census", str(n)], check=True,
+                                    capture_output=True, text=True).stdout)
+    print(f"objects alive per target at each stage's end (1 module x {n} targets, Path called "
+          "by nothing; objects the collector tracks, less those alive before the parse; "
+          "classes with >= 0.5 per target):")
+    for stage, c in got.items():
+        print(f"  {stage:>8} {c['total']:5.1f}: "
+              + ", ".join(f"{k} {v:g}" for v, k in c["by"]))
 
 
 if __name__ == "__main__":

@@ -180,6 +180,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
                 for n, u in enumerate(g.uses)]
         written_conf = dict(zip([u.key for _, _, u in done],
                                 values.confs([(g, k) for g, k, _ in done])))
+        done = None                   # (a tuple per use: not kept past here)
         values.forget()
         # (The new declarations are in the edits now, as texts of their own:
         # 1e5 MoveL turned into MoveAbsJ, ~18 MB of them twice.)
@@ -264,7 +265,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # hundreds of MB): the edited literals as written, the output parsed
     # again; of the editor the rows read what it did per use only.
     actions = editor.actions
-    values = written = converted = calls = out_files = done = editor = keys = None
+    values = written = converted = calls = out_files = editor = keys = None
     # The rows read the plan's uses and track only: the resolver's caches
     # go before the rows are made (a later use of them fails loudly).
     plan.resolver = None

@@ -594,11 +594,13 @@ class Written:
     record is made only when asked for (again(): Offs/RelTool, a message).
     Others are records."""
 
-    def __init__(self, records: dict, keys: list, values: np.ndarray, where: list):
+    def __init__(self, records: dict, keys: list, values: np.ndarray, where: tuple):
         self.records = records
         self.rows = {k: n for n, k in enumerate(keys)}
         self.values = values              # (n, 17), rows in the order of keys
-        self.where = where                # per row: (input record, output text, start, end)
+        # Columns, a row each: the input record, the output's text, the
+        # literal's start and end there.
+        self.where = where
         # Use key -> what it reads where the output gives that use a copy
         # of its target (verify.relex_copies), not the literal its name
         # reads in the input: a record, or a robtarget read plainly as
@@ -640,8 +642,9 @@ class Written:
         n = self.rows.get(key)
         if n is None:
             return default
-        rec, text, start, end = self.where[n]
-        return type(rec)(tuple(self.values[n].tolist()), text[start:end], rec.span)
+        recs, texts, starts, ends = self.where
+        rec = recs[n]
+        return type(rec)(tuple(self.values[n].tolist()), texts[n][starts[n]:ends[n]], rec.span)
 
     def __getitem__(self, key):
         record = self.get(key)
@@ -679,7 +682,8 @@ class Resolver:
         self.files = list(files)
         # Records as an output writes them (verify.py, when every edit is of
         # numeric fields).
-        self.written = written if written is not None else Written({}, [], np.empty((0, 17)), [])
+        self.written = (written if written is not None
+                        else Written({}, [], np.empty((0, 17)), ([], [], [], [])))
         self._memos: dict = {}
         self._pairs: dict = {}                  # _tool_wobj's
         # _tool_wobj's of a move lexed as one token, by its shared tail.

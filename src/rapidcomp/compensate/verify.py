@@ -81,7 +81,10 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
         by_file.setdefault(fi, []).append((start, item))
     out = {}
     keys: list = []
-    where: list = []
+    # Per row: its input record, the output's text, the literal's start and
+    # end there (columns: no tuple per row).
+    where: tuple = ([], [], [], [])
+    recs, outs, starts, ends = where
     wants: list = []
     frame = ROBTARGET_FRAME
     for fi, items in by_file.items():
@@ -98,7 +101,10 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
             if type(record) is RobTarget and (text[a:b] == want if type(want) is str
                                               else text[a:b] == frame % tuple(want)):
                 keys.append((home, start))
-                where.append((record, text, a, b))
+                recs.append(record)
+                outs.append(text)
+                starts.append(a)
+                ends.append(b)
                 wants.append(want)
                 continue
             if type(want) is str:
@@ -127,13 +133,13 @@ def relex(plan: Plan, fields: dict, file_edits: dict, texts: dict[int, str]) -> 
     if not decimal:
         # A kept field written otherwise than as a decimal number (0x1F in
         # a value the parser decoded field by field): values.relex's verdict.
-        for key, (record, text, a, b), want in zip(keys, where, wants):
+        for key, record, text, a, b, want in zip(keys, *where, wants):
             got = relex_record(record, text[a:b], want if type(want) is not str
                                else frame_fields(want))
             if got is None:
                 return None
             out[key] = got
-        keys, where, values = [], [], np.empty((0, 17))
+        keys, where, values = [], ([], [], [], []), np.empty((0, 17))
     # (As values.relex: a number beyond a num's range does not re-lex.)
     if not (np.abs(values) <= NUM_MAX).all():
         return None
