@@ -661,3 +661,65 @@ def test_local_mains_that_move_with_nothing_are_still_the_entries(tmp_path):
                   "--allow-partial")
     assert "0 of 2 target uses compensated" in r.stdout, r.stdout
     assert "which no given routine calls" in r.stdout, r.stdout
+
+
+class _Forget(dict):
+    """A memo that keeps nothing: each lookup made afresh."""
+
+    def get(self, key, default=None):
+        return default
+
+    def __setitem__(self, key, value):
+        pass
+
+
+def _plain(v):
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, tuple):
+        return (type(v).__name__,) + tuple(_plain(x) for x in v)
+    return v
+
+
+def test_the_frames_each_move_takes_remembered_by_where_it_lies_are_those_found_for_it():
+    """A RoboDK program's 1e5 moves take the tool and work object a few
+    assignments before them make: remembered per move line's tail by where
+    the move lies among its routine's assignments and the calls that may
+    run it again (Resolver._tool_wobj, _site_chain), they are what the
+    resolver finds for each move alone, with nothing remembered: before the
+    first assignment, between and after them, after a whole value, after a
+    call that may assign them again, in a loop and in an error handler, in
+    two routines."""
+    from rapidcomp.compensate.plan import Plan, Task
+    from rapidcomp.rapid import ast as A
+    from rapidcomp.rapid.parse import parse_text
+    m = [move("MoveL", i % 7, "T1", "U1") for i in range(8)]
+    body = [m[0], tframe("T1"), m[1], uframe("U1"), m[2], m[3], uframe("U2"), m[4],
+            WHOLE_T1, m[5], "    UserProc;", m[6], tframe("T2"), "    FOR i FROM 1 TO 2 DO",
+            m[7], "      UserProc;", "    ENDFOR", m[1], "  ERROR", m[2], "    RETRY;"]
+    other = ["  PROC Prog2()", tframe("T2"), uframe("U1"), m[3], m[4], "    Prog1;", m[5],
+             "  ENDPROC"]
+    texts = [program(body).replace("ENDMODULE", "\n".join(other) + "\nENDMODULE"),
+             # (Two moves alike but for the loop the second is in, whose
+             # call may assign the frames again before its next round.)
+             program([tframe("T1"), uframe("U2"), m[6], "    FOR i FROM 1 TO 2 DO", m[6],
+                      "      UserProc;", "    ENDFOR"])]
+    tails = 0
+    got, want = [], []
+    for text in texts:
+        task = Task("MOD_Prog1.mod", (parse_text(text, "MOD_Prog1.mod"),))
+        fast, slow = Plan(task), Plan(task)
+        r = slow.resolver
+        r._chains = r._tail_sites = r._tails = r._pairs = r._data_ids = _Forget()
+        module = task.files[0].modules[0]
+        for motion in module.motions:
+            if not motion.spec.moves_arm or motion.spec.joint_space:
+                continue
+            tails += type(motion.args) is A.TailArgs
+            got.append(_plain(fast.resolver._tool_wobj(motion, module)))
+            want.append(_plain(r._tool_wobj_of(motion, module)))
+    assert got == want
+    assert tails >= 10
+    # (Known and not known both, the loop's move too: the test covers each.)
+    assert {t[0] for _, t, _ in got} >= {"tuple", "Unresolved"}
+    assert [t[0] for _, t, _ in got[-2:]] == ["tuple", "Unresolved"]

@@ -686,6 +686,11 @@ class Resolver:
                         else Written({}, [], np.empty((0, 17)), ([], [], [], [])))
         self._memos: dict = {}
         self._pairs: dict = {}                  # _tool_wobj's
+        # _site_chain's, by what decides it (a RoboDK program's 1e5 moves
+        # come after the same few assignments), and _data_id's.
+        self._chains: dict = {}
+        self._tail_sites: dict = {}             # _tool_wobj's
+        self._data_ids: dict = {}
         # _tool_wobj's of a move lexed as one token, by its shared tail.
         self._tails: dict = {}
         self._confs: dict = {}                  # _plain_use's: confdata numbers -> ints
@@ -1021,10 +1026,14 @@ class Resolver:
         """Which data a name means in a routine: its LOCAL declaration
         (module's or routine's), else the name (global data of one name is
         one, PERS shared)."""
-        d = self.lookup(name, module, routine)
-        if type(d) is Declaration and (d.routine is not None or d.scope == "LOCAL"):
-            return id(d)
-        return name.lower()
+        key = (name, id(module), routine)
+        got = self._data_ids.get(key)
+        if got is None:
+            d = self.lookup(name, module, routine)
+            got = self._data_ids[key] = (
+                id(d) if type(d) is Declaration and (d.routine is not None or d.scope == "LOCAL")
+                else name.lower())
+        return got
 
     def _sites_of(self, data, by_routine: dict, reentry: _Reentry, moves_with: dict | None,
                   jumps: set, ends: dict, names: dict) -> dict | str:
@@ -1242,15 +1251,29 @@ class Resolver:
         """_sites of one tool or work object the routines by_routine
         assign: the chain, or why the value is not known (a reason the move
         is left untouched with)."""
+        hit = by_routine.get(routine)
+        if hit is not None:
+            # (The chain depends on the move only through where it lies among
+            # its routine's assignments and the calls that may run it again,
+            # whether in a handler, and whether in a loop.)
+            at = motion.span.start
+            key = (id(hit), ref.name, at > hit.body_end, bisect_left(hit.starts, at),
+                   bisect_right(hit.reentries, at), bool(motion.loops))
+            got = self._chains.get(key)
+            if got is None:
+                got = self._chains[key] = self._site_chain_of(ref, hit, motion)
+            return got
+        first = next(iter(by_routine.values())).assigns[0]
+        return (f"{ref.name} is assigned at run time ({_where(first[0], first[1].span.start)}): "
+                "by other routines, not by this move's own: its value here is the one some "
+                "routine left")
+
+    def _site_chain_of(self, ref, hit: Sites, motion) -> tuple | str:
+        """_site_chain of a move in a routine that assigns the data (hit)."""
         def unknown(why: str, at=None) -> str:
             pf, a = at or first
             return f"{ref.name} is assigned at run time ({_where(pf, a.span.start)}): {why}"
 
-        hit = by_routine.get(routine)
-        if hit is None:
-            first = next(iter(by_routine.values())).assigns[0]
-            return unknown("by other routines, not by this move's own: its value here is the "
-                           "one some routine left")
         first = hit.assigns[0]
         if hit.why is not None:
             return unknown(hit.why)
@@ -1420,15 +1443,40 @@ class Resolver:
         a plain name (a CAM program's 1e5 moves name the same two), with
         the notes their resolution gave."""
         args = motion.args
-        if type(args) is A.TailArgs and not motion.loops and not self._assigned_anywhere():
+        if type(args) is A.TailArgs and not motion.loops:
             # (A CAM program's 1e5 moves share a few tails, ",v100,z1,tool1
             # \WObj:=wobj1;": the same tool and work object in one routine,
             # looked up without making their nodes from the text of each.
             # Keyed by the tail itself, which the entry keeps alive, and the
             # roles, which say which of its arguments is which.)
-            return self._noted(self._tails, (id(module), motion.routine, motion.roles, args.tail),
-                               lambda: self._tool_wobj_of(motion, module))
+            key = (id(module), motion.routine, motion.roles, args.tail)
+            if self._assigned_anywhere():
+                # (Where the routine assigns them, RoboDK's rdkTool.tframe
+                # := [...]: and by where the move lies among those
+                # assignments, all _site_chain reads of it.)
+                hits = self._tail_sites.get(key)
+                if hits is None:
+                    hits = self._tail_sites[key] = self._routine_sites(motion, module)
+                at = motion.span.start
+                key += tuple(None if h is None else
+                             (at > h.body_end, bisect_left(h.starts, at),
+                              bisect_right(h.reentries, at)) for h in hits)
+            return self._noted(self._tails, key, lambda: self._tool_wobj_of(motion, module))
         return self._tool_wobj_of(motion, module)
+
+    def _routine_sites(self, motion, module) -> tuple:
+        """The Sites of its own routine's assignments of a move's tool and
+        of its work object (_sites), each None where there is none."""
+        sites = self.site_map()
+        routine = (id(module), (motion.routine or "").lower())
+        out = []
+        for ref in (motion.tool, motion.wobj):
+            entry = (sites.get(ref.name.lower()) if type(ref) is A.Ref and not ref.selectors
+                     else None)
+            if entry is not None:
+                entry = entry.get(self._data_id(ref.name, module, motion.routine))
+            out.append(entry.get(routine) if type(entry) is dict else None)
+        return tuple(out)
 
     def _tool_wobj_of(self, motion, module) -> tuple:
         t, w, routine = motion.tool, motion.wobj, motion.routine
