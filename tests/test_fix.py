@@ -373,6 +373,40 @@ def test_a_kept_hexadecimal_field_is_verified_by_parsing_the_output(tmp_path):
         assert kept[name] in text and decl[name][-60:] not in text
 
 
+@pytest.mark.parametrize("name", ["wobj0", "tool0"])
+def test_a_module_declaring_the_controllers_own_tool0_or_wobj0(name, tmp_path):
+    """tool0 and wobj0 are the controller's own (its BASE module declares
+    them, the identity). A module that declares one of them with another
+    value leaves which one the controller takes unknown: its moves are left
+    as written, said with where it is declared; declared as the identity
+    (BASE's own text), it changes nothing."""
+    decl = {"wobj0": ('  TASK PERS wobjdata wObj0:=[FALSE,TRUE,"",[[100,-200,50],[1,0,0,0]],'
+                      '[[0,0,0],[1,0,0,0]]];',
+                      '  TASK PERS wobjdata wobj0:=[FALSE, TRUE, "", [[0, 0, 0], [1, 0, 0, 0]], '
+                      '[[0, 0, 0], [1, 0, 0, 0]]];'),
+            "tool0": ("  PERS tooldata TOOL0:=[TRUE,[[0,0,150],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],"
+                      "0,0,0]];",
+                      "  PERS tooldata tool0:=[TRUE,[[0,0,0],[1,0,0,0]],[0.001,[0,0,0.001],"
+                      "[1,0,0,0],0,0,0]];")}[name]
+    use = "tool0\\WObj:=wObj0" if name == "wobj0" else "TOOL0"
+    target = ("[[400,300,250],[0.707107,0,0.707107,0],[0,0,-1,1],"
+              "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")
+    for k, (d, touched) in enumerate(((decl[0], False), (decl[1], True))):
+        prog = tmp_path / f"own{k}.mod"
+        prog.write_text(f"MODULE Own\n{d}\n  PROC main()\n    MoveL {target},v100,fine,{use};\n"
+                        "  ENDPROC\nENDMODULE\n")
+        out = tmp_path / f"own{k}_out.mod"
+        r = _run(["fix", str(prog), "--profile", WARM, "--emit", "robtarget", "-o", str(out)])
+        assert r.exit_code == 0, r.output
+        if touched:
+            assert "1 of 1 target uses compensated" in r.output, r.output
+        else:
+            assert "0 of 1 target uses compensated, 0 not compensated, 1 untouched" in r.output
+            assert (f"is declared at own0.mod:2 with another value than the controller's own "
+                    f"{name}") in r.output, r.output
+            assert out.read_text() == prog.read_text()
+
+
 LOOP_MODES = """MODULE A60
   PERS tooldata tSp:=[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];
   CONST robtarget arr{3}:=[[[503.758,351.759,678.631],[0.852930,-0.401623,0.332113,-0.030167],[0,-1,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],[[565.609,262.245,695.010],[0.665331,-0.057324,0.302898,0.679927],[0,-1,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],[[423.478,-388.744,940.242],[0.793380,0.316255,0.204394,-0.478282],[-1,0,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]];

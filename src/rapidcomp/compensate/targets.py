@@ -855,6 +855,27 @@ class Resolver:
         return valued[0]
 
     # ------------------------------------------------------------ tool / wobj
+    def _builtin(self, expr, module, routine: str, cls, what: str):
+        """None (the controller's own tool0 or wobj0, the identity, which its
+        BASE module declares), or Unresolved where a given module declares
+        one of that name with another value: which of the two the
+        controller takes is not known here, and the move is left as
+        written rather than compensated at a place that may be wrong."""
+        d = self.lookup(expr.name, module, routine)
+        if type(d) is not Declaration:
+            return None
+        v = d.value
+        if isinstance(v, cls) and (
+                (v.robhold.value is True and _identity(v.tframe)) if cls is ToolData else
+                (v.robhold.value is False and v.ufprog.value is True
+                 and _identity(v.uframe) and _identity(v.oframe))):
+            return None
+        pf = self.home[id(d)]
+        return Unresolved(f"{what} {expr.name} is declared at {pf.source.display_path}:"
+                          f"{pf.line(d.node.span)} with another value than the controller's own "
+                          f"{expr.name.lower()} (the identity, which its BASE module declares): "
+                          "which of the two the controller takes is not known here")
+
     def _data(self, expr, module, routine: str, builtin: str, cls, what: str, site=None):
         """The literal value of a tool/work object argument, None for the
         built-in one, or Unresolved. site: the assignments ((ParsedFile,
@@ -864,7 +885,7 @@ class Resolver:
         if type(expr) is not A.Ref:
             return Unresolved(f"the {what} is not a plain data name")
         if expr.name.lower() == builtin and not expr.selectors:
-            return None
+            return self._builtin(expr, module, routine, cls, what)
         d = self.lookup(expr.name, module, routine)
         if isinstance(d, Unresolved):
             return d
@@ -2402,6 +2423,11 @@ class Resolver:
                 raise home.source.error(where, f"{what}: confdata {name} is {record.texts[7 + i]}, "
                                         f"expected a quadrant count of a joint angle (within "
                                         f"+-{MAX_QUADRANT}, i.e. +-{90 * MAX_QUADRANT} deg)")
+
+
+def _identity(pose) -> bool:
+    """A pose of no translation and the unit quaternion, as written."""
+    return pose.xyz == (0.0, 0.0, 0.0) and pose.quat_wxyz == (1.0, 0.0, 0.0, 0.0)
 
 
 def _relative(src: Source, R, p):
