@@ -2365,10 +2365,11 @@ class Resolver:
             if type(tool) is Unresolved:
                 self._notes.append(f"{UNKNOWN_TOOL} ({tool.reason}){UNKNOWN_TOOL_MEANS}")
                 tool = None
-            return TargetUse(motion, role, label, line, kind, None, None, None, joints, None,
-                             src, tool, env=envt, file=pf, module=module,
-                             ext=self._one(src.record.ext, True), key=key,
-                             notes=tuple(self._notes))
+            # (Made as the class makes it, construct.py: a FOR loop's 1e5
+            # elements.)
+            return _use(motion, role, label, line, kind, None, None, None, joints, None,
+                        src, tool, None, envt, False, pf, module,
+                        self._one(src.record.ext, True), key, tuple(self._notes))
         if not isinstance(src.record, RobTarget):
             return fail(Unresolved("not a robtarget", True))
         tool, wobj = self._tool_wobj(motion, module)
@@ -2382,9 +2383,15 @@ class Resolver:
         # Its confdata, quaternion and position are checked with every
         # other pending use's, in poses() (an error raised before that
         # raises the first pending one's first, as one by one would).
-        u = TargetUse(motion, role, label, line, kind, None, None, self._one(src.record.conf),
-                      None, None, src, tool, wobj, envt, file=pf, module=module,
-                      ext=self._one(src.record.ext, True), key=key, notes=tuple(self._notes))
+        record = src.record
+        # (Each confdata once, keyed by its numbers as written: _plain_use.)
+        written = record.values[7:11]
+        conf = self._confs.get(written)
+        if conf is None:
+            conf = self._confs[written] = self._one(record.conf)
+        u = _use(motion, role, label, line, kind, None, None, conf, None, None, src, tool, wobj,
+                 envt, False, pf, module, self._one(record.ext, True), key,
+                 tuple(self._notes))
         self._pending.append((u, src, pf, base, wobj[1], tool[1]))
         return u
 
