@@ -695,6 +695,42 @@ def test_a_function_of_numbers_as_first_argument_is_the_call_the_grammar_makes(m
     assert _tree(eng.parse(text)) == fast
 
 
+def test_two_aggregates_first_are_the_call_the_grammar_makes(monkeypatch):
+    """MoveC [[...]],[[...]],v100,z1,tool0; (a CAM program's arcs: 5e4 of
+    them) is one token (FAST_CIRC) when its two first arguments are numeric
+    aggregates: the nodes are those the grammar's rules make of its tokens,
+    whatever the blanks and nesting; a reserved word where a name must be
+    is lexed token by token, and refused as the parser refuses it."""
+    t = robtarget(targets(1, 5)[0], 1)
+    lines = ["MODULE M", "  PROC p()"]
+    for sep in (",", " , ", ",\t", "\t,"):
+        lines += [f"    MoveC {t}{sep}{t},v100,z1,tool0;",
+                  f"    MoveC [1,2]{sep}[[3],[4]] ,v100 , fine,tool0\\WObj:=wobj1;",
+                  f"    Foo [1, 2 ]{sep}[ [3,4] , 5 ];",
+                  f"    MoveC {t}{sep}{t},v100,z1,tool0\\T1:=2;"]
+    text = "\n".join(lines + ["  ENDPROC", "ENDMODULE", ""])
+    eng = engine()
+    kinds = [t.type for t in eng.tokens(text)]
+    assert kinds.count("FAST_CIRC") == 16 and kinds.count("FAST_CALL") == 0
+    fast = _tree(eng.parse(text))
+    # (The arguments as the grammar splits them: two aggregates first.)
+    pf = parse_text("\n".join(lines[:3] + ["  ENDPROC", "ENDMODULE", ""]), "m.mod")
+    call = pf.modules[0].node.items[0].body[0]
+    assert len(pf.modules[0].motions[0].targets) == 2
+    assert [type(a.value).__name__ for a in call.args][:3] == ["NumAgg", "NumAgg", "Ref"]
+    bad = text.replace("z1,tool0;", "z1,IF;", 1)
+    with monkeypatch.context() as m:
+        m.setattr(eng, "_master", eng._master_plain)
+        m.setattr(eng, "tokens", lambda t, runs=False, _t=eng.tokens: _t(t, False))
+        assert [t.type for t in eng.tokens(text)].count("FAST_CIRC") == 0
+        assert _tree(eng.parse(text)) == fast
+        with pytest.raises(Exception) as plain:
+            eng.parse(bad)
+    with pytest.raises(Exception) as one:
+        eng.parse(bad)
+    assert type(one.value) is type(plain.value) and str(one.value) == str(plain.value)
+
+
 def test_a_run_pattern_is_compiled_only_where_a_run_may_follow():
     """Argument lists met again, but never twice in a row (a hand-written
     program's speeds change from move to move), get no pattern; two in a

@@ -33,6 +33,10 @@ _FAST_ITEM = re.compile(
     r"|([A-Za-z][A-Za-z0-9_]*)|([-+]?[0-9]+(?:\.[0-9]*)?)")
 
 
+# A numeric aggregate (the grammar's NUMAGG nests lists two deep at most):
+# where a FAST_CIRC's first one ends.
+_AGG = re.compile(r"\[(?:[^\[\]]|\[[^\[\]]*\])*\]")
+
 _INF = float("inf")
 # A plain decimal number argument of a FAST_CALL's function (the grammar's
 # _FAST_NUM: at most 30 digits each side, never beyond a num's range).
@@ -467,6 +471,18 @@ class NodeBuilder:
         # (Interned: "MoveL" 1e5 times in a CAM program is one string.)
         name = sys.intern(head.group(1))
         pos = head.end()
+        if tok.type == "FAST_CIRC":
+            # Two aggregates, a comma between (blanks around it); the
+            # second ends at the statement's last ']'. Their Args made now,
+            # with the nodes of the arguments after them (as _fast_func's).
+            mid = _AGG.match(text, pos).end()
+            at = text.index("[", mid)
+            end = text.rindex("]") + 1
+            aggs = [_numagg(text[a:b], _span((base + a, base + b)))
+                    for a, b in ((pos, mid), (at, end))]
+            every = (*(_arg("pos", None, g, g.span) for g in aggs),
+                     *_fast_tail(text[end:]).nodes(base + end))
+            return _call(name, every, _span((base, base + len(text))), plain_args(every))
         if text[pos] == "[":
             # The aggregate ends at the statement's last ']' (nothing after
             # it has brackets).

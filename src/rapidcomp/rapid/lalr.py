@@ -67,7 +67,10 @@ class _Splice(list):
 # The one-token statement and declaration, and what each becomes (the
 # builder's callback; parse's shortcut makes it so).
 _LISTED = {"FAST_CALL": lambda engine, tok: engine._build.fast_call([tok]),
+           "FAST_CIRC": lambda engine, tok: engine._build.fast_call([tok]),
            "FAST_DECL": lambda engine, tok: engine._build.fast_decl([tok])}
+# The one-token forms, which the plain lexer (_master_plain) leaves out.
+_ONE_TOKEN = ("FAST_CALL", "FAST_CIRC", "FAST_DECL")
 
 
 def _spans(node, tok) -> bool:
@@ -116,7 +119,7 @@ class Engine:
         # must be, and must be lexed token by token.
         self._master_plain = re.compile("|".join(
             f"(?P<{t.name}>{t.pattern.to_regexp()})" for t in regular
-            if t.name not in ("FAST_CALL", "FAST_DECL")))
+            if t.name not in _ONE_TOKEN))
         self._keywords = keywords
         # Reserved words, upper case (a name that is one is no identifier).
         self.reserved = frozenset(keywords)
@@ -219,11 +222,11 @@ class Engine:
             # (Where the token begins: past the blanks matched with it.)
             pos = m.start(kind)
             run = None
-            if kind == "FAST_CALL":
+            if kind == "FAST_CALL" or kind == "FAST_CIRC":
                 if self._keyword_in(m.group(kind)):
                     m = self._master_plain.match(text, pos)
                     kind, stop = m.lastgroup, m.end()
-                else:
+                elif kind == "FAST_CALL":
                     run = self._call_run
             elif kind == "FAST_DECL":
                 # Only type and name must be identifiers: the last two words

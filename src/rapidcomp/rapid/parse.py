@@ -390,14 +390,14 @@ def _deepest(nodes) -> tuple[int, int]:
     return best
 
 
-_STATEMENT_STARTS = {"NAME", "FAST_CALL", "IF", "FOR", "WHILE", "TEST", "GOTO", "RETURN",
+_STATEMENT_STARTS = {"NAME", "FAST_CALL", "FAST_CIRC", "IF", "FOR", "WHILE", "TEST", "GOTO", "RETURN",
                      "RAISE", "RETRY", "TRYNEXT", "EXIT", "CONNECT", "LATE", "PLACEHOLDER"}
 _EXPR_STARTS = {"NAME", "NUMBER", "STRING", "NUMAGG", "LBRACK", "LPAR", "TRUE", "FALSE",
                 "NOT", "ADDOP", "PLACEHOLDER"}
 _OPERATORS = {"ADDOP", "STAR", "SLASH", "DIV", "MOD", "RELOP", "EQ", "AND", "OR", "XOR"}
 _NAMES = {
     "NAME": "an identifier", "NUMBER": "a number", "STRING": "a string",
-    "NUMAGG": "'['", "FAST_CALL": "a statement", "FAST_DECL": "a declaration",
+    "NUMAGG": "'['", "FAST_CALL": "a statement", "FAST_CIRC": "a statement", "FAST_DECL": "a declaration",
     "$END": "end of file",
     "HEADER": "a %%% header", "PLACEHOLDER": "a placeholder such as <SMT>",
     "RELOP": "a comparison", "ADDOP": "'+' or '-'", "BACKSLASH": "an optional argument '\\'",
@@ -452,7 +452,7 @@ def _describe_token(tok) -> str:
         return "end of file"
     if tok.type == "NAME":
         return f"identifier '{tok.value}'"
-    if tok.type == "FAST_CALL":
+    if tok.type in ("FAST_CALL", "FAST_CIRC"):
         return f"'{tok.value.split()[0]}'"
     if tok.type == "NUMBER":
         return f"number {tok.value}"
