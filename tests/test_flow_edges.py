@@ -743,6 +743,12 @@ def test_the_moves_a_position_read_measures_are_the_ones_before_it():
         8: "untouched", 10: "untouched", 13: "untouched"}, rows
     assert rows[8][1].startswith("a program displacement set at run time (M0.mod:9, where "
                                  "CRobT() reads it) may read where this move leaves the robot")
+    # (Read inside a move's own arguments: the same, though the move calls
+    # no function but built-in ones.)
+    inside = _statuses(body.replace("pHere := CRobT();",
+                                    "MoveL Offs(CRobT(), 0, 0, 10), v500, fine, tool0;"), decls)
+    assert inside[8][0] == "untouched" and inside[8][1].startswith(
+        "a program displacement set at run time (M0.mod:9, where CRobT() reads it)"), inside
     quiet = body.replace("pHere := CRobT();", "pHere := pHere; ! not CRobT() any more")
     rows = _statuses(quiet.replace("tool0;\n        fr", "tool0;\n        TPWrite \"CRobT()\";"
                                    "\n        fr"), decls)

@@ -648,9 +648,11 @@ class _Walker:
             self.visits += 1
             if self.visits > MAX_VISITS:
                 raise _TooLarge
-            if t is A.ProcCall and s.plain:
+            if t is A.ProcCall and (s.plain or self._calls_nothing(s)):
                 # A call of names and literals calls no function (a CAM
-                # program's 1e5 moves: not remembered one by one).
+                # program's 1e5 moves: not remembered one by one); nor does
+                # one of built-in functions alone (MoveL Offs(p, 0, 0, 10),
+                # ...), where no position read may make a displacement.
                 spec = motion_spec(s.name)
                 if spec is not None:
                     st = self.motion(s, spec, st, env, frame.rt)
@@ -658,9 +660,7 @@ class _Walker:
                         i, st = self._moves(stmts, i, st, frame.rt)
                     continue
             else:
-                fcalls = self.functions.get(id(s))
-                if fcalls is None:
-                    fcalls = self.functions[id(s)] = _function_calls(s)
+                fcalls = self._fcalls(s)
                 for name in fcalls:
                     st = self.function(name, s, st, frame)
                 if self.made_of_reads and st.last:
@@ -846,7 +846,7 @@ class _Walker:
         tail = False
         while i < n:
             s = stmts[i]
-            if type(s) is not A.ProcCall or not s.plain:
+            if type(s) is not A.ProcCall or not (s.plain or self._calls_nothing(s)):
                 break
             spec = motion_spec(s.name)
             if spec is None or spec.interpolation == "external" or "search" in spec.roles:
@@ -870,6 +870,19 @@ class _Walker:
             st = st.with_last(frozenset((prev,)))
         self.runs[(id(stmts), start)] = (entered, i, st)
         return i, st
+
+    def _fcalls(self, s) -> tuple:
+        """_function_calls(s), once per statement."""
+        fcalls = self.functions.get(id(s))
+        if fcalls is None:
+            fcalls = self.functions[id(s)] = _function_calls(s)
+        return fcalls
+
+    def _calls_nothing(self, s: A.ProcCall) -> bool:
+        """A call that is walked as a plain one: its expressions call no
+        function the flow follows (built-ins only), and nothing reads a
+        position a displacement may be made of (walk() then looks)."""
+        return not self.made_of_reads and not self._fcalls(s)
 
     def _after(self, key: tuple, prev: tuple, inner: State) -> None:
         """_reach() of a use inside a run of plain moves, `prev` the use
