@@ -32,7 +32,9 @@ given module declares) makes everything unknown after it.
 Per target use it records the state before it: each component is the set
 of values it may have, and the previous move as the set of uses that may
 have run last (None: unknown; PROGRAM_START: the program starts there,
-where --start says the robot is; RESUME: where an error stopped it).
+where --start says the robot is; RESUME: where an error stopped it). The
+moves of a run of plain moves share one state, whose previous move is
+each one's own move before (AFTER: Flow.state reads it as that set).
 """
 
 from __future__ import annotations
