@@ -350,6 +350,14 @@ def test_compensation_past_the_input_position_bound_is_not_bad_input(tmp_path):
         "100000 mm of the robot" in r.output, r.output
 
 
+def _fixed(tmp_path, stem: str, text: str):
+    """fix --emit robtarget of a module of this text: (result, input, output)."""
+    prog, out = tmp_path / f"{stem}.mod", tmp_path / f"{stem}_out.mod"
+    prog.write_text(text)
+    return _run(["fix", str(prog), "--profile", WARM, "--emit", "robtarget", "-o", str(out)]), \
+        prog, out
+
+
 def test_a_kept_hexadecimal_field_is_verified_by_parsing_the_output(tmp_path):
     """A robtarget whose confdata is written 0x1 (a jointtarget with an
     external axis 0x0) is decoded field by field; fix keeps that field's
@@ -363,11 +371,8 @@ def test_a_kept_hexadecimal_field_is_verified_by_parsing_the_output(tmp_path):
     move = {"p1": "MoveL p1,v100,fine,tool0;", "j1": "MoveAbsJ j1,v100,fine,tool0;"}
     kept = {"p1": "[0,0,-1,0x1],[9E+09", "j1": "],[0x0,9E+09,9E+09,9E+09,9E+09,9E+09]];"}
     for name in ("p1", "j1"):
-        prog = tmp_path / f"{name}.mod"
-        prog.write_text(f"MODULE Hex\n  {decl[name]}\n  PROC main()\n    {move[name]}\n"
-                        "  ENDPROC\nENDMODULE\n")
-        out = tmp_path / f"{name}_out.mod"
-        r = _run(["fix", str(prog), "--profile", WARM, "--emit", "robtarget", "-o", str(out)])
+        r, _, out = _fixed(tmp_path, name, f"MODULE Hex\n  {decl[name]}\n  PROC main()\n"
+                                           f"    {move[name]}\n  ENDPROC\nENDMODULE\n")
         assert r.exit_code == 0, r.output
         text = out.read_text()
         assert kept[name] in text and decl[name][-60:] not in text
@@ -392,11 +397,9 @@ def test_a_module_declaring_the_controllers_own_tool0_or_wobj0(name, tmp_path):
     target = ("[[400,300,250],[0.707107,0,0.707107,0],[0,0,-1,1],"
               "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")
     for k, (d, touched) in enumerate(((decl[0], False), (decl[1], True))):
-        prog = tmp_path / f"own{k}.mod"
-        prog.write_text(f"MODULE Own\n{d}\n  PROC main()\n    MoveL {target},v100,fine,{use};\n"
-                        "  ENDPROC\nENDMODULE\n")
-        out = tmp_path / f"own{k}_out.mod"
-        r = _run(["fix", str(prog), "--profile", WARM, "--emit", "robtarget", "-o", str(out)])
+        r, prog, out = _fixed(tmp_path, f"own{k}", f"MODULE Own\n{d}\n  PROC main()\n"
+                                                  f"    MoveL {target},v100,fine,{use};\n"
+                                                  "  ENDPROC\nENDMODULE\n")
         assert r.exit_code == 0, r.output
         if touched:
             assert "1 of 1 target uses compensated" in r.output, r.output
