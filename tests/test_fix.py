@@ -378,36 +378,57 @@ def test_a_kept_hexadecimal_field_is_verified_by_parsing_the_output(tmp_path):
         assert kept[name] in text and decl[name][-60:] not in text
 
 
-@pytest.mark.parametrize("name", ["wobj0", "tool0"])
-def test_a_module_declaring_the_controllers_own_tool0_or_wobj0(name, tmp_path):
+_IDENTITY_WOBJ = '[FALSE, TRUE, "", [[0, 0, 0], [1, 0, 0, 0]], [[0, 0, 0], [1, 0, 0, 0]]]'
+_TOOL150 = "[TRUE,[[0,0,150],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]]"
+# (declaration, statements before the move, the move's tool argument, what
+# becomes of the move: "conflict" untouched, or the x its robtarget gets)
+OWN = {
+    "wobj0, another user frame": (
+        '  TASK PERS wobjdata wObj0:=[FALSE,TRUE,"",[[100,-200,50],[1,0,0,0]],'
+        '[[0,0,0],[1,0,0,0]]];', "", "tool0\\WObj:=wObj0", "conflict"),
+    "wobj0, another object frame": (
+        '  TASK PERS wobjdata wobj0:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],'
+        '[[0,0,20],[1,0,0,0]]];', "", "tool0\\WObj:=wobj0", "conflict"),
+    "wobj0 as BASE declares it": (f"  TASK PERS wobjdata wobj0:={_IDENTITY_WOBJ};", "",
+                                  "tool0\\WObj:=wobj0", "400.153"),
+    "tool0, another frame": (f"  PERS tooldata TOOL0:={_TOOL150};", "", "TOOL0", "conflict"),
+    "tool0, held by no robot": ("  PERS tooldata tool0:=[FALSE,[[0,0,0],[1,0,0,0]],[1,[0,0,1],"
+                                "[1,0,0,0],0,0,0]];", "", "tool0", "conflict"),
+    "tool0 as BASE declares it": ("  PERS tooldata tool0:=[TRUE,[[0,0,0],[-1,0,0,0]],"
+                                  "[0.001,[0,0,0.001],[1,0,0,0],0,0,0]];", "", "tool0", "400.153"),
+    # (Declared as the identity, then assigned: that data, its assignment
+    # followed; a LOCAL one hides the controller's.)
+    "tool0 as BASE declares it, assigned": (
+        "  PERS tooldata tool0:=[TRUE,[[0,0,0],[1,0,0,0]],[0.001,[0,0,0.001],[1,0,0,0],0,0,0]];",
+        f"    tool0 := {_TOOL150};\n", "tool0", "400.184"),
+    "a LOCAL tool0": (f"  LOCAL PERS tooldata tool0:={_TOOL150};", "", "tool0", "400.184"),
+}
+
+
+@pytest.mark.parametrize("case", list(OWN))
+def test_a_module_declaring_the_controllers_own_tool0_or_wobj0(case, tmp_path):
     """tool0 and wobj0 are the controller's own (its BASE module declares
-    them, the identity). A module that declares one of them with another
-    value leaves which one the controller takes unknown: its moves are left
-    as written, said with where it is declared; declared as the identity
-    (BASE's own text), it changes nothing."""
-    decl = {"wobj0": ('  TASK PERS wobjdata wObj0:=[FALSE,TRUE,"",[[100,-200,50],[1,0,0,0]],'
-                      '[[0,0,0],[1,0,0,0]]];',
-                      '  TASK PERS wobjdata wobj0:=[FALSE, TRUE, "", [[0, 0, 0], [1, 0, 0, 0]], '
-                      '[[0, 0, 0], [1, 0, 0, 0]]];'),
-            "tool0": ("  PERS tooldata TOOL0:=[TRUE,[[0,0,150],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],"
-                      "0,0,0]];",
-                      "  PERS tooldata tool0:=[TRUE,[[0,0,0],[1,0,0,0]],[0.001,[0,0,0.001],"
-                      "[1,0,0,0],0,0,0]];")}[name]
-    use = "tool0\\WObj:=wObj0" if name == "wobj0" else "TOOL0"
+    them, the identity). A module that declares one of them globally with
+    another value leaves which one the controller takes unknown: its moves
+    are left as written, said with where it is declared. Declared as the
+    identity (BASE's own text), it is that data, what assigns it followed;
+    declared LOCAL, it is the module's own."""
+    decl, before, use, want = OWN[case]
     target = ("[[400,300,250],[0.707107,0,0.707107,0],[0,0,-1,1],"
               "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")
-    for k, (d, touched) in enumerate(((decl[0], False), (decl[1], True))):
-        r, prog, out = _fixed(tmp_path, f"own{k}", f"MODULE Own\n{d}\n  PROC main()\n"
-                                                  f"    MoveL {target},v100,fine,{use};\n"
-                                                  "  ENDPROC\nENDMODULE\n")
-        assert r.exit_code == 0, r.output
-        if touched:
-            assert "1 of 1 target uses compensated" in r.output, r.output
-        else:
-            assert "0 of 1 target uses compensated, 0 not compensated, 1 untouched" in r.output
-            assert (f"is declared at own0.mod:2 with another value than the controller's own "
-                    f"{name}") in r.output, r.output
-            assert out.read_text() == prog.read_text()
+    r, prog, out = _fixed(tmp_path, "own", f"MODULE Own\n{decl}\n  PROC main()\n{before}"
+                                           f"    MoveL {target},v100,fine,{use};\n"
+                                           "  ENDPROC\nENDMODULE\n")
+    assert r.exit_code == 0, r.output
+    if want == "conflict":
+        name = "wobj0" if "wobj0" in case else "tool0"
+        assert "0 of 1 target uses compensated, 0 not compensated, 1 untouched" in r.output
+        assert (f"is declared at own.mod:2 with another value than the controller's own "
+                f"{name}") in r.output, r.output
+        assert out.read_text() == prog.read_text()
+    else:
+        assert "1 of 1 target uses compensated" in r.output, r.output
+        assert f"MoveL [[{want}" in out.read_text()
 
 
 LOOP_MODES = """MODULE A60

@@ -703,9 +703,15 @@ def test_the_frames_each_move_takes_remembered_by_where_it_lies_are_those_found_
              # (Two moves alike but for the loop the second is in, whose
              # call may assign the frames again before its next round.)
              program([tframe("T1"), uframe("U2"), m[6], "    FOR i FROM 1 TO 2 DO", m[6],
-                      "      UserProc;", "    ENDFOR"])]
+                      "      UserProc;", "    ENDFOR"]),
+             # (A routine's own rdkTool, and the module's in the routine
+             # after it: the data each name means, found per routine.)
+             program([tframe("T1"), uframe("U1"), m[0], m[1]]).replace("ENDMODULE", "\n".join([
+                 "  PROC Prog2()",
+                 "    VAR tooldata rdkTool := [TRUE,[[0,0,0],[1,0,0,0]],[2,[0,0,15],[1,0,0,0],0,0,"
+                 "0.005]];", tframe("T2"), m[2], m[3], "  ENDPROC", "ENDMODULE"]))]
     tails = 0
-    got, want = [], []
+    got, want, ends = [], [], []
     for text in texts:
         task = Task("MOD_Prog1.mod", (parse_text(text, "MOD_Prog1.mod"),))
         fast, slow = Plan(task), Plan(task)
@@ -718,8 +724,11 @@ def test_the_frames_each_move_takes_remembered_by_where_it_lies_are_those_found_
             tails += type(motion.args) is A.TailArgs
             got.append(_plain(fast.resolver._tool_wobj(motion, module)))
             want.append(_plain(r._tool_wobj_of(motion, module)))
+        ends.append(len(got))
     assert got == want
     assert tails >= 10
     # (Known and not known both, the loop's move too: the test covers each.)
     assert {t[0] for _, t, _ in got} >= {"tuple", "Unresolved"}
-    assert [t[0] for _, t, _ in got[-2:]] == ["tuple", "Unresolved"]
+    assert [t[0] for _, t, _ in got[ends[1] - 2:ends[1]]] == ["tuple", "Unresolved"]
+    # (The routine's own tool, and the module's: both known, not the same.)
+    assert got[ends[2] - 1][1][0] == "tuple" and got[ends[2] - 1][1] != got[ends[1] + 1][1]

@@ -166,10 +166,6 @@ class Flow:
         st = self.before.get(key, self.entry)
         return st if st.last is not AFTER else st.with_last(frozenset((self.previous[key],)))
 
-    def held(self, key) -> State:
-        """state(key) as held: its last may be AFTER (last() reads it)."""
-        return self.before.get(key, self.entry)
-
     def last(self, key, st: State) -> frozenset | None:
         """st.last, st the state held before use `key`."""
         return frozenset((self.previous[key],)) if st.last is AFTER else st.last

@@ -678,7 +678,7 @@ class _Chooser:
             last = st.last
             if last is AFTER or (last is not None and len(last) == 1):
                 # (One move before: a CAM program's 1e5, each the one before
-                # it in its run.)
+                # it in its run. Flow.one_before's, without a call per row.)
                 j = rows.get(previous[uses[i].key] if last is AFTER else next(iter(last)))
                 if j is not None:
                     edges.append((j, i))

@@ -270,6 +270,14 @@ def _data_key(expr, site) -> str:
     return f"{name}@{id(pf)}:{assign.span.start}"
 
 
+def _place(hit: Sites, at: int) -> tuple:
+    """Where offset `at` lies for a routine's assignments (hit): in a
+    handler or not, after how many of them, after how many of the calls
+    that may run it again; all a move's chain depends on but for its loop
+    (Resolver._site_chain)."""
+    return at > hit.body_end, bisect_left(hit.starts, at), bisect_right(hit.reentries, at)
+
+
 def _chain(hit: Sites, k: int) -> tuple | str:
     """The assignments of hit whose values make the one a move after the
     first k of them uses (Resolver._sites), or why that is not known."""
@@ -856,20 +864,24 @@ class Resolver:
 
     # ------------------------------------------------------------ tool / wobj
     def _builtin(self, expr, module, routine: str, cls, what: str):
-        """None (the controller's own tool0 or wobj0, the identity, which its
-        BASE module declares), or Unresolved where a given module declares
-        one of that name with another value: which of the two the
-        controller takes is not known here, and the move is left as
-        written rather than compensated at a place that may be wrong."""
+        """None: the controller's own tool0 or wobj0 (the identity, which its
+        BASE module declares) where no given module declares one of that
+        name; Unresolved where a module declares one globally with another
+        literal value: which of the two the controller takes is not known
+        here, and the move is left as written rather than compensated at a
+        place that may be wrong; else the declaration, read as any data of
+        the program (a LOCAL or routine's own hides the controller's; one
+        declared as the identity is that data, and what assigns it is
+        followed)."""
         d = self.lookup(expr.name, module, routine)
         if type(d) is not Declaration:
             return None
         v = d.value
-        if isinstance(v, cls) and (
-                (v.robhold.value is True and _identity(v.tframe)) if cls is ToolData else
-                (v.robhold.value is False and v.ufprog.value is True
-                 and _identity(v.uframe) and _identity(v.oframe))):
-            return None
+        if (d.routine is not None or d.scope == "LOCAL" or not isinstance(v, cls)
+                or ((v.robhold.value is True and _identity(v.tframe)) if cls is ToolData else
+                    (v.robhold.value is False and v.ufprog.value is True
+                     and _identity(v.uframe) and _identity(v.oframe)))):
+            return d
         pf = self.home[id(d)]
         return Unresolved(f"{what} {expr.name} is declared at {pf.source.display_path}:"
                           f"{pf.line(d.node.span)} with another value than the controller's own "
@@ -885,7 +897,9 @@ class Resolver:
         if type(expr) is not A.Ref:
             return Unresolved(f"the {what} is not a plain data name")
         if expr.name.lower() == builtin and not expr.selectors:
-            return self._builtin(expr, module, routine, cls, what)
+            own = self._builtin(expr, module, routine, cls, what)
+            if type(own) is not Declaration:
+                return own
         d = self.lookup(expr.name, module, routine)
         if isinstance(d, Unresolved):
             return d
@@ -1253,12 +1267,7 @@ class Resolver:
         out = []
         routine = (id(module), (motion.routine or "").lower())
         for ref in (motion.tool, motion.wobj):
-            entry = (sites.get(ref.name.lower()) if type(ref) is A.Ref and not ref.selectors
-                     else None)
-            if entry is not None:
-                # (The data the name means here; one no routine assigns a
-                # literal to goes the common way: _written says why.)
-                entry = entry.get(self._data_id(ref.name, module, motion.routine))
+            entry = self._site_entry(sites, ref, module, motion.routine)
             if type(entry) is dict:
                 entry = self._site_chain(ref, entry, routine, motion)
                 # (The output's resolver takes the plan's word: a move the
@@ -1267,6 +1276,15 @@ class Resolver:
                     entry = None
             out.append(entry)
         return tuple(out) if out[0] is not None or out[1] is not None else None
+
+    def _site_entry(self, sites: dict, ref, module, routine: str | None):
+        """site_map()'s entry for the data a tool or work object argument
+        names in a routine: {routine key: Sites}, why its moves are not
+        followed, or None."""
+        entry = sites.get(ref.name.lower()) if type(ref) is A.Ref and not ref.selectors else None
+        # (The data the name means here; one no routine assigns a literal to
+        # goes the common way: _written says why.)
+        return None if entry is None else entry.get(self._data_id(ref.name, module, routine))
 
     def _site_chain(self, ref, by_routine: dict, routine: tuple, motion) -> tuple | str:
         """_sites of one tool or work object the routines by_routine
@@ -1277,9 +1295,7 @@ class Resolver:
             # (The chain depends on the move only through where it lies among
             # its routine's assignments and the calls that may run it again,
             # whether in a handler, and whether in a loop.)
-            at = motion.span.start
-            key = (id(hit), ref.name, at > hit.body_end, bisect_left(hit.starts, at),
-                   bisect_right(hit.reentries, at), bool(motion.loops))
+            key = (id(hit), ref.name, *_place(hit, motion.span.start), bool(motion.loops))
             got = self._chains.get(key)
             if got is None:
                 got = self._chains[key] = self._site_chain_of(ref, hit, motion)
@@ -1479,9 +1495,7 @@ class Resolver:
                 if hits is None:
                     hits = self._tail_sites[key] = self._routine_sites(motion, module)
                 at = motion.span.start
-                key += tuple(None if h is None else
-                             (at > h.body_end, bisect_left(h.starts, at),
-                              bisect_right(h.reentries, at)) for h in hits)
+                key += tuple(None if h is None else _place(h, at) for h in hits)
             return self._noted(self._tails, key, lambda: self._tool_wobj_of(motion, module))
         return self._tool_wobj_of(motion, module)
 
@@ -1490,14 +1504,9 @@ class Resolver:
         of its work object (_sites), each None where there is none."""
         sites = self.site_map()
         routine = (id(module), (motion.routine or "").lower())
-        out = []
-        for ref in (motion.tool, motion.wobj):
-            entry = (sites.get(ref.name.lower()) if type(ref) is A.Ref and not ref.selectors
-                     else None)
-            if entry is not None:
-                entry = entry.get(self._data_id(ref.name, module, motion.routine))
-            out.append(entry.get(routine) if type(entry) is dict else None)
-        return tuple(out)
+        entries = (self._site_entry(sites, ref, module, motion.routine)
+                   for ref in (motion.tool, motion.wobj))
+        return tuple(e.get(routine) if type(e) is dict else None for e in entries)
 
     def _tool_wobj_of(self, motion, module) -> tuple:
         t, w, routine = motion.tool, motion.wobj, motion.routine
@@ -2433,8 +2442,10 @@ class Resolver:
 
 
 def _identity(pose) -> bool:
-    """A pose of no translation and the unit quaternion, as written."""
-    return pose.xyz == (0.0, 0.0, 0.0) and pose.quat_wxyz == (1.0, 0.0, 0.0, 0.0)
+    """A pose of no translation and no rotation (the unit quaternion, of
+    either sign), as written."""
+    return pose.xyz == (0.0, 0.0, 0.0) and pose.quat_wxyz in ((1.0, 0.0, 0.0, 0.0),
+                                                             (-1.0, 0.0, 0.0, 0.0))
 
 
 def _relative(src: Source, R, p):

@@ -390,14 +390,16 @@ def _deepest(nodes) -> tuple[int, int]:
     return best
 
 
-_STATEMENT_STARTS = {"NAME", "FAST_CALL", "FAST_CIRC", "IF", "FOR", "WHILE", "TEST", "GOTO", "RETURN",
-                     "RAISE", "RETRY", "TRYNEXT", "EXIT", "CONNECT", "LATE", "PLACEHOLDER"}
+_STATEMENT_STARTS = {"NAME", "FAST_CALL", "FAST_CIRC", "IF", "FOR", "WHILE", "TEST", "GOTO",
+                     "RETURN", "RAISE", "RETRY", "TRYNEXT", "EXIT", "CONNECT", "LATE",
+                     "PLACEHOLDER"}
 _EXPR_STARTS = {"NAME", "NUMBER", "STRING", "NUMAGG", "LBRACK", "LPAR", "TRUE", "FALSE",
                 "NOT", "ADDOP", "PLACEHOLDER"}
 _OPERATORS = {"ADDOP", "STAR", "SLASH", "DIV", "MOD", "RELOP", "EQ", "AND", "OR", "XOR"}
 _NAMES = {
     "NAME": "an identifier", "NUMBER": "a number", "STRING": "a string",
-    "NUMAGG": "'['", "FAST_CALL": "a statement", "FAST_CIRC": "a statement", "FAST_DECL": "a declaration",
+    "NUMAGG": "'['", "FAST_CALL": "a statement", "FAST_CIRC": "a statement",
+    "FAST_DECL": "a declaration",
     "$END": "end of file",
     "HEADER": "a %%% header", "PLACEHOLDER": "a placeholder such as <SMT>",
     "RELOP": "a comparison", "ADDOP": "'+' or '-'", "BACKSLASH": "an optional argument '\\'",
@@ -439,7 +441,8 @@ def describe_expected(expected: frozenset[str]) -> str:
     if {"VAR", "PERS", "CONST"} <= rest:
         parts.insert(0, "a declaration")
         rest -= {"VAR", "PERS", "CONST", "LOCAL", "TASK", "FAST_DECL"}
-    parts.extend(sorted(_describe_terminal(t) for t in rest))
+    # (Each once: two one-token forms are "a statement" each.)
+    parts.extend(d for d in sorted({_describe_terminal(t) for t in rest}) if d not in parts)
     if len(parts) > 8:
         parts = parts[:8] + ["..."]
     if len(parts) == 1:
