@@ -92,8 +92,8 @@ class Source:
     def with_record(self, record) -> "Source":
         """The same source holding `record` (as an output writes it);
         dataclasses.replace costs ~10 times more, once per target."""
-        return Source(record, self.decl, self.home, self.element, self.by_loop, self.ref,
-                      self.expr, self.call, self.rel_R, self.rel_d, self.home_module)
+        return _source(record, self.decl, self.home, self.element, self.by_loop, self.ref,
+                       self.expr, self.call, self.rel_R, self.rel_d, self.home_module)
 
 
 @dataclass(frozen=True, eq=False, slots=True)
@@ -1667,7 +1667,8 @@ class Resolver:
             if not expr.selectors:
                 if isinstance(d.value, tuple):
                     return Unresolved(f"{expr.name} is an array", True)
-                return Source(d.value, d, home, None, False, expr, whole, None, None, None, home_m)
+                return _source(d.value, d, home, None, False, expr, whole, None, None, None,
+                               home_m)
             if len(expr.selectors) == 1 and isinstance(expr.selectors[0], A.Index):
                 if not isinstance(d.value, tuple):
                     return Unresolved(f"{expr.name} is not an array", True)
@@ -1704,8 +1705,8 @@ class Resolver:
                                               f"1..{dim}{loop}: the controller stops here with "
                                               "ERR_INDEX")
                     flat = flat * dim + (k - 1)
-                return Source(d.value[flat], d, home, flat, by_loop, expr, whole, None, None, None,
-                              home_m)
+                return _source(d.value[flat], d, home, flat, by_loop, expr, whole, None, None,
+                               None, home_m)
             return Unresolved(f"{expr.name} with components is not a target")
         if isinstance(expr, A.Call) and expr.name.lower() in ("offs", "reltool") and outer is None:
             return self._offset(pf, expr, module, routine, env)
@@ -1752,8 +1753,8 @@ class Resolver:
                     return Unresolved(f"RelTool argument \\{a.name} is not supported")
         elif any(a.kind != "pos" for a in call.args):
             return Unresolved("Offs takes no optional arguments")
-        return Source(base.record, base.decl, base.home, base.element, base.by_loop, base.ref,
-                      call, call, rot, d, base.home_module)
+        return _source(base.record, base.decl, base.home, base.element, base.by_loop, base.ref,
+                       call, call, rot, d, base.home_module)
 
     def _at_state(self, pf, call: A.Call, module, routine: str, env, whole):
         """rcTcJ/rcTcR(cold, dq) of a transient output at thermal state
@@ -2090,7 +2091,8 @@ class Resolver:
                 "external axis it is and along which base axis it moves with --track "
                 "AXIS:x|y|z", True))
         if t.value is not None:
-            src = Source(t.value, None, None, None, False, t.expr, t.expr, None, None, None)
+            src = _source(t.value, None, None, None, False, t.expr, t.expr, None, None, None,
+                          None)
         elif t.issue:
             src = self._named_axes(t, kind, module, motion.routine)
         else:
