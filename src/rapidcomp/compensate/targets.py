@@ -270,6 +270,14 @@ def _data_key(expr, site) -> str:
     return f"{name}@{id(pf)}:{assign.span.start}"
 
 
+def _at_run_time(ref, at: tuple, why: str) -> str:
+    """Why a move's tool or work object (ref) is not known: it is assigned
+    at run time, at (ParsedFile, Assign), and why that value is not this
+    move's."""
+    pf, a = at
+    return f"{ref.name} is assigned at run time ({_where(pf, a.span.start)}): {why}"
+
+
 def _place(hit: Sites, at: int) -> tuple:
     """Where offset `at` lies for a routine's assignments (hit): in a
     handler or not, after how many of them, after how many of the calls
@@ -701,7 +709,7 @@ class Resolver:
         self._data_ids: dict = {}
         # _tool_wobj's of a move lexed as one token, by its shared tail.
         self._tails: dict = {}
-        self._confs: dict = {}                  # _plain_use's: confdata numbers -> ints
+        self._confs: dict = {}                  # _conf's: confdata numbers -> ints
         self._records: dict | None = None       # _component_type's: RECORD name -> components
         # Tools and work objects a routine assigns literals to (site_map).
         self._site_map: dict | None = None
@@ -863,7 +871,7 @@ class Resolver:
         return valued[0]
 
     # ------------------------------------------------------------ tool / wobj
-    def _builtin(self, expr, module, routine: str, cls, what: str):
+    def _builtin(self, d, expr, cls, what: str):
         """None: the controller's own tool0 or wobj0 (the identity, which its
         BASE module declares) where no given module declares one of that
         name; Unresolved where a module declares one globally with another
@@ -872,8 +880,7 @@ class Resolver:
         place that may be wrong; else the declaration, read as any data of
         the program (a LOCAL or routine's own hides the controller's; one
         declared as the identity is that data, and what assigns it is
-        followed)."""
-        d = self.lookup(expr.name, module, routine)
+        followed). d: what the name means where the move is (lookup())."""
         if type(d) is not Declaration:
             return None
         v = d.value
@@ -896,11 +903,11 @@ class Resolver:
         components of it; or components of the declared value."""
         if type(expr) is not A.Ref:
             return Unresolved(f"the {what} is not a plain data name")
+        d = self.lookup(expr.name, module, routine)
         if expr.name.lower() == builtin and not expr.selectors:
-            own = self._builtin(expr, module, routine, cls, what)
+            own = self._builtin(d, expr, cls, what)
             if type(own) is not Declaration:
                 return own
-        d = self.lookup(expr.name, module, routine)
         if isinstance(d, Unresolved):
             return d
         if d is None:
@@ -1300,16 +1307,14 @@ class Resolver:
             if got is None:
                 got = self._chains[key] = self._site_chain_of(ref, hit, motion)
             return got
-        first = next(iter(by_routine.values())).assigns[0]
-        return (f"{ref.name} is assigned at run time ({_where(first[0], first[1].span.start)}): "
-                "by other routines, not by this move's own: its value here is the one some "
-                "routine left")
+        return _at_run_time(ref, next(iter(by_routine.values())).assigns[0],
+                            "by other routines, not by this move's own: its value here is the "
+                            "one some routine left")
 
     def _site_chain_of(self, ref, hit: Sites, motion) -> tuple | str:
         """_site_chain of a move in a routine that assigns the data (hit)."""
         def unknown(why: str, at=None) -> str:
-            pf, a = at or first
-            return f"{ref.name} is assigned at run time ({_where(pf, a.span.start)}): {why}"
+            return _at_run_time(ref, at or first, why)
 
         first = hit.assigns[0]
         if hit.why is not None:
@@ -2004,13 +2009,7 @@ class Resolver:
         if type(tool) is Unresolved or type(wobj) is Unresolved:
             return None
         record = src.record
-        # (A CAM program's 1e5 confdata are a few values: each made once,
-        # keyed by its numbers as written; equal numbers, equal ints.)
-        written = record.values[7:11]
-        conf = self._confs.get(written)
-        if conf is None:
-            conf = self._confs[written] = self._one(record.conf)
-        u = _use(motion, t.role, label, line, "robtarget", None, None, conf,
+        u = _use(motion, t.role, label, line, "robtarget", None, None, self._conf(record),
                  None, None, src, tool, wobj, (), False, pf, module,
                  self._one(record.ext, True), index + (t.role, ()), tuple(notes))
         self._pending.append((u, src, pf, self.base, wobj[1], tool[1]))
@@ -2395,16 +2394,22 @@ class Resolver:
         # other pending use's, in poses() (an error raised before that
         # raises the first pending one's first, as one by one would).
         record = src.record
-        # (Each confdata once, keyed by its numbers as written: _plain_use.)
-        written = record.values[7:11]
-        conf = self._confs.get(written)
-        if conf is None:
-            conf = self._confs[written] = self._one(record.conf)
-        u = _use(motion, role, label, line, kind, None, None, conf, None, None, src, tool, wobj,
+        u = _use(motion, role, label, line, kind, None, None, self._conf(record), None, None,
+                 src, tool, wobj,
                  envt, False, pf, module, self._one(record.ext, True), key,
                  tuple(self._notes))
         self._pending.append((u, src, pf, base, wobj[1], tool[1]))
         return u
+
+    def _conf(self, record: RobTarget) -> tuple:
+        """record.conf, as the one tuple this resolver holds for it (a CAM
+        program's 1e5 confdata are a few values: each made once, keyed by
+        its numbers as written; equal numbers, equal ints)."""
+        written = record.values[7:11]
+        conf = self._confs.get(written)
+        if conf is None:
+            conf = self._confs[written] = self._one(record.conf)
+        return conf
 
     def _one(self, value: tuple, floats: bool = False) -> tuple:
         """`value`, as the one tuple this resolver holds equal to it; of
