@@ -253,15 +253,12 @@ class Rows(Sequence):
         contiguous range, as the reports ask for blocks, by slices)."""
         if type(ks) is not range:
             ks = list(ks)
-            if not ks:
-                return []
-            if ks[0] < 0 or ks[-1] - ks[0] + 1 != len(ks) or any(
-                    b <= a for a, b in zip(ks, ks[1:])):
-                return list(zip(*[[c[k] for k in ks] for c in self._cols]))
-            ks = range(ks[0], ks[-1] + 1)
-        if ks.step != 1 or ks.start < 0 or ks.stop < 0:
-            return list(zip(*[[c[k] for k in ks] for c in self._cols]))
-        return list(zip(*[c[ks.start:ks.stop] for c in self._cols]))
+            if ks and ks[0] >= 0 and ks[-1] - ks[0] + 1 == len(ks) and all(
+                    a < b for a, b in zip(ks, ks[1:])):
+                ks = range(ks[0], ks[-1] + 1)
+        if type(ks) is range and ks.step == 1 and ks.start >= 0 and ks.stop >= 0:
+            return list(zip(*[c[ks.start:ks.stop] for c in self._cols]))
+        return list(zip(*[[c[k] for k in ks] for c in self._cols]))
 
     def full(self, k: int) -> bool:
         """Row k has all three joints, six each, none a NaN, and its error
