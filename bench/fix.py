@@ -49,6 +49,47 @@ ROOT = Path(__file__).resolve().parents[1]
 PROFILE = ROOT / "fixtures" / "warm.csv"
 
 
+EXT = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
+
+
+def joints(n: int, rng) -> np.ndarray:
+    """n random joint vectors (deg) in the IRB 140's front workspace, away
+    from its singularities: the targets' joints of every benchmark module
+    (bench/shapes.py's too)."""
+    sign = rng.choice([-1.0, 1.0], size=(n, 3))
+    return np.stack([sign[:, 0] * rng.uniform(5, 40, n), rng.uniform(0, 45, n),
+                     rng.uniform(-20, 35, n), sign[:, 1] * rng.uniform(5, 60, n),
+                     rng.uniform(-100, -25, n), sign[:, 2] * rng.uniform(5, 85, n)], axis=1)
+
+
+def flange(q: np.ndarray) -> tuple:
+    """base_M_flange (R, p mm) of joint vectors q (deg) through the nominal
+    FK, and their confdata."""
+    from rapidcomp.kinematics.chain import Chain
+    from rapidcomp.kinematics.conf import confdata
+    from rapidcomp.kinematics.frames import DEG
+    from rapidcomp.kinematics.ik import Solver
+    from rapidcomp.kinematics.robot import irb140
+    robot = irb140()
+    chain = Chain.from_robot(robot)
+    R, p = chain.fk(q * DEG)
+    _, frames = chain.joint_frames(q * DEG)
+    return R, p, confdata(q * DEG, frames[:, 4], Solver(robot).geometry.phi)
+
+
+def literals(R: np.ndarray, p: np.ndarray, conf: np.ndarray) -> list[str]:
+    """robtarget literals of poses (R, p mm) and confdata, as CAM
+    post-processors write them: 3 decimals (mm), 6 (quaternion)."""
+    from rapidcomp.kinematics.frames import matrix_to_quat_wxyz
+    out = []
+    for i in range(len(p)):
+        qw = matrix_to_quat_wxyz(R[i])
+        out.append(f"[[{p[i, 0]:.3f},{p[i, 1]:.3f},{p[i, 2]:.3f}],"
+                   f"[{qw[0]:.6f},{qw[1]:.6f},{qw[2]:.6f},{qw[3]:.6f}],"
+                   f"[{','.join(str(int(c)) for c in conf[i])}],{EXT}]")
+    return out
+
+
 def cam_module(n: int, seed: int = 1, name: str = "CAM_Fix", main: bool = False,
                offs: bool = False) -> str:
     """n targets, half declared, half inline, in PROC Path. main: Path is
@@ -58,39 +99,19 @@ def cam_module(n: int, seed: int = 1, name: str = "CAM_Fix", main: bool = False,
     is unknown there: each stays a MoveL with a compensated robtarget.
     offs: Path starts with a move to Offs(p0, 0, 0, 50) too (p0 is then
     written for one of its two uses, a copy of it for the other)."""
-    from rapidcomp.kinematics.chain import Chain
-    from rapidcomp.kinematics.conf import confdata
-    from rapidcomp.kinematics.frames import DEG, matrix_to_quat_wxyz
-    from rapidcomp.kinematics.ik import Solver
-    from rapidcomp.kinematics.robot import irb140
-    rng = np.random.default_rng(seed)
-    sign = rng.choice([-1.0, 1.0], size=(n, 3))
-    q = np.stack([sign[:, 0] * rng.uniform(5, 40, n), rng.uniform(0, 45, n),
-                  rng.uniform(-20, 35, n), sign[:, 1] * rng.uniform(5, 60, n),
-                  rng.uniform(-100, -25, n), sign[:, 2] * rng.uniform(5, 85, n)], axis=1)
-    robot = irb140()
-    chain = Chain.from_robot(robot)
-    R, p = chain.fk(q * DEG)
-    _, frames = chain.joint_frames(q * DEG)
-    conf = confdata(q * DEG, frames[:, 4], Solver(robot).geometry.phi)
+    R, p, conf = flange(joints(n, np.random.default_rng(seed)))
     tcp = p + R[:, :, 2] * 150.0  # tSpindle: 150 mm along the flange z axis
-    ext = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
-
-    def rt(i):
-        qw = matrix_to_quat_wxyz(R[i])
-        return (f"[[{tcp[i, 0]:.3f},{tcp[i, 1]:.3f},{tcp[i, 2]:.3f}],"
-                f"[{qw[0]:.6f},{qw[1]:.6f},{qw[2]:.6f},{qw[3]:.6f}],"
-                f"[{','.join(str(int(c)) for c in conf[i])}],{ext}]")
+    lits = literals(R, tcp, conf)
     half = n // 2
     lines = [f"MODULE {name}",
              "  PERS tooldata tSpindle:=[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];",
              "  PERS wobjdata wPart:=[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];"]
-    lines += [f"  CONST robtarget p{i}:={rt(i)};" for i in range(half)]
+    lines += [f"  CONST robtarget p{i}:={lits[i]};" for i in range(half)]
     lines.append("  PROC Path()")
     if offs:
         lines.append("    MoveL Offs(p0,0,0,50),v100,z1,tSpindle\\WObj:=wPart;")
     lines += [f"    MoveL p{i},v100,z1,tSpindle\\WObj:=wPart;" for i in range(half)]
-    lines += [f"    MoveL {rt(i)},v100,z1,tSpindle\\WObj:=wPart;" for i in range(half, n)]
+    lines += [f"    MoveL {lits[i]},v100,z1,tSpindle\\WObj:=wPart;" for i in range(half, n)]
     lines.append("  ENDPROC")
     if main:
         lines += ["  PROC main()", "    Path;", "  ENDPROC"]

@@ -40,50 +40,20 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from fix import PROFILE, cam_module, installed_env  # noqa: E402
+from fix import (PROFILE, cam_module, flange, installed_env, joints,  # noqa: E402
+                 literals)
 
-from rapidcomp.kinematics.chain import Chain  # noqa: E402
-from rapidcomp.kinematics.conf import confdata  # noqa: E402
-from rapidcomp.kinematics.frames import DEG, matrix_to_quat_wxyz, quat_wxyz_to_matrix  # noqa: E402
-from rapidcomp.kinematics.ik import Solver  # noqa: E402
-from rapidcomp.kinematics.robot import irb140  # noqa: E402
+from rapidcomp.kinematics.frames import matrix_to_quat_wxyz, quat_wxyz_to_matrix  # noqa: E402
 
-EXT = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
 TOOL = "  PERS tooldata tSpindle:=[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];"
 WOBJ = "  PERS wobjdata wPart:=[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];"
 TAIL = ",v100,z1,tSpindle\\WObj:=wPart;"
-_ROBOT = irb140()
-_CHAIN = Chain.from_robot(_ROBOT)
-_PHI = Solver(_ROBOT).geometry.phi
-
-
-def joints(n, rng):
-    """cam_module's random joint vectors (deg)."""
-    sign = rng.choice([-1.0, 1.0], size=(n, 3))
-    return np.stack([sign[:, 0] * rng.uniform(5, 40, n), rng.uniform(0, 45, n),
-                     rng.uniform(-20, 35, n), sign[:, 1] * rng.uniform(5, 60, n),
-                     rng.uniform(-100, -25, n), sign[:, 2] * rng.uniform(5, 85, n)], axis=1)
-
-
-def flange(q):
-    """base_M_flange (R, p) and confdata of joint vectors q (deg), as cam_module."""
-    R, p = _CHAIN.fk(q * DEG)
-    _, frames = _CHAIN.joint_frames(q * DEG)
-    return R, p, confdata(q * DEG, frames[:, 4], _PHI)
-
-
-def fmt(R, p, conf):
-    """robtarget literals, 3 decimals mm / 6 quaternion (cam_module's rt)."""
-    qs = matrix_to_quat_wxyz(R)
-    return [f"[[{p[i, 0]:.3f},{p[i, 1]:.3f},{p[i, 2]:.3f}],"
-            f"[{qs[i, 0]:.6f},{qs[i, 1]:.6f},{qs[i, 2]:.6f},{qs[i, 3]:.6f}],"
-            f"[{','.join(str(int(c)) for c in conf[i])}],{EXT}]" for i in range(len(p))]
 
 
 def targets(n, seed, tool_z=150.0):
     """n reachable robtargets for a tool tool_z mm along flange z, wobj0."""
     R, p, conf = flange(joints(n, np.random.default_rng(seed)))
-    return fmt(R, p + R[:, :, 2] * tool_z, conf)
+    return literals(R, p + R[:, :, 2] * tool_z, conf)
 
 
 def module(name, decl, body_procs, main_body):
@@ -152,7 +122,7 @@ def d_offs(n, seed=1, uses=100):
         bad[idx[ok]] = False
         off[idx[~ok]] = np.round(rng.uniform(-20, 20, (int((~ok).sum()), 3)), 1)
     decl = [TOOL, WOBJ] + [f"  CONST robtarget p{j}:={x};" for j, x in
-                           enumerate(fmt(R, tcp, conf))]
+                           enumerate(literals(R, tcp, conf))]
     body = [f"MoveL Offs(p{ref[i]},{off[i, 0]:g},{off[i, 1]:g},{off[i, 2]:g}){TAIL}"
             for i in range(n)]
     return module("CAM_Offs", decl, [("Path", body)], ["Path;"])
@@ -212,7 +182,7 @@ def f_tools(n, seed=1, k=10):
         Rw, pw = Ru @ Ro, pu + Ru @ po                        # base_M_object
         pt[m] = (pt[m] - pw) @ Rw                               # Rw^T (p - pw)
         Rt[m] = Rw.T @ Rt[m]
-    t = fmt(Rt, pt, conf)
+    t = literals(Rt, pt, conf)
     half = n // 2
     decl += [f"  CONST robtarget p{i}:={t[i]};" for i in range(half)]
     tail = [f",v100,z1,tTool{ti[i]}\\WObj:=wCell{wi[i]};" for i in range(n)]
