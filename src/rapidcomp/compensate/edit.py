@@ -485,7 +485,8 @@ class Editor:
         self.field_lists: list[tuple[int, list[SpanEdit]]] = []
         # Moves turned into MoveAbsJ on a jointtarget of their own, inline
         # or newly declared: use key -> (the use, that literal, the new
-        # declaration's name or None, the instruction's name as written);
+        # declaration's name or None, the instruction's name as written; an
+        # element of a new array: None, its reference as written, ...);
         # the output is checked on them by reading those statements again
         # (verify.relex_absj). others: some structural edit is of another
         # kind (the output is parsed again).
@@ -698,7 +699,10 @@ class Editor:
         if g.array:
             name = self.names.new(("jt_" + _stem(g)) if g.mode == "absj" else _stem(g) + "_c")
             _, _, nl, indent, _ = self._anchor(g)
-            self.declare(g, type_name, name, _dims(g), self.array_value(g, nl, indent, texts))
+            # (A jointtarget array of moves turned into MoveAbsJ is read
+            # again with them: verify.relex_absj.)
+            self.declare(g, type_name, name, _dims(g), self.array_value(g, nl, indent, texts),
+                         converted=g.mode == "absj")
             g.names = writable(g.names)
             g.names["array"] = name
         else:
@@ -722,8 +726,8 @@ class Editor:
                 new_ref = g.names[src.element]
             if g.mode == "absj":
                 called = self._to_absj(u, new_ref)
-                if not g.array:
-                    self.converted[u.key] = (u, literals[src.element], new_ref, called)
+                self.converted[u.key] = (u, None if g.array else literals[src.element],
+                                         new_ref, called)
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {new_ref}"
             elif not g.array and _plain_ref(src.ref):
                 self._edit_at(u.key[0], src.ref.span.start, src.ref.span.end, new_ref,

@@ -28,6 +28,7 @@ from ..rapid import ast as A
 from ..rapid.ast import Span
 from ..rapid.build import DECL_HEAD, NodeBuilder
 from ..rapid.grammar import engine
+from ..rapid.lalr import LexFailure
 from ..rapid.model import ParsedFile
 from ..rapid.parse import parse_text
 from ..rapid.values import (JOINTTARGET_FRAME, NUM_MAX, ROBTARGET_FRAME, DecodeIssue,
@@ -169,7 +170,9 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
     aggregate for an aggregate); each new declaration one one-line
     declaration (FAST_DECL) built as the parser builds it, a CONST
     jointtarget, in the move's routine or else its module, of the literal
-    meant. Returns use key -> its joints as the controller stores them
+    meant; a move on an element of a new array (that literal None, the
+    name its reference, subscripts and all), that array's declaration read
+    again (_array_decl). Returns use key -> its joints as the controller stores them
     (the literal decoded, float32, as the resolver reads a MoveAbsJ's), a
     Converted, or None where anything differs (the output is then parsed
     again). copies: targets copied for some of their uses are read again
@@ -184,8 +187,10 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
         es, shift = _shifts(file_edits.get(fi, []))
         text, src = texts[fi], plan.files[fi].source.text
         kinds: list | None = [] if copies else None
+        arrays: dict = {}
         declared = _declared(eng, build, es, shift, text, plan.files[fi],
-                             COPY_TYPES if copies else ("jointtarget",), kinds=kinds)
+                             COPY_TYPES if copies else ("jointtarget",), kinds=kinds,
+                             arrays=arrays)
         if declared is None:
             return None
         names, scopes, aggs, declared_joints = declared
@@ -216,7 +221,22 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
             # block); each move's row of declared_joints, where its literal
             # is a declaration's read already (the same text: the same joints).
             ks = [-1] * len(items)
-            named = [n for n, it in enumerate(items) if it[2] is not None]
+            # A move on an element of a new array (no literal of its own):
+            # that element's row, the array in the move's scope and of the
+            # input array's dimensions (the statement's subscripts are the
+            # input's: the same element).
+            arrayed = [n for n, it in enumerate(items) if it[1] is None]
+            for n in arrayed:
+                u = items[n][0]
+                got = arrays.get(items[n][2].partition("{")[0].lower())
+                if got is None:
+                    return None
+                (a, b), dims, joints = got
+                if not (a <= spans[n, 0] and spans[n, 1] <= b and dims == u.source.decl.dims):
+                    return None
+                records[first + n] = joints[u.source.element]
+                ks[n] = None             # (not one of the literals read below)
+            named = [n for n, it in enumerate(items) if it[2] is not None and it[1] is not None]
             if named:
                 found = [names.get(items[n][2].lower()) for n in named]
                 if None in found or (kinds is not None
@@ -235,10 +255,10 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                 if declared_joints is not None:
                     for n, k in zip(named, found):
                         ks[n] = k
-            known = [n for n, k in enumerate(ks) if k >= 0]
+            known = [n for n, k in enumerate(ks) if k is not None and k >= 0]
             if known:
                 records[[first + n for n in known]] = declared_joints[[ks[n] for n in known]]
-            own = [n for n, k in enumerate(ks) if k < 0]
+            own = [n for n, k in enumerate(ks) if k is not None and k < 0]
             blocks.append((first, items, own, [items[n][1] for n in own]))
         # Each block's other literals, each the text of an aggregate of
         # numbers where the output holds it: decoded as the parser decodes
@@ -772,7 +792,8 @@ def _plain_declared(eng, pieces: list[str], rows_of=None,
 
 def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
               pf: ParsedFile, types: tuple = ("jointtarget",), rows_of=None,
-              width: int = 6, wide: set | None = None, kinds: list | None = None
+              width: int = 6, wide: set | None = None, kinds: list | None = None,
+              arrays: dict | None = None
               ) -> tuple[dict, array, array, np.ndarray | None] | None:
     """The new declarations of a file read again where the output holds
     them: (lower-case name -> k; the (start, end) in the input of its scope
@@ -789,7 +810,11 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     puts them (Editor._anchor; after a line that goes on with a statement,
     the output would not parse). wide, when given, receives the k of
     each declaration other modules see (not LOCAL, not in a routine);
-    kinds, each one's type (lower case), at k."""
+    kinds, each one's type (lower case), at k. arrays, when given, receives
+    each new array of jointtargets (_array_decl): lower-case name -> (the
+    (start, end) in the input of its scope, its dimensions, the joints of
+    its elements as rows, row-major); without it such a text is not read.
+    """
     out: dict = {}
     scopes, aggs = array("q"), array("q")
     inserts = np.flatnonzero(es.starts == es.ends)
@@ -853,18 +878,33 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
             decls = plain[n]
         else:
             decls = []
-            for tok in eng.tokens(piece):
-                if tok.type == "$END":
-                    break
-                if tok.type != "FAST_DECL":
+            try:
+                toks = list(eng.tokens(piece))
+            except LexFailure:
+                return None
+            at = 0
+            while toks[at].type != "$END":
+                tok = toks[at]
+                if tok.type == "FAST_DECL":
+                    node = build.fast_decl([tok])
+                    if node.dims or type(node.init) is not A.NumAgg:
+                        return None
+                    decls.append((node.storage, node.type_name, node.name,
+                                  node.init.span.start, node.init.span.end, node.scope))
+                    at += 1
+                    continue
+                got = _array_decl(toks, at) if arrays is not None else None
+                if got is None:
                     return None
-                node = build.fast_decl([tok])
-                if node.dims or type(node.init) is not A.NumAgg:
+                at, name, dims, leaves = got
+                # (A name declared twice among the new ones: parsed again.)
+                if name.lower() in arrays or name.lower() in out:
                     return None
-                decls.append((node.storage, node.type_name, node.name,
-                              node.init.span.start, node.init.span.end, node.scope))
+                arrays[name.lower()] = (scope, dims, leaves)
         for storage, declared, name, x, y, local in decls:
             if not (storage == "CONST" and declared.lower() in types):
+                return None
+            if arrays is not None and name.lower() in arrays:
                 return None
             if kinds is not None:
                 kinds.append(declared.lower())
@@ -874,7 +914,100 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
             out[name.lower()] = len(scopes) // 2
             scopes.extend(scope)
             aggs.extend((a + x, a + y))
+    if arrays:
+        for name, (scope, dims, leaves) in arrays.items():
+            rows = _jointtarget_rows(leaves)
+            if rows is None:
+                return None
+            arrays[name] = (scope, dims, rows)
     return out, scopes, aggs, joints
+
+
+def _array_decl(toks: list, at: int) -> tuple[int, str, tuple, list[str]] | None:
+    """A new array declaration as the editor writes it (Editor.declare of
+    an array's jointtargets), read in the tokens of its text from toks[at]:
+    [LOCAL] CONST jointtarget <name>{<d1>,...}:=<aggregate>; whose
+    aggregate nests, to the dimensions' depth, aggregates of d1, d2, ...
+    items, each innermost one an aggregate of numbers (NUMAGG). Returns
+    (the index past its ';', its name, its dimensions, the texts of its
+    elements in row-major order), or None where the tokens are anything
+    else (the output is then parsed again)."""
+    types = [t.type for t in toks[at:at + 3]]
+    if types[:1] == ["LOCAL"]:
+        at += 1
+        types = [t.type for t in toks[at:at + 3]]
+    if (types != ["CONST", "NAME", "NAME"] or toks[at + 1].value.lower() != "jointtarget"
+            or toks[at + 3].type != "LBRACE"):
+        return None
+    name = toks[at + 2].value
+    at += 4
+    dims = []
+    while True:
+        tok = toks[at]
+        if tok.type != "NUMBER" or not tok.value.isdigit() or int(tok.value) < 1:
+            return None
+        dims.append(int(tok.value))
+        if toks[at + 1].type == "RBRACE":
+            break
+        if toks[at + 1].type != "COMMA":
+            return None
+        at += 2
+    at += 2
+    if toks[at].value != ":=":
+        return None
+    leaves: list[str] = []
+    at = _nested(toks, at + 1, dims, leaves)
+    if at is None or toks[at].type != "SEMI":
+        return None
+    return at + 1, name, tuple(dims), leaves
+
+
+def _nested(toks: list, at: int, dims: list[int], leaves: list[str]) -> int | None:
+    """An aggregate of dims[0] items from toks[at], each one nesting
+    dims[1:] likewise, the innermost NUMAGGs (their texts appended to
+    leaves, in order); the index past it, or None."""
+    if toks[at].type != "LBRACK":
+        return None
+    n = dims[0]
+    if len(dims) == 1:
+        # (The 1e5 items of a CAM path's array: checked by slices.)
+        items = toks[at + 1:at + 2 * n]
+        if (len(items) != 2 * n - 1 or any(t.type != "NUMAGG" for t in items[::2])
+                or any(t.type != "COMMA" for t in items[1::2])
+                or toks[at + 2 * n].type != "RBRACK"):
+            return None
+        leaves += [t.value for t in items[::2]]
+        return at + 2 * n + 1
+    at += 1
+    for i in range(n):
+        if i and toks[at].type != "COMMA":
+            return None
+        at = _nested(toks, at + (1 if i else 0), dims[1:], leaves)
+        if at is None:
+            return None
+    return at + 1 if toks[at].type == "RBRACK" else None
+
+
+def _jointtarget_rows(lits: list[str]) -> np.ndarray | None:
+    """decode("jointtarget", literal).joints of each literal (each lexed as
+    a NUMAGG), as rows: the plain ones a block at a time as _joint_rows
+    reads them (every other block by the job's helper), any other decoded
+    one by one; None where one does not decode."""
+    rows = np.empty((len(lits), 6))
+    ats = range(0, len(lits), RELEX_BLOCK)
+    for at, got in zip(ats, side.alternate(_joint_rows, ((lits[at:at + RELEX_BLOCK],)
+                                                         for at in ats))):
+        block = lits[at:at + RELEX_BLOCK]
+        if got is not None and _plain_numaggs(block):
+            rows[at:at + len(block)] = got
+            continue
+        for n, literal in enumerate(block):
+            try:
+                rows[at + n] = decode("jointtarget",
+                                      A.NumAgg(literal, Span(0, len(literal)))).joints
+            except DecodeIssue:
+                return None
+    return rows
 
 
 # The rest of a MODULE line after the module's name: its attributes and a
