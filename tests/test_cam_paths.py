@@ -318,6 +318,101 @@ def test_plain_moves_resolve_as_resolve_does(track, monkeypatch):
     assert (sum(taken) > 300) == (not track)
 
 
+OFFS = r"""MODULE M
+  PERS tooldata tSpindle:=[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];
+  PERS wobjdata wPart:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  CONST robtarget p1:=%(a)s;
+  CONST robtarget arr{2}:=[%(a)s,%(b)s];
+  VAR robtarget pv:=%(b)s;
+  CONST jointtarget j1:=%(j)s;
+  VAR num n:=2;
+  PROC P()
+    MoveL Offs(p1, 0, 0, 10), v100, z1, tSpindle\WObj:=wPart;
+    MoveL Offs(p1,-1.5,+2,.5),v100,fine,tool0;
+    moveL offs(P1,1,2,3),v100,z1,tSpindle\WObj:=wPart;
+    MoveJ Offs(p1,1,2,3)\Conc,v100,z1,tSpindle\WObj:=wPart;
+    MoveL Offs(arr{2},0,0,1),v100,z1,tSpindle\WObj:=wPart;
+    MoveL Offs(pv,0,0,1),v100,z1,tSpindle\WObj:=wPart;
+    MoveL RelTool(p1,0,0,1\Rz:=10),v100,z1,tSpindle\WObj:=wPart;
+    MoveL RelTool(p1,0,0,1),v100,z1,tSpindle\WObj:=wPart;
+    MoveL Offs(%(a)s,1,2,3),v100,z1,tSpindle\WObj:=wPart;
+    MoveL Offs(p1,n,0,0),v100,z1,tSpindle\WObj:=wPart;
+    MoveL Offs(p1,1e1,0,0),v100,z1,tSpindle\WObj:=wPart;
+    MoveL Offs(j1,0,0,1),v100,z1,tSpindle\WObj:=wPart;
+    MoveL Offs(nowhere,0,0,1),v100,z1,tSpindle\WObj:=wPart;
+    MoveL Offs(p1,0,0,1),v100,z1,tNone\WObj:=wPart;
+    FOR i FROM 1 TO 2 DO
+      MoveL Offs(p1,i,0,0),v100,z1,tSpindle\WObj:=wPart;
+      MoveL Offs(p1,0,0,1),v100,z1,tSpindle\WObj:=wPart;
+    ENDFOR
+    pv := Offs(p1, 1, 1, 1);
+  ENDPROC
+ENDMODULE
+"""
+
+
+def _offs_text(**changes) -> str:
+    t = targets(2, 7)
+    return OFFS % {"a": robtarget(t[0]), "b": robtarget(t[1]), "j": jointtarget(t[0]),
+                   **changes}
+
+
+def test_offs_moves_resolve_as_resolve_does(monkeypatch):
+    """A move to Offs(<declared robtarget>, <numbers>) (an Offs-relative
+    pattern's 1e5 moves) is a plain move: the same use, field for field,
+    its flange pose bit for bit, and the same notes as resolve() gives;
+    every other Offs/RelTool (of an array element, of data the program
+    writes, a rotation, an inline target, a run-time number, a jointtarget,
+    an undeclared name or tool, inside a FOR loop) is resolve()'s own."""
+    taken = []
+    real = T.Resolver._plain_use
+
+    def spy(self, pf, module, motion, *args):
+        u = real(self, pf, module, motion, *args)
+        if u is not None and type(u.source.call) is A.Call:
+            taken.append(pf.source.text[motion.span.start:motion.span.end])
+        return u
+    task = Task("m.mod", (parse_text(_offs_text(), "m.mod"),))
+    monkeypatch.setattr(T.Resolver, "_plain_use", spy)
+    fast = Plan(task)
+    monkeypatch.setattr(T.Resolver, "_plain_moves", lambda self: False)
+    slow = Plan(task)
+    monkeypatch.undo()
+    at = [f.name for f in dataclasses.fields(T.TargetUse)].index("source")
+
+    def fields(u):
+        # (An inline target's record is decoded by each resolver: by value.)
+        out = _fields(u)
+        if u.source is not None and type(u.source.ref) is A.NumAgg:
+            out[at][0] = u.source.record.values
+        return out
+    assert [fields(u) for u in fast.uses] == [fields(u) for u in slow.uses]
+    assert fast.notes() == slow.notes()
+    # (1e1: a number the one-token form does not take; the parser's Num
+    # all the same.)
+    assert [t.split(",")[0] for t in taken] == [
+        "MoveL Offs(p1", "MoveL Offs(p1", "moveL offs(P1", "MoveJ Offs(p1", "MoveL Offs(p1"]
+    assert "1e1" in taken[-1]
+    reasons = {u.label: u.reason for u in slow.uses if u.reason}
+    assert any("not literal numbers" in r for r in reasons.values())
+
+
+@pytest.mark.parametrize("far", ["200000, 0, 0", "0, -1E+09, 0"])
+def test_an_offs_beyond_reach_is_the_same_error_either_way(monkeypatch, far):
+    # (1E+09 is not the one-token form's number: the move is lexed token by
+    # token, a plain move all the same.)
+    text = _offs_text().replace("MoveL Offs(p1,-1.5,+2,.5)", f"MoveL Offs(p1, {far})")
+    task = Task("m.mod", (parse_text(text, "m.mod"),))
+    from rapidcomp.errors import InputError
+    with pytest.raises(InputError) as fast:
+        Plan(task)
+    monkeypatch.setattr(T.Resolver, "_plain_moves", lambda self: False)
+    with pytest.raises(InputError) as slow:
+        Plan(task)
+    assert str(fast.value) == str(slow.value)
+    assert "m.mod:11:" in str(fast.value) and "Offs displacement" in str(fast.value)
+
+
 def test_an_earlier_moves_error_comes_first_with_plain_moves():
     """An input error met while resolving a plain move (its tool's
     quaternion of norm 0) is raised after the error of a use before it (a
@@ -698,6 +793,13 @@ def test_a_function_of_numbers_as_first_argument_is_the_call_the_grammar_makes(m
     kinds = [t.type for t in eng.tokens(text)]
     assert kinds.count("FAST_CALL") == 2 * 6   # (all but the exponent, the hex, the sign apart)
     fast = _tree(eng.parse(text))
+    # (One token: the function's node kept, the arguments after it made
+    # when read, as a plain move's; the call is not plain.)
+    calls = [s for s in parse_text(text, "m.mod").modules[0].node.items[0].body
+             if type(s.args) is A.TailArgs]
+    assert len(calls) == 12 and not any(c.plain for c in calls)
+    assert all(type(c.args.first) is A.Call and c.args.nodes()[0].value is c.args.first
+               for c in calls)
     monkeypatch.setattr(eng, "_master", eng._master_plain)
     monkeypatch.setattr(eng, "tokens", lambda t, runs=False, _t=eng.tokens: _t(t, False))
     assert [t.type for t in eng.tokens(text)].count("FAST_CALL") == 0

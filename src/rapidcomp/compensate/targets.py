@@ -1974,9 +1974,10 @@ class Resolver:
         return not (self.float32 or self.written or self.track or self.moved_by)
 
     def _plain_use(self, pf, module, motion, line: int, index) -> TargetUse | None:
-        """resolve()'s one use of a plain move (see resolve_all), or None
-        when the move is not one (resolve() then says what it is): the same
-        source, checks, notes and use, made directly."""
+        """resolve()'s one use of a plain move (see resolve_all; its target
+        may be Offs of a declared name by literal numbers), or None when the
+        move is not one (resolve() then says what it is): the same source,
+        checks, notes and use, made directly."""
         targets = motion.targets
         if len(targets) != 1 or motion.loops:
             return None
@@ -1993,18 +1994,36 @@ class Resolver:
                           None)
             label = "inline"
         else:
-            expr = t.expr
-            if t.issue or type(expr) is not A.Ref or expr.selectors:
+            expr = ref = t.expr
+            call = None
+            if type(expr) is A.Call:
+                # Offs(<name>, <number>, <number>, <number>) (a CAM program's
+                # pattern path: 1e5 of them), as _offset reads it.
+                args = expr.args
+                if (expr.name.lower() != "offs" or len(args) != 4
+                        or any(a.kind != "pos" for a in args)
+                        or any(type(a.value) is not A.Num for a in args[1:])):
+                    return None
+                call, ref = expr, args[0].value
+            if t.issue or type(ref) is not A.Ref or ref.selectors:
                 return None
-            d = self.lookup(expr.name, module, motion.routine)
+            d = self.lookup(ref.name, module, motion.routine)
             if type(d) is not Declaration or type(d.value) is not RobTarget \
                     or d.type != "robtarget" or self._written(d):
                 return None
             key = id(d)
-            src = _source(d.value, d, self.home[key], None, False, expr, expr, None, None,
-                          None, self.home_module[key])
-            # (A plain name is its text: the Ref's own string, not a copy per use.)
-            label = expr.name
+            if call is None:
+                src = _source(d.value, d, self.home[key], None, False, expr, expr, None, None,
+                              None, self.home_module[key])
+                # (A plain name is its text: the Ref's own string, not a copy per use.)
+                label = expr.name
+            else:
+                pos = [a.value for a in args[1:]]
+                shift = np.array(self._position([v.value for v in pos], pos[0].span.start, pf,
+                                                "the Offs displacement"))
+                src = _source(d.value, d, self.home[key], None, False, ref, call, call,
+                              NO_ROTATION, shift, self.home_module[key])
+                label = pf.text(expr)
         tool, wobj = self._tool_wobj(motion, module)
         if type(tool) is Unresolved or type(wobj) is Unresolved:
             return None

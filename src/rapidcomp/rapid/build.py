@@ -496,12 +496,14 @@ class NodeBuilder:
             word = _FAST_ITEM.match(text, pos)      # a name
             end = word.end()
             if text[end] == "(":
-                # A function of names and numeric aggregates (rcTcR(p, p_dq)).
-                func, end = _fast_func(text, base, pos, end)
-                pos = end
-                every = (_arg("pos", None, func, func.span),
-                         *_fast_tail(text[pos:]).nodes(base + pos))
-                return _call(name, every, _span((base, base + len(text))), plain_args(every))
+                # A function of names and numeric aggregates (rcTcR(p, p_dq),
+                # Offs(p, 0, 0, 10)): the first argument's value node, the
+                # arguments after it made when read (A.TailArgs) as a plain
+                # move's (an Offs-relative program's 1e5 moves: ~1 KB each
+                # kept otherwise); a call, so not plain.
+                func, pos = _fast_func(text, base, pos, end)
+                return _call(name, _tail_args(func, _fast_tail(text[pos:]), base + pos),
+                             _span((base, base + len(text))), False)
             first = _ref(word.group(3), (), _span((base + pos, base + end)))
             pos = end
         # (Plain by construction: names, a numeric aggregate, numbers, \Opt,
