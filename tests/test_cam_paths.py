@@ -261,14 +261,16 @@ def test_source_lines_are_positions_lines():
 def _fields(u) -> list:
     """Every field of a use; nodes, files and modules by identity (a record
     by identity where the parse made it, else by value: an inline target
-    whose external axes are named data is read by each resolver)."""
+    whose external axes are named data, or an Offs's inline target, is read
+    by each resolver)."""
     out = []
     for f in dataclasses.fields(u):
         v = getattr(u, f.name)
         if f.name in ("motion", "file", "module"):
             v = id(v)
         elif f.name == "source" and v is not None:
-            named = type(v.expr) is A.Agg and type(v.expr.items[-1]) is A.Ref
+            named = ((type(v.expr) is A.Agg and type(v.expr.items[-1]) is A.Ref)
+                     or (v.call is not None and type(v.ref) is A.NumAgg))
             v = [x if named and g.name == "record" else
                  id(x) if isinstance(x, (A.Ref, A.NumAgg, A.Agg, A.Call)) or g.name in (
                 "record", "decl", "home", "home_module") else
@@ -285,6 +287,7 @@ def _fields(u) -> list:
 
 def _tasks():
     tasks = [Task(n, (parse_text(t, n),)) for n, t in TEXTS if n.startswith(tuple(VARIANTS))]
+    tasks.append(Task("offs.mod", (parse_text(_offs_text(), "offs.mod"),)))
     tasks += [Task(p.name, (parse_file(p, p.name),)) for p in FIXTURES if "tasks" not in p.parts
               and p.suffix in (".mod", ".sys")]
     from rapidcomp.compensate.load import load_task
@@ -346,7 +349,12 @@ OFFS = r"""MODULE M
       MoveL Offs(p1,0,0,1),v100,z1,tSpindle\WObj:=wPart;
     ENDFOR
     pv := Offs(p1, 1, 1, 1);
+    MoveL Shifted(p1, 5),v100,z1,tSpindle\WObj:=wPart;
   ENDPROC
+  FUNC robtarget Shifted(robtarget p, num d)
+    MoveL p1,v100,fine,tSpindle\WObj:=wPart;
+    RETURN Offs(p, 0, 0, d);
+  ENDFUNC
 ENDMODULE
 """
 
@@ -378,15 +386,7 @@ def test_offs_moves_resolve_as_resolve_does(monkeypatch):
     monkeypatch.setattr(T.Resolver, "_plain_moves", lambda self: False)
     slow = Plan(task)
     monkeypatch.undo()
-    at = [f.name for f in dataclasses.fields(T.TargetUse)].index("source")
-
-    def fields(u):
-        # (An inline target's record is decoded by each resolver: by value.)
-        out = _fields(u)
-        if u.source is not None and type(u.source.ref) is A.NumAgg:
-            out[at][0] = u.source.record.values
-        return out
-    assert [fields(u) for u in fast.uses] == [fields(u) for u in slow.uses]
+    assert [_fields(u) for u in fast.uses] == [_fields(u) for u in slow.uses]
     assert fast.notes() == slow.notes()
     # (1e1: a number the one-token form does not take; the parser's Num
     # all the same.)
@@ -443,7 +443,9 @@ def _not_plain(node):
     if type(node) is tuple:
         return tuple(_not_plain(x) for x in node)
     if type(node) is A.ProcCall:
-        return dataclasses.replace(node, plain=False)
+        # (Its arguments as nodes: a call lexed as one token, A.TailArgs,
+        # read as any other.)
+        return dataclasses.replace(node, plain=False, args=_not_plain(tuple(node.args)))
     if dataclasses.is_dataclass(node) and not isinstance(node, type) and type(node) is not A.NumAgg:
         changes = {f.name: _not_plain(getattr(node, f.name)) for f in dataclasses.fields(node)
                    if type(getattr(node, f.name)) is tuple or dataclasses.is_dataclass(

@@ -1002,8 +1002,13 @@ def _plain_calls(args) -> tuple | None:
     or Offs-relative CAM program's every move), in the order the general
     walk finds them (last argument first); None for any other argument."""
     out: dict = {}
-    for arg in reversed(args):
-        v = arg.value
+    if type(args) is A.TailArgs:
+        # (A move lexed as one token: after its first argument only names,
+        # numbers and \Opt, no call; those not made from their text.)
+        args = (args.first,)
+    else:
+        args = [arg.value for arg in args]
+    for v in reversed(args):
         t = type(v)
         if t is A.Call:
             if not plain_args(v.args):

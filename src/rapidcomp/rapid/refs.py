@@ -48,7 +48,9 @@ class Usage:
 def nodes(root, plain_calls: bool = False):
     """Every syntax node below root (numeric aggregates hold no names);
     plain_calls: a plain ProcCall (names and literals only) without the
-    nodes below it (the caller reads its arguments)."""
+    nodes below it, and a call lexed as one token whose first argument is
+    a call (Offs) with only that argument's nodes below it (the caller
+    reads the other arguments)."""
     stack: list = [root]
     while stack:
         node = stack.pop()
@@ -78,7 +80,14 @@ def nodes(root, plain_calls: bool = False):
             # (Their one field that holds nodes: Offs(p, 0, 0, 10) in every
             # move of a hand-written or Offs-relative program.)
             yield node
-            stack.append(node.args)
+            args = node.args
+            if plain_calls and type(args) is A.TailArgs:
+                # (A move lexed as one token, its first argument a call:
+                # the caller reads the references after it (A.TailArgs'
+                # text has them, no node made), the walk goes on into it.)
+                stack.append(args.first)
+            else:
+                stack.append(args)
         elif t is A.Num:
             yield node
         elif not (t is A.NumAgg or node is None or t in (str, int, float, bool)):
@@ -127,13 +136,7 @@ def usage(module: A.ModuleNode) -> Usage:
                 # its text has them, A.TailArgs, no node made.)
                 args = node.args
                 if type(args) is A.TailArgs:
-                    at = args.at
-                    for name, start in args.tail.names:
-                        # (_starts written out: 4e5 references of a CAM program.)
-                        starts = refs.get(name)
-                        if starts is None:
-                            starts = refs[name] = array("q")
-                        starts.append(at + start)
+                    _tail_refs(refs, args)
                     if type(args.first) is A.Ref:
                         _referred(refs, args.first)
                     args = ()
@@ -141,6 +144,10 @@ def usage(module: A.ModuleNode) -> Usage:
                     v = arg.value
                     if type(v) is A.Ref:
                         _referred(refs, v)
+            elif type(node.args) is A.TailArgs:
+                # (MoveL Offs(p, 0, 0, 10),v100,...: those after its first
+                # here, the walk then goes into the call, nodes().)
+                _tail_refs(refs, node.args)
             spec = motion_spec(node.name)
             if spec is None:
                 calls.append(node)
@@ -149,6 +156,18 @@ def usage(module: A.ModuleNode) -> Usage:
         elif t is A.LateCall or t is A.Call:
             calls.append(node)
     return Usage(refs, writes, tuple(calls), assigns, parts)
+
+
+def _tail_refs(refs: dict, args: A.TailArgs) -> None:
+    """The references after a one-token call's first argument, from its
+    shared tail's names (last first, as the general walk finds them)."""
+    at = args.at
+    for name, start in args.tail.names:
+        # (_starts written out: 4e5 references of a CAM program.)
+        starts = refs.get(name)
+        if starts is None:
+            starts = refs[name] = array("q")
+        starts.append(at + start)
 
 
 def _referred(refs: dict, ref: A.Ref) -> None:
