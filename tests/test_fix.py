@@ -431,6 +431,39 @@ def test_a_module_declaring_the_controllers_own_tool0_or_wobj0(case, tmp_path):
         assert f"MoveL [[{want}" in out.read_text()
 
 
+@pytest.mark.parametrize("first", ["builtin", "local"])
+def test_the_moveabsj_note_names_a_modules_own_tool0_not_the_controllers(first, tmp_path):
+    """Moves turned into MoveAbsJ go to joints computed with their tool and
+    work object: the note names the data a later change would leave behind.
+    The controller's own tool0 (the identity, nothing changes it) is not
+    named; a module's LOCAL tool0, data like any other, is, even where a
+    module before it moves with the controller's by the same text."""
+    target = ("[[400,300,250],[0.707107,0,0.707107,0],[0,0,-1,1],"
+              "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")
+    folder = tmp_path / "task"
+    folder.mkdir()
+    names = {"builtin": "A_Plain" if first == "builtin" else "B_Plain",
+             "local": "A_Own" if first == "local" else "B_Own"}
+    decl = {"builtin": "", "local": f"  LOCAL PERS tooldata tool0:={_TOOL150};\n"}
+    for kind, name in names.items():
+        (folder / f"{name}.mod").write_text(
+            f"MODULE {name}\n{decl[kind]}  PROC {name}_p()\n"
+            "    MoveAbsJ [[0,0,0,0,30,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v100,fine,"
+            f"tool0;\n    MoveL {target},v100,fine,tool0;\n  ENDPROC\nENDMODULE\n")
+    r = _run(["fix", str(folder), "--profile", WARM, "--emit", "absj", "-o",
+              str(tmp_path / "out")])
+    assert r.exit_code == 0, r.output
+    assert "4 of 4 target uses compensated" in r.output, r.output
+    assert "the moves turned into MoveAbsJ go to joints computed with tool0 as the modules " \
+        "declare them" in r.output, r.output
+    # The controller's own alone: no such note.
+    (folder / f"{names['local']}.mod").unlink()
+    r = _run(["fix", str(folder), "--profile", WARM, "--emit", "absj", "-o",
+              str(tmp_path / "out2")])
+    assert r.exit_code == 0, r.output
+    assert "2 of 2 target uses compensated" in r.output and "computed with" not in r.output
+
+
 LOOP_MODES = """MODULE A60
   PERS tooldata tSp:=[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];
   CONST robtarget arr{3}:=[[[503.758,351.759,678.631],[0.852930,-0.401623,0.332113,-0.030167],[0,-1,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],[[565.609,262.245,695.010],[0.665331,-0.057324,0.302898,0.679927],[0,-1,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],[[423.478,-388.744,940.242],[0.793380,0.316255,0.204394,-0.478282],[-1,0,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]];

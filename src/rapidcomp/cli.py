@@ -408,6 +408,7 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
 
     from .compensate.job import JobSpec, default_output
     from .rapid.task import tasks_of
+    from .source import not_a_file
     several = len(programs) > 1
     if several and output is None:
         raise RapidcompError("several programs need -o DIR")
@@ -417,9 +418,11 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
     if no_report and report:
         raise RapidcompError("--no-report and --report: give one of them")
     for p in [profile] + list(with_modules):
+        # (Before any work: a pipe would be waited on, a missing file found
+        # only when its job reads it.)
+        not_a_file(p)
         if not os.path.isfile(p):
-            raise RapidcompError(f"{p}: " + ("not a regular file (a pipe or a device: give the "
-                                             "file itself)" if os.path.exists(p)
+            raise RapidcompError(f"{p}: " + ("a folder, not a file" if os.path.isdir(p)
                                              else "no such file"))
     groups = [(program, tasks_of(program, tuple(tasks))) for program in programs]
     n_tasks = sum(len(ts) for _, ts in groups)

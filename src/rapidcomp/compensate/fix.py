@@ -38,6 +38,7 @@ from .plan import Plan, Task, line_ranges
 from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, Rows, summary, use_rows
 from .solve import Solving, nominal_ahead
 from .takeback import take_back
+from .targets import IDENTITY_POSE
 from .verify import (VERIFY_DEG, VERIFY_UM, relex, relex_absj, relex_copies, relex_transient,
                      reparse, verify, verify_states, verify_states_relexed)
 
@@ -428,11 +429,14 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
     for g, u in P.uses_in_order(gs):
         if g.mode == "absj" and g.failure is None and u.kind == "robtarget":
             m = u.motion
-            if type(m.args) is not A.TailArgs or (m.roles, m.args.tail) not in tails:
+            # (The controller's own tool0 and wobj0, which nothing changes,
+            # are not named; a module's own data of that name is.)
+            builtin = (u.tool[1] is IDENTITY_POSE, u.wobj[1] is IDENTITY_POSE)
+            if type(m.args) is not A.TailArgs or (m.roles, m.args.tail, builtin) not in tails:
                 if type(m.args) is A.TailArgs:
-                    tails.add((m.roles, m.args.tail))
-                for ref in (m.tool, m.wobj):
-                    if type(ref) is A.Ref and ref.name.lower() not in ("tool0", "wobj0"):
+                    tails.add((m.roles, m.args.tail, builtin))
+                for ref, controllers in zip((m.tool, m.wobj), builtin):
+                    if type(ref) is A.Ref and not controllers:
                         frames.setdefault(ref.name.lower(), ref.name)
             assigned = assigned or any("@" in x[0] for x in (u.tool, u.wobj) if x)
     if frames:
