@@ -366,12 +366,13 @@ def _offs_text(**changes) -> str:
 
 
 def test_offs_moves_resolve_as_resolve_does(monkeypatch):
-    """A move to Offs(<declared robtarget>, <numbers>) (an Offs-relative
+    """A move to Offs/RelTool(<target>, <numbers>) (an Offs-relative
     pattern's 1e5 moves) is a plain move: the same use, field for field,
-    its flange pose bit for bit, and the same notes as resolve() gives;
-    every other Offs/RelTool (of an array element, of data the program
-    writes, a rotation, an inline target, a run-time number, a jointtarget,
-    an undeclared name or tool, inside a FOR loop) is resolve()'s own."""
+    its flange pose bit for bit, and the same notes as resolve() gives (of
+    a declared name, an array element, an inline target, with a rotation);
+    one that resolve() does not compensate (of data the program writes, a
+    run-time number, a jointtarget, an undeclared name or tool, inside a
+    FOR loop, a function of the program) is resolve()'s own."""
     taken = []
     real = T.Resolver._plain_use
 
@@ -391,8 +392,9 @@ def test_offs_moves_resolve_as_resolve_does(monkeypatch):
     # (1e1: a number the one-token form does not take; the parser's Num
     # all the same.)
     assert [t.split(",")[0] for t in taken] == [
-        "MoveL Offs(p1", "MoveL Offs(p1", "moveL offs(P1", "MoveJ Offs(p1", "MoveL Offs(p1"]
-    assert "1e1" in taken[-1]
+        "MoveL Offs(p1", "MoveL Offs(p1", "moveL offs(P1", "MoveJ Offs(p1", "MoveL Offs(arr{2}",
+        "MoveL RelTool(p1", "MoveL RelTool(p1", "MoveL Offs([[650.922", "MoveL Offs(p1"]
+    assert "\\Rz:=10" in taken[5] and "1e1" in taken[-1]
     reasons = {u.label: u.reason for u in slow.uses if u.reason}
     assert any("not literal numbers" in r for r in reasons.values())
 

@@ -1975,9 +1975,9 @@ class Resolver:
 
     def _plain_use(self, pf, module, motion, line: int, index) -> TargetUse | None:
         """resolve()'s one use of a plain move (see resolve_all; its target
-        may be Offs of a declared name by literal numbers), or None when the
-        move is not one (resolve() then says what it is): the same source,
-        checks, notes and use, made directly."""
+        may be an Offs/RelTool), or None when the move is not one (resolve()
+        then says what it is): the same source, checks, notes and use, made
+        directly."""
         targets = motion.targets
         if len(targets) != 1 or motion.loops:
             return None
@@ -1994,36 +1994,31 @@ class Resolver:
                           None)
             label = "inline"
         else:
-            expr = ref = t.expr
-            call = None
+            expr = t.expr
+            if t.issue:
+                return None
             if type(expr) is A.Call:
-                # Offs(<name>, <number>, <number>, <number>) (a CAM program's
-                # pattern path: 1e5 of them), as _offset reads it.
-                args = expr.args
-                if (expr.name.lower() != "offs" or len(args) != 4
-                        or any(a.kind != "pos" for a in args)
-                        or any(type(a.value) is not A.Num for a in args[1:])):
+                # Offs/RelTool(<target>, <numbers>...) (a CAM program's
+                # pattern path: 1e5 of them), as resolve() reads it
+                # (_offset); anything else it is not is resolve()'s to say.
+                if expr.name.lower() not in ("offs", "reltool"):
                     return None
-                call, ref = expr, args[0].value
-            if t.issue or type(ref) is not A.Ref or ref.selectors:
-                return None
-            d = self.lookup(ref.name, module, motion.routine)
-            if type(d) is not Declaration or type(d.value) is not RobTarget \
-                    or d.type != "robtarget" or self._written(d):
-                return None
-            key = id(d)
-            if call is None:
+                src = self._offset(pf, expr, module, motion.routine, {})
+                if type(src) is Unresolved:
+                    return None
+                label = pf.text(expr)
+            else:
+                if type(expr) is not A.Ref or expr.selectors:
+                    return None
+                d = self.lookup(expr.name, module, motion.routine)
+                if type(d) is not Declaration or type(d.value) is not RobTarget \
+                        or d.type != "robtarget" or self._written(d):
+                    return None
+                key = id(d)
                 src = _source(d.value, d, self.home[key], None, False, expr, expr, None, None,
                               None, self.home_module[key])
                 # (A plain name is its text: the Ref's own string, not a copy per use.)
                 label = expr.name
-            else:
-                pos = [a.value for a in args[1:]]
-                shift = np.array(self._position([v.value for v in pos], pos[0].span.start, pf,
-                                                "the Offs displacement"))
-                src = _source(d.value, d, self.home[key], None, False, ref, call, call,
-                              NO_ROTATION, shift, self.home_module[key])
-                label = pf.text(expr)
         tool, wobj = self._tool_wobj(motion, module)
         if type(tool) is Unresolved or type(wobj) is Unresolved:
             return None
