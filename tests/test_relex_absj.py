@@ -248,3 +248,56 @@ def test_joint_rows_are_the_decoders_joints():
         assert got.dtype == np.float64
     assert served > 150 and declined > 40
     assert V._joint_rows([]) is None
+
+
+def _data_and_main(n: int, local: str = "", array: bool = False) -> Task:
+    """A task of two modules as a cell writes it: the targets (and the tool
+    and work object) in a data module, the moves in another."""
+    from cam_variants import HEAD, TAIL, robtarget, targets
+    lits = [robtarget(t) for t in targets(n, 11)]
+    if array:
+        decls = [f"  {local}CONST robtarget path{{{n}}}:=[", *(f"    {x}," for x in lits[:-1]),
+                 f"    {lits[-1]}];"]
+        moves = [f"    FOR i FROM 1 TO {n} DO", f"      MoveL path{{i}}{TAIL}", "    ENDFOR"]
+    else:
+        decls = [f"  {local}CONST robtarget p{k}:={x};" for k, x in enumerate(lits)]
+        moves = [f"    MoveL p{k}{TAIL}" for k in range(n)]
+    data = "\n".join(["MODULE PathData", *HEAD, *decls, "ENDMODULE", ""])
+    main = "\n".join(["MODULE PathMain", "  PROC main()", *moves, "  ENDPROC", "ENDMODULE", ""])
+    return Task("PathMain.mod", (parse_text(main, "PathMain.mod"),
+                                 parse_text(data, "PathData.mod")))
+
+
+@pytest.mark.parametrize("array", [False, True])
+def test_targets_in_a_data_module_are_read_again(monkeypatch, solver, array):
+    # The new jointtargets go next to the targets, in the data module, not
+    # LOCAL (another module's moves read them): read again there, as
+    # parsing the output again gives.
+    task = _data_and_main(40, array=array)
+    read, parsed, served = _fix_both(monkeypatch, task, solver, "absj")
+    _same(read, parsed)
+    assert served == [40]
+    main, data = read.modules[0].text, read.modules[1].text
+    assert main.count("MoveAbsJ jt_p") == (1 if array else 40)
+    assert ("CONST jointtarget jt_path{40}:=" if array else "CONST jointtarget jt_p39:=") in data
+    assert "LOCAL CONST jointtarget" not in data
+
+
+@pytest.mark.parametrize("array", [False, True])
+def test_a_data_modules_new_target_made_local_is_not_taken(solver, array):
+    # Were it LOCAL, the other module's moves would not see it.
+    plan, editor, edits, texts = _converted(solver, _data_and_main(6, array=array))
+    assert V.relex_absj(plan, editor.converted, edits, texts) is not None
+    text = texts[1]
+    new = "CONST jointtarget jt_path{6}" if array else "CONST jointtarget jt_p3:"
+    assert new in text
+    bad = dict(texts)
+    bad[1] = text.replace(new, "LOCAL " + new, 1)
+    moved = dict(edits)
+    k = next(i for i, e in enumerate(edits[1]) if e.start == e.end and new in e.replacement)
+    e = edits[1][k]
+    at = e.replacement.index(new)
+    moved[1] = edits[1][:k] + [e._replace(replacement=e.replacement[:at] + "LOCAL "
+                                          + e.replacement[at:])] + edits[1][k + 1:]
+    assert apply_edits(plan.files[1].source.text, moved[1]) == bad[1]
+    assert V.relex_absj(plan, editor.converted, moved, bad) is None

@@ -125,6 +125,27 @@ def test_failures_alike_but_for_their_numbers():
                                         "[lines 200-202]"]
 
 
+def test_failures_alike_but_for_their_own_targets_name():
+    # Each move's own target named in its reason (p0 is not declared ...,
+    # 1e5 of them where a data module is missing): one line past ALIKE; a
+    # reason naming another name than the row's target (each its own tool)
+    # is not folded with them.
+    def named(line, target, reason):
+        return UseRow("m.mod", line, "MoveL", target, "not compensated", None, None, None, None,
+                      None, None, None, None, None, None, None, (), reason)
+    own = [named(10 + k, f"p{k}", f"p{k} is declared LOCAL in another module (d.mod:{k + 3})")
+           for k in range(report.ALIKE + 1)]
+    tools = [named(40 + k, f"q{k}", f"tool t{k} is not declared") for k in range(3)]
+    lines = report.failure_lines(own + tools, several=False)
+    assert lines[0] == (f"not compensated ({report.ALIKE + 1} alike, each with target and "
+                        "numbers of its own; as line 10): p0 is declared LOCAL in another module "
+                        "(d.mod:3) [lines 10-20]")
+    assert lines[1:] == [f"not compensated: line {40 + k} MoveL q{k}: tool t{k} is not declared"
+                         for k in range(3)]
+    # (Up to ALIKE of them: each its own line, as before.)
+    assert len(report.failure_lines(own[:report.ALIKE], several=False)) == report.ALIKE
+
+
 def test_failures_alike_keep_their_names_apart():
     # A joint's name (J1, J5) and a target's (pS21) are names, not numbers:
     # failures of J1 and of J5 are not one line (found by a review).

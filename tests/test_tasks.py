@@ -445,3 +445,34 @@ def test_a_task_folder_holding_fix_output_says_so(tmp_path):
     r = run("check", glue, "--profile", WARM)
     assert r.exit_code == 2 and "give the program file (.pgf) or a folder without the copy\n" \
         in r.output.replace("\r", ""), r.output
+
+
+def test_a_target_local_to_another_module_is_said_so(tmp_path):
+    """A move naming a target another module of the task declares LOCAL:
+    the controller does not load such a task (its module does not see the
+    name); said so, with where it is declared, not that a module is
+    missing. 12 such moves: one line in the summary. A name no module
+    declares still asks for the rest of the task."""
+    target = ("[[400,300,250],[0.707107,0,0.707107,0],[0,0,-1,1],"
+              "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")
+    folder = tmp_path / "cell"
+    folder.mkdir()
+    (folder / "Data.mod").write_text(
+        "MODULE Data\n" + "".join(f"  LOCAL CONST robtarget p{k}:={target};\n" for k in range(12))
+        + "ENDMODULE\n")
+    (folder / "Main.mod").write_text(
+        "MODULE Main\n  PROC main()\n" + "".join(f"    MoveL p{k},v100,fine,tool0;\n"
+                                                 for k in range(12))
+        + "    MoveL q9,v100,fine,tool0;\n  ENDPROC\nENDMODULE\n")
+    r = CliRunner().invoke(main, ["fix", str(folder), "--profile", str(FIXTURES / "warm.csv"),
+                                  "-o", str(tmp_path / "out")])
+    assert r.exit_code == 1, r.output
+    lines = [line.strip() for line in r.output.splitlines() if "not compensated" in line]
+    assert lines[1] == (
+        "not compensated (12 alike, each with target and numbers of its own; as Main.mod:3): "
+        "p0 is declared LOCAL in another module (Data.mod:2), which alone sees it: the "
+        "controller does not load this task (a reference error) [Main.mod lines 3-14]")
+    assert lines[2] == ("not compensated: Main.mod:15 MoveL q9: q9 is not declared in the given "
+                        "modules (give the whole task: its folder, program file or backup, or "
+                        "the declaring module with --with)")
+    assert not (tmp_path / "out").exists()

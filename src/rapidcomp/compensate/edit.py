@@ -485,8 +485,9 @@ class Editor:
         self.field_lists: list[tuple[int, list[SpanEdit]]] = []
         # Moves turned into MoveAbsJ on a jointtarget of their own, inline
         # or newly declared: use key -> (the use, that literal, the new
-        # declaration's name or None, the instruction's name as written; an
-        # element of a new array: None, its reference as written, ...);
+        # declaration's name or None, the instruction's name as written, the
+        # file declaring it or None; an element of a new array: None, its
+        # reference as written, ...);
         # the output is checked on them by reading those statements again
         # (verify.relex_absj). others: some structural edit is of another
         # kind (the output is parsed again).
@@ -691,7 +692,7 @@ class Editor:
             for u in g.uses:
                 literal = vals.literal(g, None)
                 called = self._to_absj(u, literal)
-                self.converted[u.key] = (u, literal, None, called)
+                self.converted[u.key] = (u, literal, None, called, None)
                 self.actions[u.key] = self._said(
                     f"{u.motion.instruction} -> MoveAbsJ, inline jointtarget")
             return
@@ -727,7 +728,7 @@ class Editor:
             if g.mode == "absj":
                 called = self._to_absj(u, new_ref)
                 self.converted[u.key] = (u, None if g.array else literals[src.element],
-                                         new_ref, called)
+                                         new_ref, called, g.home[0])
                 self.actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {new_ref}"
             elif not g.array and _plain_ref(src.ref):
                 self._edit_at(u.key[0], src.ref.span.start, src.ref.span.end, new_ref,
@@ -763,7 +764,7 @@ class Editor:
             for n, u in enumerate(s.uses):
                 literal = vals.literal(s, n)
                 called = self._to_absj(u, literal)
-                self.converted[u.key] = (u, literal, None, called)
+                self.converted[u.key] = (u, literal, None, called, None)
                 actions[u.key] = self._said(
                     f"{u.motion.instruction} -> MoveAbsJ, inline jointtarget")
             return

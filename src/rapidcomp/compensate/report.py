@@ -89,11 +89,12 @@ def failure_lines(rows: list[UseRow], several: bool, label: str = "not compensat
     alike: dict[str, list[UseRow]] = {}
     for reason, rs in by_reason.items():
         if len(rs) <= 2:
-            alike.setdefault(_NUMBERS.sub("#", reason or ""), []).extend(rs)
+            alike.setdefault(_alike(reason, rs[0].target), []).extend(rs)
     out = []
     for reason, rs in by_reason.items():
         if len(rs) <= 2:
-            group = alike.get(_NUMBERS.sub("#", reason or ""))
+            key = _alike(reason, rs[0].target)
+            group = alike.get(key)
             if group is None:
                 continue                              # (said with its first)
             if len(group) <= ALIKE:
@@ -101,10 +102,12 @@ def failure_lines(rows: list[UseRow], several: bool, label: str = "not compensat
                     where = f"{r.file}:{r.line}" if several else f"line {r.line}"
                     out.append(f"{label}: {where} {r.instruction} {r.target}: {reason}")
                 continue
-            del alike[_NUMBERS.sub("#", reason or "")]
+            del alike[key]
             first = group[0]
             at = f"{first.file}:{first.line}" if several else f"line {first.line}"
-            out.append(f"{label} ({len(group)} alike, each with numbers of its own; as {at}): "
+            own = ("numbers" if len({_NUMBERS.sub("#", r.reason or "") for r in group}) == 1
+                   else "target and numbers")
+            out.append(f"{label} ({len(group)} alike, each with {own} of its own; as {at}): "
                        f"{first.reason} [{_places(group, several)}]")
             continue
         out.append(f"{label} ({len(rs)}): {reason} [{_places(rs, several)}]")
@@ -127,6 +130,19 @@ def _places(rs: list[UseRow], several: bool) -> str:
 # A reason's numbers (a joint's value, a line): reasons alike but for them
 # are said in one line. (Not digits of a word: J1 and J5, pS21 are names.)
 _NUMBERS = re.compile(r"(?<![A-Za-z_\d.])[+-]?\d+(?:\.\d+)?(?![A-Za-z_\d])")
+
+
+def _alike(reason: str | None, target: str) -> str:
+    """What reasons alike but for their numbers, and the name of their own
+    target (p0 is not declared ..., p1 is not declared ...), share."""
+    reason = reason or ""
+    if _NAME.fullmatch(target):
+        reason = re.sub(r"(?<![\w.])" + re.escape(target) + r"(?![\w])", "<target>", reason)
+    return _NUMBERS.sub("#", reason)
+
+
+# A target written as a plain name (p10, pPath_3).
+_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 
 
 def _cell(text: str) -> str:

@@ -742,6 +742,7 @@ class Resolver:
         self.usages: dict[int, object] = {}   # id(Module) -> refs.Usage
         self._notes: list[str] = []             # of the use being resolved
         self._guarded: set = set()              # FOR variables of the use behind a condition
+        self._hidden: dict | None = None        # LOCAL module data by name (_not_declared)
         self._consts: list = []                 # CONST nums being evaluated (integer())
         # A use's confdata and external axes as one tuple per distinct value
         # (a CAM program's 1e5 uses have a few: ~15 MB).
@@ -870,6 +871,27 @@ class Resolver:
             return d
         return valued[0]
 
+    def _not_declared(self, name: str, what: str = "") -> Unresolved:
+        """Why no declaration a move sees gives `name` a meaning: another
+        module's LOCAL one, which its own module alone sees (the controller
+        does not load such a task: a reference error); else no given module
+        declares it (the rest of the task is missing)."""
+        if self._hidden is None:
+            # (Once: the LOCAL module data of every module, by name.)
+            self._hidden = {}
+            for (_, key), d in self.module_decls.items():
+                if d.scope == "LOCAL":
+                    self._hidden.setdefault(key, []).append(d)
+        hidden = self._hidden.get(name.lower())
+        if hidden:
+            where = ", ".join(f"{self.home[id(d)].source.display_path}:"
+                              f"{self.home[id(d)].line(d.span)}" for d in hidden)
+            return Unresolved(f"{what}{name} is declared LOCAL in another module ({where}), "
+                              "which alone sees it: the controller does not load this task (a "
+                              "reference error)", True)
+        return Unresolved(f"{what}{name} is not declared in the given modules ({MISSING_HINT})",
+                          True)
+
     # ------------------------------------------------------------ tool / wobj
     def _builtin(self, d, expr, cls, what: str):
         """None: the controller's own tool0 or wobj0 (the identity, which its
@@ -911,8 +933,7 @@ class Resolver:
         if isinstance(d, Unresolved):
             return d
         if d is None:
-            return Unresolved(f"{what} {expr.name} is not declared in the given modules "
-                              f"({MISSING_HINT})", True)
+            return self._not_declared(expr.name, f"{what} ")
         if expr.selectors:
             return self._element(expr, d, module, routine, cls, what, site)
         if not isinstance(d.value, cls):
@@ -1643,8 +1664,7 @@ class Resolver:
             if isinstance(d, Unresolved):
                 return d
             if d is None:
-                return Unresolved(f"{expr.name} is not declared in the given modules "
-                                  f"({MISSING_HINT})", True)
+                return self._not_declared(expr.name)
             if d.type not in types:
                 inner = self._component_type(d.type, expr.selectors)
                 if inner in types:

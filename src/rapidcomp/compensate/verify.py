@@ -162,14 +162,17 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                texts: dict[int, str], copies: bool = False) -> "Converted | None":
     """When every structural edit turns a move into MoveAbsJ on a jointtarget
     of its own (Editor.converted: use key -> (use, that literal, the new
-    declaration's name or None, the instruction's name as written)), each
+    declaration's name or None, the instruction's name as written, the
+    file it is declared in or None)), each
     such statement and each new declaration is read again where the output
     holds it. The statement must be the input's with its instruction's name
     and its target replaced by those meant, character for character (so a
     statement of the grammar as the input's is: a name for a name, an
     aggregate for an aggregate); each new declaration one one-line
     declaration (FAST_DECL) built as the parser builds it, a CONST
-    jointtarget, in the move's routine or else its module, of the literal
+    jointtarget the move sees (in the move's routine or else its module,
+    or, from another module, a module's declaration not LOCAL: a task's
+    data module holding the targets of another's moves), of the literal
     meant; a move on an element of a new array (that literal None, the
     name its reference, subscripts and all), that array's declaration read
     again (_array_decl). Returns use key -> its joints as the controller stores them
@@ -181,19 +184,27 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
     by_file: dict = {}
     for key in converted:
         by_file.setdefault(key[0], []).append(key)
+    # The new declarations of each file the moves are in or a move's new
+    # jointtarget is declared in (a task's data module): read once each.
+    homes: dict = {}
+    for fi in sorted(set(by_file) | {it[4] for it in converted.values() if it[4] is not None}):
+        es, shift = _shifts(file_edits.get(fi, []))
+        kinds: list | None = [] if copies else None
+        wide: set = set()
+        arrays: dict = {}
+        declared = _declared(eng, build, es, shift, texts[fi], plan.files[fi],
+                             COPY_TYPES if copies else ("jointtarget",), kinds=kinds,
+                             wide=wide, arrays=arrays)
+        if declared is None:
+            return None
+        names, scopes, aggs, declared_joints = declared
+        homes[fi] = (names, np.frombuffer(scopes, np.int64), np.frombuffer(aggs, np.int64),
+                     declared_joints, kinds, wide, arrays)
     keys: list = []
     rows: list = []
     for fi, file_keys in by_file.items():
         es, shift = _shifts(file_edits.get(fi, []))
         text, src = texts[fi], plan.files[fi].source.text
-        kinds: list | None = [] if copies else None
-        arrays: dict = {}
-        declared = _declared(eng, build, es, shift, text, plan.files[fi],
-                             COPY_TYPES if copies else ("jointtarget",), kinds=kinds,
-                             arrays=arrays)
-        if declared is None:
-            return None
-        names, scopes, aggs, declared_joints = declared
         # (Each move's joints a row of one array, not a tuple of floats; the
         # moves' offsets a block at a time, not 1e5 pairs of ints at once.)
         records = np.empty((len(file_keys), 6))
@@ -213,52 +224,58 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
             if [text[at:to] for at, to in moved.tolist()] != [
                     called + src[m.span.start + len(m.instruction):e.start] + (name or literal)
                     + src[e.end:b]
-                    for (_, literal, name, called), m, e, b in zip(
+                    for (_, literal, name, called, _), m, e, b in zip(
                         items, motions, exprs, spans[:, 1].tolist())]:
                 return None
-            # Each new declaration a move names: in the move's scope, of the
-            # literal meant (an inline literal is checked below, with its
-            # block); each move's row of declared_joints, where its literal
-            # is a declaration's read already (the same text: the same joints).
-            ks = [-1] * len(items)
+            # Each new declaration a move names: where the move sees it (in
+            # the move's routine or else its module; from another module, a
+            # module's declaration not LOCAL), of the literal meant (an
+            # inline literal is checked below, with its block); the move's
+            # joints the declaration's as read already, where its literal is
+            # read so (the same text: the same joints), else decoded below.
+            todo = [True] * len(items)
             # A move on an element of a new array (no literal of its own):
-            # that element's row, the array in the move's scope and of the
-            # input array's dimensions (the statement's subscripts are the
-            # input's: the same element).
-            arrayed = [n for n, it in enumerate(items) if it[1] is None]
-            for n in arrayed:
-                u = items[n][0]
-                got = arrays.get(items[n][2].partition("{")[0].lower())
+            # that element's row, the array where the move sees it and of
+            # the input array's dimensions (the statement's subscripts are
+            # the input's: the same element).
+            for n, it in enumerate(items):
+                if it[1] is not None:
+                    continue
+                u, home = it[0], it[4]
+                got = homes[home][6].get(it[2].partition("{")[0].lower())
                 if got is None:
                     return None
-                (a, b), dims, joints = got
-                if not (a <= spans[n, 0] and spans[n, 1] <= b and dims == u.source.decl.dims):
+                (a, b), dims, joints, seen_wide = got
+                seen = a <= spans[n, 0] and spans[n, 1] <= b if home == fi else seen_wide
+                if not (seen and dims == u.source.decl.dims):
                     return None
                 records[first + n] = joints[u.source.element]
-                ks[n] = None             # (not one of the literals read below)
-            named = [n for n, it in enumerate(items) if it[2] is not None and it[1] is not None]
-            if named:
-                found = [names.get(items[n][2].lower()) for n in named]
+                todo[n] = False
+            named: dict = {}
+            for n, it in enumerate(items):
+                if it[2] is not None and it[1] is not None:
+                    named.setdefault(it[4], []).append(n)
+            for home, ns in named.items():
+                names, scope2, at2, declared_joints, kinds, wide, _ = homes[home]
+                found = [names.get(items[n][2].lower()) for n in ns]
                 if None in found or (kinds is not None
                                      and any(kinds[k] != "jointtarget" for k in found)):
                     return None
                 k2 = 2 * np.array(found, np.int64)
-                at2, scope2 = np.frombuffer(aggs, np.int64), np.frombuffer(scopes, np.int64)
                 x = at2[k2]
-                lits = [items[n][1] for n in named]
+                lits = [items[n][1] for n in ns]
                 size = np.fromiter(map(len, lits), np.int64, len(lits))
-                if not ((scope2[k2] <= spans[named, 0]) & (spans[named, 1] <= scope2[k2 + 1])
-                        & (at2[k2 + 1] - x == size)).all():
+                seen = (((scope2[k2] <= spans[ns, 0]) & (spans[ns, 1] <= scope2[k2 + 1]))
+                        if home == fi else np.array([k in wide for k in found], bool))
+                if not (seen & (at2[k2 + 1] - x == size)).all():
                     return None
-                if not all(map(text.startswith, lits, x.tolist())):
+                if not all(map(texts[home].startswith, lits, x.tolist())):
                     return None
                 if declared_joints is not None:
-                    for n, k in zip(named, found):
-                        ks[n] = k
-            known = [n for n, k in enumerate(ks) if k is not None and k >= 0]
-            if known:
-                records[[first + n for n in known]] = declared_joints[[ks[n] for n in known]]
-            own = [n for n, k in enumerate(ks) if k is not None and k < 0]
+                    records[[first + n for n in ns]] = declared_joints[found]
+                    for n in ns:
+                        todo[n] = False
+            own = [n for n, t in enumerate(todo) if t]
             blocks.append((first, items, own, [items[n][1] for n in own]))
         # Each block's other literals, each the text of an aggregate of
         # numbers where the output holds it: decoded as the parser decodes
@@ -813,7 +830,8 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     kinds, each one's type (lower case), at k. arrays, when given, receives
     each new array of jointtargets (_array_decl): lower-case name -> (the
     (start, end) in the input of its scope, its dimensions, the joints of
-    its elements as rows, row-major); without it such a text is not read.
+    its elements as rows, row-major, whether other modules see it); without
+    it such a text is not read.
     """
     out: dict = {}
     scopes, aggs = array("q"), array("q")
@@ -896,11 +914,12 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
                 got = _array_decl(toks, at) if arrays is not None else None
                 if got is None:
                     return None
-                at, name, dims, leaves = got
+                at, name, dims, leaves, local = got
                 # (A name declared twice among the new ones: parsed again.)
                 if name.lower() in arrays or name.lower() in out:
                     return None
-                arrays[name.lower()] = (scope, dims, leaves)
+                arrays[name.lower()] = (scope, dims, leaves,
+                                        not local and scope in modules)
         for storage, declared, name, x, y, local in decls:
             if not (storage == "CONST" and declared.lower() in types):
                 return None
@@ -915,25 +934,26 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
             scopes.extend(scope)
             aggs.extend((a + x, a + y))
     if arrays:
-        for name, (scope, dims, leaves) in arrays.items():
+        for name, (scope, dims, leaves, seen_wide) in arrays.items():
             rows = _jointtarget_rows(leaves)
             if rows is None:
                 return None
-            arrays[name] = (scope, dims, rows)
+            arrays[name] = (scope, dims, rows, seen_wide)
     return out, scopes, aggs, joints
 
 
-def _array_decl(toks: list, at: int) -> tuple[int, str, tuple, list[str]] | None:
+def _array_decl(toks: list, at: int) -> tuple[int, str, tuple, list[str], bool] | None:
     """A new array declaration as the editor writes it (Editor.declare of
     an array's jointtargets), read in the tokens of its text from toks[at]:
     [LOCAL] CONST jointtarget <name>{<d1>,...}:=<aggregate>; whose
     aggregate nests, to the dimensions' depth, aggregates of d1, d2, ...
     items, each innermost one an aggregate of numbers (NUMAGG). Returns
     (the index past its ';', its name, its dimensions, the texts of its
-    elements in row-major order), or None where the tokens are anything
-    else (the output is then parsed again)."""
+    elements in row-major order, whether it is LOCAL), or None where the
+    tokens are anything else (the output is then parsed again)."""
     types = [t.type for t in toks[at:at + 3]]
-    if types[:1] == ["LOCAL"]:
+    local = types[:1] == ["LOCAL"]
+    if local:
         at += 1
         types = [t.type for t in toks[at:at + 3]]
     if (types != ["CONST", "NAME", "NAME"] or toks[at + 1].value.lower() != "jointtarget"
@@ -959,7 +979,7 @@ def _array_decl(toks: list, at: int) -> tuple[int, str, tuple, list[str]] | None
     at = _nested(toks, at + 1, dims, leaves)
     if at is None or toks[at].type != "SEMI":
         return None
-    return at + 1, name, tuple(dims), leaves
+    return at + 1, name, tuple(dims), leaves, local
 
 
 def _nested(toks: list, at: int, dims: list[int], leaves: list[str]) -> int | None:
