@@ -556,3 +556,32 @@ def test_an_output_named_with_a_slash_is_a_folder(tmp_path, monkeypatch):
     (tmp_path / "file").write_text("")
     r = _run(["fix", "paper_front.mod", "--profile", str(FIXTURES / "warm.csv"), "-o", "file/"])
     assert r.exit_code == 2 and "-o file/: file is a file, not a folder" in r.output, r.output
+
+
+@pytest.mark.parametrize("storage", ["PERS", "CONST"])
+def test_a_move_kept_a_robtarget_move_under_absj_says_why(storage, tmp_path):
+    """--emit absj turns MoveL into MoveAbsJ, but for a move whose target is
+    PERS data (ModPos or another task may change it): kept, the row says
+    so, and a note counts such moves (found by a new user: they stayed
+    MoveL with no word why). A CONST target: turned, no such word."""
+    target = ("[[400,300,250],[0.707107,0,0.707107,0],[0,0,-1,1],"
+              "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")
+    prog, out = tmp_path / "pk.mod", tmp_path / "pk_out.mod"
+    prog.write_text(f"MODULE Pk\n  {storage} robtarget pA:={target};\n  PROC main()\n"
+                    "    MoveAbsJ [[0,0,0,0,30,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v100,"
+                    "fine,tool0;\n    MoveL pA,v100,fine,tool0;\n  ENDPROC\nENDMODULE\n")
+    r = _run(["fix", str(prog), "--profile", WARM, "--emit", "absj", "-o", str(out),
+              "--json", str(tmp_path / "pk.json")])
+    assert r.exit_code == 0, r.output
+    row = next(t for t in json.loads((tmp_path / "pk.json").read_text())["targets"]
+               if t["line"] == 5)
+    note = ("kept robtarget moves, not turned into MoveAbsJ: 1 move (pk.mod: lines 5); the "
+            "report's rows say why")
+    if storage == "PERS":
+        assert "MoveL pA,v100,fine,tool0;" in out.read_text()
+        assert "kept as MoveL: pA is PERS data (ModPos or another task may change it; a " \
+            "MoveAbsJ would not follow)" in row["warnings"], row
+        assert note in r.output, r.output
+    else:
+        assert "MoveAbsJ jt_pA,v100,fine,tool0;" in out.read_text()
+        assert not any("kept as" in w for w in row["warnings"]) and note not in r.output

@@ -416,6 +416,21 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
         where = "; ".join(f"{f}: lines {line_ranges(sorted(absj[f]))}" for f in sorted(absj))
         notes.append("MoveL -> MoveAbsJ gives up the straight-line path between points "
                      f"({where}); use --emit robtarget to keep MoveL linear.")
+    # Moves --emit would turn into MoveAbsJ that stay robtarget moves for
+    # what they are (PERS data, program displacement, an optional argument
+    # MoveAbsJ has not, ...): the output's MoveL are meant, each row says why.
+    kept: dict[str, set] = {}
+    for g in gs:
+        if g.why_kept and g.failure is None:
+            for u in g.uses:
+                if u.key in g.why_kept:
+                    kept.setdefault(u.file.source.display_path, set()).add(u.line)
+    if kept:
+        where = "; ".join(f"{f}: lines {line_ranges(sorted(kept[f]))}" for f in sorted(kept))
+        n = sum(len(v) for v in kept.values())
+        notes.append(f"kept robtarget moves, not turned into MoveAbsJ: {n} "
+                     f"move{'s' if n != 1 else ''} ({where}); the report's rows say why (PERS "
+                     "data, named external axes, an argument MoveAbsJ has not, ...)")
     # A move turned into MoveAbsJ goes to joints computed with its tool and
     # work object as declared; the robtarget move followed a change to them
     # (a TCP calibration, a user frame redefined on the FlexPendant).

@@ -71,6 +71,9 @@ class Group:
     # Uses kept robtarget moves because other iterations of their statement
     # must stay ones (_one_statement).
     kept: frozenset = frozenset()
+    # Use key -> why a move --emit would turn into MoveAbsJ stays a
+    # robtarget move (kept_robtarget), for the report to say.
+    why_kept: Mapping = field(default_factory=lambda: NONE)
     # Where its first use is among the uses grouping() walks: the groups'
     # order, which the editor keeps (new names and declarations are made in
     # it).
@@ -126,6 +129,7 @@ class Singles:
     array: bool = False
     decl: None = None
     kept: frozenset = frozenset()
+    why_kept: Mapping = field(default_factory=lambda: NONE)
 
     @property
     def elements(self) -> range:
@@ -218,21 +222,31 @@ def split_off(gs: list, s: Singles, ns, file_index: dict, placed: bool = False) 
     return out
 
 
-def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int) -> str:
+def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int,
+            why: dict | None = None) -> str:
     """absj: the use becomes a MoveAbsJ; rob: a robtarget is written; joint:
     a jointtarget of a MoveAbsJ is written. auto converts MoveJ only (a
     MoveL keeps its straight line), absj MoveJ and MoveL. A move that
     program displacement may shift, whose configuration the controller may
     choose otherwise than assumed, or whose target is PERS data (changed
     at run time by ModPos or another task) stays a robtarget move:
-    MoveAbsJ would fix all three."""
+    MoveAbsJ would fix all three. why, when given, receives use key -> why
+    a move the mode turns into MoveAbsJ is kept (but for a caution of its
+    pick or program displacement, which its row says anyway)."""
     if u.kind == "jointtarget":
         return "joint"
     m = u.motion
     name = m.spec.name.lower()
     # (row: the use's row in solved.)
-    if name in ABSJ_FROM[mode] and kept_robtarget(u, plan, solved, row) is None:
-        return "absj"
+    if name in ABSJ_FROM[mode]:
+        kept = kept_robtarget(u, plan, solved, row)
+        if kept is None:
+            return "absj"
+        if (why is not None and kept is not solved.picks.caution[row]
+                and not plan.may_be_displaced(u)):
+            # (A caution, or program displacement, is said with its row
+            # and its note already.)
+            why[u.key] = kept
     return "rob"
 
 
@@ -353,7 +367,8 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
         np.isnan(q_all).any(axis=1).tolist(),
         rounded.view(np.dtype((np.void, rounded.itemsize * 6))).ravel().tolist())]
     rows = [solved.row[u.key] for u in loop_first]
-    modes = [mode_of(u, mode, plan, solved, row) for u, row in zip(loop_first, rows)]
+    why: dict = {}
+    modes = [mode_of(u, mode, plan, solved, row, why) for u, row in zip(loop_first, rows)]
     # A jointtarget's compensation does not depend on the move's tool (its
     # joints reach the flange's whole pose), except near J5 = 0, where the
     # wrist fallback holds the tool's point exact: there the tool is part
@@ -384,6 +399,9 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
                 s.uses.append(u)
                 s.rows.append(row)
                 s.at.append(at)
+                if u.key in why:
+                    s.why_kept = writable(s.why_kept)
+                    s.why_kept[u.key] = why[u.key]
                 continue
         if src.decl is not None and file_index[id(src.home)] < plan.n_written:
             home = (file_index[id(src.home)], src.home_module)
@@ -411,6 +429,9 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
         g.rows_seen.setdefault(src.element, row)
         if u.key in kept:
             g.kept = g.kept | {u.key}
+        if u.key in why:
+            g.why_kept = writable(g.why_kept)
+            g.why_kept[u.key] = why[u.key]
     if alone is not None:
         out += [s for s in alone.values() if s.uses]
     return out

@@ -370,6 +370,13 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
                            "not rewrite as MoveAbsJ's ToJointPos:=")
             if why:
                 warnings = warnings + (f"kept as {u.motion.instruction}: " + "; ".join(why),)
+        kept = g.why_kept.get(u.key) if g.why_kept else None
+        if kept is not None and not warnings:
+            # What else keeps a move --emit would turn into MoveAbsJ (PERS
+            # data, program displacement, external axes of named data):
+            # said, not a MoveL left as it was with no word why.
+            warnings = warnings + (f"kept as {u.motion.instruction}: "
+                                   + kept.removesuffix(": kept a robtarget move"),)
         if g.kept and u.key in g.kept:
             warnings = warnings + (f"kept as {u.motion.instruction}: in another iteration of its "
                                    "loop this statement must stay a robtarget move, and one "
