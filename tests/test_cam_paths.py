@@ -858,3 +858,43 @@ def test_a_run_pattern_is_compiled_only_where_a_run_may_follow():
     twice = "MoveL p1,v300,z1,tool_alt_run_test;\n" * 3
     assert _tokens(twice, True) == _tokens(twice, False)
     assert [k for k in eng._runs if k[1][1] == ",v300,z1,tool_alt_run_test;"]
+
+
+def test_reltool_rotations_are_the_tools_own_turns():
+    """RelTool(p, dx, dy, dz \\Rx:=a \\Rz:=c) as the controller takes it:
+    the displacement along the target's own axes, then turns about its x,
+    then the new z (tool0, wobj0: the flange at the target). Oracle: the
+    rotation matrices written out here; moves turned alike share one matrix
+    (made once), and one turned otherwise gets its own."""
+    from math import cos, radians, sin
+    t = targets(1, 21)[0]
+    text = "\n".join([
+        "MODULE M", f"  CONST robtarget p1:={robtarget(t)};", "  PROC P()",
+        "    MoveL RelTool(p1,1,2,3\\Rx:=30\\Rz:=45),v100,fine,tool0;",
+        "    MoveL RelTool(p1,-4,0,1.5\\Rx:=30\\Rz:=45),v100,fine,tool0;",
+        "    MoveL RelTool(p1,1,2,3\\Rz:=-20),v100,fine,tool0;",
+        "  ENDPROC", "ENDMODULE", ""])
+    plan = Plan(Task("m.mod", (parse_text(text, "m.mod"),)))
+
+    def rx(a):
+        a = radians(a)
+        return np.array([[1, 0, 0], [0, cos(a), -sin(a)], [0, sin(a), cos(a)]])
+
+    def rz(a):
+        a = radians(a)
+        return np.array([[cos(a), -sin(a), 0], [sin(a), cos(a), 0], [0, 0, 1]])
+    w, x, y, z = (float(v) for v in robtarget(t).split("],[")[1].split(","))
+    n = (w * w + x * x + y * y + z * z) ** 0.5
+    w, x, y, z = w / n, x / n, y / n, z / n
+    R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                  [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                  [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    p = np.array([float(v) for v in robtarget(t)[2:].split("]")[0].split(",")])
+    want = [(R @ rx(30) @ rz(45), p + R @ [1, 2, 3]), (R @ rx(30) @ rz(45), p + R @ [-4, 0, 1.5]),
+            (R @ rz(-20), p + R @ [1, 2, 3])]
+    uses = plan.uses
+    for u, (Rw, pw) in zip(uses, want):
+        assert np.allclose(u.R, Rw, atol=1e-12) and np.allclose(u.p, pw, atol=1e-9)
+    assert uses[0].source.rel_R is uses[1].source.rel_R
+    assert uses[2].source.rel_R is not uses[0].source.rel_R
+    assert not uses[0].source.rel_R.flags.writeable

@@ -309,14 +309,28 @@ def names_to_point(m) -> bool:
     return m.to_point
 
 
-def _call_key(src: Source):
-    if src.call is None:
-        return None
-    return (src.call.name.lower(), tuple(np.round(src.rel_d, 12)),
-            _IDENTITY_KEY if src.rel_R is NO_ROTATION else tuple(np.round(src.rel_R, 12).ravel()))
+def _call_keys(uses: list[TargetUse]) -> list:
+    """What each use's Offs/RelTool is, as a key (None for none): its name,
+    displacement and rotation rounded (the numbers of all rounded at once:
+    an Offs-relative program's 1e5)."""
+    out: list = [None] * len(uses)
+    at = [n for n, u in enumerate(uses) if u.source.call is not None]
+    if not at:
+        return out
+    srcs = [uses[n].source for n in at]
+    d = np.round(np.array([s.rel_d for s in srcs], float).reshape(-1, 3), 12).tolist()
+    turned = [k for k, s in enumerate(srcs) if s.rel_R is not NO_ROTATION]
+    R = [_IDENTITY_KEY] * len(srcs)
+    if turned:
+        rows = np.round(np.array([srcs[k].rel_R for k in turned], float).reshape(-1, 9), 12)
+        for k, r in zip(turned, rows.tolist()):
+            R[k] = tuple(r)
+    for n, s, dd, rr in zip(at, srcs, d, R):
+        out[n] = (s.call.name.lower(), tuple(dd), rr)
+    return out
 
 
-_IDENTITY_KEY = tuple(np.round(NO_ROTATION, 12).ravel())
+_IDENTITY_KEY = tuple(np.round(NO_ROTATION, 12).ravel().tolist())
 
 
 def multi_index(flat: int, dims: tuple[int, ...]) -> tuple[int, ...]:
@@ -380,6 +394,7 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
               "absj decl": Singles("absj", declared=True, placement="new")}
              if singles else None)
     once = _read_once(plan) if singles else frozenset()
+    call_keys = _call_keys(loop_first)
     for at, (u, row, m) in enumerate(zip(loop_first, rows, modes)):
         src = u.source
         if alone is not None and m != "joint" and src.call is None and not src.by_loop \
@@ -411,7 +426,7 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
                  else ("inline", u.key[0], src.ref.span))
         context = (((u.tool[0] if u.tool is not None else None) if wrist[row] else None,
                     None) if m == "joint" else (u.tool[0], u.wobj[0]))
-        base = (m, where, _call_key(src), *context, home[0], id(home[1]))
+        base = (m, where, call_keys[at], *context, home[0], id(home[1]))
         if src.by_loop or m == "joint":
             key = base + (None,)
         else:

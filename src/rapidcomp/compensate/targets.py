@@ -594,6 +594,8 @@ def _name_or_node(expr):
 # (read only: an Offs-relative program has one per move).
 NO_ROTATION = np.eye(3)
 NO_ROTATION.flags.writeable = False
+# RelTool's \Rx, \Ry, \Rz.
+_TURN = {"rx": rot_x, "ry": rot_y, "rz": rot_z}
 
 
 def _written_key(src: Source, pf) -> tuple[int, int]:
@@ -743,6 +745,7 @@ class Resolver:
         self._notes: list[str] = []             # of the use being resolved
         self._guarded: set = set()              # FOR variables of the use behind a condition
         self._hidden: dict | None = None        # LOCAL module data by name (_not_declared)
+        self._turns: dict = {}                  # RelTool's rotations -> matrix (_offset)
         self._consts: list = []                 # CONST nums being evaluated (integer())
         # A use's confdata and external axes as one tuple per distinct value
         # (a CAM program's 1e5 uses have a few: ~15 MB).
@@ -1764,18 +1767,29 @@ class Resolver:
                                     f"the {call.name} displacement"))
         rot = NO_ROTATION
         if call.name.lower() == "reltool":
+            turns = []
             for a in call.args:
                 if a.kind == "optval" and a.name.lower() in ("rx", "ry", "rz"):
                     if not isinstance(a.value, A.Num):
                         return Unresolved("RelTool rotation is not a literal number")
-                    f = {"rx": rot_x, "ry": rot_y, "rz": rot_z}[a.name.lower()]
                     angle = float(self._num(a.value.value))
                     if not abs(angle) <= 1e5:
                         raise pf.source.error(a.value.span.start, f"RelTool \\{a.name} is "
                                               f"{a.value.text} deg: not an angle")
-                    rot = rot @ f(angle * DEG)
+                    turns.append((a.name.lower(), angle))
                 elif a.kind != "pos":
                     return Unresolved(f"RelTool argument \\{a.name} is not supported")
+            if turns:
+                # (One matrix per distinct rotation, read only: a CAM
+                # program's 1e5 RelTool turn by a few angles.)
+                key = tuple(turns)
+                rot = self._turns.get(key)
+                if rot is None:
+                    rot = NO_ROTATION
+                    for name, angle in turns:
+                        rot = rot @ _TURN[name](angle * DEG)
+                    rot.flags.writeable = False
+                    self._turns[key] = rot
         elif any(a.kind != "pos" for a in call.args):
             return Unresolved("Offs takes no optional arguments")
         return _source(base.record, base.decl, base.home, base.element, base.by_loop, base.ref,
