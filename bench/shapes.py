@@ -21,6 +21,8 @@ it compensated. Goal of issue #14 (for bench/fix.py's shape): <= 10 s and
              ConfL\\Off, inline targets
   c_plain    the same 20 PROCs with a declared tool and work object
   d_offs     MoveL Offs(pK, dx, dy, dz): 1 % declared targets, each used 100 times
+  h_reltool  the same as RelTool(pK, dx, dy, dz \\Rz:=a), a whole degree in -30..30
+  i_datamod  a task folder: the targets in a data module, the moves in another
   e_confoff  ConfL\\Off, then inline MoveL
   f_tools    10 tools x 10 work objects, half declared, half inline
   g_mixed    MoveJ/MoveL, SetDO and WaitTime every 10 moves
@@ -31,6 +33,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -99,10 +102,13 @@ def c_robodk(n, seed=1, plain=False, procs=20):
     return module("MOD_RoboDK", decl, bodies, [f"Prog{k + 1};" for k in range(procs)])
 
 
-def d_offs(n, seed=1, uses=100):
+def d_offs(n, seed=1, uses=100, reltool=False):
     """n // uses declared pK, each used `uses` times as Offs(pK,dx,dy,dz)
     with distinct offsets (|d| <= 20 mm); each Offs target checked with the
-    nominal and warm IK (rapidcomp's own solver), re-drawn until it solves."""
+    nominal and warm IK (rapidcomp's own solver), re-drawn until it solves.
+    reltool: RelTool(pK,dx,dy,dz \\Rz:=a) instead, a whole degree in
+    -30..30 (the displacement along the target's own axes, then the turn
+    about its z)."""
     from rapidcomp.compensate.load import load_solver
 
     solver = load_solver(str(PROFILE), None, False)
@@ -113,19 +119,49 @@ def d_offs(n, seed=1, uses=100):
     Rr = quat_wxyz_to_matrix(np.round(matrix_to_quat_wxyz(R), 6))   # as written
     ref = np.repeat(np.arange(k), uses)
     off = np.round(rng.uniform(-20, 20, (n, 3)), 1)
+    turn = np.round(rng.uniform(-30, 30, n)) if reltool else np.zeros(n)
     bad = np.ones(n, bool)
     while bad.any():
         idx = np.nonzero(bad)[0]
-        Rb, pb = Rr[ref[idx]], tcp[ref[idx]] + off[idx] - Rr[ref[idx]][:, :, 2] * 150.0
+        Rt = Rr[ref[idx]]
+        if reltool:
+            a = np.radians(turn[idx])
+            c, s = np.cos(a), np.sin(a)
+            Rz = np.zeros((len(idx), 3, 3))
+            Rz[:, 0, 0], Rz[:, 0, 1], Rz[:, 1, 0], Rz[:, 1, 1], Rz[:, 2, 2] = c, -s, s, c, 1
+            Rb = Rt @ Rz
+            tb = tcp[ref[idx]] + np.einsum("nij,nj->ni", Rt, off[idx])
+        else:
+            Rb, tb = Rt, tcp[ref[idx]] + off[idx]
+        pb = tb - Rb[:, :, 2] * 150.0
         _, comp = solver.compensate(Rb, pb, conf[ref[idx]].astype(float))
         ok = np.asarray(comp.success)
         bad[idx[ok]] = False
-        off[idx[~ok]] = np.round(rng.uniform(-20, 20, (int((~ok).sum()), 3)), 1)
+        m = int((~ok).sum())
+        off[idx[~ok]] = np.round(rng.uniform(-20, 20, (m, 3)), 1)
+        if reltool:
+            turn[idx[~ok]] = np.round(rng.uniform(-30, 30, m))
     decl = [TOOL, WOBJ] + [f"  CONST robtarget p{j}:={x};" for j, x in
                            enumerate(literals(R, tcp, conf))]
-    body = [f"MoveL Offs(p{ref[i]},{off[i, 0]:g},{off[i, 1]:g},{off[i, 2]:g}){TAIL}"
-            for i in range(n)]
-    return module("CAM_Offs", decl, [("Path", body)], ["Path;"])
+    if reltool:
+        body = [f"MoveL RelTool(p{ref[i]},{off[i, 0]:g},{off[i, 1]:g},{off[i, 2]:g} "
+                f"\\Rz:={turn[i]:g}){TAIL}" for i in range(n)]
+    else:
+        body = [f"MoveL Offs(p{ref[i]},{off[i, 0]:g},{off[i, 1]:g},{off[i, 2]:g}){TAIL}"
+                for i in range(n)]
+    return module("CAM_RelTool" if reltool else "CAM_Offs", decl, [("Path", body)], ["Path;"])
+
+
+def i_datamod(n, seed=1):
+    """A task folder as a cell keeps one: the tool, the work object and the
+    n targets (CONST, global) in a data module, the moves in another."""
+    t = targets(n, seed)
+    data = "\n".join(["MODULE PathData", TOOL, WOBJ,
+                      *(f"  CONST robtarget p{i}:={x};" for i, x in enumerate(t)),
+                      "ENDMODULE", ""])
+    main = module("PathMain", [], [("Path", [f"MoveL p{i}{TAIL}" for i in range(n)])],
+                  ["Path;"])
+    return {"PathData.mod": data, "PathMain.mod": main}
 
 
 def e_confoff(n, seed=1):
@@ -218,6 +254,8 @@ SHAPES = {
     "c_robodk": c_robodk,
     "c_plain": lambda n: c_robodk(n, plain=True),
     "d_offs": d_offs,
+    "h_reltool": lambda n: d_offs(n, reltool=True),
+    "i_datamod": i_datamod,
     "e_confoff": e_confoff,
     "f_tools": f_tools,
     "g_mixed": g_mixed,
@@ -255,13 +293,26 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         env = installed_env(str(Path(tmp) / "pycache"))
         for name in args.shapes.split(","):
-            path = Path(tmp) / f"{name}.mod"
-            path.write_text(SHAPES[name](args.size))
-            r = run(str(path), str(Path(tmp) / f"{name}_comp.mod"), env)
-            print(f"{name:<13} {r['uses']:>7} {path.stat().st_size / 1e6:>6.1f} {r['s']:>8.2f} "
+            made = SHAPES[name](args.size)
+            if type(made) is dict:
+                # (A task folder: its modules, the output a folder too.)
+                path = Path(tmp) / name
+                path.mkdir()
+                for file, text in made.items():
+                    (path / file).write_text(text)
+                size = sum(f.stat().st_size for f in path.iterdir())
+                out = Path(tmp) / f"{name}_comp"
+            else:
+                path = Path(tmp) / f"{name}.mod"
+                path.write_text(made)
+                size = path.stat().st_size
+                out = Path(tmp) / f"{name}_comp.mod"
+            made = None
+            r = run(str(path), str(out), env)
+            print(f"{name:<13} {r['uses']:>7} {size / 1e6:>6.1f} {r['s']:>8.2f} "
                   f"{r['peak_MiB']:>9.0f} {r['cores']:>6.2f} {r['done']:>12} {r['rc']:>3}",
                   flush=True)
-            path.unlink()
+            shutil.rmtree(path) if path.is_dir() else path.unlink()
 
 
 if __name__ == "__main__":

@@ -575,8 +575,8 @@ def test_a_move_kept_a_robtarget_move_under_absj_says_why(storage, tmp_path):
     assert r.exit_code == 0, r.output
     row = next(t for t in json.loads((tmp_path / "pk.json").read_text())["targets"]
                if t["line"] == 5)
-    note = ("kept robtarget moves, not turned into MoveAbsJ: 1 move (pk.mod: lines 5); the "
-            "report's rows say why")
+    note = ("kept robtarget moves, not turned into MoveAbsJ: 1 statement (pk.mod: lines 5); "
+            "the report's rows say why")
     if storage == "PERS":
         assert "MoveL pA,v100,fine,tool0;" in out.read_text()
         assert "kept as MoveL: pA is PERS data (ModPos or another task may change it; a " \
@@ -585,3 +585,22 @@ def test_a_move_kept_a_robtarget_move_under_absj_says_why(storage, tmp_path):
     else:
         assert "MoveAbsJ jt_pA,v100,fine,tool0;" in out.read_text()
         assert not any("kept as" in w for w in row["warnings"]) and note not in r.output
+
+
+def test_a_kept_move_says_why_beside_its_other_warnings(tmp_path):
+    # (Found by a review.) A PERS target near J5 = 0: its row warns of the
+    # wrist singularity and says why it stays a MoveL, both.
+    prog = tmp_path / "k.mod"
+    prog.write_text(
+        "MODULE K\n"
+        "  PERS tooldata tSpindle:=[TRUE,[[0,0,150],[1,0,0,0]],[2,[0,0,75],[1,0,0,0],0,0,0]];\n"
+        "  PERS robtarget pS:=[[697.078,123.013,391.820],[0.490144,-0.000114,0.867326,"
+        "0.086626],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];\n"
+        "  PROC main()\n    MoveL pS,v100,z1,tSpindle;\n  ENDPROC\nENDMODULE\n")
+    r = _run(["fix", str(prog), "--profile", WARM, "--emit", "absj", "-o",
+              str(tmp_path / "k_out.mod"), "--json", str(tmp_path / "k.json")])
+    assert r.exit_code == 0, r.output
+    (row,) = json.loads((tmp_path / "k.json").read_text())["targets"]
+    assert row["warnings"][0].startswith("near wrist singularity"), row
+    assert row["warnings"][1] == ("kept as MoveL: pS is PERS data (ModPos or another task may "
+                                  "change it; a MoveAbsJ would not follow)")

@@ -361,6 +361,9 @@ def test_a_pipe_given_for_a_file_is_refused_not_waited_on(tmp_path):
             ("m.mod", ["fix", "{p}", "--profile", str(WARM)]),
             ("p.pgf", ["check", "{p}", "--profile", str(WARM)]),
             ("m.csv", ["discover", "{p}"]),
+            ("w.csv", ["fix", str(FIXTURES / "cubes.mod"), "--profile", "{p}"]),
+            ("d.mod", ["fix", str(FIXTURES / "cubes.mod"), "--profile", str(WARM),
+                       "--with", "{p}"]),
             ("arm.urdf", ["check", str(FIXTURES / "cubes.mod"), "--profile", str(WARM),
                           "--robot", "{p}"])):
         p = tmp_path / name

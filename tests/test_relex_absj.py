@@ -301,3 +301,26 @@ def test_a_data_modules_new_target_made_local_is_not_taken(solver, array):
                                           + e.replacement[at:])] + edits[1][k + 1:]
     assert apply_edits(plan.files[1].source.text, moved[1]) == bad[1]
     assert V.relex_absj(plan, editor.converted, moved, bad) is None
+
+
+@pytest.mark.parametrize("array", [False, True])
+def test_a_new_name_declared_in_two_modules_is_not_taken(solver, array):
+    # (Found by a review.) The moves' own module declaring the data
+    # module's new name too, LOCAL: the moves see their own; which one is
+    # not looked into, the output is parsed again.
+    plan, editor, edits, texts = _converted(solver, _data_and_main(6, array=array))
+    assert V.relex_absj(plan, editor.converted, edits, texts) is not None
+    src = plan.files[0].source.text
+    at = src.index("\n")                          # the end of the MODULE line
+    zero = "[[0,0,0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    decl = (f"LOCAL CONST jointtarget jt_path{{6}}:=[{','.join([zero] * 6)}];" if array
+            else f"LOCAL CONST jointtarget jt_p3:={zero};")
+    e = edits[1][0]
+    moved = dict(edits)
+    moved[0] = sorted(list(edits.get(0, [])) + [e._replace(start=at, end=at,
+                                                           replacement="\n  " + decl)],
+                      key=lambda x: (x.start, x.end))
+    bad = dict(texts)
+    bad[0] = apply_edits(src, moved[0])
+    parse_text(bad[0], "PathMain.mod")
+    assert V.relex_absj(plan, editor.converted, moved, bad) is None

@@ -127,23 +127,35 @@ def test_failures_alike_but_for_their_numbers():
 
 def test_failures_alike_but_for_their_own_targets_name():
     # Each move's own target named in its reason (p0 is not declared ...,
-    # 1e5 of them where a data module is missing): one line past ALIKE; a
-    # reason naming another name than the row's target (each its own tool)
-    # is not folded with them.
+    # 1e5 of them where a data module is missing), written plainly or in an
+    # Offs: one line past ALIKE, whether each target is used once or three
+    # times; a reason naming another name than the row's target (each its
+    # own tool) is not folded, however many.
     def named(line, target, reason):
         return UseRow("m.mod", line, "MoveL", target, "not compensated", None, None, None, None,
                       None, None, None, None, None, None, None, (), reason)
+    n = report.ALIKE + 1
     own = [named(10 + k, f"p{k}", f"p{k} is declared LOCAL in another module (d.mod:{k + 3})")
-           for k in range(report.ALIKE + 1)]
-    tools = [named(40 + k, f"q{k}", f"tool t{k} is not declared") for k in range(3)]
+           for k in range(n)]
+    tools = [named(40 + k, f"q{k}", f"tool t{k} is not declared") for k in range(n)]
     lines = report.failure_lines(own + tools, several=False)
-    assert lines[0] == (f"not compensated ({report.ALIKE + 1} alike, each with target and "
-                        "numbers of its own; as line 10): p0 is declared LOCAL in another module "
-                        "(d.mod:3) [lines 10-20]")
+    assert lines[0] == (f"not compensated ({n} alike, each with target and numbers of its own; "
+                        "as line 10): p0 is declared LOCAL in another module (d.mod:3) "
+                        "[lines 10-20]")
     assert lines[1:] == [f"not compensated: line {40 + k} MoveL q{k}: tool t{k} is not declared"
-                         for k in range(3)]
+                         for k in range(n)]
     # (Up to ALIKE of them: each its own line, as before.)
     assert len(report.failure_lines(own[:report.ALIKE], several=False)) == report.ALIKE
+    # Each base target moved to three times, plainly and in Offs: one line.
+    thrice = [named(100 + 3 * k + j, f"Offs(b{k},0,0,{j})" if j else f"b{k}",
+                    f"b{k} is not declared") for k in range(n) for j in range(3)]
+    assert report.failure_lines(thrice, several=False) == [
+        f"not compensated ({3 * n} alike, each with target and numbers of its own; as line "
+        f"100): b0 is not declared [lines 100-{100 + 3 * n - 1}]"]
+    # Up to ALIKE such reasons: a line each, with its count and places.
+    few = thrice[:3 * (report.ALIKE - 1)]
+    assert report.failure_lines(few, several=False)[0] == (
+        "not compensated (3): b0 is not declared [lines 100-102]")
 
 
 def test_failures_alike_keep_their_names_apart():

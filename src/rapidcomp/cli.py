@@ -421,9 +421,8 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
         # (Before any work: a pipe would be waited on, a missing file found
         # only when its job reads it.)
         not_a_file(p)
-        if not os.path.isfile(p):
-            raise RapidcompError(f"{p}: " + ("a folder, not a file" if os.path.isdir(p)
-                                             else "no such file"))
+        if not os.path.exists(p):
+            raise RapidcompError(f"{p}: no such file")
     groups = [(program, tasks_of(program, tuple(tasks))) for program in programs]
     n_tasks = sum(len(ts) for _, ts in groups)
     if n_tasks > 1 and (report or json_path):

@@ -417,8 +417,9 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
         notes.append("MoveL -> MoveAbsJ gives up the straight-line path between points "
                      f"({where}); use --emit robtarget to keep MoveL linear.")
     # Moves --emit would turn into MoveAbsJ that stay robtarget moves for
-    # what they are (PERS data, program displacement, an optional argument
-    # MoveAbsJ has not, ...): the output's MoveL are meant, each row says why.
+    # what they are (PERS data, named external axes, an optional argument
+    # MoveAbsJ has not, ...; a caution or program displacement has its own
+    # word): the output's MoveL are meant, each row says why.
     kept: dict[str, set] = {}
     for g in gs:
         if g.why_kept and g.failure is None:
@@ -429,8 +430,8 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
         where = "; ".join(f"{f}: lines {line_ranges(sorted(kept[f]))}" for f in sorted(kept))
         n = sum(len(v) for v in kept.values())
         notes.append(f"kept robtarget moves, not turned into MoveAbsJ: {n} "
-                     f"move{'s' if n != 1 else ''} ({where}); the report's rows say why (PERS "
-                     "data, named external axes, an argument MoveAbsJ has not, ...)")
+                     f"statement{'s' if n != 1 else ''} ({where}); the report's rows say why "
+                     "(PERS data, named external axes, an argument MoveAbsJ has not, ...)")
     # A move turned into MoveAbsJ goes to joints computed with its tool and
     # work object as declared; the robtarget move followed a change to them
     # (a TCP calibration, a user frame redefined on the FlexPendant).
@@ -445,7 +446,9 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
         if g.mode == "absj" and g.failure is None and u.kind == "robtarget":
             m = u.motion
             # (The controller's own tool0 and wobj0, which nothing changes,
-            # are not named; a module's own data of that name is.)
+            # are not named; a module's own data of that name is. The
+            # resolver gives the controller's as its one identity pose: the
+            # uses here are the ones it made, in this process.)
             builtin = (u.tool[1] is IDENTITY_POSE, u.wobj[1] is IDENTITY_POSE)
             if type(m.args) is not A.TailArgs or (m.roles, m.args.tail, builtin) not in tails:
                 if type(m.args) is A.TailArgs:

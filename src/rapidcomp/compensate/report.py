@@ -79,38 +79,43 @@ def summary_lines(result: FixResult) -> list[str]:
 
 def failure_lines(rows: list[UseRow], several: bool, label: str = "not compensated") -> list[str]:
     """One line per failure; failures sharing a reason (a missing module
-    fails every move that uses it) in one line with their places; and so
-    are more than ALIKE failures whose reasons differ in their numbers
-    only (a CAM program near the wrist singularity: each its own J5 and
-    line), with the first one's reason."""
+    fails every move that uses it) in one line with their places; and
+    failures whose reasons differ only in their numbers and the names of
+    their own targets (a CAM program near the wrist singularity: each its
+    own J5 and line; a missing data module: each its own target), in one
+    line with the first one's reason where they would take more than ALIKE
+    lines."""
     by_reason: dict[str, list[UseRow]] = {}
     for r in rows:
         by_reason.setdefault(r.reason, []).append(r)
-    alike: dict[str, list[UseRow]] = {}
+    keys = {reason: _alike(reason, rs[0].target) for reason, rs in by_reason.items()}
+    # The lines each key's reasons take one by one: a reason of one or two
+    # failures a line each, of more one line.
+    lines: dict[str, int] = {}
     for reason, rs in by_reason.items():
-        if len(rs) <= 2:
-            alike.setdefault(_alike(reason, rs[0].target), []).extend(rs)
+        lines[keys[reason]] = lines.get(keys[reason], 0) + (len(rs) if len(rs) <= 2 else 1)
+    folded: dict[str, list[UseRow]] = {}
+    for reason, rs in by_reason.items():
+        if lines[keys[reason]] > ALIKE:
+            folded.setdefault(keys[reason], []).extend(rs)
     out = []
     for reason, rs in by_reason.items():
-        if len(rs) <= 2:
-            key = _alike(reason, rs[0].target)
-            group = alike.get(key)
-            if group is None:
+        group = folded.get(keys[reason])
+        if group is not None:
+            if group[0] is not rs[0]:
                 continue                              # (said with its first)
-            if len(group) <= ALIKE:
-                for r in rs:
-                    where = f"{r.file}:{r.line}" if several else f"line {r.line}"
-                    out.append(f"{label}: {where} {r.instruction} {r.target}: {reason}")
-                continue
-            del alike[key]
-            first = group[0]
-            at = f"{first.file}:{first.line}" if several else f"line {first.line}"
+            at = (f"{group[0].file}:{group[0].line}" if several
+                  else f"line {group[0].line}")
             own = ("numbers" if len({_NUMBERS.sub("#", r.reason or "") for r in group}) == 1
                    else "target and numbers")
             out.append(f"{label} ({len(group)} alike, each with {own} of its own; as {at}): "
-                       f"{first.reason} [{_places(group, several)}]")
-            continue
-        out.append(f"{label} ({len(rs)}): {reason} [{_places(rs, several)}]")
+                       f"{group[0].reason} [{_places(group, several)}]")
+        elif len(rs) <= 2:
+            for r in rs:
+                where = f"{r.file}:{r.line}" if several else f"line {r.line}"
+                out.append(f"{label}: {where} {r.instruction} {r.target}: {reason}")
+        else:
+            out.append(f"{label} ({len(rs)}): {reason} [{_places(rs, several)}]")
     return out
 
 
@@ -133,16 +138,17 @@ _NUMBERS = re.compile(r"(?<![A-Za-z_\d.])[+-]?\d+(?:\.\d+)?(?![A-Za-z_\d])")
 
 
 def _alike(reason: str | None, target: str) -> str:
-    """What reasons alike but for their numbers, and the name of their own
-    target (p0 is not declared ..., p1 is not declared ...), share."""
+    """What reasons alike but for their numbers and the names their own
+    target is written with (p0 is not declared ..., p1 is not declared ...;
+    Offs(p7, 0, 0, 10): p7 ...) share."""
     reason = reason or ""
-    if _NAME.fullmatch(target):
-        reason = re.sub(r"(?<![\w.])" + re.escape(target) + r"(?![\w])", "<target>", reason)
+    for name in set(_NAME.findall(target)):
+        reason = re.sub(r"(?<![\w.])" + re.escape(name) + r"(?![\w])", "<name>", reason)
     return _NUMBERS.sub("#", reason)
 
 
-# A target written as a plain name (p10, pPath_3).
-_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+# A name in a target's text (p10, pPath_3, Offs).
+_NAME = re.compile(r"(?<![\w.])[A-Za-z][A-Za-z0-9_]*")
 
 
 def _cell(text: str) -> str:

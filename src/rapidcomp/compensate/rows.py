@@ -355,6 +355,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
                  None, d_warnings, why), 2 * i if has_q else -1)
     warnings = d_warnings
     if g is not None:
+        said = False                       # (why it stays a robtarget move)
         if g.mode == "absj" and u.motion.spec.name == "MoveL":
             warnings = warnings + _LINEAR
         elif g.mode == "rob" and mode is not None and (u.motion.roles.optional or
@@ -370,11 +371,12 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
                            "not rewrite as MoveAbsJ's ToJointPos:=")
             if why:
                 warnings = warnings + (f"kept as {u.motion.instruction}: " + "; ".join(why),)
+                said = True
         kept = g.why_kept.get(u.key) if g.why_kept else None
-        if kept is not None and not warnings:
+        if kept is not None and not said:
             # What else keeps a move --emit would turn into MoveAbsJ (PERS
-            # data, program displacement, external axes of named data):
-            # said, not a MoveL left as it was with no word why.
+            # data, external axes of named data): said, not a MoveL left as
+            # it was with no word why.
             warnings = warnings + (f"kept as {u.motion.instruction}: "
                                    + kept.removesuffix(": kept a robtarget move"),)
         if g.kept and u.key in g.kept:

@@ -200,6 +200,15 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
         names, scopes, aggs, declared_joints = declared
         homes[fi] = (names, np.frombuffer(scopes, np.int64), np.frombuffer(aggs, np.int64),
                      declared_joints, kinds, wide, arrays)
+    # (A name new in two files, which the editor never writes: which one a
+    # move sees is not looked into; the output is parsed again.)
+    if len(homes) > 1:
+        new: set = set()
+        for names, *_, arrays in homes.values():
+            if not new.isdisjoint(names) or not new.isdisjoint(arrays):
+                return None
+            new.update(names)
+            new.update(arrays)
     keys: list = []
     rows: list = []
     for fi, file_keys in by_file.items():
