@@ -23,6 +23,7 @@ it compensated. Goal of issue #14 (for bench/fix.py's shape): <= 10 s and
   d_offs     MoveL Offs(pK, dx, dy, dz): 1 % declared targets, each used 100 times
   h_reltool  the same as RelTool(pK, dx, dy, dz \\Rz:=a), a whole degree in -30..30
   i_datamod  a task folder: the targets in a data module, the moves in another
+  j_alldecl  the same in one module: every target declared, each moved to once
   e_confoff  ConfL\\Off, then inline MoveL
   f_tools    10 tools x 10 work objects, half declared, half inline
   g_mixed    MoveJ/MoveL, SetDO and WaitTime every 10 moves
@@ -152,16 +153,18 @@ def d_offs(n, seed=1, uses=100, reltool=False):
     return module("CAM_RelTool" if reltool else "CAM_Offs", decl, [("Path", body)], ["Path;"])
 
 
-def i_datamod(n, seed=1):
+def i_datamod(n, seed=1, folder=True):
     """A task folder as a cell keeps one: the tool, the work object and the
-    n targets (CONST, global) in a data module, the moves in another."""
+    n targets (CONST, global) in a data module, the moves in another.
+    folder=False: all in one module (RobotStudio's own way: every target
+    declared, each moved to once)."""
     t = targets(n, seed)
-    data = "\n".join(["MODULE PathData", TOOL, WOBJ,
-                      *(f"  CONST robtarget p{i}:={x};" for i, x in enumerate(t)),
-                      "ENDMODULE", ""])
-    main = module("PathMain", [], [("Path", [f"MoveL p{i}{TAIL}" for i in range(n)])],
-                  ["Path;"])
-    return {"PathData.mod": data, "PathMain.mod": main}
+    decl = [f"  CONST robtarget p{i}:={x};" for i, x in enumerate(t)]
+    body = [("Path", [f"MoveL p{i}{TAIL}" for i in range(n)])]
+    if not folder:
+        return module("PathAll", [TOOL, WOBJ, *decl], body, ["Path;"])
+    data = "\n".join(["MODULE PathData", TOOL, WOBJ, *decl, "ENDMODULE", ""])
+    return {"PathData.mod": data, "PathMain.mod": module("PathMain", [], body, ["Path;"])}
 
 
 def e_confoff(n, seed=1):
@@ -256,6 +259,7 @@ SHAPES = {
     "d_offs": d_offs,
     "h_reltool": lambda n: d_offs(n, reltool=True),
     "i_datamod": i_datamod,
+    "j_alldecl": lambda n: i_datamod(n, folder=False),
     "e_confoff": e_confoff,
     "f_tools": f_tools,
     "g_mixed": g_mixed,
