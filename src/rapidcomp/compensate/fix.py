@@ -400,6 +400,11 @@ def _missed(solved, gs, verified, file_index: dict) -> dict:
     return out
 
 
+def _file_lines(by_file: dict[str, set]) -> str:
+    """`a.mod: lines 3-7, 9; b.mod: lines 2` of lines by file."""
+    return "; ".join(f"{f}: lines {line_ranges(sorted(by_file[f]))}" for f in sorted(by_file))
+
+
 def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
     notes = []
     # The lines of the moves turned into MoveAbsJ, by file (a set of ints
@@ -413,9 +418,8 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
                 lines = absj[file] = set()
             lines.add(line)
     if absj:
-        where = "; ".join(f"{f}: lines {line_ranges(sorted(absj[f]))}" for f in sorted(absj))
         notes.append("MoveL -> MoveAbsJ gives up the straight-line path between points "
-                     f"({where}); use --emit robtarget to keep MoveL linear.")
+                     f"({_file_lines(absj)}); use --emit robtarget to keep MoveL linear.")
     # Moves --emit would turn into MoveAbsJ that stay robtarget moves for
     # what they are (PERS data, named external axes, an optional argument
     # MoveAbsJ has not, ...; a caution or program displacement has its own
@@ -427,11 +431,11 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
                 if u.key in g.why_kept:
                     kept.setdefault(u.file.source.display_path, set()).add(u.line)
     if kept:
-        where = "; ".join(f"{f}: lines {line_ranges(sorted(kept[f]))}" for f in sorted(kept))
         n = sum(len(v) for v in kept.values())
         notes.append(f"kept robtarget moves, not turned into MoveAbsJ: {n} "
-                     f"statement{'s' if n != 1 else ''} ({where}); the report's rows say why "
-                     "(PERS data, named external axes, an argument MoveAbsJ has not, ...)")
+                     f"statement{'s' if n != 1 else ''} ({_file_lines(kept)}); the report's "
+                     "rows say why (PERS data, named external axes, an argument MoveAbsJ has "
+                     "not, ...)")
     # A move turned into MoveAbsJ goes to joints computed with its tool and
     # work object as declared; the robtarget move followed a change to them
     # (a TCP calibration, a user frame redefined on the FlexPendant).
