@@ -860,6 +860,38 @@ def test_a_run_pattern_is_compiled_only_where_a_run_may_follow():
     assert [k for k in eng._runs if k[1][1] == ",v300,z1,tool_alt_run_test;"]
 
 
+def test_offs_and_reltool_poses_in_one_batch_as_one_by_one():
+    """poses() moves every Offs/RelTool target in one batch: the same bits
+    as _relative of each on its own (oracle: the one-by-one function), for
+    Offs, RelTool with and without turns, and plain targets among them."""
+    from rapidcomp.compensate.targets import _relative, _relative_many
+    from rapidcomp.kinematics.frames import unit_quat_matrices
+    ts = targets(7, 5)
+    decls = [f"  CONST robtarget p{i}:={robtarget(t)};" for i, t in enumerate(ts)]
+    moves = ["MoveL Offs(p0,1.5,-2,3.25),v100,fine,tool0;",
+             "MoveL RelTool(p1,1,2,3\\Rx:=30\\Rz:=45),v100,fine,tool0;",
+             "MoveL p2,v100,fine,tool0;",
+             "MoveL RelTool(p3,-4,0.1,1.5),v100,fine,tool0;",
+             "MoveJ Offs(p4,0,0,-10),v100,fine,tool0;",
+             "MoveL RelTool(p5,7,-8,9\\Ry:=-12.5),v100,fine,tool0;",
+             "MoveL p6,v100,fine,tool0;"]
+    text = "\n".join(["MODULE M", *decls, "  PROC P()", *(f"    {m}" for m in moves),
+                      "  ENDPROC", "ENDMODULE", ""])
+    plan = Plan(Task("m.mod", (parse_text(text, "m.mod"),)))
+    srcs = [u.source for u in plan.uses]
+    assert [s.call.name if s.call else None for s in srcs] == [
+        "Offs", "RelTool", None, "RelTool", "Offs", "RelTool", None]
+    q = np.array([s.record.quat_wxyz for s in srcs], float)
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    R = unit_quat_matrices(q)
+    p = np.array([s.record.xyz for s in srcs], float)
+    one = [_relative(s, R[i], p[i]) for i, s in enumerate(srcs)]
+    _relative_many(R, p, srcs)
+    for i, (Ri, pi) in enumerate(one):
+        assert np.array_equal(R[i], Ri) and np.array_equal(p[i], pi), i
+    assert not np.array_equal(one[1][0], unit_quat_matrices(q[1:2])[0])
+
+
 def test_reltool_rotations_are_the_tools_own_turns():
     """RelTool(p, dx, dy, dz \\Rx:=a \\Rz:=c) as the controller takes it:
     the displacement along the target's own axes, then turns about its x,

@@ -86,7 +86,7 @@ class Source:
     expr: A.Expr                   # the whole target argument (Offs/RelTool call or ref)
     call: A.Call | None            # the Offs/RelTool around ref
     rel_R: np.ndarray | None       # RelTool rotation (identity for Offs)
-    rel_d: np.ndarray | None       # Offs/RelTool displacement, mm
+    rel_d: tuple | None            # Offs/RelTool displacement (x, y, z), mm
     home_module: Module | None = None  # the module holding decl
 
     def with_record(self, record) -> "Source":
@@ -1763,8 +1763,9 @@ class Resolver:
             return base
         if not isinstance(base.record, RobTarget):
             return Unresolved(f"{call.name} of a non-robtarget", True)
-        d = np.array(self._position([v.value for v in pos[1:]], pos[1].span.start, pf,
-                                    f"the {call.name} displacement"))
+        # (A tuple: poses() makes the array of every use's at once.)
+        d = tuple(self._position([v.value for v in pos[1:]], pos[1].span.start, pf,
+                                 f"the {call.name} displacement"))
         rot = NO_ROTATION
         if call.name.lower() == "reltool":
             turns = []
@@ -1772,7 +1773,7 @@ class Resolver:
                 if a.kind == "optval" and a.name.lower() in ("rx", "ry", "rz"):
                     if not isinstance(a.value, A.Num):
                         return Unresolved("RelTool rotation is not a literal number")
-                    angle = float(self._num(a.value.value))
+                    angle, = self._floats((a.value.value,))
                     if not abs(angle) <= 1e5:
                         raise pf.source.error(a.value.span.start, f"RelTool \\{a.name} is "
                                               f"{a.value.text} deg: not an angle")
@@ -1874,9 +1875,7 @@ class Resolver:
             return
         q, p = self._checked_parts(pending)
         R = unit_quat_matrices(q)
-        for i, (u, _, _, _, _, _) in enumerate(pending):
-            if u.source.call is not None:
-                R[i], p[i] = _relative(u.source, R[i], p[i])
+        _relative_many(R, p, [item[1] for item in pending])
 
         flange = flange_poses(*(stacked_poses([item[k] for item in pending]) for k in (3, 4)),
                               (R, p), stacked_poses([item[5] for item in pending]))
@@ -2510,6 +2509,24 @@ def _relative(src: Source, R, p):
     if src.call.name.lower() == "offs":
         return R, p + src.rel_d
     return R @ src.rel_R, p + R @ src.rel_d
+
+
+def _relative_many(R: np.ndarray, p: np.ndarray, srcs: list) -> None:
+    """_relative of every row, in place (R (n, 3, 3), p (n, 3) mm: the
+    literals' poses of srcs): the Offs rows' displacements added at once,
+    the RelTool rows' 3x3 products in one batch (an Offs- or RelTool-relative
+    CAM program's 1e5, each alone: 0.35 s). The same products as one by one."""
+    offs, rel = [], []
+    for i, s in enumerate(srcs):
+        if s.call is not None:
+            (offs if s.call.name.lower() == "offs" else rel).append(i)
+    if offs:
+        p[offs] += np.array([srcs[i].rel_d for i in offs])
+    if rel:
+        R_rel = R[rel]
+        d = np.array([srcs[i].rel_d for i in rel])
+        p[rel] += np.matmul(R_rel, d[:, :, None])[:, :, 0]
+        R[rel] = np.matmul(R_rel, np.array([srcs[i].rel_R for i in rel]))
 
 
 def _at(offset) -> int:
