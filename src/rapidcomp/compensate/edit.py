@@ -53,6 +53,14 @@ class Values:
             return g.src
         return g.source(k)
 
+    def absj_literal(self, s: Singles, n: int) -> str:
+        """literal() of element n of s (absj) as of the Group of its one
+        use (Singles.single), without that Group."""
+        prepared = self._values.get(("absj", id(s), n))
+        if prepared is not None:
+            return prepared
+        return _absj_literal(self.solved.deformed.q_deg[s.rows[n]], s.uses[n].source.record)
+
     @contextmanager
     def lent(self, s: Singles, n: int, g: Group):
         """Within: the MoveAbsJ literal prepared for element n of s is that
@@ -384,8 +392,7 @@ class Values:
             prepared = self._values.get(("absj", id(g), k))
             if prepared is not None:
                 return prepared
-            return records.jointtarget_literal(records.absj_texts(self.joints(g, k),
-                                                                  self.source(g, k).record))
+            return _absj_literal(self.joints(g, k), self.source(g, k).record)
         record = self.source(g, k).record
         if k in g.slots or (g.array and k not in g.rows):
             return records.robtarget_literal(list(record.texts))  # unreached: as written
@@ -395,6 +402,12 @@ class Values:
         if g.mode == "joint":
             return records.jointtarget_literal(texts)
         return records.robtarget_literal(texts)
+
+
+def _absj_literal(q_deg, record) -> str:
+    """The jointtarget literal of a MoveAbsJ to joints q_deg, its external
+    axes those of `record`."""
+    return records.jointtarget_literal(records.absj_texts(q_deg, record))
 
 
 def _as_literal(record, texts) -> str:
@@ -539,11 +552,16 @@ class Editor:
         that line goes on with anything but declarations and a comment,
         right after the last declaration of the line.
         Returns (file, offset, line break, indentation, in a routine)."""
-        fi, module = g.home
-        if g.decl is not None and g.src.home_module is module:
-            span = g.decl.span
-            return self._after(fi, module, span, g.decl.node,
-                               _indent(self.text(fi), span.start), g.decl.routine is not None)
+        return self._anchor_of(g.home, g.decl, g.src.home_module)
+
+    def _anchor_of(self, home: tuple, decl, decl_module) -> tuple[int, int, str, str, bool]:
+        """_anchor of a group of home `home` whose source is declaration
+        decl (or None) of module decl_module."""
+        fi, module = home
+        if decl is not None and decl_module is module:
+            span = decl.span
+            return self._after(fi, module, span, decl.node,
+                               _indent(self.text(fi), span.start), decl.routine is not None)
         # (After the module's last data declaration: one place per file and
         # module, found once; a CAM program's 5e4 inline targets turned
         # into MoveAbsJ each declare a jointtarget there.)
@@ -607,25 +625,34 @@ class Editor:
         jointtarget of moves turned into MoveAbsJ, a copy of a target);
         anchor: _anchor(g), when the caller has it."""
         self.others = self.others or not converted
-        fi, end, nl, indent, in_routine = anchor or self._anchor(g)
-        scope = "" if in_routine or not g.local else "LOCAL "
-        decl = f"{scope}CONST {type_name} {name}{dims}{self._assign(g, fi)}{value};"
+        anchor = anchor or self._anchor(g)
+        self._declare(anchor, g.local,
+                      self._assign(anchor[0], g.decl, g.src.home_module, g.home_module),
+                      type_name, name, dims, value)
+
+    def _declare(self, anchor: tuple, local: bool, assign: str, type_name: str, name: str,
+                 dims: str, value: str) -> None:
+        """declare() at `anchor` (_anchor's), ':=' spaced `assign`."""
+        fi, end, nl, indent, in_routine = anchor
+        scope = "" if in_routine or not local else "LOCAL "
+        decl = f"{scope}CONST {type_name} {name}{dims}{assign}{value};"
         self.inserts.setdefault((fi, end), []).append(decl)
         self.insert_nl[(fi, end)] = nl
         self.insert_indent[(fi, end)] = indent
 
-    def _assign(self, g: Group, fi: int) -> str:
-        """':=' spaced as in the declaration the new one comes from (else
-        as in the module's first declaration with a value)."""
+    def _assign(self, fi: int, decl, decl_module, home_module) -> str:
+        """':=' spaced as in the declaration `decl` (of module decl_module)
+        the new one comes from, where it is in home_module, of file fi
+        (else as in home_module's first declaration with a value)."""
         text = self.text(fi)
-        if g.decl is not None and g.src.home_module is g.home_module:
-            node = g.decl.node
+        if decl is not None and decl_module is home_module:
+            node = decl.node
         else:
             # The module's first declaration with a value (once per module:
             # a CAM program asks for each of its 1e5 targets).
-            key = ("first value", id(g.home_module))
+            key = ("first value", id(home_module))
             if key not in self._per_module:
-                self._per_module[key] = next((it for it in g.home_module.node.items
+                self._per_module[key] = next((it for it in home_module.node.items
                                           if isinstance(it, A.DataDecl) and it.init is not None),
                                          None)
             node = self._per_module[key]
@@ -739,14 +766,37 @@ class Editor:
                 self.edit(u.key[0], src.ref.span, new_ref, f"{u.label} -> {new_ref}")
                 self.actions[u.key] = f"new {type_name} {new_ref.split('{')[0]}"
 
-    def apply_new(self, s: Singles, n: int) -> None:
-        """apply() of element n of Singles whose elements each make a new
-        name and declaration: as the Group of its one use, made for the
-        call (its literal the one prepared for the element), in the order
-        place.apply_order gives."""
-        g = s.single(n, self.plan.file_index, placed=True)
-        with self.values.lent(s, n, g):
-            self.apply(g)
+    def apply_new(self, s: Singles, ns: list[int]) -> None:
+        """apply() of elements ns of Singles whose elements each make a new
+        name and declaration, one after the other (place.apply_order): each
+        as the Group of its one use (its literal the one prepared for the
+        element). A declared target's move turned into MoveAbsJ on a new
+        jointtarget next to it (RobotStudio's way: every target declared,
+        each moved to once; 1e5 of them) without making that Group."""
+        if self.transient or s.mode != "absj" or s.placement != "new":
+            for n in ns:
+                g = s.single(n, self.plan.file_index, placed=True)
+                with self.values.lent(s, n, g):
+                    self.apply(g)
+            return
+        file_index, names, vals = self.plan.file_index, self.names, self.values
+        converted, actions = self.converted, self.actions
+        for n in ns:
+            u = s.uses[n]
+            src = u.source
+            decl, module = src.decl, src.home_module
+            home = (file_index[id(src.home)], module)
+            # (As apply() names it: "jt_" and _stem of the group, which is
+            # the declaration's name: Singles hold no Offs/RelTool.)
+            name = names.new("jt_" + decl.name)
+            literal = vals.absj_literal(s, n)
+            anchor = self._anchor_of(home, decl, module)
+            self._declare(anchor, u.module is module,
+                          self._assign(anchor[0], decl, module, module),
+                          "jointtarget", name, "", literal)
+            called = self._to_absj(u, name)
+            converted[u.key] = (u, literal, name, called, home[0])
+            actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {name}"
 
     def _apply_singles(self, s: Singles) -> None:
         """apply() of each element of s as of the Group of its one use: its

@@ -199,14 +199,23 @@ def uses_in_order(gs: list) -> list:
 
 def apply_order(gs: list) -> list:
     """gs as the editor writes them: the groups in order, each element of
-    Singles that makes a new name and declaration among them at its place
-    (as (Singles, n)), the other Singles after them (what they write does
+    Singles that makes a new name and declaration among them at its place,
+    the elements of one Singles that come one after the other as one
+    (Singles, [n, ...]), the other Singles after them (what they write does
     not depend on the order)."""
     ordered = [s for s in gs if type(s) is Singles and s.ordered]
     rest = [g for g in gs if not (type(g) is Singles and g.ordered)]
     if not ordered:
         return rest
-    return _interleaved(rest, ordered) + [g for g in rest if type(g) is Singles]
+    out: list = []
+    for x in _interleaved(rest, ordered):
+        if type(x) is not tuple:
+            out.append(x)
+        elif out and type(out[-1]) is tuple and out[-1][0] is x[0]:
+            out[-1][1].append(x[1])
+        else:
+            out.append((x[0], [x[1]]))
+    return out + [g for g in rest if type(g) is Singles]
 
 
 def split_off(gs: list, s: Singles, ns, file_index: dict, placed: bool = False) -> list[Group]:
