@@ -860,6 +860,32 @@ def test_a_run_pattern_is_compiled_only_where_a_run_may_follow():
     assert [k for k in eng._runs if k[1][1] == ",v300,z1,tool_alt_run_test;"]
 
 
+def test_a_plan_keeps_no_list_or_array_per_declared_target():
+    """Issue #14 (no per-target object past its stage): a program of
+    declared targets, each moved to once (RobotStudio's way), leaves no
+    list (the resolver's global names) and no array (where each name is
+    referred to) per target: the plan of 300 such targets holds as many of
+    them as the plan of 150, and reads each target where it is declared."""
+    import gc
+    from array import array
+
+    def held(n: int) -> tuple[int, int]:
+        ts = targets(n, 8)
+        text = "\n".join([
+            "MODULE M", *(f"  CONST robtarget p{i}:={robtarget(t)};" for i, t in enumerate(ts)),
+            "  PROC P()", *(f"    MoveL p{i},v100,z1,tool0;" for i in range(n)),
+            "  ENDPROC", "ENDMODULE", ""])
+        plan = Plan(Task("m.mod", (parse_text(text, "m.mod"),)))
+        assert [u.source.decl.name for u in plan.uses] == [f"p{i}" for i in range(n)]
+        gc.collect()
+        kinds = [type(o) for o in gc.get_objects()]
+        return kinds.count(list), kinds.count(array)
+
+    held(10)
+    (lists150, arrays150), (lists300, arrays300) = held(150), held(300)
+    assert lists300 - lists150 < 20 and arrays300 - arrays150 < 20
+
+
 def test_offs_and_reltool_poses_in_one_batch_as_one_by_one():
     """poses() moves every Offs/RelTool target in one batch: the same bits
     as _relative of each on its own (oracle: the one-by-one function), for

@@ -26,6 +26,7 @@ from ..errors import InputError
 from ..kinematics.ik import IKOptions, Solver, Warn
 from ..rapid import ast as A
 from ..rapid.model import Declaration, Module
+from ..rapid.refs import reference_starts
 from .plan import Plan
 from .solve import Solved, Solving, same_joints, solve_slots
 from .targets import NO_ROTATION, Source, TargetUse, flange_pose, named_part
@@ -480,7 +481,7 @@ def _read_once(plan: Plan) -> frozenset:
     for pf in plan.files:
         for m in pf.modules:
             for name, rs in plan.resolver.usages[id(m)].refs.items():
-                count[name] = count.get(name, 0) + len(rs)
+                count[name] = count.get(name, 0) + len(reference_starts(rs))
     shared = plan.resolver.shared
     return frozenset(id(ds[0][1]) for name, ds in _declarations(plan).items()
                      if len(ds) == 1 and ds[0][0] < plan.n_written
@@ -603,7 +604,8 @@ def place(plan: Plan, gs: list[Group]) -> None:
         for m in pf.modules:
             for name, rs in plan.resolver.usages[id(m)].refs.items():
                 if name in needed:
-                    refs.setdefault(name, set()).update((fi, start) for start in rs)
+                    refs.setdefault(name, set()).update(
+                        (fi, start) for start in reference_starts(rs))
     declared = _declarations(plan)
     consumed = {(u.key[0], u.source.ref.span.start)
                 for g in gs if g.mode == "absj" and g.failure is None and g.decl is not None

@@ -732,7 +732,9 @@ class Resolver:
         self.track = tuple(track)
         self.moved_by = moved_by
         self.base = base if base is not None else IDENTITY_POSE   # world_M_base at track 0
-        self.globals: dict[str, list[Declaration]] = {}
+        # Global data by lower-case name: its declaration, a list where two
+        # or more modules declare it (1e5 targets: no list each).
+        self.globals: dict[str, Declaration | list[Declaration]] = {}
         self.module_decls: dict[tuple[int, str], Declaration] = {}
         self.routine_decls: dict[tuple[int, str, str], Declaration] = {}
         self.params: dict[tuple[int, str], set[str]] = {}
@@ -789,7 +791,13 @@ class Resolver:
                     if d.routine is None:
                         self.module_decls.setdefault((mid, name), d)
                         if d.scope != "LOCAL":
-                            self.globals.setdefault(name, []).append(d)
+                            got = self.globals.get(name)
+                            if got is None:
+                                self.globals[name] = d
+                            elif type(got) is Declaration:
+                                self.globals[name] = [got, d]
+                            else:
+                                got.append(d)
                     else:
                         self.routine_decls[(mid, d.routine.lower(), name)] = d
 
@@ -855,8 +863,11 @@ class Resolver:
         if d is not None and d.scope == "LOCAL":
             return d
         found = self.globals.get(key)
-        if not found:
+        if found is None:
             return d
+        if type(found) is Declaration:
+            # (One module declares it: this one's, which it is, or another's.)
+            return found
         # Global data of one name in two modules: the controller refuses to
         # load the task. PERS of one type are one shared object: allowed, but
         # which initial value it holds depends on the load order unless they
@@ -1385,7 +1396,8 @@ class Resolver:
         self.writes = task_writes(files, self.usages)
         if not observers:
             return
-        pers = {name for name, ds in self.globals.items() if any(d.storage == "PERS" for d in ds)}
+        pers = {name for name, ds in self.globals.items()
+                if any(d.storage == "PERS" for d in ((ds,) if type(ds) is Declaration else ds))}
         theirs = {id(m): usage(m.node) for pf in observers for m in pf.modules}
         other = task_writes(list(observers), theirs)
         by_name = dict(self.writes.by_name)

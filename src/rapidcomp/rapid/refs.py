@@ -35,8 +35,10 @@ def _field_names(cls: type) -> tuple[str, ...]:
 class Usage:
     # lower-case name -> where each reference starts (offsets: a CAM
     # program's 1e5 moves name the same speed, zone, tool and work object;
-    # their nodes are made when read, A.TailArgs)
-    refs: dict[str, array]
+    # their nodes are made when read, A.TailArgs): an int where the name
+    # is referred to once (a program of declared targets, each moved to
+    # once: 1e5 names, no array each), else an array (reference_starts)
+    refs: dict[str, "int | array"]
     writes: dict[str, list[A.Span]]       # lower-case name -> assignments / search results
     calls: tuple = ()                     # ProcCall/LateCall/Call: arguments may be written
                                           # (see writes.py)
@@ -163,23 +165,34 @@ def _tail_refs(refs: dict, args: A.TailArgs) -> None:
     shared tail's names (last first, as the general walk finds them)."""
     at = args.at
     for name, start in args.tail.names:
-        # (_starts written out: 4e5 references of a CAM program.)
+        # (_refer written out: 4e5 references of a CAM program.)
         starts = refs.get(name)
-        if starts is None:
-            starts = refs[name] = array("q")
-        starts.append(at + start)
+        if type(starts) is array:
+            starts.append(at + start)
+        elif starts is None:
+            refs[name] = at + start
+        else:
+            refs[name] = array("q", (starts, at + start))
 
 
 def _referred(refs: dict, ref: A.Ref) -> None:
-    _starts(refs, ref.name.lower()).append(ref.span.start)
+    _refer(refs, ref.name.lower(), ref.span.start)
 
 
-def _starts(refs: dict, name: str) -> array:
-    """Where the references to `name` (lower case) start, as found so far."""
+def _refer(refs: dict, name: str, start: int) -> None:
+    """One more reference to `name` (lower case), at `start` (Usage.refs)."""
     starts = refs.get(name)
     if starts is None:
-        starts = refs[name] = array("q")
-    return starts
+        refs[name] = start
+    elif type(starts) is int:
+        refs[name] = array("q", (starts, start))
+    else:
+        starts.append(start)
+
+
+def reference_starts(starts: "int | array") -> "tuple[int] | array":
+    """Where the references of a name of Usage.refs start."""
+    return (starts,) if type(starts) is int else starts
 
 
 def _search_writes(node: A.ProcCall, spec, writes: dict) -> None:
