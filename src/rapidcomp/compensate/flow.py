@@ -880,7 +880,16 @@ class _Walker:
         """A call that is walked as a plain one: its expressions call no
         function the flow follows (built-ins only), and nothing reads a
         position a displacement may be made of (walk() then looks)."""
-        return not self.made_of_reads and not self._fcalls(s)
+        if self.made_of_reads:
+            return False
+        args = s.args
+        if type(args) is A.TailArgs and type(args.first) is A.Call:
+            # (A move lexed as one token whose first argument is a call of
+            # names and numbers (build._fast_func): that function is all
+            # it calls. Every move of an Offs- or RelTool-relative CAM
+            # program: not remembered one by one.)
+            return args.first.name.lower() in BUILTIN_FUNCTIONS
+        return not self._fcalls(s)
 
     def _after(self, key: tuple, prev: tuple, inner: State) -> None:
         """_reach() of a use inside a run of plain moves, `prev` the use
