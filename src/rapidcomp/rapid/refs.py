@@ -84,10 +84,11 @@ def nodes(root, plain_calls: bool = False):
             yield node
             args = node.args
             if plain_calls and type(args) is A.TailArgs:
-                # (A move lexed as one token, its first argument a call:
-                # the caller reads the references after it (A.TailArgs'
-                # text has them, no node made), the walk goes on into it.)
-                stack.append(args.first)
+                # (A move lexed as one token, its first argument a call of
+                # names and numbers (build._fast_func): the caller reads
+                # that call and its references, and those after it
+                # (A.TailArgs' text has them, no node made).)
+                continue
             else:
                 stack.append(args)
         elif t is A.Num:
@@ -132,6 +133,7 @@ def usage(module: A.ModuleNode) -> Usage:
             elif len(selectors) == 1 and type(selectors[0]) is A.Component:
                 parts.setdefault(node.target.name.lower(), []).append(node)
         elif t is A.ProcCall:
+            first = None
             if node.plain:
                 # (A CAM move, 1e5 of them: its references, in the order the
                 # walk gives them, read here; those after its first where
@@ -147,14 +149,21 @@ def usage(module: A.ModuleNode) -> Usage:
                     if type(v) is A.Ref:
                         _referred(refs, v)
             elif type(node.args) is A.TailArgs:
-                # (MoveL Offs(p, 0, 0, 10),v100,...: those after its first
-                # here, the walk then goes into the call, nodes().)
+                # (MoveL Offs(p, 0, 0, 10),v100,...: those after its first,
+                # then the call and its names (nodes() goes no further), in
+                # the order the walk would meet them.)
                 _tail_refs(refs, node.args)
+                first = node.args.first
+                for arg in reversed(first.args):
+                    if type(arg.value) is A.Ref:
+                        _referred(refs, arg.value)
             spec = motion_spec(node.name)
             if spec is None:
                 calls.append(node)
             elif "search" in spec.roles:
                 _search_writes(node, spec, writes)
+            if first is not None:
+                calls.append(first)
         elif t is A.LateCall or t is A.Call:
             calls.append(node)
     return Usage(refs, writes, tuple(calls), assigns, parts)
