@@ -137,6 +137,9 @@ class IKBatch:
     iterations: np.ndarray
     warnings: np.ndarray       # (N,) Warn bits
     joint_change_deg: np.ndarray | None = None
+    # (N,) the bound on a joint's change from its seed (deg: the solver's
+    # max_joint_change_deg), where the rows are a deformed robot's
+    jump_bound_deg: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.status)
@@ -173,7 +176,10 @@ class IKBatch:
                     and abs(self.q_deg[i, 4]) < 5.0)
             return (("near the wrist singularity (J5 ~ 0, where only J4 + J6 is defined): "
                      if near else "")
-                    + f"J{j + 1} would move {d:.4f} deg, more than the allowed bound")
+                    + f"J{j + 1} would move {d:.4f} deg from the nominal solution, more than "
+                    + ("the allowed bound" if self.jump_bound_deg is None else
+                       f"the {float(self.jump_bound_deg[i]):g} deg a thermal correction may "
+                       "move a joint"))
         return "the solution is on another configuration branch (cfx changed)"
 
     def warning_texts(self, i: int) -> tuple[str, ...]:
@@ -550,7 +556,7 @@ class Solver:
         self._mark_limits(qd, status, detail, djoint)
         q_out = np.where(active[:, None], qd, np.nan)
         return IKBatch(q_out, status, detail, djoint, conf, res_mm, res_rad, iters,
-                       warnings, change)
+                       warnings, change, np.full(N, float(opt.max_joint_change_deg)))
 
     def _wrist_fallback(self, R, p, q, q_ref, seed: IKBatch, active, res_mm, res_rad, tcp):
         """Rows near J5 = 0 that the full solve left unconverged or moved
