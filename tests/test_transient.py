@@ -448,6 +448,16 @@ def test_review_cases_literal_index_backinfo_overwrite_and_static_profiles(tmp_p
     assert r.returncode == 2 and "exists and is not this support module" in r.stderr
     assert (out.parent / "rcThermal.sys").read_bytes() == before
     assert not (out.parent / "again.mod").exists()
+    # The same law again: the module there is the one it would write, kept,
+    # and the command says so beside what it wrote.
+    r = _rapidcomp("fix", mod, "--profile", FIXTURES / "warm.csv", "--transient", "--tau-heat",
+                   "40", "-o", out.parent / "again.mod", cwd=tmp_path)
+    assert r.returncode == 0 and (out.parent / "again.mod").is_file(), r.stderr
+    assert r.stdout.splitlines()[-1] == (
+        f"wrote {out.parent / 'again.mod'}, {out.parent / 'again.md'}; kept "
+        f"{out.parent / 'rcThermal.sys'} (the same "
+        "support module was there)"), r.stdout
+    assert (out.parent / "rcThermal.sys").read_bytes() == before
     backup = tmp_path / "bk"
     r = _rapidcomp("fix", FIXTURES / "tasks" / "backup_irbt", "--profile", FIXTURES / "warm.csv",
                    "--transient", "--tau-heat", "30", "--track", "a:x", "-o", backup,

@@ -361,7 +361,10 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
                 shown.append(o.spec.output + os.sep)
             shown += [p for p, _ in o.files if not o.spec.source.is_folder
                       or not p.startswith(o.spec.output + os.sep)]
-        click.echo("wrote " + ", ".join(shown))
+        kept = [p for o in outcomes for p in o.kept if not o.spec.source.is_folder
+                or not p.startswith(o.spec.output + os.sep)]
+        click.echo("wrote " + ", ".join(shown) + (
+            f"; kept {', '.join(kept)} (the same support module was there)" if kept else ""))
     sys.exit(EXIT_PARTIAL if failed else EXIT_OK)
 
 

@@ -94,6 +94,9 @@ class JobOutcome:
     result: FixResult
     # (path, bytes or a Report) to write: atomic.write_all takes both.
     files: tuple[tuple[str, bytes | Report], ...]
+    # Files of the output that were there already as they would be written
+    # (a transient support module another program of the folder wrote).
+    kept: tuple[str, ...] = ()
 
 
 def default_output(path: str, folder: bool = False) -> str:
@@ -164,12 +167,13 @@ def _run_helped(spec: JobSpec, src: TaskSource, progress: Progress) -> JobOutcom
     names = {} if src.is_folder else {src.modules[0]: Path(spec.output).name}
     base, base_text = robot_base(src, spec.base)
     transient = support = None
+    kept: list[str] = []
     if spec.transient is not None:
         from .transient import check_names
         check_names(task, spec.transient)
         # (The support module, and whether one of another program is where
         # it goes, known before the work: not refused after it.)
-        support = _support_files(spec, task)
+        support = _support_files(spec, task, kept)
         transient = (spec.transient, load_state_solvers(spec.profile, spec.robot, spec.force,
                                                         spec.limits))
     result = fix(task, solver, spec.mode, track=parse_track(spec.track), output_names=names,
@@ -212,14 +216,15 @@ def _run_helped(spec: JobSpec, src: TaskSource, progress: Progress) -> JobOutcom
     if spec.json:
         out.append((spec.json, Report("json", result, meta, progress)))
     progress.done()
-    return JobOutcome(spec, result, tuple(out))
+    return JobOutcome(spec, result, tuple(out), tuple(kept))
 
 
-def _support_files(spec: JobSpec, task) -> list[tuple[str, bytes]]:
+def _support_files(spec: JobSpec, task, kept: list[str]) -> list[tuple[str, bytes]]:
     """The transient support module, where the task loads it: next to the
     output module; in a folder next to the task's first module (a backup:
     its task's SYSMOD folder, whose modules a restore loads); a program
-    file (.pgf) lists it after its last module."""
+    file (.pgf) lists it after its last module. Where the same module is
+    there already, its path goes to `kept`, not to the files."""
     from .transient import MODULE_FILE, support_module
     src = spec.source
     first = task.files[0].source
@@ -245,6 +250,7 @@ def _support_files(spec: JobSpec, task) -> list[tuple[str, bytes]]:
         # The same module (another program of the folder wrote it, in its
         # own line breaks): kept as it is.
         out = []
+        kept.append(str(path))
     if not src.is_folder:
         return out
     # A program file lists the support module too: the one given, or each
