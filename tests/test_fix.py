@@ -77,6 +77,37 @@ def test_second_run_with_zero_profile_changes_nothing(case, zero_solver):
                if "CRobT" not in r.target)
 
 
+@pytest.mark.parametrize("case", sorted(p.name for p in (GOLDEN / "fix").iterdir()))
+def test_the_note_counts_the_new_copies_of_targets(case):
+    """The report's note on copies of declared targets counts the robtarget
+    and jointtarget declarations the output has and the input has not (the
+    MoveAbsJ jointtargets, jt_..., not among them); no note where there
+    are none."""
+    import re
+    folder = GOLDEN / "fix" / case
+    decl = re.compile(r"CONST (robtarget|jointtarget) (\w+)")
+
+    def text(side: str) -> str:
+        # (A module, or a task folder's modules.)
+        paths = sorted(p for p in folder.glob(f"{side}*") if p.is_file()) + sorted(
+            p for p in (folder / side).rglob("*") if p.is_file())
+        return "".join(p.read_text(errors="replace") for p in paths)
+    before = set(decl.findall(text("before")))
+    after = decl.findall(text("after"))
+    new: dict[str, int] = {}
+    for kind, name in after:
+        if (kind, name) not in before and not name.startswith("jt_"):
+            new[kind] = new.get(kind, 0) + 1
+    note = [line for line in (folder / "report.md").read_text().splitlines()
+            if line.startswith("- new declarations: ")]
+    if not new:
+        assert note == []
+        return
+    said = dict((k.rstrip("s"), int(n)) for n, k in re.findall(
+        r"(\d+) (robtargets?|jointtargets?)", note[0].split(",")[0] + note[0].split(",")[1]))
+    assert said == new
+
+
 def test_only_numbers_and_instructions_change():
     """Outside the edited spans the output is the input, byte for byte: the
     CRLF line ends, comments and layout of cubes.mod survive. Without the

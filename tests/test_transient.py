@@ -195,6 +195,14 @@ def test_fix_transient_holds_at_every_thermal_state(tmp_path):
                    "-o", out, cwd=tmp_path)
     assert r.returncode == 0, r.stderr + r.stdout
     assert "76 of 76" in r.stdout and "transient" in r.stdout
+    # (Where MoveL stay robtarget moves, their constants (pS25_reltool's
+    # too) are said by the transient note, not as copies of targets.)
+    auto = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", FIXTURES / "warm.csv",
+                      "--transient", "--tau-heat", "45", "--limit", "J5=-120:120", "-o",
+                      tmp_path / "auto" / "cubes.mod", cwd=tmp_path)
+    assert auto.returncode == 0 and "RelTool(rcTcR(pS25, pS25_reltool_dq)" in (
+        tmp_path / "auto" / "cubes.mod").read_text(), auto.stderr
+    assert "new declarations" not in auto.stdout
     report = (tmp_path / "cubes_tr.md").read_text()
     assert "the worst over the thermal states" in report and "| transient | clock:" in report
     support = (tmp_path / "rcThermal.sys").read_text()

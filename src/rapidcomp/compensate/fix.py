@@ -276,7 +276,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     at: list | None = [] if cells is not None or jcells is not None else None
     rows = use_rows(plan, solved, group_of=group_of, actions=actions, verified=verified,
                     mode=mode, written_conf=written_conf, at=at)
-    notes = plan_notes + _notes(rows, gs)
+    notes = plan_notes + _notes(rows, gs, transient is not None)
     if transient is not None:
         notes += _transient_notes(transient[0], state_errors if any(
             r.status == COMPENSATED for r in rows) else {})
@@ -405,7 +405,7 @@ def _file_lines(by_file: dict[str, set]) -> str:
     return "; ".join(f"{f}: lines {line_ranges(sorted(by_file[f]))}" for f in sorted(by_file))
 
 
-def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
+def _notes(rows: Rows, gs: list[P.Group], transient: bool = False) -> list[str]:
     notes = []
     # The lines of the moves turned into MoveAbsJ, by file (a set of ints
     # each: 1e5 of a CAM program, no tuple each to sort).
@@ -470,6 +470,30 @@ def _notes(rows: Rows, gs: list[P.Group]) -> list[str]:
                      "(a TCP calibration, a user frame redefined on the FlexPendant) as the "
                      "robtarget move did; after one, run rapidcomp again, or keep robtarget "
                      "moves with --emit robtarget.")
+    # Copies of declared targets (not the MoveAbsJ jointtargets, which the
+    # note above and the rows say; nor a transient output's constants, which
+    # its own note says): a target its uses need at other values
+    # (Offs/RelTool of it, other tools or configurations), one copy per
+    # value. An Offs-relative CAM program gets 1e5: the module doubles.
+    copies: dict[str, list[str]] = {}
+    for g in () if transient else gs:
+        # (names: none where no number changes, a copy made of nothing.)
+        if type(g) is not P.Singles and g.failure is None and g.mode != "absj" \
+                and g.placement == "new" and g.names:
+            copies.setdefault("robtarget" if g.mode == "rob" else "jointtarget",
+                              []).extend(g.names.values())
+    if copies:
+        kinds = sorted(copies.items())
+        many = sum(len(v) for _, v in kinds) > 1
+        notes.append(
+            "new declarations: "
+            + " and ".join(f"{len(v)} {k}{'s' if len(v) != 1 else ''}" for k, v in kinds)
+            + (", compensated copies of declared targets (" if many
+               else ", a compensated copy of a declared target (")
+            + "; ".join(v[0] + (", ..." if len(v) > 1 else "") for _, v in kinds)
+            + f"), next to the target {'each' if many else 'it'} comes from: a use that needs "
+            "a target at another value than its other uses (Offs/RelTool of it, another tool "
+            "or configuration) reads a copy; the report's rows name it")
     for g in gs:
         if g.slots:
             name = g.names.get("array", "the new jointtarget array")
