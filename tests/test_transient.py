@@ -466,6 +466,19 @@ def test_review_cases_literal_index_backinfo_overwrite_and_static_profiles(tmp_p
         f"{out.parent / 'rcThermal.sys'} (the same "
         "support module was there)"), r.stdout
     assert (out.parent / "rcThermal.sys").read_bytes() == before
+    # Two programs into one folder share its support module: named once,
+    # written (first run) or kept (second).
+    mod2 = tmp_path / "m2.mod"
+    mod2.write_text(mod.read_text().replace("MODULE M1", "MODULE M2"))
+    lines = []
+    for _ in range(2):
+        r = _rapidcomp("fix", mod, mod2, "--profile", FIXTURES / "warm.csv", "--transient",
+                       "--tau-heat", "40", "-o", tmp_path / "two", cwd=tmp_path)
+        assert r.returncode == 0, r.stderr
+        lines.append(r.stdout.splitlines()[-1])
+    assert lines[0].count("rcThermal.sys") == 1 and "kept" not in lines[0], lines[0]
+    assert lines[1].endswith(f"; kept {tmp_path / 'two' / 'rcThermal.sys'} (the same support "
+                             "module was there)"), lines[1]
     backup = tmp_path / "bk"
     r = _rapidcomp("fix", FIXTURES / "tasks" / "backup_irbt", "--profile", FIXTURES / "warm.csv",
                    "--transient", "--tau-heat", "30", "--track", "a:x", "-o", backup,

@@ -363,6 +363,8 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
                       or not p.startswith(o.spec.output + os.sep)]
         kept = [p for o in outcomes for p in o.kept if not o.spec.source.is_folder
                 or not p.startswith(o.spec.output + os.sep)]
+        # (Each once: programs into one folder share its support module.)
+        shown, kept = list(dict.fromkeys(shown)), list(dict.fromkeys(kept))
         click.echo("wrote " + ", ".join(shown) + (
             f"; kept {', '.join(kept)} (the same support module was there)" if kept else ""))
     sys.exit(EXIT_PARTIAL if failed else EXIT_OK)

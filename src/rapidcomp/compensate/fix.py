@@ -474,7 +474,8 @@ def _notes(rows: Rows, gs: list[P.Group], transient: bool = False) -> list[str]:
     # note above and the rows say; nor a transient output's constants, which
     # its own note says): a target its uses need at other values
     # (Offs/RelTool of it, other tools or configurations), one copy per
-    # value. An Offs-relative CAM program gets 1e5: the module doubles.
+    # value, or one that is not edited in place (place.place). An
+    # Offs-relative CAM program gets 1e5: the module doubles.
     copies: dict[str, list[str]] = {}
     for g in () if transient else gs:
         # (names: none where no number changes, a copy made of nothing.)
@@ -491,9 +492,10 @@ def _notes(rows: Rows, gs: list[P.Group], transient: bool = False) -> list[str]:
             + (", compensated copies of declared targets (" if many
                else ", a compensated copy of a declared target (")
             + "; ".join(v[0] + (", ..." if len(v) > 1 else "") for _, v in kinds)
-            + f"), next to the target {'each' if many else 'it'} comes from: a use that needs "
-            "a target at another value than its other uses (Offs/RelTool of it, another tool "
-            "or configuration) reads a copy; the report's rows name it")
+            + "): where a target itself cannot serve a use compensated (its other uses need "
+            "it at another value: Offs/RelTool of it, another tool or configuration; or it is "
+            "not edited in place: data of a --with module, PERS another task shares, a name "
+            "read outside moves), the use reads a copy; the report's rows name it")
     for g in gs:
         if g.slots:
             name = g.names.get("array", "the new jointtarget array")

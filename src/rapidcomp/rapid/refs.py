@@ -49,10 +49,9 @@ class Usage:
 
 def nodes(root, plain_calls: bool = False):
     """Every syntax node below root (numeric aggregates hold no names);
-    plain_calls: a plain ProcCall (names and literals only) without the
-    nodes below it, and a call lexed as one token whose first argument is
-    a call (Offs) with only that argument's nodes below it (the caller
-    reads the other arguments)."""
+    plain_calls: a plain ProcCall (names and literals only), and a call
+    lexed as one token whose first argument is a call (Offs), without the
+    nodes below them: the caller reads their arguments (usage())."""
     stack: list = [root]
     while stack:
         node = stack.pop()
