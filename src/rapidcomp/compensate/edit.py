@@ -974,8 +974,11 @@ class Editor:
                 if literals is not None:
                     literals[k] = (literal, cold_text)
             names[key] = (cold, dq)
-            g.names = writable(g.names)
-            g.names[key] = cold or g.decl.name
+            if g.array:
+                # (Read by the note on slots no move reaches, fix._notes:
+                # not kept for each of 1e5 declared targets.)
+                g.names = writable(g.names)
+                g.names[key] = cold or g.decl.name
         return names
 
     def _use_transient(self, g: Group, names: dict, func: str, absj: bool,

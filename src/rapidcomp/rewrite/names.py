@@ -47,12 +47,19 @@ class NameAllocator:
 
     def new(self, stem: str) -> str:
         """A fresh identifier like `stem`, or `stem_2`, `stem_3`, ..."""
-        n = self._next.get(stem.lower(), 1)
+        key = stem.lower()
+        n = self._next.get(key, 1)
+        taken = self.taken
         while True:
             suffix = "" if n == 1 else f"_{n}"
             name = stem[:MAX_LEN - len(suffix)] + suffix
-            if name.lower() not in self.taken:
-                self.taken.add(name.lower())
-                self._next[stem.lower()] = n + 1
+            low = name.lower()
+            if low not in taken:
+                taken.add(low)
+                # (A stem's first name, `stem` itself, leaves no entry: its
+                # next request probes it once more. 1e5 declared targets
+                # each make one name of a stem of its own.)
+                if n > 1:
+                    self._next[key] = n + 1
                 return name
             n += 1
