@@ -813,26 +813,33 @@ def test_a_function_of_numbers_as_first_argument_is_the_call_the_grammar_makes(m
 def test_two_aggregates_first_are_the_call_the_grammar_makes(monkeypatch):
     """MoveC [[...]],[[...]],v100,z1,tool0; (a CAM program's arcs: 5e4 of
     them) is one token (FAST_CIRC) when its two first arguments are numeric
-    aggregates: the nodes are those the grammar's rules make of its tokens,
-    whatever the blanks and nesting; a reserved word where a name must be
-    is lexed token by token, and refused as the parser refuses it."""
+    aggregates, or a name (a declared circle point) and an aggregate: the
+    nodes are those the grammar's rules make of its tokens, whatever the
+    blanks and nesting; a reserved word where a name must be is lexed token
+    by token, and refused as the parser refuses it."""
     t = robtarget(targets(1, 5)[0], 1)
     lines = ["MODULE M", "  PROC p()"]
     for sep in (",", " , ", ",\t", "\t,"):
         lines += [f"    MoveC {t}{sep}{t},v100,z1,tool0;",
                   f"    MoveC [1,2]{sep}[[3],[4]] ,v100 , fine,tool0\\WObj:=wobj1;",
                   f"    Foo [1, 2 ]{sep}[ [3,4] , 5 ];",
-                  f"    MoveC {t}{sep}{t},v100,z1,tool0\\T1:=2;"]
+                  f"    MoveC {t}{sep}{t},v100,z1,tool0\\T1:=2;",
+                  f"    MoveC c_10{sep}{t},v100,z1,tool0\\WObj:=wobj1;",
+                  f"    Foo a{sep}[ [3,4] , 5 ];"]
     text = "\n".join(lines + ["  ENDPROC", "ENDMODULE", ""])
     eng = engine()
     kinds = [t.type for t in eng.tokens(text)]
-    assert kinds.count("FAST_CIRC") == 16 and kinds.count("FAST_CALL") == 0
+    assert kinds.count("FAST_CIRC") == 24 and kinds.count("FAST_CALL") == 0
     fast = _tree(eng.parse(text))
     # (The arguments as the grammar splits them: two aggregates first.)
     pf = parse_text("\n".join(lines[:3] + ["  ENDPROC", "ENDMODULE", ""]), "m.mod")
     call = pf.modules[0].node.items[0].body[0]
     assert len(pf.modules[0].motions[0].targets) == 2
     assert [type(a.value).__name__ for a in call.args][:3] == ["NumAgg", "NumAgg", "Ref"]
+    pf = parse_text("\n".join(lines[:2] + lines[6:7] + ["  ENDPROC", "ENDMODULE", ""]), "m.mod")
+    call = pf.modules[0].node.items[0].body[0]
+    assert [type(a.value).__name__ for a in call.args][:3] == ["Ref", "NumAgg", "Ref"]
+    assert call.args[0].value.name == "c_10" and pf.modules[0].motions[0].targets[0].role == "cir"
     bad = text.replace("z1,tool0;", "z1,IF;", 1)
     with monkeypatch.context() as m:
         m.setattr(eng, "_master", eng._master_plain)

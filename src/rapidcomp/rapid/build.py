@@ -472,15 +472,22 @@ class NodeBuilder:
         name = sys.intern(head.group(1))
         pos = head.end()
         if tok.type == "FAST_CIRC":
-            # Two aggregates, a comma between (blanks around it); the
-            # second ends at the statement's last ']'. Their Args made now,
-            # with the nodes of the arguments after them (as _fast_func's).
-            mid = _AGG.match(text, pos).end()
+            # An aggregate or a name (a declared circle point), then an
+            # aggregate, a comma between (blanks around it); the second ends
+            # at the statement's last ']'. Their Args made now, with the
+            # nodes of the arguments after them (as _fast_func's).
+            if text[pos] == "[":
+                mid = _AGG.match(text, pos).end()
+                span = _span((base + pos, base + mid))
+                first = _numagg(text[pos:mid], span)
+            else:
+                mid = _FAST_ITEM.match(text, pos).end()
+                span = _span((base + pos, base + mid))
+                first = _ref(text[pos:mid], (), span)
             at = text.index("[", mid)
             end = text.rindex("]") + 1
-            aggs = [_numagg(text[a:b], _span((base + a, base + b)))
-                    for a, b in ((pos, mid), (at, end))]
-            every = (*(_arg("pos", None, g, g.span) for g in aggs),
+            second = _numagg(text[at:end], _span((base + at, base + end)))
+            every = (_arg("pos", None, first, span), _arg("pos", None, second, second.span),
                      *_fast_tail(text[end:]).nodes(base + end))
             return _call(name, every, _span((base, base + len(text))), plain_args(every))
         if text[pos] == "[":
