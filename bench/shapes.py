@@ -14,6 +14,7 @@ it compensated. Goal of issue #14 (for bench/fix.py's shape): <= 10 s and
 
   bench_main / bench_nomain  bench/fix.py's module (Path called from main / by nothing)
   a_movec    MoveC only (size/2 moves), each a circle point and an end point, inline
+  k_circdecl MoveC only, each a declared circle point and an inline end point
   b_const    Grasshopper: CONST robtarget path{n} := [...]; FOR i ... MoveL path{i}
   b_var      the same, VAR
   b_pers     the same, PERS
@@ -24,6 +25,7 @@ it compensated. Goal of issue #14 (for bench/fix.py's shape): <= 10 s and
   h_reltool  the same as RelTool(pK, dx, dy, dz \\Rz:=a), a whole degree in -30..30
   i_datamod  a task folder: the targets in a data module, the moves in another
   j_alldecl  the same in one module: every target declared, each moved to once
+  j_alldecl_tr  j_alldecl with `--transient --tau-heat 45` (not --emit absj)
   e_confoff  ConfL\\Off, then inline MoveL
   f_tools    10 tools x 10 work objects, half declared, half inline
   g_mixed    MoveJ/MoveL, SetDO and WaitTime every 10 moves
@@ -72,6 +74,15 @@ def a_movec(n, seed=1):
     t = targets(n, seed)
     body = [f"MoveC {t[2 * k]},{t[2 * k + 1]}{TAIL}" for k in range(n // 2)]
     return module("CAM_MoveC", [TOOL, WOBJ], [("Path", body)], ["Path;"])
+
+
+def k_circdecl(n, seed=1):
+    """MoveC with a declared circle point and an inline end point (size/2
+    moves), as a program mixing taught and generated points writes them."""
+    t = targets(n, seed)
+    decl = [f"  CONST robtarget c{k}:={t[2 * k]};" for k in range(n // 2)]
+    body = [f"MoveC c{k},{t[2 * k + 1]}{TAIL}" for k in range(n // 2)]
+    return module("CAM_CircDecl", [TOOL, WOBJ, *decl], [("Arcs", body)], ["Arcs;"])
 
 
 def b_array(n, kind, seed=1):
@@ -251,6 +262,7 @@ SHAPES = {
     "bench_main": lambda n: cam_module(n, main=True),
     "bench_nomain": lambda n: cam_module(n),
     "a_movec": a_movec,
+    "k_circdecl": k_circdecl,
     "b_const": lambda n: b_array(n, "CONST"),
     "b_var": lambda n: b_array(n, "VAR"),
     "b_pers": lambda n: b_array(n, "PERS"),
@@ -260,6 +272,7 @@ SHAPES = {
     "h_reltool": lambda n: d_offs(n, reltool=True),
     "i_datamod": i_datamod,
     "j_alldecl": lambda n: i_datamod(n, folder=False),
+    "j_alldecl_tr": lambda n: i_datamod(n, folder=False),
     "e_confoff": e_confoff,
     "f_tools": f_tools,
     "g_mixed": g_mixed,
@@ -267,13 +280,17 @@ SHAPES = {
 
 
 
-def run(path: str, out: str, env: dict) -> dict:
+# Shapes run with other options than `--emit absj`.
+MODES = {"j_alldecl_tr": ("--transient", "--tau-heat", "45")}
+
+
+def run(path: str, out: str, env: dict, mode: tuple = ("--emit", "absj")) -> dict:
     """`rapidcomp fix` on path, end to end in a process of its own: seconds,
     peak MiB, cores (wait4's CPU time counts the children it reaped), exit
     code and its summary's counts."""
     t = time.perf_counter()
     proc = subprocess.Popen([sys.executable, "-m", "rapidcomp", "fix", path, "--profile",
-                             str(PROFILE), "--emit", "absj", "--allow-partial", "-o", out],
+                             str(PROFILE), *mode, "--allow-partial", "-o", out],
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     text = proc.stdout.read()
     _, status, usage = os.wait4(proc.pid, 0)
@@ -312,7 +329,7 @@ def main() -> None:
                 size = path.stat().st_size
                 out = Path(tmp) / f"{name}_comp.mod"
             made = None
-            r = run(str(path), str(out), env)
+            r = run(str(path), str(out), env, MODES.get(name, ("--emit", "absj")))
             print(f"{name:<13} {r['uses']:>7} {size / 1e6:>6.1f} {r['s']:>8.2f} "
                   f"{r['peak_MiB']:>9.0f} {r['cores']:>6.2f} {r['done']:>12} {r['rc']:>3}",
                   flush=True)
