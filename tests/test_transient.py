@@ -523,6 +523,37 @@ def test_two_programs_in_one_folder_share_the_support_module(tmp_path):
     assert b"\r\n" not in (out / "rcThermal.sys").read_bytes()
 
 
+def test_a_target_read_once_that_the_transient_writer_refuses_is_its_own_group(tmp_path,
+                                                                                monkeypatch):
+    """A declared target one move reads alone (place.Singles) that the
+    transient writer refuses (as it refuses confdata one robtarget cannot
+    carry in both states) is refused with that reason in its row and the
+    summary, its move left as written, the other 75 written: the element
+    becomes the Group of its own it is (place.split_off)."""
+    from click.testing import CliRunner
+
+    from rapidcomp.cli import main
+    from rapidcomp.compensate import edit
+    real = edit.Editor._apply_transient
+
+    def refusing(self, g):
+        if [u.line for u in g.uses] == [106]:          # MoveL pS3, v200, fine, tool0;
+            g.failure = ("refused here (a test's reason)", None)
+            return None
+        return real(self, g)
+    monkeypatch.setattr(edit.Editor, "_apply_transient", refusing)
+    out = tmp_path / "o.mod"
+    r = CliRunner().invoke(main, ["fix", str(FIXTURES / "cubes.mod"), "--profile",
+                                  str(FIXTURES / "warm.csv"), "--transient", "--tau-heat", "45",
+                                  "--limit", "J5=-120:120", "--allow-partial", "-o", str(out)])
+    assert r.exit_code == 1, r.output
+    assert "75 of 76 target uses compensated, 1 not compensated" in r.output
+    assert "line 106 MoveL pS3: refused here (a test's reason)" in r.output
+    text = out.read_text()
+    assert "        MoveL pS3, v200, fine, tool0;" in text and "pS3_dq" not in text
+    assert "MoveL rcTcR(pS4, pS4_dq), v200, fine, tool0;" in text
+
+
 def test_a_support_module_of_another_program_is_refused_before_the_work(tmp_path, monkeypatch):
     """Where rcThermal.sys of other settings is in the way, the command says
     so before it compensates anything (a CAM program's work is not done

@@ -66,14 +66,21 @@ class Values:
         """Within: the MoveAbsJ literal prepared for element n of s is that
         of g, the Group of its one use made for the while (Singles.single;
         its key only while it lives: an id is reused once it is gone)."""
-        key = ("absj", id(g), None)
-        prepared = self._values.get(("absj", id(s), n))
-        if prepared is not None:
-            self._values[key] = prepared
+        # (A transient output's value and correction, too: prepare()'s of
+        # the element.)
+        keys = []
+        for mine, its in ((("absj", id(g), None), ("absj", id(s), n)),
+                          ((id(g), None), (id(s), n)),
+                          (("pose dq", id(g), None), ("pose dq", id(s), n))):
+            prepared = self._values.get(its)
+            if prepared is not None:
+                self._values[mine] = prepared
+                keys.append(mine)
         try:
             yield
         finally:
-            self._values.pop(key, None)
+            for key in keys:
+                self._values.pop(key, None)
 
     def joints(self, g: Group, k) -> np.ndarray:
         if k in g.slots:
@@ -505,6 +512,9 @@ class Editor:
         # (verify.relex_absj). others: some structural edit is of another
         # kind (the output is parsed again).
         self.converted: dict = {}
+        # Elements of Singles written one by one that failed: (the Singles,
+        # the element, why), for the caller (fix.py: place.split_off).
+        self.failed: list[tuple[Singles, int, tuple]] = []
         # A declared robtarget or jointtarget that some of its uses read as
         # a CONST copy <name>_c next to it: use key -> (the use, the copy's
         # literal, its name, its type, the file it is declared in); read
@@ -671,7 +681,10 @@ class Editor:
     # -------------------------------------------------------- per group
     def apply(self, g: Group | Singles) -> None:
         if type(g) is Singles:
-            self._apply_singles(g)
+            if self.transient:
+                self._apply_one_by_one(g, g.elements)
+            else:
+                self._apply_singles(g)
             return
         if self.transient:
             self._apply_transient(g)
@@ -774,10 +787,7 @@ class Editor:
         jointtarget next to it (RobotStudio's way: every target declared,
         each moved to once; 1e5 of them) without making that Group."""
         if self.transient or s.mode != "absj" or s.placement != "new":
-            for n in ns:
-                g = s.single(n, self.plan.file_index, placed=True)
-                with self.values.lent(s, n, g):
-                    self.apply(g)
+            self._apply_one_by_one(s, ns)
             return
         file_index, names, vals = self.plan.file_index, self.names, self.values
         converted, actions = self.converted, self.actions
@@ -797,6 +807,19 @@ class Editor:
             called = self._to_absj(u, name)
             converted[u.key] = (u, literal, name, called, home[0])
             actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {name}"
+
+    def _apply_one_by_one(self, s: Singles, ns) -> None:
+        """apply() of elements ns of s, each as the Group of its one use
+        (Singles.single; its prepared values lent to it). One that fails
+        (a transient output's confdata) goes to self.failed, for the caller
+        to make it the Group of its own it is (place.split_off)."""
+        file_index = self.plan.file_index
+        for n in ns:
+            g = s.single(n, file_index, placed=True)
+            with self.values.lent(s, n, g):
+                self.apply(g)
+            if g.failure is not None:
+                self.failed.append((s, n, g.failure))
 
     def _apply_singles(self, s: Singles) -> None:
         """apply() of each element of s as of the Group of its one use: its

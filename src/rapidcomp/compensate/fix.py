@@ -117,10 +117,9 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # The uses grouped as far as their nominal solutions decide, while the
     # deformed robot's IK is made beside (solve.Solving).
     solving = Solving(plan, solver, start)
-    # (Inline literals read by one use alone are Singles, not a Group
-    # each: a CAM program's 1e5; transient mode writes Groups only.)
-    gs = P.grouping(plan, solving, mode, solver.options.wrist_fallback_deg,
-                    singles=transient is None)
+    # (Inline literals and declarations read by one use alone are Singles,
+    # not a Group each: a CAM program's 1e5.)
+    gs = P.grouping(plan, solving, mode, solver.options.wrist_fallback_deg, singles=True)
     # The plan's notes made meanwhile too: past the groups nothing reads the
     # flow (printing and verifying the values read the plan's uses and
     # resolver; the rows its uses and track).
@@ -183,6 +182,17 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
                                 values.confs([(g, k) for g, k, _ in done])))
         done = None                   # (a tuple per use: not kept past here)
         values.forget()
+        # Elements of Singles whose writing failed (a transient output's
+        # confdata): each the Group of its own it is, which says why (past
+        # the values keyed by element, which the split renumbers).
+        by_singles: dict = {}
+        for s, n, why in editor.failed:
+            by_singles.setdefault(id(s), (s, [], []))
+            by_singles[id(s)][1].append(n)
+            by_singles[id(s)][2].append(why)
+        for s, ns, whys in by_singles.values():
+            for g, why in zip(P.split_off(gs, s, ns, plan.file_index, placed=True), whys):
+                g.failure = why
         # (The new declarations are in the edits now, as texts of their own:
         # 1e5 MoveL turned into MoveAbsJ, ~18 MB of them twice.)
         editor.edits = editor.field_lists = None
