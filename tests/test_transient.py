@@ -534,14 +534,22 @@ def test_a_target_read_once_that_the_transient_writer_refuses_is_its_own_group(t
 
     from rapidcomp.cli import main
     from rapidcomp.compensate import edit
-    real = edit.Editor._apply_transient
+    from rapidcomp.compensate import place as P
+    real, kept = edit.Editor._apply_transient, edit.Values.conf_kept
 
     def refusing(self, g):
         if [u.line for u in g.uses] == [106]:          # MoveL pS3, v200, fine, tool0;
             g.failure = ("refused here (a test's reason)", None)
             return None
         return real(self, g)
+
+    def not_kept(self, g, k):
+        # (Its confdata not the written one: not the Singles' own way, the
+        # Group's, where the writer refuses it.)
+        lines = [g.uses[k].line] if type(g) is P.Singles else [u.line for u in g.uses]
+        return False if lines == [106] else kept(self, g, k)
     monkeypatch.setattr(edit.Editor, "_apply_transient", refusing)
+    monkeypatch.setattr(edit.Values, "conf_kept", not_kept)
     out = tmp_path / "o.mod"
     r = CliRunner().invoke(main, ["fix", str(FIXTURES / "cubes.mod"), "--profile",
                                   str(FIXTURES / "warm.csv"), "--transient", "--tau-heat", "45",

@@ -157,6 +157,11 @@ class Values:
             int)).all(axis=1)
         return d, dq, conf, kept
 
+    def prepared_dq(self, s: Singles, n: int) -> bool:
+        """prepare() made element n's correction and its literal."""
+        got = self._values.get(("pose dq", id(s), n))
+        return got is not None and len(got) == 3
+
     def conf_kept(self, g: Group, k) -> bool:
         """Transient: pose_dq(g, k)'s confdata is the written one."""
         key = ("pose dq", id(g), k)
@@ -681,10 +686,12 @@ class Editor:
     # -------------------------------------------------------- per group
     def apply(self, g: Group | Singles) -> None:
         if type(g) is Singles:
-            if self.transient:
-                self._apply_one_by_one(g, g.elements)
-            else:
+            if not self.transient:
                 self._apply_singles(g)
+            elif g.declared and g.mode == "rob":
+                self._transient_declared(g)
+            else:
+                self._apply_one_by_one(g, g.elements)
             return
         if self.transient:
             self._apply_transient(g)
@@ -820,6 +827,38 @@ class Editor:
                 self.apply(g)
             if g.failure is not None:
                 self.failed.append((s, n, g.failure))
+
+    def _transient_declared(self, s: Singles) -> None:
+        """_apply_one_by_one of declared robtargets each read by its one
+        move, kept a robtarget move (transient): where the written confdata
+        serves every state, what _apply_transient writes for the Group of
+        its one use (<name>_dq next to the declaration, the move's target
+        rcTcR(<name>, <name>_dq)), without that Group (RobotStudio's way:
+        every target declared, 1e5 of them); any other element, in its
+        turn, that Group's way."""
+        vals, file_index, names = self.values, self.plan.file_index, self.names
+        actions, calls, prepared = self.actions, self.calls, vals.prepared_dq
+        why = self._said(f"target -> {FUNC_R}")
+        for n in s.elements:
+            if not prepared(s, n) or not vals.conf_kept(s, n):
+                self._apply_one_by_one(s, (n,))
+                continue
+            u = s.uses[n]
+            src = u.source
+            decl, module = src.decl, src.home_module
+            anchor = self._anchor_of((file_index[id(src.home)], module), decl, module)
+            # (As _declare_transient names and declares it: no cold copy.)
+            dq = names.new(decl.name[:29] + "_dq")
+            literal = vals.pose_literal(s, n)
+            self.others = True
+            self._declare(anchor, u.module is module, self._assign(anchor[0], decl, module, module),
+                          "pose", dq, "", literal)
+            # (As _use_transient writes its target.)
+            ref_text = u.file.text(src.ref)
+            target = f"{FUNC_R}({ref_text}, {dq})"
+            self.edit(u.key[0], src.ref.span, target, why)
+            actions[u.key] = f"{ref_text} -> {target}"
+            calls[u.key] = (u, ref_text, dq, literal, FUNC_R, src.ref.span, None, None)
 
     def _apply_singles(self, s: Singles) -> None:
         """apply() of each element of s as of the Group of its one use: its
