@@ -562,6 +562,40 @@ def test_a_target_read_once_that_the_transient_writer_refuses_is_its_own_group(t
     assert "MoveL rcTcR(pS4, pS4_dq), v200, fine, tool0;" in text
 
 
+def test_new_names_come_in_the_groups_order_with_targets_read_once(tmp_path, monkeypatch):
+    """A transient output's new names (<name>_dq) are made in the order a
+    Group each makes them, where targets read once (place.Singles) and
+    others share a stem: two 32-character names alike in their first 29
+    (one read once, one read twice, at a later line) get the same names
+    either way (the first met the first), and the whole output is the
+    same."""
+    from click.testing import CliRunner
+
+    from rapidcomp.cli import main
+    from rapidcomp.compensate import place as P
+    text = (FIXTURES / "cubes.mod").read_text()
+    text = text.replace("        MoveL pS26, v200, fine, tool0;\n",
+                        "        MoveL pS26, v200, fine, tool0;\n        MoveL pS9, v200, fine, tool0;\n")
+    text = re.sub(r"\bpS2\b", "a" * 29 + "001", text)
+    text = re.sub(r"\bpS9\b", "a" * 29 + "002", text)
+    program = tmp_path / "names.mod"
+    program.write_text(text)
+
+    def run(where):
+        r = CliRunner().invoke(main, ["fix", str(program), "--profile", str(FIXTURES / "warm.csv"),
+                                      "--transient", "--tau-heat", "45", "--limit",
+                                      "J5=-120:120", "-o", str(where / "o.mod")])
+        assert r.exit_code == 0, r.output
+        return (where / "o.mod").read_text()
+    singles = run(tmp_path / "singles")
+    # (The second, cut to 32 characters with its suffix: <29 a>__2.)
+    assert f"{'a' * 29}001, {'a' * 29}_dq)" in singles
+    assert f"{'a' * 29}002, {'a' * 29}__2)" in singles
+    real = P.grouping
+    monkeypatch.setattr(P, "grouping", lambda *a, **k: real(*a, **{**k, "singles": False}))
+    assert run(tmp_path / "groups") == singles
+
+
 def test_a_support_module_of_another_program_is_refused_before_the_work(tmp_path, monkeypatch):
     """Where rcThermal.sys of other settings is in the way, the command says
     so before it compensates anything (a CAM program's work is not done

@@ -688,8 +688,6 @@ class Editor:
         if type(g) is Singles:
             if not self.transient:
                 self._apply_singles(g)
-            elif g.declared and g.mode == "rob":
-                self._transient_declared(g)
             else:
                 self._apply_one_by_one(g, g.elements)
             return
@@ -792,7 +790,11 @@ class Editor:
         as the Group of its one use (its literal the one prepared for the
         element). A declared target's move turned into MoveAbsJ on a new
         jointtarget next to it (RobotStudio's way: every target declared,
-        each moved to once; 1e5 of them) without making that Group."""
+        each moved to once; 1e5 of them), and a transient output's
+        <name>_dq next to it, without making that Group."""
+        if self.transient and s.mode == "rob":
+            self._transient_declared(s, ns)
+            return
         if self.transient or s.mode != "absj" or s.placement != "new":
             self._apply_one_by_one(s, ns)
             return
@@ -828,9 +830,10 @@ class Editor:
             if g.failure is not None:
                 self.failed.append((s, n, g.failure))
 
-    def _transient_declared(self, s: Singles) -> None:
-        """_apply_one_by_one of declared robtargets each read by its one
-        move, kept a robtarget move (transient): where the written confdata
+    def _transient_declared(self, s: Singles, ns: list[int]) -> None:
+        """_apply_one_by_one of elements ns of declared robtargets each read
+        by its one move, kept a robtarget move (transient), in the groups'
+        order (their new names are made in it): where the written confdata
         serves every state, what _apply_transient writes for the Group of
         its one use (<name>_dq next to the declaration, the move's target
         rcTcR(<name>, <name>_dq)), without that Group (RobotStudio's way:
@@ -839,7 +842,7 @@ class Editor:
         vals, file_index, names = self.values, self.plan.file_index, self.names
         actions, calls, prepared = self.actions, self.calls, vals.prepared_dq
         why = self._said(f"target -> {FUNC_R}")
-        for n in s.elements:
+        for n in ns:
             if not prepared(s, n) or not vals.conf_kept(s, n):
                 self._apply_one_by_one(s, (n,))
                 continue

@@ -120,6 +120,12 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # (Inline literals and declarations read by one use alone are Singles,
     # not a Group each: a CAM program's 1e5.)
     gs = P.grouping(plan, solving, mode, solver.options.wrist_fallback_deg, singles=True)
+    if transient is not None:
+        # (A transient output's declared targets each make a new name: made
+        # in the groups' order, as a Group each would make them.)
+        for s in gs:
+            if type(s) is P.Singles and s.declared:
+                s.in_order = True
     # The plan's notes made meanwhile too: past the groups nothing reads the
     # flow (printing and verifying the values read the plan's uses and
     # resolver; the rows its uses and track).

@@ -121,6 +121,10 @@ class Singles:
     # absj: a new jointtarget, made in the groups' order), not inline
     # literals.
     declared: bool = False
+    # Its elements written in the groups' order even where they are not
+    # turned into MoveAbsJ: a transient output's each make a new name
+    # (<name>_dq) and declaration (fix.py sets it).
+    in_order: bool = False
     # As a Group placed inline (declared: in place), nothing failed, no
     # name or slot written.
     failure: None = None
@@ -171,7 +175,7 @@ class Singles:
     def ordered(self) -> bool:
         """Its elements are written in the groups' order (Editor.apply, in
         apply_order): each makes a new name and declaration."""
-        return self.declared and self.mode == "absj"
+        return self.declared and (self.mode == "absj" or self.in_order)
 
 
 def _interleaved(gs: list, singles) -> list:
