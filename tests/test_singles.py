@@ -236,3 +236,52 @@ def test_a_name_is_said_as_the_first_move_spells_it(solver, monkeypatch):
         assert left == [(1, 1)]
         said = next(n for n in got.notes if n.startswith("the moves turned into MoveAbsJ"))
         assert ("WPART" if single_first else "wPart") in said, said
+
+
+def test_apply_order_is_the_groups_order_in_runs():
+    """apply_order gives the groups and the ordered Singles' elements in the
+    order a Group each would come (_interleaved: by place among the uses
+    walked), the elements of one Singles that follow one another as one
+    run, the other Singles last: the same as the order written out here
+    element by element (random groups and Singles, seeded)."""
+    import random
+    from types import SimpleNamespace
+
+    from rapidcomp.compensate import place as P
+    rnd = random.Random(3)
+    for _ in range(200):
+        places = rnd.sample(range(1000), rnd.randint(1, 60))
+        gs: list = []
+        singles = [P.Singles("absj", declared=True, placement="new"),
+                   P.Singles("rob", declared=True, placement="in place", in_order=True),
+                   P.Singles("rob")]
+        for at in sorted(places):
+            k = rnd.randrange(5)
+            if k < 2:
+                gs.append(P.Group("rob", SimpleNamespace(decl=None), None, None, (0, None),
+                                  first=at))
+            else:
+                singles[k - 2].at.append(at)
+                singles[k - 2].uses.append(None)
+        rnd.shuffle(gs)
+        gs += [s for s in singles if s.at]
+        # The oracle: each item at its place, runs of one Singles joined.
+        items = sorted([(g.first, 0, g) for g in gs if type(g) is P.Group]
+                       + [(a, 1, (s, n)) for s in singles[:2] for n, a in enumerate(s.at)],
+                       key=lambda x: (x[0], x[1]))
+        want: list = []
+        for _, _, x in items:
+            if type(x) is not tuple:
+                want.append(x)
+            elif want and type(want[-1]) is tuple and want[-1][0] is x[0]:
+                want[-1][1].append(x[1])
+            else:
+                want.append((x[0], [x[1]]))
+        if not any(s.at for s in singles[:2]):
+            want = [g for g in gs if not (type(g) is P.Singles and g.ordered)]
+        else:
+            want += [s for s in gs if type(s) is P.Singles and not s.ordered]
+        got = P.apply_order(gs)
+        assert len(got) == len(want)
+        for a, b in zip(got, want):
+            assert (a[0] is b[0] and a[1] == b[1]) if type(b) is tuple else a is b
