@@ -240,10 +240,11 @@ def test_a_name_is_said_as_the_first_move_spells_it(solver, monkeypatch):
 
 def test_apply_order_is_the_groups_order_in_runs():
     """apply_order gives the groups and the ordered Singles' elements in the
-    order a Group each would come (_interleaved: by place among the uses
+    order a Group each would come (place._runs: by place among the uses
     walked), the elements of one Singles that follow one another as one
-    run, the other Singles last: the same as the order written out here
-    element by element (random groups and Singles, seeded)."""
+    run, the other Singles last; and uses_in_order every use so: the same
+    as the order written out here element by element (random groups and
+    Singles, seeded)."""
     import random
     from types import SimpleNamespace
 
@@ -260,9 +261,10 @@ def test_apply_order_is_the_groups_order_in_runs():
             if k < 2:
                 gs.append(P.Group("rob", SimpleNamespace(decl=None), None, None, (0, None),
                                   first=at))
+                gs[-1].uses += [object() for _ in range(rnd.randint(1, 3))]
             else:
                 singles[k - 2].at.append(at)
-                singles[k - 2].uses.append(None)
+                singles[k - 2].uses.append(object())
         rnd.shuffle(gs)
         gs += [s for s in singles if s.at]
         # The oracle: each item at its place, runs of one Singles joined.
@@ -285,3 +287,13 @@ def test_apply_order_is_the_groups_order_in_runs():
         assert len(got) == len(want)
         for a, b in zip(got, want):
             assert (a[0] is b[0] and a[1] == b[1]) if type(b) is tuple else a is b
+        # Every use, each element of every Singles at its place (uses_in_order).
+        every = sorted([(g.first, 0, g) for g in gs if type(g) is P.Group]
+                       + [(a, 1, (s, n)) for s in gs if type(s) is P.Singles
+                          for n, a in enumerate(s.at)], key=lambda x: (x[0], x[1]))
+        pairs = [(x[0], x[0].uses[x[1]]) if type(x) is tuple else None for _, _, x in every]
+        want_uses = []
+        for p, (_, _, x) in zip(pairs, every):
+            want_uses += [p] if p is not None else [(x, u) for u in x.uses]
+        got_uses = P.uses_in_order(gs)
+        assert [(id(g), id(u)) for g, u in got_uses] == [(id(g), id(u)) for g, u in want_uses]

@@ -798,24 +798,30 @@ class Editor:
         if self.transient or s.mode != "absj" or s.placement != "new":
             self._apply_one_by_one(s, ns)
             return
-        file_index, names, vals = self.plan.file_index, self.names, self.values
+        names, vals = self.names, self.values
         converted, actions = self.converted, self.actions
         for n in ns:
             u = s.uses[n]
-            src = u.source
-            decl, module = src.decl, src.home_module
-            home = (file_index[id(src.home)], module)
             # (As apply() names it: "jt_" and _stem of the group, which is
             # the declaration's name: Singles hold no Offs/RelTool.)
-            name = names.new("jt_" + decl.name)
+            name = names.new("jt_" + u.source.decl.name)
             literal = vals.absj_literal(s, n)
-            anchor = self._anchor_of(home, decl, module)
-            self._declare(anchor, u.module is module,
-                          self._assign(anchor[0], decl, module, module),
-                          "jointtarget", name, "", literal)
+            home = self._declare_next_to(u, "jointtarget", name, literal)
             called = self._to_absj(u, name)
-            converted[u.key] = (u, literal, name, called, home[0])
+            converted[u.key] = (u, literal, name, called, home)
             actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {name}"
+
+    def _declare_next_to(self, u, type_name: str, name: str, value: str) -> int:
+        """declare() of the Group of u alone, u's target a declaration of a
+        given module (Singles.single's home: that module): next to it,
+        LOCAL unless another module's move reads it. Returns the index of
+        the file it goes in."""
+        src = u.source
+        decl, module = src.decl, src.home_module
+        anchor = self._anchor_of((self.plan.file_index[id(src.home)], module), decl, module)
+        self._declare(anchor, u.module is module, self._assign(anchor[0], decl, module, module),
+                      type_name, name, "", value)
+        return anchor[0]
 
     def _apply_one_by_one(self, s: Singles, ns) -> None:
         """apply() of elements ns of s, each as the Group of its one use
@@ -839,7 +845,7 @@ class Editor:
         rcTcR(<name>, <name>_dq)), without that Group (RobotStudio's way:
         every target declared, 1e5 of them); any other element, in its
         turn, that Group's way."""
-        vals, file_index, names = self.values, self.plan.file_index, self.names
+        vals, names = self.values, self.names
         actions, calls, prepared = self.actions, self.calls, vals.prepared_dq
         why = self._said(f"target -> {FUNC_R}")
         for n in ns:
@@ -848,14 +854,11 @@ class Editor:
                 continue
             u = s.uses[n]
             src = u.source
-            decl, module = src.decl, src.home_module
-            anchor = self._anchor_of((file_index[id(src.home)], module), decl, module)
             # (As _declare_transient names and declares it: no cold copy.)
-            dq = names.new(decl.name[:29] + "_dq")
+            dq = names.new(src.decl.name[:29] + "_dq")
             literal = vals.pose_literal(s, n)
             self.others = True
-            self._declare(anchor, u.module is module, self._assign(anchor[0], decl, module, module),
-                          "pose", dq, "", literal)
+            self._declare_next_to(u, "pose", dq, literal)
             # (As _use_transient writes its target.)
             ref_text = u.file.text(src.ref)
             target = f"{FUNC_R}({ref_text}, {dq})"

@@ -178,14 +178,33 @@ class Singles:
         return self.declared and (self.mode == "absj" or self.in_order)
 
 
-def _interleaved(gs: list, singles) -> list:
-    """The Groups of gs by Group.first, each element (s, n) of the Singles
+def _runs(gs: list, singles) -> list:
+    """The Groups of gs by Group.first, each element of the Singles
     `singles` at its own place among them (Singles.at): the order of a
-    Group each."""
-    items = [(g.first, 0, g) for g in gs if type(g) is not Singles]
-    items += [(a, 1, (s, n)) for s in singles for n, a in enumerate(s.at)]
-    items.sort(key=lambda x: (x[0], x[1]))
-    return [x[2] for x in items]
+    Group each; the elements of one Singles that come one after the other
+    as one (Singles, [n, ...]). As arrays (1e5 elements: no tuple each to
+    sort): by place among the uses walked, a Group before an element at
+    the same place (none is: each is a use's own)."""
+    groups = [g for g in gs if type(g) is not Singles]
+    places = np.concatenate([np.array([g.first for g in groups], np.int64),
+                             *(np.array(s.at, np.int64) for s in singles)])
+    if not len(places):
+        return []
+    which = np.concatenate([np.full(len(groups), -1, np.int64),
+                            *(np.full(len(s.at), k, np.int64) for k, s in enumerate(singles))])
+    index = np.concatenate([np.arange(len(groups)), *(np.arange(len(s.at)) for s in singles)])
+    by = np.argsort(places, kind="stable")
+    which, index = which[by], index[by]
+    # Runs: a Group each, else the elements of one Singles one after the other.
+    cuts = np.flatnonzero((which[1:] != which[:-1]) | (which[1:] < 0)) + 1
+    out: list = []
+    for a, b in zip([0, *cuts.tolist()], [*cuts.tolist(), len(which)]):
+        k = int(which[a])
+        if k < 0:
+            out.append(groups[int(index[a])])
+        else:
+            out.append((singles[k], index[a:b].tolist()))
+    return out
 
 
 def uses_in_order(gs: list) -> list:
@@ -194,9 +213,10 @@ def uses_in_order(gs: list) -> list:
     order of a Group each (what is said first of them is what a Group
     each says first)."""
     out = []
-    for x in _interleaved(gs, [s for s in gs if type(s) is Singles]):
+    for x in _runs(gs, [s for s in gs if type(s) is Singles]):
         if type(x) is tuple:
-            out.append((x[0], x[0].uses[x[1]]))
+            s, ns = x
+            out += [(s, s.uses[n]) for n in ns]
         else:
             out += [(x, u) for u in x.uses]
     return out
@@ -212,29 +232,7 @@ def apply_order(gs: list) -> list:
     rest = [g for g in gs if not (type(g) is Singles and g.ordered)]
     if not ordered:
         return rest
-    groups = [g for g in rest if type(g) is not Singles]
-    if not any(s.at for s in ordered):
-        return rest
-    # _interleaved's order, as arrays (1e5 elements: no tuple each to
-    # sort): by place among the uses walked, a Group before an element at
-    # the same place (none is: each is a use's own).
-    places = np.concatenate([np.array([g.first for g in groups], np.int64),
-                             *(np.array(s.at, np.int64) for s in ordered)])
-    which = np.concatenate([np.full(len(groups), -1, np.int64),
-                            *(np.full(len(s.at), k, np.int64) for k, s in enumerate(ordered))])
-    index = np.concatenate([np.arange(len(groups)), *(np.arange(len(s.at)) for s in ordered)])
-    by = np.argsort(places, kind="stable")
-    which, index = which[by], index[by]
-    # Runs: a Group each, else the elements of one Singles one after the other.
-    cuts = np.flatnonzero((which[1:] != which[:-1]) | (which[1:] < 0)) + 1
-    out: list = []
-    for a, b in zip([0, *cuts.tolist()], [*cuts.tolist(), len(which)]):
-        k = int(which[a])
-        if k < 0:
-            out.append(groups[int(index[a])])
-        else:
-            out.append((ordered[k], index[a:b].tolist()))
-    return out + [g for g in rest if type(g) is Singles]
+    return _runs(rest, ordered) + [g for g in rest if type(g) is Singles]
 
 
 def split_off(gs: list, s: Singles, ns, file_index: dict, placed: bool = False) -> list[Group]:

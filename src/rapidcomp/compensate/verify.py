@@ -300,14 +300,10 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
                     if [t.type for t in eng.tokens(literal)] != ["NUMAGG", "$END"]:
                         return None
             if rows_of is None:
-                for n, literal in zip(own, lits):
-                    try:
-                        records[first + n] = decode(
-                            "jointtarget", A.NumAgg(literal, Span(0, len(literal)))).joints
-                    except DecodeIssue:
-                        return None
-            else:
-                records[[first + n for n in own]] = rows_of
+                rows_of = _decoded_joints(lits)
+                if rows_of is None:
+                    return None
+            records[[first + n for n in own]] = rows_of
         # (As the resolver reads a jointtarget: float32, then floats.)
         joints = records.astype(np.float32).astype(float)
         if not (np.abs(joints) <= MAX_JOINT_DEG).all():
@@ -1027,15 +1023,23 @@ def _jointtarget_rows(lits: list[str]) -> np.ndarray | None:
     for at, got in zip(ats, side.alternate(_joint_rows, ((lits[at:at + RELEX_BLOCK],)
                                                          for at in ats))):
         block = lits[at:at + RELEX_BLOCK]
-        if got is not None and _plain_numaggs(block):
-            rows[at:at + len(block)] = got
-            continue
-        for n, literal in enumerate(block):
-            try:
-                rows[at + n] = decode("jointtarget",
-                                      A.NumAgg(literal, Span(0, len(literal)))).joints
-            except DecodeIssue:
+        if got is None or not _plain_numaggs(block):
+            got = _decoded_joints(block)
+            if got is None:
                 return None
+        rows[at:at + len(block)] = got
+    return rows
+
+
+def _decoded_joints(lits: list[str]) -> np.ndarray | None:
+    """decode("jointtarget", literal).joints of each literal, one by one,
+    as rows (n, 6); None where one does not decode."""
+    rows = np.empty((len(lits), 6))
+    for n, literal in enumerate(lits):
+        try:
+            rows[n] = decode("jointtarget", A.NumAgg(literal, Span(0, len(literal)))).joints
+        except DecodeIssue:
+            return None
     return rows
 
 

@@ -81,15 +81,12 @@ def nodes(root, plain_calls: bool = False):
             # (Their one field that holds nodes: Offs(p, 0, 0, 10) in every
             # move of a hand-written or Offs-relative program.)
             yield node
-            args = node.args
-            if plain_calls and type(args) is A.TailArgs:
-                # (A move lexed as one token, its first argument a call of
-                # names and numbers (build._fast_func): the caller reads
-                # that call and its references, and those after it
-                # (A.TailArgs' text has them, no node made).)
-                continue
-            else:
-                stack.append(args)
+            # (A move lexed as one token, its first argument a call of
+            # names and numbers (build._fast_func): with plain_calls, the
+            # caller reads that call and its references, and those after it
+            # (A.TailArgs' text has them, no node made).)
+            if not (plain_calls and type(node.args) is A.TailArgs):
+                stack.append(node.args)
         elif t is A.Num:
             yield node
         elif not (t is A.NumAgg or node is None or t in (str, int, float, bool)):
