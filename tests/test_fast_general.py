@@ -1,7 +1,7 @@
 """`rapidcomp fix` from the command line gives the same bytes with every
 CAM-scale shortcut (issue #14) taken as with every one that can be switched
 off switched off, on every fixture, golden case and task folder, in every
---emit mode (and --transient on a few).
+--emit mode (and --transient, --transient --emit absj on a few).
 
 The shortcuts are forced on where the inputs are small: the job's helper
 (side.py) and the parse's child (rapid/predecode.py) run for any size, and
@@ -45,6 +45,7 @@ MODES = {
     "absj": ("--emit", "absj"),
     "robtarget": ("--emit", "robtarget"),
     "transient": ("--transient", "--tau-heat", "30"),
+    "transient absj": ("--transient", "--tau-heat", "30", "--emit", "absj"),
 }
 TRANSIENT_ON = {"cubes.mod", "rapid/robodk.mod", "task cell"}
 
@@ -76,7 +77,8 @@ def _count(monkeypatch, module, name: str, seen: list) -> None:
     monkeypatch.setattr(module, name, counted)
 
 
-CASES = [(p, m) for p in PROGRAMS for m in MODES if m != "transient" or p in TRANSIENT_ON]
+CASES = [(p, m) for p in PROGRAMS for m in MODES
+         if not m.startswith("transient") or p in TRANSIENT_ON]
 
 
 @pytest.mark.parametrize("program,mode", CASES)

@@ -11,11 +11,14 @@ from pathlib import Path
 import pytest
 
 from cam_variants import EXT, HEAD, VARIANTS, bench_module
+from test_cam_paths import _groups_only
 from test_takeback import _same, missing
+from rapidcomp.compensate import edit as E
 from rapidcomp.compensate import fix as F
 from rapidcomp.compensate import place as P
-from rapidcomp.compensate.load import load_solver
+from rapidcomp.compensate.load import load_solver, load_state_solvers
 from rapidcomp.compensate.plan import Task
+from rapidcomp.compensate.transient import Transient
 from rapidcomp.rapid.parse import parse_text
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -114,6 +117,54 @@ def test_singles_write_what_a_group_each_writes(name, mode, miss_every, solver, 
     if miss_every:
         # Some missed and were taken back or placed again as Groups.
         assert "would miss by 5.000 um" in "".join(r.reason or "" for r in got.rows)
+
+
+@pytest.fixture(scope="module")
+def state_solvers():
+    return load_state_solvers(str(ROOT / "fixtures" / "warm.csv"), None, False,
+                              ("J5=-120:120",))
+
+
+@pytest.mark.parametrize("mode", ["auto", "absj"])
+@pytest.mark.parametrize("name", sorted(PROGRAMS))
+def test_transient_singles_write_what_a_group_each_writes(name, mode, solver, state_solvers,
+                                                          monkeypatch):
+    """--transient: each Single written as rcTcJ/rcTcR(cold, dq), its
+    constants declared next to its target or inline (Editor.
+    _transient_singles, without a Group each), gives what a Group each
+    gives; those whose confdata no robtarget carries in every state
+    through the Group's way, one by one."""
+    tr = (Transient(45.0, 45.0, 2.0), state_solvers)
+    one_by_one: list = []
+    kinds: set = set()
+    real, real_singles = E.Editor._apply_one_by_one, E.Editor._transient_singles
+
+    def spy(self, s, ns):
+        one_by_one.extend(s.mode for _ in ns)
+        return real(self, s, ns)
+
+    def spy_singles(self, s, ns):
+        kinds.add((s.mode, s.declared))
+        return real_singles(self, s, ns)
+    monkeypatch.setattr(E.Editor, "_apply_one_by_one", spy)
+    monkeypatch.setattr(E.Editor, "_transient_singles", spy_singles)
+    got = F.fix(Task(name, (parse_text(PROGRAMS[name], name + ".mod"),)), solver, mode,
+                transient=tr)
+    monkeypatch.undo()
+    _groups_only(monkeypatch)
+    want = F.fix(Task(name, (parse_text(PROGRAMS[name], name + ".mod"),)), solver, mode,
+                 transient=tr)
+    monkeypatch.undo()
+    _same(got, want, mode)
+    assert got.summary()["compensated"] >= {"failing": 3, "declared": 5}.get(name, 40)
+    # Singles of every kind (declared and inline, turned into MoveAbsJ or
+    # kept robtarget moves) were written so; as a Group each, a move turned
+    # into MoveAbsJ never, a robtarget move kept whose confdata the written
+    # one is not.
+    assert kinds
+    if name == "broken_runs":
+        assert kinds == {("absj", False), ("absj", True), ("rob", False), ("rob", True)}
+    assert "absj" not in one_by_one and len(one_by_one) <= 3
 
 
 def test_a_single_that_fails_is_a_group_of_its_own_that_says_why(solver, monkeypatch):

@@ -268,6 +268,16 @@ class Values:
                 block, stacks = made.pop(0)
                 for j, (g, k) in enumerate(block):
                     self._values[("pose dq", id(g), k)] = (stacks, j, literals[j])
+            # Moves turned into MoveAbsJ rcTcJ(cold, dq), each read alone (a
+            # CAM program's 1e5): their cold values' and corrections'
+            # literals, as batches (every other block's by the job's helper).
+            items = [(s, n) for s in gs if type(s) is Singles and s.mode == "absj"
+                     for n in s.elements if ("absj dq", id(s), n) not in self._values]
+            blocks = [items[at:at + PREPARE_BLOCK] for at in range(0, len(items), PREPARE_BLOCK)]
+            for block, lits in zip(blocks, side.alternate(records.transient_joint_literals,
+                                                          map(self._transient_inputs, blocks))):
+                for (s, n), pair in zip(block, lits):
+                    self._values[("absj dq", id(s), n)] = pair
             return
         items = [(g, k) for g in gs if g.failure is None and g.mode == "rob"
                  for k in g.elements if ("texts", id(g), k) not in self._values]
@@ -297,6 +307,20 @@ class Values:
         else:
             q = self.solved.deformed.q_deg[[g.rows[k] for g, k in block]]
         return q, records.absj_axes([self.source(g, k).record for g, k in block])
+
+    def _transient_inputs(self, block: list) -> tuple:
+        """(cold joints, their corrections, external axes' texts) of a
+        block of Singles' elements turned into MoveAbsJ rcTcJ(cold, dq):
+        cold() and dq() of each, as rows."""
+        rows = [s.rows[n] for s, n in block]
+        cold = self.solved.nominal.q_deg[rows]
+        return (cold, self.solved.deformed.q_deg[rows] - cold,
+                records.absj_axes([s.uses[n].source.record for s, n in block]))
+
+    def transient_literals(self, s: Singles, n: int) -> tuple[str, str]:
+        """Transient: the (cold value, correction) literals prepare() made
+        for element n of Singles s turned into MoveAbsJ."""
+        return self._values[("absj dq", id(s), n)]
 
     def _prepare(self, items: list, handed: list | None = None) -> None:
         """The values and texts of `items`; with `handed`, the texts'
@@ -689,7 +713,7 @@ class Editor:
             if not self.transient:
                 self._apply_singles(g)
             else:
-                self._apply_one_by_one(g, g.elements)
+                self._transient_singles(g, g.elements)
             return
         if self.transient:
             self._apply_transient(g)
@@ -792,10 +816,10 @@ class Editor:
         jointtarget next to it (RobotStudio's way: every target declared,
         each moved to once; 1e5 of them), and a transient output's
         <name>_dq next to it, without making that Group."""
-        if self.transient and s.mode == "rob":
-            self._transient_declared(s, ns)
+        if self.transient:
+            self._transient_singles(s, ns)
             return
-        if self.transient or s.mode != "absj" or s.placement != "new":
+        if s.mode != "absj" or s.placement != "new":
             self._apply_one_by_one(s, ns)
             return
         names, vals = self.names, self.values
@@ -811,16 +835,18 @@ class Editor:
             converted[u.key] = (u, literal, name, called, home)
             actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {name}"
 
-    def _declare_next_to(self, u, type_name: str, name: str, value: str) -> int:
+    def _declare_next_to(self, u, type_name: str, *named: str) -> int:
         """declare() of the Group of u alone, u's target a declaration of a
-        given module (Singles.single's home: that module): next to it,
-        LOCAL unless another module's move reads it. Returns the index of
-        the file it goes in."""
+        given module (Singles.single's home: that module), of each name and
+        value of `named` (name, value, name, value, ...), in that order:
+        next to it, LOCAL unless another module's move reads it. Returns
+        the index of the file they go in."""
         src = u.source
         decl, module = src.decl, src.home_module
         anchor = self._anchor_of((self.plan.file_index[id(src.home)], module), decl, module)
-        self._declare(anchor, u.module is module, self._assign(anchor[0], decl, module, module),
-                      type_name, name, "", value)
+        local, assign = u.module is module, self._assign(anchor[0], decl, module, module)
+        for at in range(0, len(named), 2):
+            self._declare(anchor, local, assign, type_name, named[at], "", named[at + 1])
         return anchor[0]
 
     def _apply_one_by_one(self, s: Singles, ns) -> None:
@@ -836,35 +862,70 @@ class Editor:
             if g.failure is not None:
                 self.failed.append((s, n, g.failure))
 
-    def _transient_declared(self, s: Singles, ns: list[int]) -> None:
-        """_apply_one_by_one of elements ns of declared robtargets each read
-        by its one move, kept a robtarget move (transient), in the groups'
-        order (their new names are made in it): where the written confdata
-        serves every state, what _apply_transient writes for the Group of
-        its one use (<name>_dq next to the declaration, the move's target
-        rcTcR(<name>, <name>_dq)), without that Group (RobotStudio's way:
-        every target declared, 1e5 of them); any other element, in its
-        turn, that Group's way."""
+    def _transient_singles(self, s: Singles, ns) -> None:
+        """_apply_one_by_one of elements ns of s (in the groups' order where
+        they make new names) in a transient output: what _apply_transient
+        writes for the Group of each one's use, without that Group (a CAM
+        program's 1e5 inline targets; RobotStudio's way, every target
+        declared and moved to once, 1e5 of them):
+        - turned into MoveAbsJ: rcTcJ(cold, dq), the cold value and its
+          correction inline, or declared next to the target as
+          jt_<name> and jt_<name>_dq;
+        - kept a robtarget move, where the written confdata serves every
+          state: rcTcR(<target as written>, dq), the correction inline, or
+          declared next to the target as <name>_dq;
+        any other element, in its turn, that Group's way."""
         vals, names = self.values, self.names
-        actions, calls, prepared = self.actions, self.calls, vals.prepared_dq
+        actions, calls = self.actions, self.calls
+        if s.mode == "absj":
+            why = self._said(f"MoveAbsJ {FUNC_J}(cold, correction)")
+            for n in ns:
+                u = s.uses[n]
+                src = u.source
+                cold_lit, dq_lit = vals.transient_literals(s, n)
+                if s.declared:
+                    # (As _declare_transient names and declares them.)
+                    cold = names.new("jt_" + src.decl.name)
+                    dq = names.new(cold[:29] + "_dq")
+                    self.others = True
+                    self._declare_next_to(u, "jointtarget", cold, cold_lit, dq, dq_lit)
+                    target = f"{FUNC_J}({cold}, {dq})"
+                    called = self._to_absj(u, target)
+                    actions[u.key] = f"{u.motion.instruction} -> MoveAbsJ {target}"
+                    calls[u.key] = (u, cold, dq, dq_lit, FUNC_J, src.expr.span, called,
+                                    cold_lit)
+                else:
+                    # (As _apply_transient writes an inline one.)
+                    called = self._to_absj(u, f"{FUNC_J}({cold_lit}, {dq_lit})")
+                    actions[u.key] = self._said(f"{u.motion.instruction} -> {why}")
+                    calls[u.key] = (u, cold_lit, None, dq_lit, FUNC_J, src.expr.span, called,
+                                    cold_lit)
+            return
+        prepared = vals.prepared_dq
         why = self._said(f"target -> {FUNC_R}")
+        inline = self._said(f"inline robtarget -> {FUNC_R}(written, correction)")
         for n in ns:
             if not prepared(s, n) or not vals.conf_kept(s, n):
                 self._apply_one_by_one(s, (n,))
                 continue
             u = s.uses[n]
             src = u.source
-            # (As _declare_transient names and declares it: no cold copy.)
-            dq = names.new(src.decl.name[:29] + "_dq")
             literal = vals.pose_literal(s, n)
-            self.others = True
-            self._declare_next_to(u, "pose", dq, literal)
-            # (As _use_transient writes its target.)
             ref_text = u.file.text(src.ref)
-            target = f"{FUNC_R}({ref_text}, {dq})"
-            self.edit(u.key[0], src.ref.span, target, why)
-            actions[u.key] = f"{ref_text} -> {target}"
-            calls[u.key] = (u, ref_text, dq, literal, FUNC_R, src.ref.span, None, None)
+            if s.declared:
+                # (As _declare_transient names and declares it: no cold copy.)
+                dq = names.new(src.decl.name[:29] + "_dq")
+                self._declare_next_to(u, "pose", dq, literal)
+                # (As _use_transient writes its target.)
+                target = f"{FUNC_R}({ref_text}, {dq})"
+                self.edit(u.key[0], src.ref.span, target, why)
+                actions[u.key] = f"{ref_text} -> {target}"
+                calls[u.key] = (u, ref_text, dq, literal, FUNC_R, src.ref.span, None, None)
+            else:
+                # (As _apply_transient_rob writes an inline one.)
+                self.edit(u.key[0], src.ref.span, f"{FUNC_R}({ref_text}, {literal})", why)
+                actions[u.key] = inline
+                calls[u.key] = (u, ref_text, None, literal, FUNC_R, src.ref.span, None, None)
 
     def _apply_singles(self, s: Singles) -> None:
         """apply() of each element of s as of the Group of its one use: its

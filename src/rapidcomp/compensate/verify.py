@@ -447,31 +447,68 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
         names, scopes, aggs, rows = declared
         if fi not in by_file and (es.starts != es.ends).any():
             return None                   # (an edit of no statement read here)
-        decls[fi] = (scopes.tolist(), aggs.tolist(), rows, wide, kinds)
+        # (As columns: the declarations a move names are checked a block at
+        # a time, 2e5 of them in a transient output.)
+        seen_wide = np.zeros(len(kinds), bool)
+        seen_wide[list(wide)] = True
+        decls[fi] = (np.frombuffer(scopes, np.int64).reshape(-1, 2),
+                     np.frombuffer(aggs, np.int64).reshape(-1, 2), rows, seen_wide,
+                     np.array(kinds))
         for name, k in names.items():
             if found.setdefault(name, (fi, k)) != (fi, k):
                 return None               # (one name in two files: not as meant)
 
-    def declared_row(name: str, literal: str, kind: str, u, fi: int):
-        """The numbers of the new declaration `name` a move of file fi
-        names, if it is one of `kind`, it sees, of `literal`; else None."""
-        hit = found.get(name.lower())
-        if hit is None:
+    def declared_rows(fi: int, starts: np.ndarray, ends: np.ndarray, names: list,
+                      literals: list, kind: str):
+        """The numbers of the new declarations `names` that moves of file fi
+        (their statements' starts and ends) name, each one's as rows (n, 7),
+        if each is one of `kind`, the move sees, of its literal; else
+        None."""
+        hits = [found.get(name.lower()) for name in names]
+        if None in hits:
             return None
-        dfi, k = hit
-        scope, agg, declared_rows, wide, kinds = decls[dfi]
-        if kinds[k] != kind:
+        homes = np.fromiter((h[0] for h in hits), np.int64, len(hits))
+        ks = np.fromiter((h[1] for h in hits), np.int64, len(hits))
+        out = np.empty((len(hits), 7))
+        for dfi in np.unique(homes).tolist():
+            at = np.flatnonzero(homes == dfi)
+            k = ks[at]
+            scope, agg, declared_rows, wide, kinds = decls[dfi]
+            if (kinds[k] != kind).any():
+                return None
+            seen = wide[k]
+            if dfi == fi:
+                seen = seen | ((scope[k, 0] <= starts[at]) & (ends[at] <= scope[k, 1]))
+            if not seen.all():
+                return None
+            these = [literals[n] for n in at.tolist()]
+            x = agg[k, 0]
+            if not np.array_equal(agg[k, 1] - x, np.fromiter(map(len, these), np.int64, len(at))):
+                return None
+            if not all(map(texts[dfi].startswith, these, x.tolist())):
+                return None
+            if declared_rows is not None:
+                out[at] = declared_rows[k]
+                continue
+            got = _dq_rows(these)
+            if got is None or not _plain_numaggs(these):
+                return None
+            out[at] = got
+        return out
+
+    def inline_rows(lits: list) -> np.ndarray | None:
+        """_dq_rows of inline literals of decimal numbers, a block at a
+        time, every other one read by the job's helper (side.py)."""
+        if not _plain_numaggs(lits):
             return None
-        if not (k in wide or (dfi == fi and scope[2 * k] <= u.motion.span.start
-                              and u.motion.span.end <= scope[2 * k + 1])):
-            return None
-        x = agg[2 * k]
-        if agg[2 * k + 1] - x != len(literal) or not texts[dfi].startswith(literal, x):
-            return None
-        if declared_rows is not None:
-            return declared_rows[k]
-        got = _dq_rows([literal])
-        return None if got is None or not _plain_numaggs([literal]) else got[0]
+        out = np.empty((len(lits), 7))
+        ats = range(0, len(lits), RELEX_BLOCK)
+        for at, got in zip(ats, side.alternate(_dq_rows, ((lits[at:at + RELEX_BLOCK],)
+                                                          for at in ats))):
+            if got is None:
+                return None
+            out[at:at + RELEX_BLOCK] = got
+        return out
 
     keys: list = []
     dqs: list = []
@@ -479,33 +516,36 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
     for fi, file_keys in by_file.items():
         es, shift = _shifts(file_edits.get(fi, []))
         text, src = texts[fi], plan.files[fi].source.text
-        # Each statement as meant: the input's, each of its targets replaced
-        # (a MoveC has two; a move in a loop is one statement of several
-        # uses: the same replacement), and the name of a move turned into
-        # MoveAbsJ. Its uses' spans as the rows of one array (statement,
-        # span replaced, use, what), sorted: read a block at a time.
-        for key in file_keys:
-            u, func, span, called = calls[key][0], calls[key][4], calls[key][5], calls[key][6]
+        entries = [calls[key] for key in file_keys]
+        uses = [c[0] for c in entries]
+        n = len(entries)
+        for u, (_, _, _, _, func, span, called, _) in zip(uses, entries):
             if (u.kind, type(u.source.record), func, called is not None) not in _CALLED:
                 return None
             before = src[span.start - 1:span.start]
             if before.isalnum() or before == "_":
                 return None
-
-        def spans(n, key):
-            u, span, called = calls[key][0], calls[key][5], calls[key][6]
-            m = u.motion.span
-            yield from (m.start, m.end, span.start, span.end, n, 0)
-            if called is not None:
-                yield from (m.start, m.end, m.start, m.start + len(u.motion.instruction), n, 1)
-        # (Made as an array from the start: no list of 6e5 ints.)
-        cols = np.fromiter((v for n, key in enumerate(file_keys) for v in spans(n, key)),
-                           np.int64).reshape(-1, 6)
+        # Each statement as meant: the input's, each of its targets replaced
+        # (a MoveC has two; a move in a loop is one statement of several
+        # uses: the same replacement), and the name of a move turned into
+        # MoveAbsJ. Its uses' spans as the rows of one array (statement,
+        # span replaced, use, what), sorted: read a block at a time.
+        starts = np.fromiter((u.motion.span.start for u in uses), np.int64, n)
+        ends = np.fromiter((u.motion.span.end for u in uses), np.int64, n)
+        at = np.arange(n)
+        renamed = np.fromiter((c[6] is not None for c in entries), bool, n)
+        cols = np.concatenate([
+            np.stack([starts, ends, np.fromiter((c[5].start for c in entries), np.int64, n),
+                      np.fromiter((c[5].end for c in entries), np.int64, n), at,
+                      np.zeros(n, np.int64)], axis=1),
+            np.stack([starts, ends, starts,
+                      starts + np.fromiter((len(u.motion.instruction) for u in uses), np.int64,
+                                           n), at, np.ones(n, np.int64)], axis=1)[renamed]])
         cols = cols[np.lexsort(cols.T[::-1])]
         checked = _Statements(text, src, es, shift)
         for first in range(0, len(cols), RELEX_BLOCK):
-            for a, b, x, y, n, what in cols[first:first + RELEX_BLOCK].tolist():
-                call = calls[file_keys[n]]
+            for a, b, x, y, k, what in cols[first:first + RELEX_BLOCK].tolist():
+                call = entries[k]
                 if not checked.add(a, b, x, y, call[6] if what else _call_text(call)):
                     return None
         # (Every other edit is an insert: the declarations read above.)
@@ -514,45 +554,45 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
         cols = checked = None
         # Each correction, and each new cold value: a new declaration's the
         # move sees, of its type and the literal meant, or an inline literal.
-        rows = np.empty((len(file_keys), 7))
-        cold = np.full((len(file_keys), 6), np.nan)
-        inline = []
-        for n, key in enumerate(file_keys):
-            u, cold_text, name, literal, func, _, _, cold_literal = calls[key]
-            if name is None:
-                inline.append(n)
-            else:
-                got = declared_row(name, literal, _CORRECTION[func], u, fi)
+        inline, named, cold_inline, cold_named = [], [], [], []
+        for k, (_, cold_text, name, _, _, _, _, cold_literal) in enumerate(entries):
+            (inline if name is None else named).append(k)
+            if cold_literal is not None:      # (else the input's target: as it was)
+                (cold_inline if cold_text == cold_literal else cold_named).append(k)
+        rows = np.empty((n, 7))
+        cold = np.full((n, 6), np.nan)
+        for func in (FUNC_J, FUNC_R):
+            these = [k for k in named if entries[k][4] == func]
+            if these:
+                got = declared_rows(fi, starts[these], ends[these],
+                                    [entries[k][2] for k in these],
+                                    [entries[k][3] for k in these], _CORRECTION[func])
                 if got is None:
                     return None
-                rows[n] = got
-            if cold_literal is None:
-                continue                  # (the input's target: as it was)
-            if cold_text == cold_literal:
-                got = _dq_rows([cold_literal])
-                got = None if got is None or not _plain_numaggs([cold_literal]) else got[0]
-            else:
-                got = declared_row(cold_text, cold_literal, "jointtarget", u, fi)
-            if got is None or not np.isnan(got[6]):
+                rows[these] = got
+        if cold_named:
+            got = declared_rows(fi, starts[cold_named], ends[cold_named],
+                                [entries[k][1] for k in cold_named],
+                                [entries[k][7] for k in cold_named], "jointtarget")
+            if got is None or not np.isnan(got[:, 6]).all():
                 return None
-            cold[n] = got[:6]
+            cold[cold_named] = got[:, :6]
+        if cold_inline:
+            got = inline_rows([entries[k][7] for k in cold_inline])
+            if got is None or not np.isnan(got[:, 6]).all():
+                return None
+            cold[cold_inline] = got[:, :6]
         if inline:
-            lits = [calls[file_keys[n]][3] for n in inline]
-            if not _plain_numaggs(lits):
+            got = inline_rows([entries[k][3] for k in inline])
+            if got is None:
                 return None
-            # (A block at a time, every other one read by the job's helper:
-            # side.py.)
-            ats = range(0, len(lits), RELEX_BLOCK)
-            for at, got in zip(ats, side.alternate(_dq_rows, ((lits[at:at + RELEX_BLOCK],)
-                                                              for at in ats))):
-                if got is None:
-                    return None
-                rows[inline[at:at + RELEX_BLOCK]] = got
+            rows[inline] = got
             # (An inline literal is of its function's type: its count of
             # numbers, which _dq_rows reads, says which.)
             if (np.isnan(rows[inline, 6]) != np.fromiter(
-                    (calls[file_keys[n]][4] == FUNC_J for n in inline), bool, len(inline))).any():
+                    (entries[k][4] == FUNC_J for k in inline), bool, len(inline))).any():
                 return None
+        entries = uses = None
         keys += file_keys
         dqs.append(rows)
         colds.append(cold)
@@ -875,13 +915,14 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
                       [text[a:a + n] for a, n in zip(at_out.tolist(),
                                                      es.lengths()[inserts].tolist())]))
     plain = _plain_declared(eng, [piece for _, _, piece in places], rows_of, width)
-    joints = None
     if plain is not None:
+        # Every insert's declarations written plainly (a CAM program's 5e4,
+        # one each; a transient output's 1e5 pairs): as the loop below
+        # reads them, at once, in order (k: a declaration's place among
+        # all, the row of its numbers).
         plain, joints = plain
-    if plain is not None and all(len(decls) == 1 for decls in plain):
-        # One declaration per insert (a CAM program's 5e4): as the loop
-        # below reads them, at once.
-        decls = [decls[0] for decls in plain]
+        places = [(scope, a) for (scope, a, _), decls in zip(places, plain) for _ in decls]
+        decls = [decl for decls in plain for decl in decls]
         if not all(storage == "CONST" and declared.lower() in types
                    for storage, declared, _, _, _, _ in decls):
             return None
@@ -889,42 +930,39 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
             kinds.extend(declared.lower() for _, declared, _, _, _, _ in decls)
         # (A later one of the same name wins, as a dict's last value.)
         out = {name.lower(): k for k, (_, _, name, _, _, _) in enumerate(decls)}
-        scopes.extend([x for scope, _, _ in places for x in scope])
-        aggs.extend([x for (_, a, _), (_, _, _, x0, y0, _) in zip(places, decls)
+        scopes.extend([x for scope, _ in places for x in scope])
+        aggs.extend([x for (_, a), (_, _, _, x0, y0, _) in zip(places, decls)
                      for x in (a + x0, a + y0)])
         if wide is not None:
-            wide.update(k for k, ((scope, _, _), decl) in enumerate(zip(places, decls))
+            wide.update(k for k, ((scope, _), decl) in enumerate(zip(places, decls))
                         if decl[5] is None and scope in modules)
         return out, scopes, aggs, joints
-    for n, (scope, a, piece) in enumerate(places):
-        if plain is not None:
-            decls = plain[n]
-        else:
-            decls = []
-            try:
-                toks = list(eng.tokens(piece))
-            except LexFailure:
+    for scope, a, piece in places:
+        decls = []
+        try:
+            toks = list(eng.tokens(piece))
+        except LexFailure:
+            return None
+        at = 0
+        while toks[at].type != "$END":
+            tok = toks[at]
+            if tok.type == "FAST_DECL":
+                node = build.fast_decl([tok])
+                if node.dims or type(node.init) is not A.NumAgg:
+                    return None
+                decls.append((node.storage, node.type_name, node.name,
+                              node.init.span.start, node.init.span.end, node.scope))
+                at += 1
+                continue
+            got = _array_decl(toks, at) if arrays is not None else None
+            if got is None:
                 return None
-            at = 0
-            while toks[at].type != "$END":
-                tok = toks[at]
-                if tok.type == "FAST_DECL":
-                    node = build.fast_decl([tok])
-                    if node.dims or type(node.init) is not A.NumAgg:
-                        return None
-                    decls.append((node.storage, node.type_name, node.name,
-                                  node.init.span.start, node.init.span.end, node.scope))
-                    at += 1
-                    continue
-                got = _array_decl(toks, at) if arrays is not None else None
-                if got is None:
-                    return None
-                at, name, dims, leaves, local = got
-                # (A name declared twice among the new ones: parsed again.)
-                if name.lower() in arrays or name.lower() in out:
-                    return None
-                arrays[name.lower()] = (scope, dims, leaves,
-                                        not local and scope in modules)
+            at, name, dims, leaves, local = got
+            # (A name declared twice among the new ones: parsed again.)
+            if name.lower() in arrays or name.lower() in out:
+                return None
+            arrays[name.lower()] = (scope, dims, leaves,
+                                    not local and scope in modules)
         for storage, declared, name, x, y, local in decls:
             if not (storage == "CONST" and declared.lower() in types):
                 return None
@@ -944,7 +982,7 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
             if rows is None:
                 return None
             arrays[name] = (scope, dims, rows, seen_wide)
-    return out, scopes, aggs, joints
+    return out, scopes, aggs, None
 
 
 def _array_decl(toks: list, at: int) -> tuple[int, str, tuple, list[str], bool] | None:

@@ -289,6 +289,20 @@ def absj_literals_of(q_deg: np.ndarray, axes: list[str]) -> list[str]:
     return [f"[[{j}],[{e}]]" for j, e in zip(joints, axes)]
 
 
+def transient_joint_literals(cold: np.ndarray, dq: np.ndarray, axes: list[str]
+                             ) -> list[tuple[str, str]]:
+    """(cold value, correction) literals of moves turned into MoveAbsJ
+    rcTcJ(cold, dq) (cold, dq (n, 6) deg; axes: the cold values' external
+    axes, absj_axes): the cold one as absj_literals_of makes it, the
+    correction's joints and six zero external axes; numbers formatted in
+    one batch (a function of numbers and texts, which a CAM program's job
+    hands to its helper for every other block: side.py)."""
+    colds = absj_literals_of(cold, axes)
+    dqs = numbers.fmt_many(np.asarray(dq, float).ravel().tolist(), numbers.JOINT_DECIMALS)
+    return [(c, f"[[{j}],[0,0,0,0,0,0]]")
+            for c, j in zip(colds, map(",".join, zip(*[iter(dqs)] * 6)))]
+
+
 def pose_literals(d: np.ndarray, dq: np.ndarray) -> list[str]:
     """The pose literals [[dx,dy,dz],[dq1,dq2,dq3,dq4]] of transient
     corrections (d (n, 3) mm, dq (n, 4)), numbers formatted in one batch: a
