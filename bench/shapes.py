@@ -26,6 +26,9 @@ it compensated. Goal of issue #14 (for bench/fix.py's shape): <= 10 s and
   i_datamod  a task folder: the targets in a data module, the moves in another
   j_alldecl  the same in one module: every target declared, each moved to once
   j_alldecl_tr  j_alldecl with `--transient --tau-heat 45` (not --emit absj)
+  j_alldecl_tra j_alldecl with `--transient --tau-heat 45 --emit absj` (every move
+             MoveAbsJ rcTcJ(jt_pK, jt_pK_dq), two new declarations per target)
+  bench_tra  bench_main with `--transient --tau-heat 45 --emit absj` (inline rcTcJ)
   e_confoff  ConfL\\Off, then inline MoveL
   f_tools    10 tools x 10 work objects, half declared, half inline
   g_mixed    MoveJ/MoveL, SetDO and WaitTime every 10 moves
@@ -273,6 +276,8 @@ SHAPES = {
     "i_datamod": i_datamod,
     "j_alldecl": lambda n: i_datamod(n, folder=False),
     "j_alldecl_tr": lambda n: i_datamod(n, folder=False),
+    "j_alldecl_tra": lambda n: i_datamod(n, folder=False),
+    "bench_tra": lambda n: cam_module(n, main=True),
     "e_confoff": e_confoff,
     "f_tools": f_tools,
     "g_mixed": g_mixed,
@@ -281,7 +286,9 @@ SHAPES = {
 
 
 # Shapes run with other options than `--emit absj`.
-MODES = {"j_alldecl_tr": ("--transient", "--tau-heat", "45")}
+MODES = {"j_alldecl_tr": ("--transient", "--tau-heat", "45"),
+         "j_alldecl_tra": ("--transient", "--tau-heat", "45", "--emit", "absj"),
+         "bench_tra": ("--transient", "--tau-heat", "45", "--emit", "absj")}
 
 
 def run(path: str, out: str, env: dict, mode: tuple = ("--emit", "absj")) -> dict:

@@ -520,11 +520,26 @@ def test_a_resolver_of_the_same_files_takes_the_plans_tables():
                      "routine_decls"):
             assert getattr(taken, name) == getattr(own, name), (task.name, name)
             assert getattr(taken, name) is getattr(plan.resolver, name)
+        for resolver in (own, taken):
+            _homes_are(resolver, files)
         again = [parse_text(pf.source.text, pf.source.display_path) for pf in files]
         other = T.Resolver(again, float32=True, writes=False, usages={}, like=plan.resolver)
         assert other.home is not plan.resolver.home
-        assert set(other.home) == {id(d) for pf in again for m in pf.modules
-                                   for d in m.declarations}
+        _homes_are(other, again)
+
+
+def _homes_are(resolver, files) -> None:
+    """Each declaration's file and module, as the resolver has them (no
+    entry each where the files hold one module)."""
+    one = sum(len(pf.modules) for pf in files) == 1
+    for pf in files:
+        for m in pf.modules:
+            for d in m.declarations:
+                assert resolver.home[id(d)] is pf and resolver.home_module[id(d)] is m
+    assert (len(resolver.home) == 0) == one
+    if not one:
+        with pytest.raises(KeyError):           # (not a declaration of the files)
+            resolver.home[id(resolver)]
 
 
 def _pick(p):
@@ -706,28 +721,46 @@ def test_plain_numaggs_are_what_the_lexer_reads_as_one_aggregate():
     assert fast_seen > 1000 and slow_seen > 500
 
 
+def _plain(eng, pieces: list[str]):
+    """_plain_declared of pieces as inserted texts of an output (each after
+    a line of something else)."""
+    text, starts = "", []
+    for piece in pieces:
+        text += "\n  ! before"
+        starts.append(len(text))
+        text += piece
+    return V._plain_declared(eng, text + "\n", starts, [len(p) for p in pieces]), text, starts
+
+
 def test_plain_declarations_read_as_the_lexer_reads_them():
     """_plain_declared reads the editor's new declarations as lexing them
     does, and gives up (None) on anything else."""
     eng = engine()
     t = targets(3, 2)
     good = [f"\n  CONST jointtarget jt_p{i}:={jointtarget(x)};" for i, x in enumerate(t)]
-    got, joints = V._plain_declared(eng, ["".join(good), good[0] + "\r\n\tLOCAL CONST jointtarget a := "
-                                  + jointtarget(t[1]) + " ;"])
-    assert [[(s, ty, n, local) for s, ty, n, _, _, local in piece] for piece in got] == [
-        [("CONST", "jointtarget", f"jt_p{i}", None) for i in range(3)],
-        [("CONST", "jointtarget", "jt_p0", None), ("CONST", "jointtarget", "a", "LOCAL")]]
-    piece = "".join(good)
-    x, y = got[0][1][3:5]
-    assert piece[x:y] == jointtarget(t[1])
+    pieces = ["".join(good), good[0] + "\r\n\tLOCAL CONST jointtarget a := "
+              + jointtarget(t[1]) + " ;", "\n  const JointTarget Bb:=" + jointtarget(t[2]) + ";"]
+    got, text, _ = _plain(eng, pieces)
+    assert list(zip(got.piece.tolist(), got.type, got.name, list(got.scoped))) == [
+        *((0, "jointtarget", f"jt_p{i}", False) for i in range(3)),
+        (1, "jointtarget", "jt_p0", False), (1, "jointtarget", "a", True),
+        (2, "jointtarget", "bb", False)]
+    assert got.storage == {"CONST", "const"}
+    # Each aggregate's place in the output.
+    want = [t[0], t[1], t[2], t[0], t[1], t[2]]
+    bounds = got.bounds.tolist()
+    assert [text[x:y] for x, y in zip(bounds[::2], bounds[1::2])] == [jointtarget(x) for x in want]
     # The joints of each declaration, in order: as decoding each reads them.
-    want = [t[0], t[1], t[2], t[0], t[1]]
-    assert joints.tolist() == [list(decode("jointtarget", A.NumAgg(jointtarget(x), A.Span(
+    assert got.rows.tolist() == [list(decode("jointtarget", A.NumAgg(jointtarget(x), A.Span(
         0, len(jointtarget(x))))).joints) for x in want]
     for bad in [good[0] + " ! note", "\n  CONST jointtarget IF:=" + jointtarget(t[0]) + ";",
+                "\n  CONST ENDFOR a:=" + jointtarget(t[0]) + ";",
                 "\n  CONST jointtarget a:=[[1,2,3,4,5,6],[1,2,3,4,5,x]];",
-                "\n  CONST jointtarget a:=[[1,2,3,4,5,6] ,[1,2,3,4,5,6]];", "\n  MoveL p1,v1,z1,t;"]:
-        assert V._plain_declared(eng, [bad]) is None, bad
+                "\n  CONST jointtarget a:=[[1,2,3,4,5,6] ,[1,2,3,4,5,6]];", "\n  MoveL p1,v1,z1,t;",
+                good[0] + "\n  MoveL p1,v1,z1,t;" + good[1], good[0][:-1]]:
+        # (Alone, and among good ones: before, after or between them.)
+        for where in range(4):
+            assert _plain(eng, [*good[:where], bad, *good[where:]])[0] is None, (bad, where)
 
 
 # ---------------------------------------------------------------- the whole fix

@@ -203,6 +203,9 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         # 1e5 MoveL turned into MoveAbsJ, ~18 MB of them twice.)
         editor.edits = editor.field_lists = None
         editor.inserts = editor.insert_nl = editor.insert_indent = None
+        # (And the names taken: every word of the input and every new name,
+        # 2e5 of them where each of 1e5 declared targets gets two, ~25 MB.)
+        editor.names = None
         if transient is not None:
             release()
         texts = {fi: apply_edits(plan.files[fi].source.text, es)

@@ -433,7 +433,8 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
     for key in calls:
         by_file.setdefault(key[0], []).append(key)
     # The new declarations of every edited file, by name (a move may name
-    # one of another module's: its target's home).
+    # one of another module's: its target's home): file -> lower-case name
+    # -> k.
     found: dict = {}
     decls: dict = {}
     for fi in file_edits:
@@ -454,9 +455,9 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
         decls[fi] = (np.frombuffer(scopes, np.int64).reshape(-1, 2),
                      np.frombuffer(aggs, np.int64).reshape(-1, 2), rows, seen_wide,
                      np.array(kinds))
-        for name, k in names.items():
-            if found.setdefault(name, (fi, k)) != (fi, k):
-                return None               # (one name in two files: not as meant)
+        if not all(names.keys().isdisjoint(other) for other in found.values()):
+            return None                   # (one name in two files: not as meant)
+        found[fi] = names
 
     def declared_rows(fi: int, starts: np.ndarray, ends: np.ndarray, names: list,
                       literals: list, kind: str):
@@ -464,12 +465,16 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
         (their statements' starts and ends) name, each one's as rows (n, 7),
         if each is one of `kind`, the move sees, of its literal; else
         None."""
-        hits = [found.get(name.lower()) for name in names]
-        if None in hits:
+        names = [name.lower() for name in names]
+        homes = np.full(len(names), -1, np.int64)
+        ks = np.empty(len(names), np.int64)
+        for dfi, table in found.items():
+            got = np.fromiter((table.get(name, -1) for name in names), np.int64, len(names))
+            hit = got >= 0
+            homes[hit], ks[hit] = dfi, got[hit]
+        if (homes < 0).any():
             return None
-        homes = np.fromiter((h[0] for h in hits), np.int64, len(hits))
-        ks = np.fromiter((h[1] for h in hits), np.int64, len(hits))
-        out = np.empty((len(hits), 7))
+        out = np.empty((len(names), 7))
         for dfi in np.unique(homes).tolist():
             at = np.flatnonzero(homes == dfi)
             k = ks[at]
@@ -813,43 +818,88 @@ _PLAIN_DECL = re.compile(r"[ \t\f\r\n\ufeff]*(?:" + DECL_HEAD.pattern + r")(\[[^
                          re.IGNORECASE)
 
 
-def _plain_declared(eng, pieces: list[str], rows_of=None,
-                    width: int = 6) -> tuple[list, np.ndarray] | None:
-    """What _declared's lexing reads in each inserted text, when every one
-    is one-line declarations written plainly (_PLAIN_DECL, their words no
-    reserved ones, their aggregates plain jointtargets of decimal numbers):
-    per text, (storage, type, name, start and end of its aggregate in the
-    text, LOCAL or None) of each declaration; and the joints of every
-    declaration, in that order, as _joint_rows reads them (rows_of:
-    another such reader, of `width` numbers). None: the texts are lexed
-    one by one."""
+class _Plain(NamedTuple):
+    """_plain_declared's reading of the inserted texts: per declaration, in
+    order (as columns: a transient output inserts 2e5), the text it is in
+    (its index), its type and name (lower case), its aggregate's start and
+    end in the output (at 2k, 2k + 1), whether it is LOCAL or TASK; the
+    storage words met (as written); the numbers of each, as rows."""
+    piece: array
+    type: list
+    name: list
+    bounds: array
+    scoped: bytearray
+    storage: set
+    rows: np.ndarray
+
+
+def _plain_declared(eng, text: str, starts: list[int], lengths: list[int], rows_of=None,
+                    width: int = 6) -> _Plain | None:
+    """What _declared's lexing reads in each inserted text (text[start:
+    start + length] of the output), when every one is one-line declarations
+    written plainly (_PLAIN_DECL, their words no reserved ones, their
+    aggregates plain jointtargets of decimal numbers), a _Plain: the
+    numbers of each as _joint_rows reads them (rows_of: another such
+    reader, of `width` numbers). None: the texts are lexed one by one."""
     rows_of = rows_of or _joint_rows
-    out = []
-    aggs = []
     reserved = eng.reserved
-    for piece in pieces:
-        found = []
-        pos = 0
-        while pos < len(piece):
-            m = _PLAIN_DECL.match(piece, pos)
-            if m is None or m.group(3).upper() in reserved or m.group(4).upper() in reserved:
-                return None
-            found.append((m.group(2).upper(), m.group(3), m.group(4), m.start(5), m.end(5),
-                          m.group(1)))
-            aggs.append(m.group(5))
-            pos = m.end()
-        out.append(found)
-    # (A block at a time: their field texts are not all alive at once;
-    # every other block's read by the job's helper, side.py.)
-    joints = np.empty((len(aggs), width))
-    ats = range(0, len(aggs), RELEX_BLOCK)
-    for at, rows in zip(ats, side.alternate(rows_of, ((aggs[at:at + RELEX_BLOCK],)
-                                                      for at in ats))):
-        block = aggs[at:at + RELEX_BLOCK]
-        if not (rows is not None and _plain_numaggs(block)):
+    match = _PLAIN_DECL.match
+    piece, types, names = array("q"), [], []
+    bounds, scoped, storage = array("q"), bytearray(), set()
+    lower: dict = {}                 # (a type as written: its lower case, once)
+    plain = [True]
+
+    def blocks():
+        """The declarations read, their aggregates a block at a time (not
+        all their texts alive at once; every other block's numbers read by
+        the job's helper, side.py)."""
+        block: list = []
+        for j, (at, n) in enumerate(zip(starts, lengths)):
+            pos, end = at, at + n
+            while pos < end:
+                m = match(text, pos, end)
+                if m is None:
+                    plain[0] = False
+                    return
+                scope, word, type_, name, agg = m.group(1, 2, 3, 4, 5)
+                low = lower.get(type_)
+                if low is None:
+                    if type_.upper() in reserved:
+                        plain[0] = False
+                        return
+                    low = lower[type_] = type_.lower()
+                if name.upper() in reserved:
+                    plain[0] = False
+                    return
+                piece.append(j)
+                types.append(low)
+                names.append(name.lower())
+                bounds.extend(m.span(5))
+                scoped.append(scope is not None)
+                storage.add(word)
+                block.append(agg)
+                pos = m.end()
+                if len(block) == RELEX_BLOCK:
+                    yield (block,)
+                    block = []
+        if block:
+            yield (block,)
+
+    rows = []
+    for got in side.alternate(_plain_rows, ((rows_of, block) for block, in blocks())):
+        if got is None:
             return None
-        joints[at:at + len(block)] = rows
-    return out, joints
+        rows.append(got)
+    if not plain[0] or not rows:
+        return None
+    return _Plain(piece, types, names, bounds, scoped, storage, np.concatenate(rows))
+
+
+def _plain_rows(rows_of, block: list[str]) -> np.ndarray | None:
+    """rows_of(block), where the block's aggregates are of decimal numbers
+    (_plain_numaggs); else None."""
+    got = rows_of(block)
+    return got if got is not None and _plain_numaggs(block) else None
 
 
 def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
@@ -911,33 +961,30 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
     if in_scope is None:
         return None
     modules = {(m.node.span.start, m.node.span.end) for m in pf.modules}
-    places = list(zip(in_scope, at_out.tolist(),
-                      [text[a:a + n] for a, n in zip(at_out.tolist(),
-                                                     es.lengths()[inserts].tolist())]))
-    plain = _plain_declared(eng, [piece for _, _, piece in places], rows_of, width)
+    at_out, lengths = at_out.tolist(), es.lengths()[inserts].tolist()
+    plain = _plain_declared(eng, text, at_out, lengths, rows_of, width)
     if plain is not None:
         # Every insert's declarations written plainly (a CAM program's 5e4,
         # one each; a transient output's 1e5 pairs): as the loop below
         # reads them, at once, in order (k: a declaration's place among
         # all, the row of its numbers).
-        plain, joints = plain
-        places = [(scope, a) for (scope, a, _), decls in zip(places, plain) for _ in decls]
-        decls = [decl for decls in plain for decl in decls]
-        if not all(storage == "CONST" and declared.lower() in types
-                   for storage, declared, _, _, _, _ in decls):
+        if ({word.upper() for word in plain.storage} != {"CONST"}
+                or not set(plain.type) <= set(types)):
             return None
         if kinds is not None:
-            kinds.extend(declared.lower() for _, declared, _, _, _, _ in decls)
+            kinds.extend(plain.type)
         # (A later one of the same name wins, as a dict's last value.)
-        out = {name.lower(): k for k, (_, _, name, _, _, _) in enumerate(decls)}
-        scopes.extend([x for scope, _ in places for x in scope])
-        aggs.extend([x for (_, a), (_, _, _, x0, y0, _) in zip(places, decls)
-                     for x in (a + x0, a + y0)])
+        out = dict(zip(plain.name, range(len(plain.name))))
+        piece = np.frombuffer(plain.piece, np.int64)
+        scopes.frombytes(np.array(in_scope, np.int64).reshape(-1, 2)[piece].tobytes())
+        aggs.extend(plain.bounds)
         if wide is not None:
-            wide.update(k for k, ((scope, _), decl) in enumerate(zip(places, decls))
-                        if decl[5] is None and scope in modules)
-        return out, scopes, aggs, joints
-    for scope, a, piece in places:
+            seen = np.array([scope in modules for scope in in_scope], bool)[piece]
+            seen &= ~np.frombuffer(plain.scoped, bool)
+            wide.update(np.flatnonzero(seen).tolist())
+        return out, scopes, aggs, plain.rows
+    for scope, a, n in zip(in_scope, at_out, lengths):
+        piece = text[a:a + n]
         decls = []
         try:
             toks = list(eng.tokens(piece))
