@@ -300,3 +300,39 @@ def test_numbers_as_tools_write_them_keep_the_one_token_path():
     other = parse_text(f"MODULE m\n  CONST robtarget p:={far};\nENDMODULE\n", "m.mod").module
     assert type(other.declarations[0].node.init) is A.Agg
     assert other.declarations[0].value.values[2] == 3e-100
+
+
+def test_a_span_is_the_pair_of_its_offsets():
+    """ast.Span holds (start, end) as one int: it reads, unpacks, orders,
+    copies and prints as the pair does; equal only to a Span of that range."""
+    import pickle
+    import random
+    rnd = random.Random(3)
+    pairs = [(a, a + rnd.randrange(0, 5000)) for a in
+             (rnd.randrange(0, 2 ** 32 - 6000) for _ in range(300))] + [(0, 0), (7, 7)]
+    spans = [A.Span(*p) for p in pairs]
+    for (a, b), s in zip(pairs, spans):
+        assert (s.start, s.end) == (a, b) == tuple(s) == (s[0], s[1])
+        x, y = s
+        assert (x, y) == (a, b) and len(s) == 2 and bool(s)
+        assert pickle.loads(pickle.dumps(s)) == s and type(pickle.loads(pickle.dumps(s))) is A.Span
+        assert repr(s) == f"Span(start={a}, end={b})"
+        assert s == A.Span(a, b) and s != (a, b)
+    assert sorted(spans) == [A.Span(*p) for p in sorted(pairs)]
+    # The parse's nodes, the one-token path's and the general one's.
+    text = "MODULE M\n  PROC p()\n    MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v1,z1,t;\n"
+    pf = parse_text(text + "    x := 1;\n  ENDPROC\nENDMODULE\n", "m.mod")
+    move, assign = pf.modules[0].routines[0].node.body
+    assert text[move.span.start:move.span.end].startswith("MoveL [[1,2,3]")
+    assert text[move.span.end - 1] == ";" and type(move.span) is A.Span
+    assert [type(a.span) for a in move.args] == [A.Span] * 4
+    assert type(assign.span) is A.Span and assign.span.start == len(text) + 4
+
+
+def test_a_text_beyond_what_a_span_holds_is_refused(monkeypatch):
+    from rapidcomp.errors import InputError
+    monkeypatch.setattr(A, "SPAN_LIMIT", 40)
+    with pytest.raises(InputError, match=r"m.mod:1:1: 48 characters: more than the 39 of the "
+                                         "largest module rapidcomp reads"):
+        parse_text("MODULE M\n  ! a comment of some length\nENDMODULE\n", "m.mod")
+    parse_text("MODULE M\nENDMODULE\n", "m.mod")

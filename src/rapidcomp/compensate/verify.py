@@ -221,7 +221,7 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
         for first in range(0, len(file_keys), RELEX_BLOCK):
             block = file_keys[first:first + RELEX_BLOCK]
             items = [converted[key] for key in block]
-            spans = np.array([it[0].motion.span for it in items], np.int64).reshape(-1, 2)
+            spans = _span_rows([it[0].motion.span for it in items])
             # (Where each statement's ends lie in the output.)
             moved = spans + shift[np.searchsorted(es.ends, spans, "right")]
             # Each statement as meant, the output's texts compared as one
@@ -318,6 +318,13 @@ def relex_absj(plan: Plan, converted: dict, file_edits: dict,
 COPY_TYPES = ("jointtarget", "robtarget")
 
 
+def _span_rows(spans: list[Span]) -> np.ndarray:
+    """Spans as rows (n, 2) of their starts and ends (a Span is one int, its
+    start the high 32 bits: read as such, no pair made of each)."""
+    v = np.fromiter(spans, np.int64, len(spans))
+    return np.stack([v >> 32, v & 0xFFFFFFFF], axis=1)
+
+
 def relex_copies(plan: Plan, copies: dict, file_edits: dict, texts: dict[int, str],
                  written: Written) -> Written | None:
     """When targets are copied for some of their uses (Editor.copies: use
@@ -365,7 +372,7 @@ def relex_copies(plan: Plan, copies: dict, file_edits: dict, texts: dict[int, st
         for u, _, name, _, _ in items:
             statements.setdefault(id(u.motion), (u.motion.span, set()))[1].add(
                 (tuple(u.source.ref.span), name))
-        spans = np.array([span for span, _ in statements.values()], np.int64).reshape(-1, 2)
+        spans = _span_rows([span for span, _ in statements.values()])
         moved = (spans + shift[np.searchsorted(es.ends, spans, "right")]).tolist()
         for ((a, b), refs), (x, y) in zip(statements.values(), moved):
             meant, pos = [], a

@@ -8,14 +8,54 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import NamedTuple, Union
+from typing import Union
 
 from ..construct import maker
 
 
-class Span(NamedTuple):
-    start: int
-    end: int
+class Span(int):
+    """A half-open range of character offsets [start, end), as a pair:
+    `span.start`, `span.end`, `start, end = span`, span[0], span[1]. Held
+    as one int, start << 32 | end (ordered as the pair is; equal to a Span
+    of the same range, never to a tuple): a node's span is one object of 48
+    bytes, not a tuple of two ints (128; a CAM program's nodes have 4e5-5e5
+    spans, issue #14), and not one the cyclic collector tracks. Offsets are
+    below 2**32: parse.py reads no larger text."""
+
+    __slots__ = ()
+
+    def __new__(cls, start: int, end: int):
+        return int.__new__(cls, (start << 32) | end)
+
+    @property
+    def start(self) -> int:
+        return self >> 32
+
+    @property
+    def end(self) -> int:
+        return self & 0xFFFFFFFF
+
+    def __iter__(self):
+        return iter((self >> 32, self & 0xFFFFFFFF))
+
+    def __getitem__(self, j):
+        return (self >> 32, self & 0xFFFFFFFF)[j]
+
+    def __len__(self) -> int:
+        return 2
+
+    def __bool__(self) -> bool:
+        return True                         # (as a pair is, Span(0, 0) too)
+
+    def __repr__(self) -> str:
+        return f"Span(start={self >> 32}, end={self & 0xFFFFFFFF})"
+
+    def __reduce__(self):
+        return Span, (self >> 32, self & 0xFFFFFFFF)
+
+
+# Offsets a Span holds are below this (parse.py refuses a larger text).
+SPAN_LIMIT = 1 << 32
 
 
 # ----------------------------------------------------------------- expressions

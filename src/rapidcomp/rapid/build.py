@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import re
 import sys
-from functools import partial
 
 
 from ..construct import made_as, maker
@@ -44,7 +43,9 @@ _FAST_NUM = re.compile(r"[-+]?(?:[0-9]{1,30}(?:\.[0-9]{0,30})?|\.[0-9]{1,30})(?!
 
 # The nodes of one-token statements and declarations, made as their classes
 # make them (construct.py; a CAM program's 1e5 moves and 5e4 declarations).
-_span = partial(tuple.__new__, Span)
+def _span(se, _new=int.__new__, _Span=Span) -> Span:
+    """Span(*se) (a pair of offsets), without a call of its __new__."""
+    return _new(_Span, (se[0] << 32) | se[1])
 _arg, _ref, _num, _call, _decl, _numagg, _func, _tail_args = (
     maker(c) for c in (A.Arg, A.Ref, A.Num, A.ProcCall, A.DataDecl, A.NumAgg, A.Call,
                        A.TailArgs))
@@ -224,7 +225,7 @@ def _tail_maker(items: tuple):
     """make(at): _Tail.nodes of these items, written as code (their words,
     values and relative spans constants; each node made as construct.maker
     makes it, without a call per node)."""
-    ns: dict = {"_t": tuple.__new__, "_Span": Span}
+    ns: dict = {"_t": int.__new__, "_Span": Span}
 
     def node(cls, var: str, values: list[str]) -> list[str]:
         # var = cls(*values), made as construct.maker makes it.
@@ -235,21 +236,21 @@ def _tail_maker(items: tuple):
     for j, (opt, val, word, s0, e0, s2, e2, is_num, num) in enumerate(items):
         ns[f"opt{j}"], ns[f"val{j}"], ns[f"word{j}"], ns[f"num{j}"] = opt, val, word, num
         if word is not None:
-            lines.append(f"    s{j} = _t(_Span, (at + {s0}, at + {e0}))")
+            lines.append(f"    s{j} = _t(_Span, ((at + {s0}) << 32) | (at + {e0}))")
             lines += node(A.Ref, f"r{j}", [f"word{j}", "()", f"s{j}"])
             lines += node(A.Arg, f"a{j}", ["'pos'", "None", f"r{j}", f"s{j}"])
         elif opt is None:
-            lines.append(f"    s{j} = _t(_Span, (at + {s0}, at + {e0}))")
+            lines.append(f"    s{j} = _t(_Span, ((at + {s0}) << 32) | (at + {e0}))")
             lines += node(A.Num, f"r{j}", [f"num{j}", f"val{j}", f"s{j}"])
             lines += node(A.Arg, f"a{j}", ["'pos'", "None", f"r{j}", f"s{j}"])
         elif val is None:
-            lines.append(f"    s{j} = _t(_Span, (at + {s0}, at + {e0}))")
+            lines.append(f"    s{j} = _t(_Span, ((at + {s0}) << 32) | (at + {e0}))")
             lines += node(A.Arg, f"a{j}", ["'opt'", f"opt{j}", "None", f"s{j}"])
         else:
-            lines.append(f"    v{j} = _t(_Span, (at + {s2}, at + {e2}))")
+            lines.append(f"    v{j} = _t(_Span, ((at + {s2}) << 32) | (at + {e2}))")
             lines += (node(A.Num, f"r{j}", [f"num{j}", f"val{j}", f"v{j}"]) if is_num
                       else node(A.Ref, f"r{j}", [f"val{j}", "()", f"v{j}"]))
-            lines.append(f"    s{j} = _t(_Span, (at + {s0}, at + {e0}))")
+            lines.append(f"    s{j} = _t(_Span, ((at + {s0}) << 32) | (at + {e0}))")
             lines += node(A.Arg, f"a{j}", ["'optval'", f"opt{j}", f"r{j}", f"s{j}"])
         out.append(f"a{j}")
     lines.append(f"    return ({''.join(a + ', ' for a in out)})")

@@ -31,6 +31,10 @@ def parse_text(text: str, display_path: str = "<text>") -> ParsedFile:
 
 
 def parse_source(source: SourceText) -> ParsedFile:
+    if len(source.text) >= A.SPAN_LIMIT:
+        # (A node's span holds offsets below it: ast.Span.)
+        raise source.error(0, f"{len(source.text)} characters: more than the "
+                           f"{A.SPAN_LIMIT - 1} of the largest module rapidcomp reads")
     # Parsing allocates millions of small acyclic objects (~30% of the time
     # otherwise goes to the cyclic collector).
     with paused():
