@@ -1197,13 +1197,16 @@ class Editor:
         named = self._renamed.get(m.instruction)
         if named is None:
             named = self._renamed[m.instruction] = (
-                _style("MoveAbsJ", m.instruction), self._said(f"{m.instruction} -> MoveAbsJ"))
-        called, why = named
+                _style("MoveAbsJ", m.instruction), self._said(f"{m.instruction} -> MoveAbsJ"),
+                self._said(f"{m.instruction} -> MoveAbsJ: its target"))
+        called, why, why_target = named
         # (Its name's span as Motion.name_span gives it, without the Span.)
         start = m.span.start
         self._edit_at(fi, start, start + len(m.instruction), called, why)
+        # (One why for 1e5 edits, as the name's: it names an edit only in an
+        # internal error, which gives its place.)
         expr = u.source.expr.span
-        self._edit_at(fi, expr.start, expr.end, target_text, f"{u.label} -> {target_text[:40]}")
+        self._edit_at(fi, expr.start, expr.end, target_text, why_target)
         return called
 
     def file_edits(self) -> dict[int, list[SpanEdit] | EditColumns]:
