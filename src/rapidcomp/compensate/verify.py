@@ -897,9 +897,10 @@ def _plain_declared(eng, text: str, starts: list[int], lengths: list[int], rows_
         if got is None:
             return None
         rows.append(got)
-    if not plain[0] or not rows:
+    if not plain[0]:
         return None
-    return _Plain(piece, types, names, bounds, scoped, storage, np.concatenate(rows))
+    return _Plain(piece, types, names, bounds, scoped, storage,
+                  np.concatenate(rows) if rows else np.empty((0, width)))
 
 
 def _plain_rows(rows_of, block: list[str]) -> np.ndarray | None:
@@ -975,7 +976,7 @@ def _declared(eng, build, es: EditColumns, shift: np.ndarray, text: str,
         # one each; a transient output's 1e5 pairs): as the loop below
         # reads them, at once, in order (k: a declaration's place among
         # all, the row of its numbers).
-        if ({word.upper() for word in plain.storage} != {"CONST"}
+        if (not {word.upper() for word in plain.storage} <= {"CONST"}
                 or not set(plain.type) <= set(types)):
             return None
         if kinds is not None:

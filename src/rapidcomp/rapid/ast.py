@@ -14,13 +14,15 @@ from ..construct import maker
 
 
 class Span(int):
-    """A half-open range of character offsets [start, end), as a pair:
+    """A half-open range of character offsets [start, end), read as a pair:
     `span.start`, `span.end`, `start, end = span`, span[0], span[1]. Held
-    as one int, start << 32 | end (ordered as the pair is; equal to a Span
-    of the same range, never to a tuple): a node's span is one object of 48
-    bytes, not a tuple of two ints (128; a CAM program's nodes have 4e5-5e5
-    spans, issue #14), and not one the cyclic collector tracks. Offsets are
-    below 2**32: parse.py reads no larger text."""
+    as one int, start << 32 | end: a node's span is one object of 48 bytes,
+    not a tuple of two ints (128; a CAM program's nodes have 4e5-5e5
+    spans, issue #14). It is that int in all else: ordered as the pair is,
+    equal (and hashed) as a Span of the same range or that int, never as a
+    tuple; arithmetic, json and numpy see the int (rows of spans:
+    verify._span_rows). Offsets are 0 <= x < 2**32, not checked here:
+    parse.py reads no larger text."""
 
     __slots__ = ()
 
