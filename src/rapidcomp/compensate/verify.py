@@ -858,8 +858,7 @@ def _plain_declared(eng, text: str, starts: list[int], lengths: list[int], rows_
 
     def blocks():
         """The declarations read, their aggregates a block at a time (not
-        all their texts alive at once; every other block's numbers read by
-        the job's helper, side.py)."""
+        all their texts alive at once)."""
         block: list = []
         for j, (at, n) in enumerate(zip(starts, lengths)):
             pos, end = at, at + n
@@ -892,8 +891,16 @@ def _plain_declared(eng, text: str, starts: list[int], lengths: list[int], rows_
         if block:
             yield (block,)
 
+    # Each block's numbers read by the job's helper, as it is handed, while
+    # this process reads the next block's declarations (the helper has
+    # nothing else to do meanwhile); without one, here.
+    if side.helps():
+        pending = [side.run(_plain_rows, rows_of, block) for block, in blocks()]
+        made = (p.get() for p in pending)
+    else:
+        made = (_plain_rows(rows_of, block) for block, in blocks())
     rows = []
-    for got in side.alternate(_plain_rows, ((rows_of, block) for block, in blocks())):
+    for got in made:
         if got is None:
             return None
         rows.append(got)
