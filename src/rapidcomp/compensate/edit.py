@@ -271,13 +271,9 @@ class Values:
             # Moves turned into MoveAbsJ rcTcJ(cold, dq), each read alone (a
             # CAM program's 1e5): their cold values' and corrections'
             # literals, as batches (every other block's by the job's helper).
-            items = [(s, n) for s in gs if type(s) is Singles and s.mode == "absj"
-                     for n in s.elements if ("absj dq", id(s), n) not in self._values]
-            blocks = [items[at:at + PREPARE_BLOCK] for at in range(0, len(items), PREPARE_BLOCK)]
-            for block, lits in zip(blocks, side.alternate(records.transient_joint_literals,
-                                                          map(self._transient_inputs, blocks))):
-                for (s, n), pair in zip(block, lits):
-                    self._values[("absj dq", id(s), n)] = pair
+            self._in_blocks([(s, n) for s in gs if type(s) is Singles and s.mode == "absj"
+                             for n in s.elements if ("absj dq", id(s), n) not in self._values],
+                            "absj dq", records.transient_joint_literals, self._transient_inputs)
             return
         items = [(g, k) for g in gs if g.failure is None and g.mode == "rob"
                  for k in g.elements if ("texts", id(g), k) not in self._values]
@@ -291,14 +287,19 @@ class Values:
             self._store(*block[:-1], block[-1].get())
         # The jointtargets of moves turned into MoveAbsJ (a CAM program
         # entered from main: 1e5), their joints formatted as one batch.
-        items = [(g, k) for g in gs if g.failure is None and g.mode == "absj" and not g.array
-                 for k in g.elements if ("absj", id(g), k) not in self._values]
+        self._in_blocks([(g, k) for g in gs if g.failure is None and g.mode == "absj"
+                         and not g.array for k in g.elements
+                         if ("absj", id(g), k) not in self._values],
+                        "absj", records.absj_literals_of, self._absj_inputs)
+
+    def _in_blocks(self, items: list, key: str, fn, inputs) -> None:
+        """fn(*inputs(block)) of (group, element) items PREPARE_BLOCK at a
+        time (every other block's made by the job's helper: side.py), each
+        item's value kept as (key, id(group), element)."""
         blocks = [items[at:at + PREPARE_BLOCK] for at in range(0, len(items), PREPARE_BLOCK)]
-        # (Every other block's made by the job's helper: side.py.)
-        for block, lits in zip(blocks, side.alternate(records.absj_literals_of,
-                                                      map(self._absj_inputs, blocks))):
-            for (g, k), literal in zip(block, lits):
-                self._values[("absj", id(g), k)] = literal
+        for block, made in zip(blocks, side.alternate(fn, map(inputs, blocks))):
+            for (g, k), value in zip(block, made):
+                self._values[(key, id(g), k)] = value
 
     def _absj_inputs(self, block: list) -> tuple:
         """(joints, external axes' texts) of a block's MoveAbsJ literals."""
