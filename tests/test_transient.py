@@ -195,6 +195,11 @@ def test_fix_transient_holds_at_every_thermal_state(tmp_path):
                    "-o", out, cwd=tmp_path)
     assert r.returncode == 0, r.stderr + r.stdout
     assert "76 of 76" in r.stdout and "transient" in r.stdout
+    # The notes' advice is an option --transient takes (it refuses --emit
+    # robtarget): --emit auto keeps a MoveL linear (rcTcR).
+    assert "use --emit auto to keep MoveL linear" in r.stdout
+    assert "or keep MoveL robtarget moves with --emit auto." in r.stdout
+    assert "--emit robtarget" not in r.stdout
     # (Where MoveL stay robtarget moves, their constants (pS25_reltool's
     # too) are said by the transient note, not as copies of targets.)
     auto = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", FIXTURES / "warm.csv",

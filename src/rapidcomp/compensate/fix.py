@@ -436,9 +436,12 @@ def _notes(rows: Rows, gs: list[P.Group], transient: bool = False) -> list[str]:
             if lines is None:
                 lines = absj[file] = set()
             lines.add(line)
+    # (What keeps MoveL linear: --emit robtarget, which --transient does not
+    # take; there --emit auto, a MoveL kept with rcTcR.)
+    keep = "--emit auto" if transient else "--emit robtarget"
     if absj:
         notes.append("MoveL -> MoveAbsJ gives up the straight-line path between points "
-                     f"({_file_lines(absj)}); use --emit robtarget to keep MoveL linear.")
+                     f"({_file_lines(absj)}); use {keep} to keep MoveL linear.")
     # Moves --emit would turn into MoveAbsJ that stay robtarget moves for
     # what they are (PERS data, named external axes, an optional argument
     # MoveAbsJ has not, ...; a caution or program displacement has its own
@@ -487,8 +490,9 @@ def _notes(rows: Rows, gs: list[P.Group], transient: bool = False) -> list[str]:
                         else " as the modules declare them")
                      + ": a MoveAbsJ does not follow a later change to a tool or work object "
                      "(a TCP calibration, a user frame redefined on the FlexPendant) as the "
-                     "robtarget move did; after one, run rapidcomp again, or keep robtarget "
-                     "moves with --emit robtarget.")
+                     "robtarget move did; after one, run rapidcomp again, or keep "
+                     + ("MoveL robtarget moves with --emit auto." if transient
+                        else "robtarget moves with --emit robtarget."))
     # Copies of declared targets (not the MoveAbsJ jointtargets, which the
     # note above and the rows say; nor a transient output's constants, which
     # its own note says): a target its uses need at other values
