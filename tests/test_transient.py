@@ -656,3 +656,44 @@ def test_a_large_modules_words_are_read_as_its_parse_found_them(monkeypatch):
             continue
         with pytest.raises(RapidcompError, match=f"uses {clash}, a name of the transient"):
             check_names(Task("m.mod", (pf,)))
+
+
+def test_cold_values_with_other_confdata_are_counted_in_a_note(tmp_path):
+    """A robtarget move whose warm robot needs another J4 quadrant (J4 at
+    0 exactly: orientation [0,0,1,0]) keeps its kind with a cold value that
+    carries that confdata: a declared target's copy <name>_cold, an inline
+    literal rewritten in the call. The note counts them as the output and
+    the rows hold them (counted here from the output's text and the
+    input's confdata, not from the tool's lists)."""
+    ext = "[9E9,9E9,9E9,9E9,9E9,9E9]"
+    pts = [(478.062, 138.973, 529.132), (509.096, 115.489, 328.158),
+           (471.701, 134.306, 429.830), (502.485, 175.660, 414.361)] * 2
+    lines = ["MODULE Cold"]
+    lines += [f"    CONST robtarget p{i}:=[[{x},{y},{z}],[0,0,1,0],[0,0,0,0],{ext}];"
+              for i, (x, y, z) in enumerate(pts[:4])]
+    lines += ["    PROC main()"] + [f"        MoveL p{i},v100,fine,tool0;" for i in range(4)]
+    lines += [f"        MoveL [[{x},{y},{z}],[0,0,1,0],[0,0,0,0],{ext}],v100,fine,tool0;"
+              for x, y, z in pts[4:]]
+    lines += ["    ENDPROC", "ENDMODULE", ""]
+    (tmp_path / "cold.mod").write_text("\n".join(lines))
+    r = _rapidcomp("fix", tmp_path / "cold.mod", "--profile", FIXTURES / "warm.csv",
+                   "--transient", "--tau-heat", "45", "-o", tmp_path / "out" / "cold.mod",
+                   cwd=tmp_path)
+    assert r.returncode == 0 and "8 of 8" in r.stdout, r.stderr + r.stdout
+    out = (tmp_path / "out" / "cold.mod").read_text()
+    copies = re.findall(r"CONST robtarget (\w+_cold):=\[\[[^]]*\],\[[^]]*\],\[([^]]*)\]", out)
+    inline = [c for c in re.findall(r"rcTcR\(\[\[[^]]*\],\[[^]]*\],\[([^]]*)\]", out)
+              if c != "0,0,0,0"]
+    assert copies and inline and all(conf != "0,0,0,0" for _, conf in copies)
+    names = [name for name, _ in copies]
+    n = len(copies) + len(inline)             # (each copy read by its one move)
+    shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+    what = (f"{len(names)} read from {len(names)} cop{'ies' if len(names) > 1 else 'y'} of "
+            f"declared targets ({shown})")
+    assert (f"note: transient: {n} target use{'s' if n > 1 else ''} of robtarget moves carr"
+            f"{'y' if n > 1 else 'ies'} a cold value with other confdata than written, the "
+            f"one every thermal state needs: {what}, {len(inline)} inline; the warm robot "
+            "needs another quadrant of J1, J4 or J6") in r.stdout
+    report = (tmp_path / "out" / "cold.md").read_text()
+    assert report.count("rcTcR(written with the confdata every state needs, correction)") == (
+        len(inline))

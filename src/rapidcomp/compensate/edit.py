@@ -562,6 +562,13 @@ class Editor:
         # with other confdata: the output is parsed again).
         self.calls: dict = {}
         self.calls_other = False
+        # Transient: robtarget moves whose cold value carries the confdata
+        # every state needs, not the written one (_apply_transient): how
+        # many, how many of them inline, and the names of the copies the
+        # others read (<name>_cold; an array's once) (a note says so:
+        # fix._transient_notes).
+        self.cold_moves = self.cold_inline = 0
+        self.cold_copies: list[str] = []
         self._per_module: dict = {}
         self._renamed: dict = {}             # instruction -> (MoveAbsJ as it, why) (_to_absj)
 
@@ -1086,6 +1093,8 @@ class Editor:
             s = _stem(g, k)
             want = cold_name(s, key if g.array else k)
             cold = self.names.new(want) if want else None
+            if cold is not None and cold_type == "robtarget":
+                self.cold_copies.append(cold)
             dq = self.names.new(((cold if dq_after_cold and cold else s))[:29] + "_dq")
             if g.array:
                 if cold is not None:
@@ -1159,6 +1168,7 @@ class Editor:
                 literal = literal[:literal.rindex(",[")] + "," + axes + "]"
             return literal
 
+        self.cold_moves += sum(u.source.element in confs for u in g.uses) if confs else 0
         # (Its cold value its target as written, a name or a literal, and no
         # Offs/RelTool around it: self.calls, read again as such.)
         plain = not confs and not g.array and g.src.call is None
@@ -1167,11 +1177,14 @@ class Editor:
             for u in g.uses:
                 k = u.source.element
                 cold = cold_literal(g, k) if k in confs else u.file.text(u.source.ref)
+                self.cold_inline += k in confs
                 dq = self._pose_literal(g, k)
                 target = f"{func}({cold}, {dq})"
                 self.edit(u.key[0], u.source.ref.span, target, self._said(f"target -> {func}"))
                 self.actions[u.key] = self._said(
-                    f"inline robtarget -> {func}(written, correction)")
+                    f"inline robtarget -> {func}(written"
+                    + (" with the confdata every state needs" if k in confs else "")
+                    + ", correction)")
                 if plain:
                     self.calls[u.key] = (u, cold, None, dq, func, u.source.ref.span, None,
                                          None)

@@ -284,7 +284,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # What each stage made per target is not needed past it (1e5 targets:
     # hundreds of MB): the edited literals as written, the output parsed
     # again; of the editor the rows read what it did per use only.
-    actions = editor.actions
+    actions, cold = editor.actions, (editor.cold_moves, editor.cold_inline, editor.cold_copies)
     values = written = converted = calls = out_files = editor = keys = None
     # The rows read the plan's uses and track only: the resolver's caches
     # go before the rows are made (a later use of them fails loudly).
@@ -298,7 +298,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     notes = plan_notes + _notes(rows, gs, transient is not None)
     if transient is not None:
         notes += _transient_notes(transient[0], state_errors if any(
-            r.status == COMPENSATED for r in rows) else {})
+            r.status == COMPENSATED for r in rows) else {}, *cold)
     # Past the rows the plan, the solutions, the groups and the actions are
     # not needed (1e5 targets: some 300 MB the diffs and the report reuse
     # instead of growing the process further).
@@ -365,23 +365,46 @@ def _worst(solved, solvers, keys: list, um: np.ndarray, deg: np.ndarray) -> tupl
     return dict(zip(keys, zip(worst_um.tolist(), worst_deg.tolist()))), by_state
 
 
-def _transient_notes(tr, state_errors: dict) -> list[str]:
+def _transient_notes(tr, state_errors: dict, cold_moves: int = 0, cold_inline: int = 0,
+                     cold_copies: list[str] = ()) -> list[str]:
     from .transient import FUNC_J, FUNC_R, MODULE_FILE
     figures = "; ".join(f"s={s:g}: {um:.3f} um / {deg:.1e} deg"
                         for s, (um, deg) in sorted(state_errors.items()))
     if not state_errors:
         return [f"transient: no target compensated; {MODULE_FILE} is written all the same "
                 f"(state law: {tr.law})."]
-    return [f"transient: each compensated move goes to {FUNC_J}(cold, dq) (MoveAbsJ) or "
-            f"{FUNC_R}(cold, dq) (a robtarget move, which keeps its kind) = the cold robot's "
-            "target + s x the warm robot's correction; load "
-            f"{MODULE_FILE} (written next to the output) into the same task. State law: "
-            f"{tr.law}.",
-            "transient: the written numbers evaluated as the controller computes them (float32) "
-            "at every thermal state, on the robot deformed by s x profile, worst target: "
-            f"{figures} (what is left beyond float32 rounding is the linearisation q_cold + "
-            "s x dq, second order in the deformation; the orientation of a wrist-singular "
-            "target is in its row)."]
+    other = []
+    if cold_moves:
+        # (A robtarget's confdata is one for every state: where the warm
+        # robot needs another quadrant of J1, J4 or J6 and the cold joints
+        # are within the quadrant tolerance of it too, the cold value takes
+        # it.)
+        where = []
+        declared = cold_moves - cold_inline
+        if declared:
+            shown = ", ".join(cold_copies[:3]) + (", ..." if len(cold_copies) > 3 else "")
+            where.append(f"{declared} read from {len(cold_copies)} "
+                         f"cop{'ies' if len(cold_copies) != 1 else 'y'} of declared targets "
+                         f"({shown})")
+        if cold_inline:
+            where.append(f"{cold_inline} inline")
+        other.append(f"transient: {cold_moves} target use{'s' if cold_moves != 1 else ''} of "
+                     f"robtarget moves carr{'y' if cold_moves != 1 else 'ies'} a cold value "
+                     "with other confdata "
+                     f"than written, the one every thermal state needs: {', '.join(where)}; "
+                     "the warm robot needs another quadrant of J1, J4 or J6 and the cold robot's "
+                     "joints are within the quadrant tolerance of it too (the rows say which).")
+    return other + [
+        f"transient: each compensated move goes to {FUNC_J}(cold, dq) (MoveAbsJ) or "
+        f"{FUNC_R}(cold, dq) (a robtarget move, which keeps its kind) = the cold robot's "
+        "target + s x the warm robot's correction; load "
+        f"{MODULE_FILE} (written next to the output) into the same task. State law: "
+        f"{tr.law}.",
+        "transient: the written numbers evaluated as the controller computes them (float32) "
+        "at every thermal state, on the robot deformed by s x profile, worst target: "
+        f"{figures} (what is left beyond float32 rounding is the linearisation q_cold + "
+        "s x dq, second order in the deformation; the orientation of a wrist-singular "
+        "target is in its row)."]
 
 
 def _missed(solved, gs, verified, file_index: dict) -> dict:
