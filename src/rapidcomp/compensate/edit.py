@@ -21,7 +21,7 @@ from ..kinematics.frames import matrix_to_quat_wxyz, row_dots
 from ..errors import InternalError
 from ..rapid import ast as A
 from ..rapid.values import RobTarget
-from ..rewrite import numbers, records
+from ..rewrite import records
 from ..rewrite.names import NameAllocator
 from .place import Group, Singles, element_label, multi_index, writable
 from .plan import Plan
@@ -180,8 +180,7 @@ class Values:
         if got is not None and len(got) == 3:
             return got[2]
         d, dq, _ = self.pose_dq(g, k)
-        return ("[[" + ",".join(numbers.mm(float(v)) for v in d) + "],["
-                + ",".join(numbers.fmt(float(v), numbers.QUAT_DECIMALS) for v in dq) + "]]")
+        return records.pose_literals(d[None], dq[None])[0]
 
     def robtarget_value(self, g: Group, k):
         """(R, p, conf) of the literal the ideal controller must be given:
@@ -570,7 +569,9 @@ class Editor:
         self.cold_moves = self.cold_inline = 0
         self.cold_copies: list[str] = []
         self._per_module: dict = {}
-        self._renamed: dict = {}             # instruction -> (MoveAbsJ as it, why) (_to_absj)
+        # (_to_absj) instruction -> (MoveAbsJ as it, the why of its name's edit, of its
+        # target's)
+        self._renamed: dict = {}
 
     def text(self, fi: int) -> str:
         return self.plan.files[fi].source.text
@@ -978,8 +979,7 @@ class Editor:
 
     # -------------------------------------------------------- transient
     def _dq_literal(self, g: Group, k) -> str:
-        texts = [numbers.joint(float(v)) for v in self.values.dq(g, k)] + ["0"] * 6
-        return records.jointtarget_literal(texts)
+        return records.correction_literals(self.values.dq(g, k)[None])[0]
 
     def _cold_literal(self, g: Group, k) -> str:
         if g.mode == "absj":

@@ -509,18 +509,16 @@ def relex_transient(plan: Plan, calls: dict, file_edits: dict,
         return out
 
     def inline_rows(lits: list) -> np.ndarray | None:
-        """_dq_rows of inline literals of decimal numbers, a block at a
-        time, every other one read by the job's helper (side.py)."""
-        if not _plain_numaggs(lits):
-            return None
-        out = np.empty((len(lits), 7))
-        ats = range(0, len(lits), RELEX_BLOCK)
-        for at, got in zip(ats, side.alternate(_dq_rows, ((lits[at:at + RELEX_BLOCK],)
-                                                          for at in ats))):
+        """_dq_rows of inline literals of decimal numbers (_plain_rows), a
+        block at a time, every other one read by the job's helper
+        (side.py)."""
+        out = []
+        for got in side.alternate(_plain_rows, ((_dq_rows, lits[at:at + RELEX_BLOCK])
+                                                for at in range(0, len(lits), RELEX_BLOCK))):
             if got is None:
                 return None
-            out[at:at + RELEX_BLOCK] = got
-        return out
+            out.append(got)
+        return np.concatenate(out)
 
     keys: list = []
     dqs: list = []

@@ -41,11 +41,14 @@ _INF = float("inf")
 # _FAST_NUM: at most 30 digits each side, never beyond a num's range).
 _FAST_NUM = re.compile(r"[-+]?(?:[0-9]{1,30}(?:\.[0-9]{0,30})?|\.[0-9]{1,30})(?![\w.])")
 
-# The nodes of one-token statements and declarations, made as their classes
-# make them (construct.py; a CAM program's 1e5 moves and 5e4 declarations).
+
 def _span(se, _new=int.__new__, _Span=Span) -> Span:
     """Span(*se) (a pair of offsets), without a call of its __new__."""
     return _new(_Span, (se[0] << 32) | se[1])
+
+
+# The nodes of one-token statements and declarations, made as their classes
+# make them (construct.py; a CAM program's 1e5 moves and 5e4 declarations).
 _arg, _ref, _num, _call, _decl, _numagg, _func, _tail_args = (
     maker(c) for c in (A.Arg, A.Ref, A.Num, A.ProcCall, A.DataDecl, A.NumAgg, A.Call,
                        A.TailArgs))

@@ -297,10 +297,15 @@ def transient_joint_literals(cold: np.ndarray, dq: np.ndarray, axes: list[str]
     correction's joints and six zero external axes; numbers formatted in
     one batch (a function of numbers and texts, which a CAM program's job
     hands to its helper for every other block: side.py)."""
-    colds = absj_literals_of(cold, axes)
+    return list(zip(absj_literals_of(cold, axes), correction_literals(dq)))
+
+
+def correction_literals(dq: np.ndarray) -> list[str]:
+    """The jointtarget literals of transient corrections of joints (dq (n,
+    6) deg): the joints, six zero external axes; numbers formatted in one
+    batch."""
     dqs = numbers.fmt_many(np.asarray(dq, float).ravel().tolist(), numbers.JOINT_DECIMALS)
-    return [(c, f"[[{j}],[0,0,0,0,0,0]]")
-            for c, j in zip(colds, map(",".join, zip(*[iter(dqs)] * 6)))]
+    return [f"[[{j}],[0,0,0,0,0,0]]" for j in map(",".join, zip(*[iter(dqs)] * 6))]
 
 
 def pose_literals(d: np.ndarray, dq: np.ndarray) -> list[str]:
