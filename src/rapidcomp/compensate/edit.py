@@ -852,8 +852,20 @@ class Editor:
         the index of the file they go in."""
         src = u.source
         decl, module = src.decl, src.home_module
-        anchor = self._anchor_of((self.plan.file_index[id(src.home)], module), decl, module)
-        local, assign = u.module is module, self._assign(anchor[0], decl, module, module)
+        fi = self.plan.file_index[id(src.home)]
+        text = self.plan.files[fi].source.text
+        span = decl.span
+        end = span.end
+        c = text[end:end + 1]
+        if c == "\n" or c == "\r" or not c:
+            # (The declaration ends its line, as RobotStudio writes every one
+            # of 1e5: the place _anchor_of finds, at the end of that line,
+            # without its search for declarations that follow on it.)
+            anchor = (fi, end, "\r\n" if text.startswith("\r\n", end) else c or "\n",
+                      _indent(text, span.start), decl.routine is not None)
+        else:
+            anchor = self._anchor_of((fi, module), decl, module)
+        local, assign = u.module is module, self._assign(fi, decl, module, module)
         for at in range(0, len(named), 2):
             self._declare(anchor, local, assign, type_name, named[at], "", named[at + 1])
         return anchor[0]
