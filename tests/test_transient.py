@@ -459,6 +459,12 @@ def test_review_cases_literal_index_backinfo_overwrite_and_static_profiles(tmp_p
     r = _rapidcomp("fix", mod, "--profile", FIXTURES / "warm.csv", "--transient", "--tau-heat",
                    "90", "-o", out.parent / "again.mod", cwd=tmp_path)
     assert r.returncode == 2 and "exists and is not this support module" in r.stderr
+    # (It says where they differ: the line of the time constant.)
+    at = next(i for i, line in enumerate(before.decode().splitlines(), 1)
+              if "rcTauHeat:=" in line and "CONST" in line)
+    assert (f"rcThermal.sys:{at}:26: exists and is not this support module: its line {at} "
+            "holds `CONST num rcTauHeat:=40;` where this run writes `CONST num rcTauHeat:=90;`"
+            in r.stderr), r.stderr
     assert (out.parent / "rcThermal.sys").read_bytes() == before
     assert not (out.parent / "again.mod").exists()
     # The same law again: the module there is the one it would write, kept,
@@ -697,3 +703,26 @@ def test_cold_values_with_other_confdata_are_counted_in_a_note(tmp_path):
     report = (tmp_path / "out" / "cold.md").read_text()
     assert report.count("rcTcR(written with the confdata every state needs, correction)") == (
         len(inline))
+
+
+def test_where_a_support_module_in_the_way_differs():
+    """The refusal of another rcThermal.sys names the first line of code
+    that differs (a comment that differs, where no code does), both
+    lines, a long one around where they differ, line breaks aside; and
+    where one of them ends."""
+    from rapidcomp.compensate.transient import differs
+    ours = b"MODULE rcThermal\n    ! tau 40 min\n    CONST num rcTauHeat:=40;\nENDMODULE\n"
+    theirs = ours.replace(b"40", b"45").replace(b"\n", b"\r\n")
+    assert differs(theirs, ours) == (":3:27", "its line 3 holds `CONST num rcTauHeat:=45;` "
+                                     "where this run writes `CONST num rcTauHeat:=40;`")
+    assert differs(ours.replace(b"! tau 40", b"! tau 45"), ours) == (
+        ":2:12", "its line 2 holds `! tau 45 min` where this run writes `! tau 40 min`")
+    assert differs(ours.replace(b"\n", b"\r\n"), ours) == ("", "")
+    assert differs(ours + b"MODULE x\n", ours) == (
+        ":5:1", "its line 5 holds `MODULE x` where this run's ends")
+    assert differs(ours[:-10], ours) == (
+        ":3:29", "it ends at its line 3 where this run's goes on with `ENDMODULE`")
+    assert differs(None, ours) == ("", "")
+    long = b"    ! " + b"x" * 100 + b"a" + b"y" * 100 + b"\n"
+    there, what = differs(long.replace(b"a", b"b"), long)
+    assert there == ":1:107" and what.count("...") == 4 and "xb" in what and "xa" in what

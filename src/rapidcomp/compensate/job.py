@@ -225,7 +225,7 @@ def _support_files(spec: JobSpec, task, kept: list[str]) -> list[tuple[str, byte
     its task's SYSMOD folder, whose modules a restore loads); a program
     file (.pgf) lists it after its last module. Where the same module is
     there already, its path goes to `kept`, not to the files."""
-    from .transient import MODULE_FILE, support_module
+    from .transient import MODULE_FILE, differs, support_module
     src = spec.source
     first = task.files[0].source
     nl = "\r\n" if "\r\n" in first.text else "\n"
@@ -244,9 +244,11 @@ def _support_files(spec: JobSpec, task, kept: list[str]) -> list[tuple[str, byte
         except OSError:
             existing = None
         if existing is None or existing.replace(b"\r\n", b"\n") != text.replace(b"\r\n", b"\n"):
-            raise RapidcompError(f"{path}: exists and is not this support module (another "
-                                 "program's, with other settings, or a file of yours); write the "
-                                 "output to another folder or remove it")
+            where, what = differs(existing, text)
+            raise RapidcompError(f"{path}{where}: exists and is not this support module"
+                                 f"{': ' + what if what else ''} (another program's, with other "
+                                 "settings, or a file of yours); write the output to another "
+                                 "folder or remove it")
         # The same module (another program of the folder wrote it, in its
         # own line breaks): kept as it is.
         out = []

@@ -244,6 +244,49 @@ def day_number(year: int, month: int, day: int) -> int:
     return 365 * y + y // 4 - y // 100 + y // 400 + (153 * (m - 3) + 2) // 5 + day - 1
 
 
+def differs(existing: bytes | None, text: bytes) -> tuple[str, str]:
+    """Where the support module `existing` (a file's bytes, None: not
+    readable) differs from `text`, the one this run writes, line breaks
+    aside: (":line:col", "its line L holds `...` where this run writes
+    `...`") of the first line of code that differs (else of the first
+    comment), each "" where nothing can be said. The user sees which
+    setting differs (most often a time constant) without a diff."""
+    if existing is None:
+        return "", ""
+    have, want = (_lines(t.decode("latin-1")) for t in (existing, text))
+    if have == want:
+        return "", ""
+    other = [i for i, (a, b) in enumerate(zip(have, want)) if a != b]
+    if other:
+        i = next((i for i in other if not have[i].lstrip().startswith("!")), other[0])
+        a, b = have[i], want[i]
+        col = next((k for k, (x, y) in enumerate(zip(a, b)) if x != y), min(len(a), len(b)))
+        return f":{i + 1}:{col + 1}", (f"its line {i + 1} holds {_quoted(a, col)} where this "
+                                       f"run writes {_quoted(b, col)}")
+    i = min(len(have), len(want))
+    if len(have) > len(want):
+        return f":{i + 1}:1", f"its line {i + 1} holds {_quoted(have[i])} where this run's ends"
+    return f":{i}:{len(have[i - 1]) + 1}", (f"it ends at its line {i} where this run's goes "
+                                             f"on with {_quoted(want[i])}")
+
+
+def _lines(text: str) -> list[str]:
+    lines = text.replace("\r\n", "\n").split("\n")
+    return lines[:-1] if lines[-1] == "" else lines
+
+
+def _quoted(line: str, col: int = 0) -> str:
+    """line in backquotes, its indentation aside; a long one from some way
+    before column col (0-based), where it differs."""
+    blanks = len(line) - len(line.lstrip())
+    line, col = line.strip(), max(col - blanks, 0)
+    if len(line) > 72:
+        start = max(0, min(col - 36, len(line) - 69))
+        line = ("..." if start else "") + line[start:start + 69 - (3 if start else 0)] + (
+            "..." if start + 69 < len(line) else "")
+    return f"`{line}`"
+
+
 # ------------------------------------------------------------- the module
 
 def support_module(tr: Transient, nl: str = "\n") -> str:
