@@ -60,10 +60,16 @@ def summary_lines(result: FixResult) -> list[str]:
     untouched = sum(s["untouched"].values())
     out = [f"{s['compensated']} of {s['target_uses']} target uses compensated, "
            f"{s['not_compensated']} not compensated, {untouched} untouched"]
-    for reason, n in s["untouched"].items():
-        out.append(f"{UNTOUCHED} ({n}): {reason}")
     several = len(result.modules) > 1
     rows = result.rows
+    # (Where: the console line is what a user reads first.)
+    by_reason: dict[str, list[UseRow]] = {}
+    if untouched:
+        for k, (status, reason) in enumerate(zip(rows.column("status"), rows.column("reason"))):
+            if status == UNTOUCHED:
+                by_reason.setdefault(reason, []).append(rows[k])
+    for reason, n in s["untouched"].items():
+        out.append(f"{UNTOUCHED} ({n}): {reason} [{_places(by_reason[reason], several)}]")
     out += failure_lines([rows[k] for k, status in enumerate(rows.column("status"))
                           if status == "not compensated"], several)
     if s["error_before_um"]:
@@ -128,7 +134,7 @@ def _places(rs: list[UseRow], several: bool) -> str:
     places: dict[str, list[int]] = {}
     for r in rs:
         places.setdefault(r.file, []).append(r.line)
-    return "; ".join((f"{f} " if several else "") + "lines "
+    return "; ".join((f"{f} " if several else "") + ("line " if len(set(lines)) == 1 else "lines ")
                      + line_ranges(sorted(set(lines))) for f, lines in places.items())
 
 
