@@ -47,7 +47,14 @@ def test_caret_points_at_column():
 
 @pytest.mark.parametrize("text,where,phrase", [
     ("MODULE m\nPROC p()\n", "3:1", "unexpected end of file; expected a declaration, a statement"),
-    ("MODULE m\nPROC p()\n x := 1\nENDPROC\nENDMODULE\n", "4:1", "expected an operator or ';'"),
+    # (A ';' missing where a line ends: said there, not where the next
+    # line starts; a comment between changes nothing.)
+    ("MODULE m\nPROC p()\n x := 1\nENDPROC\nENDMODULE\n", "3:8",
+     "';' missing after number 1: the next line goes on with 'ENDPROC'; expected ';' or an "
+     "operator here"),
+    ("MODULE m\nPROC p()\n MoveL p1, v100, fine, tool0 ! to p1\r\n MoveJ p1, v100, fine, "
+     "tool0;\nENDPROC\nENDMODULE\n", "3:29", "';' missing after identifier 'tool0': the next "
+     "line goes on with identifier 'MoveJ'; expected ';' or an operator, '(', ','"),
     ("MODULE m\nPROC p()\n IF x THEN\n ENDPROC\nENDMODULE\n", "4:2", "ELSE, ELSEIF or ENDIF"),
     ("MODULE m\n VAR num x := 1 @ 2;\nENDMODULE\n", "2:17", "unexpected character '@'"),
     ("MODULE m\n VAR num if := 1;\nENDMODULE\n", "2:10", "unexpected 'if'; expected an identifier"),

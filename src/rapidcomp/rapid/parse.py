@@ -467,6 +467,9 @@ def _describe_token(tok) -> str:
     return f"'{shown}'"
 
 
+_LINE_BREAK = re.compile(r"[\r\n]")
+
+
 def _syntax_error(source: SourceText, exc: ParseFailure) -> InputError:
     tok, expected, prev = exc.token, exc.expected, exc.previous
     if prev is not None and prev.type == "ENDMODULE" and tok.type != "MODULE":
@@ -478,6 +481,15 @@ def _syntax_error(source: SourceText, exc: ParseFailure) -> InputError:
         msg = f"unexpected end of file; expected {describe_expected(expected)}"
         if "ENDMODULE" in expected:
             msg += " (is ENDMODULE missing?)"
+    elif ("SEMI" in expected and prev is not None
+          and _LINE_BREAK.search(source.text, prev.end_pos, tok.start_pos)):
+        # (A statement that could end on its line but runs on into the next:
+        # the ';' is missing where the line ends, not where the next starts.)
+        rest = expected - {"SEMI"}
+        return source.error(prev.end_pos, (
+            f"';' missing after {_describe_token(prev)}: the next line goes on with "
+            f"{_describe_token(tok)}; expected ';'"
+            + (f" or {describe_expected(rest)}" if rest else "") + " here"))
     else:
         msg = f"unexpected {_describe_token(tok)}; expected {describe_expected(expected)}"
         if "RBRACK" in expected:
