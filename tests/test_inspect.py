@@ -35,3 +35,28 @@ def test_inspect_cli_text_runs_on_every_fixture():
         result = CliRunner().invoke(main, ["inspect", str(path)])
         assert result.exit_code == 0, result.output
         assert "MODULE" in result.stdout
+
+
+@pytest.mark.parametrize("program,modules", [
+    # (A program file: its modules in its order, not a stale copy beside.)
+    ("glue/Glue.pgf", ["glue/GlueData.mod", "glue/GlueMain.mod"]),
+    ("cell", ["cell/CellData.mod", "cell/MainModule.mod"]),
+    # (A backup: every task's, motion or not.)
+    ("backup_irbt", ["backup_irbt/RAPID/TASK1/PROGMOD/Track.mod",
+                     "backup_irbt/RAPID/TASK1/SYSMOD/user.sys",
+                     "backup_irbt/RAPID/TASK2/PROGMOD/Comm.mod"]),
+])
+def test_inspect_a_task_is_each_of_its_modules_inspected(program, modules):
+    """`inspect` takes what `check` and `fix` take: a task folder, a program
+    file or a backup is each of its modules as `inspect MODULE` shows it,
+    one after the other (text), or listed (JSON)."""
+    tasks = FIXTURES / "tasks"
+
+    def run(*args):
+        r = CliRunner().invoke(main, ["inspect", *args])
+        assert r.exit_code == 0, r.output
+        return r.stdout
+    assert run(str(tasks / program)) == "\n".join(run(str(tasks / m)) for m in modules)
+    doc = json.loads(run(str(tasks / program), "--json"))
+    assert doc == {"program": str(tasks / program),
+                   "modules": [json.loads(run(str(tasks / m), "--json")) for m in modules]}

@@ -213,22 +213,23 @@ PROGRAM_HELP = ("PROGRAM is a module (.mod, .modx, .sys, .prg), a task folder (e
                 "below it), a program file (.pgf) or a controller backup (RAPID/<TASK>/...).")
 
 
-@main.command()
-@click.argument("program", type=click.Path(dir_okay=False))
+@main.command(epilog=PROGRAM_HELP)
+@click.argument("program", type=click.Path())
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
 def inspect(program: str, as_json: bool) -> None:
-    """Show what the parser found in PROGRAM: counts, target data, motions."""
-    from .rapid.inspect import render_text, report
-    from .rapid.parse import parse_file
+    """Show what the parser found in PROGRAM: counts, target data, motions
+    (of each of a task's modules, in the order the task lists them)."""
+    from .rapid.inspect import modules_of, render_text, report
     try:
-        pf = parse_file(program)
+        reps = [report(pf) for pf in modules_of(program)]
     except RapidcompError as exc:
         _fail(exc)
-    rep = report(pf)
     if as_json:
-        click.echo(json.dumps(rep, indent=2))
+        doc = reps[0] if len(reps) == 1 and os.path.isfile(program) and not program.lower(
+        ).endswith(".pgf") else {"program": program, "modules": reps}
+        click.echo(json.dumps(doc, indent=2))
     else:
-        click.echo(render_text(rep), nl=False)
+        click.echo("\n".join(render_text(r) for r in reps), nl=False)
 
 
 @main.command(epilog=PROGRAM_HELP)

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Iterator
+from pathlib import Path
 
 from . import ast as A
 from .model import ParsedFile
@@ -20,6 +22,22 @@ def _value_summary(value) -> dict | None:
     if isinstance(value, JointTarget):
         return {"robax": list(value.joints), "extax": list(value.ext)}
     return None
+
+
+def modules_of(program: str) -> Iterator[ParsedFile]:
+    """The modules `inspect PROGRAM` reads, parsed one at a time: a module
+    file as given; each module of a task folder, program file (.pgf) or
+    controller backup (each of its tasks, motion or not), named by the path
+    the user can open."""
+    from .parse import parse_file
+    from .task import tasks_of
+    path = Path(program)
+    if path.is_file() and path.suffix.lower() != ".pgf":
+        yield parse_file(program)
+        return
+    for source in tasks_of(program, (), motion_only=False):
+        for rel in source.modules:
+            yield parse_file(source.root / rel)
 
 
 def report(pf: ParsedFile) -> dict:
