@@ -225,8 +225,9 @@ def inspect(program: str, as_json: bool) -> None:
     except RapidcompError as exc:
         _fail(exc)
     if as_json:
-        doc = reps[0] if len(reps) == 1 and os.path.isfile(program) and not program.lower(
-        ).endswith(".pgf") else {"program": program, "modules": reps}
+        # (A module alone: its report, as before tasks were taken.)
+        alone = os.path.isfile(program) and not program.lower().endswith(".pgf")
+        doc = reps[0] if alone else {"program": program, "modules": reps}
         click.echo(json.dumps(doc, indent=2))
     else:
         click.echo("\n".join(render_text(r) for r in reps), nl=False)
