@@ -635,3 +635,29 @@ def test_a_kept_move_says_why_beside_its_other_warnings(tmp_path):
     assert row["warnings"][0].startswith("near wrist singularity"), row
     assert row["warnings"][1] == ("kept as MoveL: pS is PERS data (ModPos or another task may "
                                   "change it; a MoveAbsJ would not follow)")
+
+
+def test_what_a_run_writes_over_is_said(tmp_path, monkeypatch):
+    """A file already where the output, report or a folder's module goes is
+    replaced (an earlier run's output, as a compiler's), and the "wrote"
+    line says so, each by name (a folder: how many of its files); a first
+    run says nothing of it."""
+    monkeypatch.chdir(tmp_path)
+    profile = str(FIXTURES / "warm.csv")
+
+    def wrote(*args):
+        r = CliRunner().invoke(main, ["fix", *args, "--profile", profile])
+        assert r.exit_code == 0, r.output
+        return r.output.splitlines()[-1]
+    front = str(FIXTURES / "paper_front.mod")
+    assert wrote(front, "-o", "a.mod") == "wrote a.mod, a.md"
+    assert wrote(front, "-o", "a.mod") == ("wrote a.mod (replaced the file there), a.md "
+                                           "(replaced the file there)")
+    (tmp_path / "mine.mod").write_text("MODULE mine\nENDMODULE\n")
+    assert wrote(front, "-o", "b.mod", "--report", "mine.mod") == (
+        "wrote b.mod, mine.mod (replaced the file there)")
+    cell = str(FIXTURES / "tasks" / "cell")
+    assert wrote(cell, "-o", "out") == "wrote out/, out.md"
+    (tmp_path / "out" / "MainModule.mod").unlink()
+    assert wrote(cell, "-o", "out") == ("wrote out/ (replaced 1 file there), out.md (replaced "
+                                        "the file there)")

@@ -42,6 +42,23 @@ def _write(files) -> None:
         _fail(RapidcompError(f"{where}: cannot write: {why}; nothing written"))
 
 
+def _there(files) -> list[str]:
+    """The paths of `files` where a file is already (the write replaces
+    it: said, so that no earlier output or file of the user's goes without
+    a word)."""
+    return [str(p) for p, _ in files if os.path.lexists(p)]
+
+
+def _replacing(shown: str, replaced: list[str]) -> str:
+    """A path the "wrote" line shows, with what the write replaced: the
+    file itself, or, for a folder (shown with its separator), how many of
+    the files in it."""
+    if not shown.endswith(os.sep):
+        return shown + (" (replaced the file there)" if shown in replaced else "")
+    n = sum(p.startswith(shown) for p in replaced)
+    return shown + (f" (replaced {n} file{'s' if n > 1 else ''} there)" if n else "")
+
+
 class _Group(click.Group):
     def invoke(self, ctx):
         try:
@@ -355,6 +372,7 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
         click.echo("rapidcomp: some targets cannot be compensated; nothing written "
                    "(--allow-partial writes the rest and lists these)", err=True)
         sys.exit(EXIT_PARTIAL)
+    replaced = _there(files)
     _write(files)
     if not quiet:
         shown: list[str] = []
@@ -367,7 +385,7 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
                 or not p.startswith(o.spec.output + os.sep)]
         # (Each once: programs into one folder share its support module.)
         shown, kept = list(dict.fromkeys(shown)), list(dict.fromkeys(kept))
-        click.echo("wrote " + ", ".join(shown) + (
+        click.echo("wrote " + ", ".join(_replacing(p, replaced) for p in shown) + (
             f"; kept {', '.join(kept)} (the same support module was there)" if kept else ""))
     sys.exit(EXIT_PARTIAL if failed else EXIT_OK)
 
@@ -624,6 +642,7 @@ def _campaign_options(f):
 
 
 def _write_outcome(outcome, quiet: bool) -> None:
+    replaced = _there(outcome.files)
     _write(outcome.files)
     if not quiet:
         for line in outcome.summary:
@@ -631,7 +650,7 @@ def _write_outcome(outcome, quiet: bool) -> None:
         for note in outcome.notes:
             click.echo(f"note: {note}")
         if outcome.files:
-            click.echo("wrote " + ", ".join(p for p, _ in outcome.files))
+            click.echo("wrote " + ", ".join(_replacing(p, replaced) for p, _ in outcome.files))
 
 
 @main.command()
