@@ -99,8 +99,10 @@ def test_messages(text, where, phrase):
 
 
 def test_missing_file_is_bad_input(tmp_path):
-    result = CliRunner().invoke(main, ["inspect", str(tmp_path / "nope.mod")])
-    assert result.exit_code == 2 and "cannot read file" in result.stderr
+    # (As check and fix say it.)
+    for command in (["inspect"], ["check", "--profile", str(FIXTURES / "warm.csv")]):
+        result = CliRunner().invoke(main, [*command, str(tmp_path / "nope.mod")])
+        assert result.exit_code == 2 and "nope.mod: no such file or folder" in result.stderr
 
 
 def test_python_dash_m_entry_point():

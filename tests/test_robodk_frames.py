@@ -556,8 +556,10 @@ def test_the_reason_names_the_first_service_routine_in_the_text(tmp_path):
         **{f"Svc{k}": [tframe("T2")] for k in (3, 1, 2)}}))
     # (Each run a process of its own: the order of a set of ids is not the
     # same from one process to the next.)
-    outs = {own_process("fix", src, "--profile", "fixtures/warm.csv", "-o", tmp_path / "o.mod",
-                        "--allow-partial").stdout for _ in range(3)}
+    # (Each into a folder of its own: a run's output is not the last's.)
+    outs = {own_process("fix", src, "--profile", "fixtures/warm.csv", "-o",
+                        tmp_path / f"{k}" / "o.mod", "--allow-partial").stdout.replace(
+                            str(tmp_path / f"{k}"), "") for k in range(3)}
     (out,) = outs
     assert "by Svc3 (MOD_Main.mod:14), which no given routine calls" in out, out
 

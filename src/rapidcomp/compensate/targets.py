@@ -14,10 +14,11 @@ data of every module of the task.
 Only values known statically are resolved: literal targets, declared
 targets with literal values, array elements with literal indices or
 indexed by the enclosing FOR loop's variable with constant bounds,
-Offs/RelTool with literal numbers, and jointtargets of MoveAbsJ. What is
-not resolved says why, and whether that is by design (untouched: a value
-known only at run time, a stationary tool) or a gap in the input (blocked:
-a name no given module declares), which fails the compensation.
+Offs/RelTool with literal numbers or CONST nums, and jointtargets of
+MoveAbsJ. What is not resolved says why, and whether that is by design
+(untouched: a value known only at run time, a stationary tool) or a gap in
+the input (blocked: a name no given module declares), which fails the
+compensation.
 """
 
 from __future__ import annotations
@@ -1778,8 +1779,13 @@ class Resolver:
 
     def _offset(self, pf, call: A.Call, module, routine: str, env):
         pos = [a.value for a in call.args if a.kind == "pos"]
-        if len(pos) != 4 or not all(isinstance(v, A.Num) for v in pos[1:]):
-            return Unresolved(f"{call.name} arguments are not literal numbers")
+        if len(pos) != 4:
+            return Unresolved(f"{call.name} takes a target and three numbers")
+        # (Literal numbers, or CONST nums: fixed before the program runs.)
+        xyz = [self.number(v, module, routine) for v in pos[1:]]
+        if None in xyz:
+            return Unresolved(f"{call.name} arguments are not literal numbers or CONST nums "
+                              "of a literal value")
         if isinstance(pos[0], (A.Agg, A.NumAgg)):
             try:
                 record = decode("robtarget", pos[0], f"{call.name} robtarget")
@@ -1795,19 +1801,22 @@ class Resolver:
         if not isinstance(base.record, RobTarget):
             return Unresolved(f"{call.name} of a non-robtarget", True)
         # (A tuple: poses() makes the array of every use's at once.)
-        d = tuple(self._position([v.value for v in pos[1:]], pos[1].span.start, pf,
-                                 f"the {call.name} displacement"))
+        d = tuple(self._position(xyz, pos[1].span.start, pf, f"the {call.name} displacement"))
         rot = NO_ROTATION
         if call.name.lower() == "reltool":
             turns = []
             for a in call.args:
                 if a.kind == "optval" and a.name.lower() in ("rx", "ry", "rz"):
-                    if not isinstance(a.value, A.Num):
-                        return Unresolved("RelTool rotation is not a literal number")
-                    angle, = self._floats((a.value.value,))
+                    angle = self.number(a.value, module, routine)
+                    if angle is None:
+                        return Unresolved("RelTool rotation is not a literal number or a CONST "
+                                          "num of a literal value")
+                    angle, = self._floats((angle,))
                     if not abs(angle) <= 1e5:
+                        written = (a.value.text if isinstance(a.value, A.Num)
+                                   else f"{pf.text(a.value)} = {angle:g}")
                         raise pf.source.error(a.value.span.start, f"RelTool \\{a.name} is "
-                                              f"{a.value.text} deg: not an angle")
+                                              f"{written} deg: not an angle")
                     turns.append((a.name.lower(), angle))
                 elif a.kind != "pos":
                     return Unresolved(f"RelTool argument \\{a.name} is not supported")
@@ -1956,20 +1965,7 @@ class Resolver:
         if isinstance(expr, A.Ref) and not expr.selectors:
             d = self.lookup(expr.name, module, routine)
             if isinstance(d, Declaration) and d.storage == "CONST" and d.type == "num":
-                if any(c is d for c in self._consts):
-                    # CONST a:=b; CONST b:=a; has no value: the controller
-                    # does not load it (and the evaluation would not end).
-                    chain = self._consts[next(i for i, c in enumerate(self._consts) if c is d):]
-                    raise self.home[id(d)].source.error(
-                        d.node.name_span.start,
-                        f"CONST {d.name} is defined through itself ("
-                        + " -> ".join(c.name for c in chain + [d]) + "): it has no value")
-                self._consts.append(d)
-                try:
-                    # Its value's names are those of the module that declares it.
-                    return self.integer(d.node.init, self.home_module[id(d)], d.routine)
-                finally:
-                    self._consts.pop()
+                return self._through_const(d, self.integer)
         if (isinstance(expr, A.Call) and expr.name.lower() == "dim" and len(expr.args) == 2
                 and all(a.kind == "pos" for a in expr.args)):
             # Dim(array, k): an array's sizes are fixed where it is declared
@@ -1979,6 +1975,44 @@ class Resolver:
                 d = self.lookup(arr.name, module, routine)
                 if isinstance(d, Declaration) and 1 <= k <= len(d.dims):
                     return d.dims[k - 1]
+        return None
+
+    def _through_const(self, d: Declaration, evaluate):
+        """evaluate(value, module, routine) of CONST d's value, with the
+        names of the module (and routine) that declares it."""
+        if any(c is d for c in self._consts):
+            # CONST a:=b; CONST b:=a; has no value: the controller
+            # does not load it (and the evaluation would not end).
+            chain = self._consts[next(i for i, c in enumerate(self._consts) if c is d):]
+            raise self.home[id(d)].source.error(
+                d.node.name_span.start,
+                f"CONST {d.name} is defined through itself ("
+                + " -> ".join(c.name for c in chain + [d]) + "): it has no value")
+        if d.node.init is None:
+            return None
+        self._consts.append(d)
+        try:
+            return evaluate(d.node.init, self.home_module[id(d)], d.routine)
+        finally:
+            self._consts.pop()
+
+    def number(self, expr, module, routine: str | None) -> float | None:
+        """The value of a num argument where it is fixed before the program
+        runs: a literal number, or a CONST num whose value is one (or such
+        a CONST), negated or in parentheses (the controller evaluates a
+        CONST when it loads the module); None for anything else (a VAR or
+        PERS num, an expression: known at run time only)."""
+        if isinstance(expr, A.Num):
+            return expr.value
+        if isinstance(expr, A.Unary) and expr.op == "-":
+            v = self.number(expr.operand, module, routine)
+            return -v if v is not None else None
+        if isinstance(expr, A.Paren):
+            return self.number(expr.expr, module, routine)
+        if isinstance(expr, A.Ref) and not expr.selectors:
+            d = self.lookup(expr.name, module, routine)
+            if isinstance(d, Declaration) and d.storage == "CONST" and d.type == "num":
+                return self._through_const(d, self.number)
         return None
 
     def loop_range(self, loop, module, routine: str, bounded: bool = True) -> range | None:

@@ -1,0 +1,102 @@
+"""Offs/RelTool whose numbers are CONST nums (`Offs(pB, 0, 0, nSafeZ)`, as
+cells write their approach heights): the controller fixes a CONST when it
+loads the module, so the move goes where the same Offs of the literal
+values goes. The oracle is that program written by hand with the values
+in place of the names: every compensated number must be the same. A VAR
+or PERS num is known at run time only: the move is untouched, and says
+why."""
+
+from __future__ import annotations
+
+import re
+
+from click.testing import CliRunner
+
+from rapidcomp.cli import main
+
+from conftest import FIXTURES
+
+HEAD = """MODULE OffC
+    CONST robtarget pB:=[[500,0,400],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+"""
+NAMED = HEAD + """    CONST num nH:=50;
+    CONST num nUp:=nH;
+    CONST num nAng:=15.5;
+    VAR num nVar:=20;
+    PERS num nPers:=20;
+    CONST num nSum:=10+5;
+    PROC main()
+        CONST num nLocal:=-12.5;
+        MoveL Offs(pB, 0, 0, nH), v100, fine, tool0;
+        MoveL Offs(pB, 0, nUp, (nLocal)), v100, fine, tool0;
+        MoveJ Offs(pB, -nUp, 0, 0), v100, fine, tool0;
+        MoveL RelTool(pB, 0, 0, nH \\Rz:=nAng), v100, fine, tool0;
+        MoveL Offs(pB, 0, 0, nVar), v100, fine, tool0;
+        MoveL Offs(pB, 0, 0, nPers), v100, fine, tool0;
+        MoveL Offs(pB, 0, 0, nSum), v100, fine, tool0;
+        MoveL RelTool(pB, 0, 0, 0 \\Rz:=nVar), v100, fine, tool0;
+    ENDPROC
+ENDMODULE
+"""
+# The same program with the values written in by hand where the moves
+# read the CONSTs: the oracle.
+LITERAL = NAMED.replace("""        MoveL Offs(pB, 0, 0, nH), v100, fine, tool0;
+        MoveL Offs(pB, 0, nUp, (nLocal)), v100, fine, tool0;
+        MoveJ Offs(pB, -nUp, 0, 0), v100, fine, tool0;
+        MoveL RelTool(pB, 0, 0, nH \\Rz:=nAng), v100, fine, tool0;
+""", """        MoveL Offs(pB, 0, 0, 50), v100, fine, tool0;
+        MoveL Offs(pB, 0, 50, -12.5), v100, fine, tool0;
+        MoveJ Offs(pB, -50, 0, 0), v100, fine, tool0;
+        MoveL RelTool(pB, 0, 0, 50 \\Rz:=15.5), v100, fine, tool0;
+""")
+assert LITERAL != NAMED
+
+
+def _fix(tmp_path, name, text, *options):
+    src = tmp_path / f"{name}.mod"
+    src.write_text(text)
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                  "-o", str(tmp_path / f"{name}_out.mod"), *options])
+    assert r.exit_code == 0, r.output
+    out = (tmp_path / f"{name}_out.mod").read_text()
+    rows = [line for line in (tmp_path / f"{name}_out.md").read_text().splitlines()
+            if re.match(r"\| \d+ \|", line)]
+    return r.output, out, rows
+
+
+def _values(text: str) -> list[str]:
+    """The values of the output's new declarations."""
+    return [line.split(":=", 1)[1] for line in text.splitlines()
+            if re.match(r"\s*LOCAL CONST (robtarget \w+_c(_\d+)?|jointtarget jt_\w+):=", line)]
+
+
+def _cells(row: str) -> list[str]:
+    cells = row.split(" | ")
+    return cells[3:5] + cells[6:]
+
+
+def test_offs_of_const_nums_goes_where_offs_of_their_values_goes(tmp_path):
+    for mode in ("robtarget", "auto", "absj"):
+        said, named, rows = _fix(tmp_path, f"named_{mode}", NAMED, "--emit", mode)
+        _, literal, literal_rows = _fix(tmp_path, f"literal_{mode}", LITERAL, "--emit", mode)
+        assert "4 of 8 target uses compensated, 0 not compensated, 4 untouched" in said
+        # The same new values (their names may come in another order).
+        assert sorted(_values(named)) == sorted(_values(literal)) and _values(named), mode
+        # Row by row the same status, rule, joints, errors and residuals (the
+        # target as written and the new name aside).
+        cells = [_cells(row) for row in rows]
+        assert cells == [_cells(row) for row in literal_rows], mode
+    assert ("untouched (3): Offs arguments are not literal numbers or CONST nums of a literal "
+            "value [lines 15-17]") in said
+    assert ("untouched (1): RelTool rotation is not a literal number or a CONST num of a "
+            "literal value [line 18]") in said
+
+
+def test_an_offs_of_a_const_defined_through_itself_is_bad_input(tmp_path):
+    text = NAMED.replace("CONST num nH:=50;", "CONST num nH:=nUp;")
+    src = tmp_path / "loop.mod"
+    src.write_text(text)
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv")])
+    assert r.exit_code == 2
+    assert "loop.mod:3:15: CONST nH is defined through itself (nH -> nUp -> nH)" in r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["loop.mod"]
