@@ -456,9 +456,14 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
         if src.by_loop or m == "joint":
             key = base + (None,)
         else:
+            # (An element of a FOR-walked array: its group holds the array's
+            # literal, so the element is written there where its value is
+            # the one the group's uses of it have, or where none of them
+            # reads it (pArr{1} before a FOR i FROM 2 ...): not a copy.)
             array = by_key.get(base + (None,))
-            if array is not None and src.element in array.rows_seen and _same(
-                    solved, array.rows_seen[src.element], row):
+            seen = None if array is None else array.rows_seen.get(src.element, -1)
+            if seen is not None and (_same(solved, seen, row) if seen >= 0
+                                     else q_keys[row] is not None):
                 key = base + (None,)
             else:
                 key = base + (q_keys[row],)

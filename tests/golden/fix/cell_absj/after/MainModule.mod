@@ -26,7 +26,7 @@ MODULE MainModule
     ENDPROC
 
     PROC Glue()
-        MoveAbsJ jt_pGlue_1, v500, z10, tGlue\WObj:=wFixture;
+        MoveAbsJ jt_pGlue{1}, v500, z10, tGlue\WObj:=wFixture;
         FOR k FROM 2 TO 8 DO
             MoveAbsJ jt_pGlue{k}, v100, z1, tGlue\WObj:=wFixture;
         ENDFOR

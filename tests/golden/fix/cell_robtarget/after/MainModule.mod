@@ -26,7 +26,7 @@ MODULE MainModule
     ENDPROC
 
     PROC Glue()
-        MoveJ pGlue_1_c, v500, z10, tGlue\WObj:=wFixture;
+        MoveJ pGlue{1}, v500, z10, tGlue\WObj:=wFixture;
         FOR k FROM 2 TO 8 DO
             MoveL pGlue{k}, v100, z1, tGlue\WObj:=wFixture;
         ENDFOR
