@@ -198,3 +198,18 @@ ENDMODULE
     assert f"the pose is at {elbow} and the wrist singularity (J5 ~ 0), where" in lines[6]
     assert f"the pose is at {elbow}, where a small change" in lines[7]
     assert "compensable" in lines[8] and "not compensable" not in lines[8]
+
+
+def test_rows_without_numbers_keep_the_table_columns():
+    """Untouched and not-compensable rows show "-" under each number
+    column, so every row's status starts under the header's "status"."""
+    from conftest import ROOT
+    r = CliRunner().invoke(main, ["check", str(ROOT / "tests" / "golden" / "fix" / "refusals" /
+                                               "before.mod"), "--profile", str(FIXTURES / "warm.csv")])
+    lines = r.output.splitlines()
+    at = lines[1].index("status")
+    rows = lines[2:lines.index("")]
+    assert len(rows) == 10 and sum("untouched" in row for row in rows) == 5
+    for row in rows:
+        assert row[at:].startswith(("compensable", "not compensable", "untouched")), row
+        assert row[at - 2:at] == "  "

@@ -57,13 +57,14 @@ def render_text(result: CheckResult) -> str:
     places = [f"{r.file}:{r.line}" if several else str(r.line) for r in rows]
     w = max([6] + [len(p) for p in places])
     out = [f"{result.program}: predicted error on the warm robot, per target",
-           f"{'line':>{w}}  {'instruction':<10} {'target':<28} {'error um':>9} {'error deg':>9} "
+           f"{'line':>{w}}  {'instruction':<11} {'target':<28} {'error um':>9} {'error deg':>9} "
            f"{'after um':>9} {'after deg':>9}  status"]
     for r, where in zip(rows, places):
         def f(x, fmt):
-            return format(x, fmt) if x is not None else "-"
+            # (A cell with no number keeps the column's width: "-" under it.)
+            return format(x, fmt) if x is not None else "-".rjust(int(fmt.split(".")[0]))
         note = r.reason or ("; ".join(r.warnings) if r.warnings else "")
-        out.append(f"{where:>{w}}  {r.instruction:<10} {r.target[:28]:<28} "
+        out.append(f"{where:>{w}}  {r.instruction:<11} {r.target[:28]:<28} "
                    f"{f(r.error_um, '9.1f')} {f(r.error_deg, '9.4f')} {f(r.residual_um, '9.1e')} "
                    f"{f(r.residual_deg, '9.1e')}  {r.status}" + (f" [{r.rule}]" if r.rule else "")
                    + (f": {note}" if note else ""))
