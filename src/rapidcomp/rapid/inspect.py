@@ -133,7 +133,9 @@ def render_text(rep: dict) -> str:
                     extra = f"  conf [{','.join(str(x) for x in d['value']['conf'])}]"
                 elif "issue" in d:
                     extra = f"  (no literal value: {d['issue']})"
-                lines.append(f"    {d['line']:>6}  {d['storage']} {d['type']} {d['name']}{dims}{where}{extra}")
+                scope = f"{d['scope']} " if d["scope"] else ""
+                lines.append(f"    {d['line']:>6}  {scope}{d['storage']} {d['type']} {d['name']}{dims}"
+                             f"{where}{extra}")
         if m["motions"]:
             lines.append("  motions:")
             for mo in m["motions"]:
