@@ -63,3 +63,22 @@ def test_an_element_the_loop_does_not_reach_is_written_in_the_array(tmp_path):
     assert "3 of 3 target uses compensated" in said
     assert "MoveAbsJ jt_pArr{1}, v200" in out and "jt_pArr_1" not in out
     assert re.search(r"jt_pArr\{3\}:=\[\s*" + re.escape(want) + ",", out), out
+
+
+def test_a_new_arrays_rows_are_indented_as_the_modules(tmp_path):
+    """The jointtarget array written for a robtarget array (absj) has its
+    rows indented as the robtarget array's rows are (tabs in a module
+    indented with tabs); where those share the declaration's line, one
+    step past the declaration: a tab in a module indented with tabs."""
+    tabs = ARRAY.replace("    ", "\t")
+    _, out = _fix(tmp_path, "tabs", tabs, "absj")
+    rows = [line for line in out.splitlines() if line.lstrip().startswith("[[-")]
+    assert len(rows) == 3 and all(line.startswith("\t\t[[-") for line in rows), rows
+    one_line = tabs.replace(",\n\t\t", ",").replace("[\n\t\t", "[")
+    assert f"pArr{{3}}:=[{P1},{P2},{P3}];" in one_line
+    _, out = _fix(tmp_path, "one_line", one_line, "absj")
+    rows = [line for line in out.splitlines() if line.lstrip().startswith("[[-")]
+    assert len(rows) == 3 and all(line.startswith("\t\t[[-") for line in rows), rows
+    _, out = _fix(tmp_path, "spaces", ARRAY.replace("        [[", "      [["), "absj")
+    rows = [line for line in out.splitlines() if line.lstrip().startswith("[[-")]
+    assert len(rows) == 3 and all(line.startswith("      [[-") for line in rows), rows

@@ -508,6 +508,8 @@ def _indent(text: str, pos: int) -> str:
 
 
 _REST_OF_LINE = re.compile(r"[^\r\n]*")
+# An array literal whose first row begins a line: that line's blanks.
+_FIRST_ROW = re.compile(r"\[[ \t]*(?:\r\n|\r|\n)([ \t]*)\[")
 _BLANKS = re.compile(r"[ \t]*")
 
 
@@ -1012,8 +1014,20 @@ class Editor:
         rows = len(lits) // dims[0]
         parts = [nest(lits[i * rows:(i + 1) * rows], dims[1:]) if len(dims) > 1 else lits[i]
                  for i in range(dims[0])]
-        inner = indent + "    "
+        inner = self._rows_indent(g, indent)
         return "[" + nl + inner + ("," + nl + inner).join(parts) + "]"
+
+    def _rows_indent(self, g: Group, indent: str) -> str:
+        """The indentation of a new array's rows: that of the rows of the
+        array it comes from, where they begin lines of their own; else one
+        step past the declaration's `indent`: a tab in a module indented
+        with tabs, four spaces otherwise."""
+        init = g.decl.node.init
+        text = self.text(self.plan.file_index[id(g.src.home)])
+        m = _FIRST_ROW.match(text, init.span.start, init.span.end)
+        if m is not None:
+            return m.group(1)
+        return indent + ("\t" if "\t" in indent else "    ")
 
     def _pose_literal(self, g: Group, k) -> str:
         return self.values.pose_literal(g, k)
