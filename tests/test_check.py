@@ -213,3 +213,20 @@ def test_rows_without_numbers_keep_the_table_columns():
     for row in rows:
         assert row[at:].startswith(("compensable", "not compensable", "untouched")), row
         assert row[at - 2:at] == "  "
+
+
+def test_the_summary_says_the_failures_as_fix_says_them(tmp_path):
+    """Below its table, check says the uses it cannot compensate as fix's
+    summary does: alike ones in one line with their count and places, so
+    a CAM program's 313 rows of one long reason (whose advice, --start,
+    is in the first row's) are said in a few lines."""
+    program = str(FIXTURES / "rapid" / "cam_inline.mod")
+    profile = str(FIXTURES / "warm.csv")
+    checked = CliRunner().invoke(main, ["check", program, "--profile", profile]).output
+    fixed = CliRunner().invoke(main, ["fix", program, "--profile", profile,
+                                      "-o", str(tmp_path / "o.mod")]).output
+    said = [line for line in checked.splitlines() if line.startswith("  not compensable")]
+    want = [line.replace("not compensated", "not compensable", 1)
+            for line in fixed.splitlines() if line.startswith("  not compensated")]
+    assert said == want and 3 <= len(said) <= 10
+    assert any("(306 alike, each with numbers of its own; as line 8)" in line for line in said)

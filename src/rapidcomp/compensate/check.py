@@ -78,6 +78,11 @@ def render_text(result: CheckResult) -> str:
     out.append(line)
     for reason, n in s["untouched"].items():
         out.append(f"  {UNTOUCHED} ({n}): {reason}")
+    # The failures as fix's summary says them: alike ones in one line, with
+    # their places (313 rows of one long reason: its advice said once).
+    from .report import failure_lines        # (report.py imports fix.py: only here)
+    out += [f"  {line}" for line in failure_lines(
+        [r for r in rows if r.status == FAILED], several, FAILED)]
     for note in result.notes:
         out.append(f"note: {note}")
     if s["error_before_um"]:
