@@ -158,6 +158,9 @@ P4 = "[[400,-150,250],[0.707107,0,0.707107,0],[-1,-1,0,1]"
 # {mod:OLD=>NEW} paper_front.mod with OLD replaced by NEW.
 BAD = [
     (["fix", "nothing.mod", "--profile", "{warm}"], 2, "nothing.mod: no such file"),
+    (["fix", "{paper}", "{paper}", "--profile", "{warm}", "-o", "{tmp}/both.mod"], 2,
+     "several programs are written into a folder, each under its own name; give a folder, not "
+     "a module file name"),
     (["fix", "{paper}", "--profile", "nothing.csv"], 2, "nothing.csv: no such file"),
     (["fix", "{paper}", "--profile", "{warm}", "--limit", "J5=a:b"], 2, "--limit J5=a:b"),
     (["fix", "{paper}", "--profile", "{warm}", "--limit", "J5=-1e400:5"], 2, "--limit"),

@@ -437,6 +437,11 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
     several = len(programs) > 1
     if several and output is None:
         raise RapidcompError("several programs need -o DIR")
+    if several and not os.path.isdir(output) and output.lower().endswith(
+            (".mod", ".modx", ".sys", ".prg")):
+        # (A folder named as a module file is not what was meant.)
+        raise RapidcompError(f"-o {output}: several programs are written into a folder, each "
+                             "under its own name; give a folder, not a module file name")
     for option, value in (("-o", output), ("--report", report), ("--json", json_path)):
         if value is not None and not value.strip():
             raise RapidcompError(f"{option}: an empty path; give a file name")
