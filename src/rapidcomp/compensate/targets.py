@@ -1955,17 +1955,53 @@ class Resolver:
     def integer(self, expr, module, routine: str | None) -> int | None:
         """A literal integer, a CONST num with a literal integer value, or
         Dim() of a declared array."""
-        if isinstance(expr, A.Num) and float(expr.value).is_integer() and abs(expr.value) < 2**53:
-            return int(expr.value)
+        return self._fixed(expr, module, routine, self._integer)
+
+    def number(self, expr, module, routine: str | None) -> float | None:
+        """The value of a num argument where it is fixed before the program
+        runs: a literal number, or a CONST num whose value is one (or such
+        a CONST), negated or in parentheses (the controller evaluates a
+        CONST when it loads the module); None for anything else (a VAR or
+        PERS num, an expression: known at run time only)."""
+        return self._fixed(expr, module, routine,
+                           lambda e, m, r: e.value if isinstance(e, A.Num) else None)
+
+    def _fixed(self, expr, module, routine: str | None, leaf):
+        """What expr comes to before the program runs, through '-',
+        parentheses and CONST nums (their values, read with the names of the
+        module and routine that declare them) down to leaf(expr, module,
+        routine): None where leaf gives None, or a name is not a CONST num."""
         if isinstance(expr, A.Unary) and expr.op == "-":
-            v = self.integer(expr.operand, module, routine)
+            v = self._fixed(expr.operand, module, routine, leaf)
             return -v if v is not None else None
         if isinstance(expr, A.Paren):
-            return self.integer(expr.expr, module, routine)
+            return self._fixed(expr.expr, module, routine, leaf)
         if isinstance(expr, A.Ref) and not expr.selectors:
             d = self.lookup(expr.name, module, routine)
-            if isinstance(d, Declaration) and d.storage == "CONST" and d.type == "num":
-                return self._through_const(d, self.integer)
+            if not (isinstance(d, Declaration) and d.storage == "CONST" and d.type == "num"):
+                return None
+            if any(c is d for c in self._consts):
+                # CONST a:=b; CONST b:=a; has no value: the controller
+                # does not load it (and the evaluation would not end).
+                chain = self._consts[next(i for i, c in enumerate(self._consts) if c is d):]
+                raise self.home[id(d)].source.error(
+                    d.node.name_span.start,
+                    f"CONST {d.name} is defined through itself ("
+                    + " -> ".join(c.name for c in chain + [d]) + "): it has no value")
+            if d.node.init is None:
+                return None
+            self._consts.append(d)
+            try:
+                return self._fixed(d.node.init, self.home_module[id(d)], d.routine, leaf)
+            finally:
+                self._consts.pop()
+        return leaf(expr, module, routine)
+
+    def _integer(self, expr, module, routine: str | None) -> int | None:
+        """integer()'s own cases: a literal integer, Dim() of a declared
+        array."""
+        if isinstance(expr, A.Num) and float(expr.value).is_integer() and abs(expr.value) < 2**53:
+            return int(expr.value)
         if (isinstance(expr, A.Call) and expr.name.lower() == "dim" and len(expr.args) == 2
                 and all(a.kind == "pos" for a in expr.args)):
             # Dim(array, k): an array's sizes are fixed where it is declared
@@ -1975,44 +2011,6 @@ class Resolver:
                 d = self.lookup(arr.name, module, routine)
                 if isinstance(d, Declaration) and 1 <= k <= len(d.dims):
                     return d.dims[k - 1]
-        return None
-
-    def _through_const(self, d: Declaration, evaluate):
-        """evaluate(value, module, routine) of CONST d's value, with the
-        names of the module (and routine) that declares it."""
-        if any(c is d for c in self._consts):
-            # CONST a:=b; CONST b:=a; has no value: the controller
-            # does not load it (and the evaluation would not end).
-            chain = self._consts[next(i for i, c in enumerate(self._consts) if c is d):]
-            raise self.home[id(d)].source.error(
-                d.node.name_span.start,
-                f"CONST {d.name} is defined through itself ("
-                + " -> ".join(c.name for c in chain + [d]) + "): it has no value")
-        if d.node.init is None:
-            return None
-        self._consts.append(d)
-        try:
-            return evaluate(d.node.init, self.home_module[id(d)], d.routine)
-        finally:
-            self._consts.pop()
-
-    def number(self, expr, module, routine: str | None) -> float | None:
-        """The value of a num argument where it is fixed before the program
-        runs: a literal number, or a CONST num whose value is one (or such
-        a CONST), negated or in parentheses (the controller evaluates a
-        CONST when it loads the module); None for anything else (a VAR or
-        PERS num, an expression: known at run time only)."""
-        if isinstance(expr, A.Num):
-            return expr.value
-        if isinstance(expr, A.Unary) and expr.op == "-":
-            v = self.number(expr.operand, module, routine)
-            return -v if v is not None else None
-        if isinstance(expr, A.Paren):
-            return self.number(expr.expr, module, routine)
-        if isinstance(expr, A.Ref) and not expr.selectors:
-            d = self.lookup(expr.name, module, routine)
-            if isinstance(d, Declaration) and d.storage == "CONST" and d.type == "num":
-                return self._through_const(d, self.number)
         return None
 
     def loop_range(self, loop, module, routine: str, bounded: bool = True) -> range | None:
