@@ -100,3 +100,40 @@ def test_an_offs_of_a_const_defined_through_itself_is_bad_input(tmp_path):
     assert r.exit_code == 2
     assert "loop.mod:3:15: CONST nH is defined through itself (nH -> nUp -> nH)" in r.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["loop.mod"]
+
+
+def test_a_for_loops_variable_hides_a_const_of_its_name(tmp_path):
+    """In FOR k ... Offs(p, 0, 0, k) the k is the loop's, not a CONST num k
+    of the module (RAPID: a loop's variable hides data of its name): known
+    at run time only, untouched; outside the loop the CONST's value. An
+    array index likewise: pA{j} in a loop on j of bounds not fixed is not
+    the CONST j's element."""
+    text = HEAD + """    CONST robtarget pA{3}:=[[[500,0,400],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],[[500,10,400],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],[[500,20,400],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]];
+    CONST num k:=50;
+    CONST num j:=2;
+    VAR num n:=3;
+    PROC main()
+        FOR k FROM 1 TO 3 DO
+            MoveL Offs(pB, 0, 0, k), v100, fine, tool0;
+        ENDFOR
+        FOR j FROM 1 TO n DO
+            MoveL pA{j}, v100, fine, tool0;
+        ENDFOR
+        MoveL Offs(pB, 0, 0, k), v100, fine, tool0;
+    ENDPROC
+ENDMODULE
+"""
+    said, out, _ = _fix(tmp_path, "loops", text, "--emit", "robtarget", "--allow-partial")
+    assert "1 of 5 target uses compensated, 0 not compensated, 4 untouched" in said
+    assert ("untouched (3): Offs arguments are not literal numbers or CONST nums of a literal "
+            "value [line 9]") in said
+    assert ("untouched (1): index of pA is not a literal or the variable of an enclosing FOR "
+            "loop with constant bounds [line 12]") in said
+    # (The move outside the loops: Offs(pB, 0, 0, 50).)
+    _, literal, _ = _fix(tmp_path, "literal", HEAD + """    PROC main()
+        MoveL Offs(pB, 0, 0, 50), v100, fine, tool0;
+    ENDPROC
+ENDMODULE
+""", "--emit", "robtarget")
+    # (There pB itself is rewritten: nothing else reads it.)
+    assert _values(out) == [re.search(r"CONST robtarget pB:=(.*)$", literal, re.M).group(1)]

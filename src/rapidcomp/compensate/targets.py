@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 import operator
 from bisect import bisect_left, bisect_right
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from itertools import repeat
 from typing import NamedTuple
@@ -761,6 +762,7 @@ class Resolver:
         self.usages: dict[int, object] = {}   # id(Module) -> refs.Usage
         self._notes: list[str] = []             # of the use being resolved
         self._guarded: set = set()              # FOR variables of the use behind a condition
+        self._loop_vars: frozenset = frozenset()  # FOR variables around the use (_in_loops)
         self._hidden: dict | None = None        # LOCAL module data by name (_not_declared)
         self._turns: dict = {}                  # RelTool's rotations -> matrix (_offset)
         self._consts: list = []                 # CONST nums being evaluated (integer())
@@ -1977,6 +1979,10 @@ class Resolver:
         if isinstance(expr, A.Paren):
             return self._fixed(expr.expr, module, routine, leaf)
         if isinstance(expr, A.Ref) and not expr.selectors:
+            if expr.name.lower() in self._loop_vars and not self._consts:
+                # (An enclosing FOR loop's variable, not data of its name.
+                # In a CONST's value the names are the module's.)
+                return None
             d = self.lookup(expr.name, module, routine)
             if not (isinstance(d, Declaration) and d.storage == "CONST" and d.type == "num"):
                 return None
@@ -2180,6 +2186,22 @@ class Resolver:
                           True)
 
     def _use(self, pf, module, motion, t, kind, label, env, key) -> TargetUse:
+        with self._in_loops(motion):
+            return self._use_in(pf, module, motion, t, kind, label, env, key)
+
+    @contextmanager
+    def _in_loops(self, motion):
+        """While a move's target is resolved: the variables of its enclosing
+        FOR loops, which hide data of the same name (_fixed: `FOR k ...`
+        with a CONST num k in the module: the k of Offs(p, 0, 0, k) is the
+        loop's); none outside."""
+        self._loop_vars = frozenset(lp.var.lower() for lp in motion.loops if lp.var)
+        try:
+            yield
+        finally:
+            self._loop_vars = frozenset()
+
+    def _use_in(self, pf, module, motion, t, kind, label, env, key) -> TargetUse:
         line = pf.line(motion.span)
         envt = key[3]
         self._notes = []
@@ -2300,7 +2322,8 @@ class Resolver:
         an output whose every edit is numbers of existing literals
         (verify.py)."""
         try:
-            return self._again(u)
+            with self._in_loops(u.motion):
+                return self._again(u)
         except Exception:
             self._checked_parts(self._pending)      # an earlier use's error comes first
             raise
