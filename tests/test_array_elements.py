@@ -82,3 +82,22 @@ def test_a_new_arrays_rows_are_indented_as_the_modules(tmp_path):
     _, out = _fix(tmp_path, "spaces", ARRAY.replace("        [[", "      [["), "absj")
     rows = [line for line in out.splitlines() if line.lstrip().startswith("[[-")]
     assert len(rows) == 3 and all(line.startswith("      [[-") for line in rows), rows
+
+
+def test_an_element_outside_the_loop_that_fails_fails_alone(tmp_path):
+    """Where the element only a literal index reads cannot be compensated
+    (J1 past a limit set just below it), it alone is refused: the loop's
+    elements are written as they are without it."""
+    limit = ("--limit", "J1=-0.001:170", "--allow-partial")
+    at = "[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+    text = (ARRAY.replace(P1, f"[[500,0,400],{at}").replace(P2, f"[[500,100,400],{at}")
+            .replace(P3, f"[[500,150,400],{at}"))
+    for mode in ("robtarget", "absj"):
+        src = tmp_path / f"fail_{mode}.mod"
+        src.write_text(text)
+        r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                      "--emit", mode, "-o", str(tmp_path / f"o_{mode}.mod"),
+                                      *limit])
+        assert r.exit_code == 1, r.output
+        assert "2 of 3 target uses compensated, 1 not compensated" in r.output, r.output
+        assert "not compensated: line 7 MoveL pArr{1}: J1 beyond its limit" in r.output

@@ -69,6 +69,11 @@ class Group:
     local: bool = True               # a new declaration is LOCAL to its module
     slots: Mapping = field(default_factory=lambda: NONE)   # unreached element -> (joints, what)
     rows_seen: dict = field(default_factory=dict)  # element -> first solved row (grouping)
+    # A FOR-walked array's elements that only uses by a literal index read
+    # (pArr{1} before FOR i FROM 2 ...) -> where the first of them is among
+    # the uses grouping() walks: such an element that fails goes to a
+    # Group of its own (settle), not failing the array's.
+    outside: Mapping = field(default_factory=lambda: NONE)
     # Uses kept robtarget moves because other iterations of their statement
     # must stay ones (_one_statement).
     kept: frozenset = frozenset()
@@ -465,6 +470,9 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
             if seen is not None and (_same(solved, seen, row) if seen >= 0
                                      else q_keys[row] is not None):
                 key = base + (None,)
+                if seen < 0:
+                    array.outside = writable(array.outside)
+                    array.outside[src.element] = at
             else:
                 key = base + (q_keys[row],)
         g = by_key.get(key)
@@ -523,6 +531,8 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
     for s in [g for g in gs if type(g) is Singles]:
         split_off(gs, s, [n for n, i in enumerate(s.rows)
                           if not ok[i] or (left[i] and s.mode == "rob")], plan.file_index)
+    for g in [g for g in gs if type(g) is Group and g.outside]:
+        _let_outside_go(gs, g, solved, ok, left)
     for g in gs:
         if type(g) is Singles:
             continue
@@ -532,6 +542,28 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
         uses = g.uses
         g.local = (uses[0].module is g.home[1] if len(uses) == 1
                    else all(u.module is g.home[1] for u in uses))
+
+
+def _let_outside_go(gs: list, g: Group, solved: Solved, ok: list, left: list) -> None:
+    """An element of FOR-walked array g that only uses by a literal index
+    read (Group.outside), one of which fails, leaves g with those uses: the
+    Group of their own grouping() made before such elements joined the
+    array's (its failure is theirs alone; the loop's elements are
+    written)."""
+    for k, first in g.outside.items():
+        us = [u for u in g.uses if not u.source.by_loop and u.source.element == k]
+        rows = [solved.row[u.key] for u in us]
+        if all(ok[i] and not (left[i] and g.mode == "rob") for i in rows):
+            continue
+        own = Group(g.mode, us[0].source, us[0].tool, us[0].wobj, g.home, uses=us,
+                    first=first, rows_seen={k: rows[0]})
+        keys = {u.key for u in us}
+        own.kept = g.kept & keys
+        if g.why_kept:
+            own.why_kept = {key: why for key, why in g.why_kept.items() if key in keys}
+        g.uses = [u for u in g.uses if u.key not in keys]
+        del g.rows_seen[k]
+        gs.append(own)
 
 
 def _one_statement(uses: list[TargetUse], modes: list[str]) -> frozenset:
