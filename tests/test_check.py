@@ -230,3 +230,14 @@ def test_the_summary_says_the_failures_as_fix_says_them(tmp_path):
             for line in fixed.splitlines() if line.startswith("  not compensated")]
     assert said == want and 3 <= len(said) <= 10
     assert any("(306 alike, each with numbers of its own; as line 8)" in line for line in said)
+
+
+def test_a_long_target_is_cut_where_the_cut_shows(tmp_path):
+    src = tmp_path / "long.mod"
+    src.write_text("MODULE L\n    CONST robtarget pLongTargetName:=[[500,0,400],[0,0,1,0],"
+                   "[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n    PROC main()\n"
+                   "        MoveL Offs(pLongTargetName, 10, 20, 1000), v100, fine, tool0;\n"
+                   "    ENDPROC\nENDMODULE\n")
+    r = CliRunner().invoke(main, ["check", str(src), "--profile", str(FIXTURES / "warm.csv")])
+    row = r.output.splitlines()[2]
+    assert " Offs(pLongTargetName, 10,... " in row and "1000" not in row, row

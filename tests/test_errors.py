@@ -53,8 +53,11 @@ def test_caret_points_at_column():
      "';' missing after number 1: the next line goes on with 'ENDPROC'; expected ';' or an "
      "operator here"),
     ("MODULE m\nPROC p()\n MoveL p1, v100, fine, tool0 ! to p1\r\n MoveJ p1, v100, fine, "
-     "tool0;\nENDPROC\nENDMODULE\n", "3:29", "';' missing after identifier 'tool0': the next "
-     "line goes on with identifier 'MoveJ'; expected ';' or an operator, '(', ','"),
+     "tool0;\nENDPROC\nENDMODULE\n", "3:29", "';' or ',' missing after identifier 'tool0': the "
+     "next line goes on with identifier 'MoveJ'; expected ';' or an operator, '(', ','"),
+    # (An aggregate of several lines is quoted on one.)
+    ("MODULE m\nPROC p()\n x := [1,\n   2]\n y := 1;\nENDPROC\nENDMODULE\n", "4:6",
+     "';' missing after '[1, 2]': the next line goes on with identifier 'y'"),
     ("MODULE m\nPROC p()\n IF x THEN\n ENDPROC\nENDMODULE\n", "4:2", "ELSE, ELSEIF or ENDIF"),
     ("MODULE m\n VAR num x := 1 @ 2;\nENDMODULE\n", "2:17", "unexpected character '@'"),
     ("MODULE m\n VAR num if := 1;\nENDMODULE\n", "2:10", "unexpected 'if'; expected an identifier"),

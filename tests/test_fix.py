@@ -661,3 +661,10 @@ def test_what_a_run_writes_over_is_said(tmp_path, monkeypatch):
     (tmp_path / "out" / "MainModule.mod").unlink()
     assert wrote(cell, "-o", "out") == ("wrote out/ (replaced 1 file there), out.md (replaced "
                                         "the file there)")
+    # (The folder as however it is written: ./out, out/; its report beside
+    # it, not out/.md in it.)
+    assert wrote(cell, "-o", "./out") == ("wrote out/ (replaced 2 files there), out.md "
+                                          "(replaced the file there)")
+    assert wrote(cell, "-o", "other/") == "wrote other/, other.md"
+    assert sorted(p.name for p in (tmp_path / "other").iterdir()) == ["CellData.mod",
+                                                                     "MainModule.mod"]

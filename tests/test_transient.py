@@ -723,6 +723,8 @@ def test_where_a_support_module_in_the_way_differs():
     assert differs(ours[:-10], ours) == (
         ":3:29", "it ends at its line 3 where this run's goes on with `ENDMODULE`")
     assert differs(None, ours) == ("", "")
+    assert differs(b"", ours) == (":1:1", "it is empty where this run's begins with "
+                                  "`MODULE rcThermal`")
     long = b"    ! " + b"x" * 100 + b"a" + b"y" * 100 + b"\n"
     there, what = differs(long.replace(b"a", b"b"), long)
     assert there == ":1:107" and what.count("...") == 4 and "xb" in what and "xa" in what

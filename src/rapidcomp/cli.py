@@ -475,8 +475,11 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
         name = Path(program.rstrip("/\\")).name
         if src.is_folder:
             stem = Path(name).stem if src.kind == "pgf" else name
-            out = str(Path(output) / stem) if several else (output or default_output(
-                program.rstrip("/\\"), folder=True))
+            # (As a path says it once: -o out/ is the folder out, its report
+            # out.md beside it, not out/.md in it.)
+            out = str(Path(output) / stem) if several else (
+                os.path.normpath(output) if output else default_output(
+                    program.rstrip("/\\"), folder=True))
         elif several or (output is not None and (os.path.isdir(output) or output.endswith(
                 ("/", os.sep)))):
             # (-o out/ names a folder, made if it is not there: not a file

@@ -64,7 +64,10 @@ def render_text(result: CheckResult) -> str:
             # (A cell with no number keeps the column's width: "-" under it.)
             return format(x, fmt) if x is not None else "-".rjust(int(fmt.split(".")[0]))
         note = r.reason or ("; ".join(r.warnings) if r.warnings else "")
-        out.append(f"{where:>{w}}  {r.instruction:<11} {r.target[:28]:<28} "
+        # (A longer target cut where the cut shows: Offs(pTab,0,0,100 is not
+        # Offs(pTab,0,0,1000).)
+        target = r.target if len(r.target) <= 28 else r.target[:25] + "..."
+        out.append(f"{where:>{w}}  {r.instruction:<11} {target:<28} "
                    f"{f(r.error_um, '9.1f')} {f(r.error_deg, '9.4f')} {f(r.residual_um, '9.1e')} "
                    f"{f(r.residual_deg, '9.1e')}  {r.status}" + (f" [{r.rule}]" if r.rule else "")
                    + (f": {note}" if note else ""))

@@ -264,6 +264,8 @@ def differs(existing: bytes | None, text: bytes) -> tuple[str, str]:
         return f":{i + 1}:{col + 1}", (f"its line {i + 1} holds {_quoted(a, col)} where this "
                                        f"run writes {_quoted(b, col)}")
     i = min(len(have), len(want))
+    if not have:
+        return ":1:1", f"it is empty where this run's begins with {_quoted(want[0])}"
     if len(have) > len(want):
         return f":{i + 1}:1", f"its line {i + 1} holds {_quoted(have[i])} where this run's ends"
     return f":{i}:{len(have[i - 1]) + 1}", (f"it ends at its line {i} where this run's goes "

@@ -463,11 +463,14 @@ def _describe_token(tok) -> str:
         return f"'{tok.value.split()[0]}'"
     if tok.type == "NUMBER":
         return f"number {tok.value}"
-    shown = tok.value if len(tok.value) <= 20 else tok.value[:17] + "..."
+    # (A token of several lines, an aggregate, on one.)
+    value = _LINE_BREAKS.sub(" ", tok.value)
+    shown = value if len(value) <= 20 else value[:17] + "..."
     return f"'{shown}'"
 
 
 _LINE_BREAK = re.compile(r"[\r\n]")
+_LINE_BREAKS = re.compile(r"[ \t]*(?:\r\n|\r|\n)[ \t]*")
 
 
 def _syntax_error(source: SourceText, exc: ParseFailure) -> InputError:
@@ -486,8 +489,10 @@ def _syntax_error(source: SourceText, exc: ParseFailure) -> InputError:
         # (A statement that could end on its line but runs on into the next:
         # the ';' is missing where the line ends, not where the next starts.)
         rest = expected - {"SEMI"}
+        # (Where a ',' may follow too, the line may just as well lack one.)
+        missing = "';' or ','" if "COMMA" in expected else "';'"
         return source.error(prev.end_pos, (
-            f"';' missing after {_describe_token(prev)}: the next line goes on with "
+            f"{missing} missing after {_describe_token(prev)}: the next line goes on with "
             f"{_describe_token(tok)}; expected ';'"
             + (f" or {describe_expected(rest)}" if rest else "") + " here"))
     else:
