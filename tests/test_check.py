@@ -241,3 +241,15 @@ def test_a_long_target_is_cut_where_the_cut_shows(tmp_path):
     r = CliRunner().invoke(main, ["check", str(src), "--profile", str(FIXTURES / "warm.csv")])
     row = r.output.splitlines()[2]
     assert " Offs(pLongTargetName, 10,... " in row and "1000" not in row, row
+
+
+def test_the_summary_says_the_untouched_as_fix_says_them(tmp_path):
+    from conftest import ROOT
+    program = str(ROOT / "tests" / "golden" / "fix" / "refusals" / "before.mod")
+    profile = str(FIXTURES / "warm.csv")
+    checked = CliRunner().invoke(main, ["check", program, "--profile", profile]).output
+    fixed = CliRunner().invoke(main, ["fix", program, "--profile", profile, "--allow-partial",
+                                      "-o", str(tmp_path / "o.mod")]).output
+    said = [line for line in checked.splitlines() if line.startswith("  untouched (")]
+    assert said == [line for line in fixed.splitlines() if line.startswith("  untouched (")]
+    assert len(said) == 5 and said[2] == "  untouched (1): the target is computed at run time [line 22]"

@@ -79,11 +79,11 @@ def render_text(result: CheckResult) -> str:
     if s["untouched"]:
         line += f", {sum(s['untouched'].values())} untouched"
     out.append(line)
-    for reason, n in s["untouched"].items():
-        out.append(f"  {UNTOUCHED} ({n}): {reason}")
-    # The failures as fix's summary says them: alike ones in one line, with
-    # their places (313 rows of one long reason: its advice said once).
-    from .report import failure_lines        # (report.py imports fix.py: only here)
+    # The untouched and the failures as fix's summary says them, with their
+    # places; alike failures in one line (313 rows of one long reason: its
+    # advice said once).
+    from .report import failure_lines, untouched_lines  # (report.py imports fix.py)
+    out += [f"  {line}" for line in untouched_lines(result.rows, s["untouched"], several)]
     out += [f"  {line}" for line in failure_lines(
         [r for r in rows if r.status == FAILED], several, FAILED)]
     for note in result.notes:

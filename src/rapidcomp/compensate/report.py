@@ -62,14 +62,7 @@ def summary_lines(result: FixResult) -> list[str]:
            f"{s['not_compensated']} not compensated, {untouched} untouched"]
     several = len(result.modules) > 1
     rows = result.rows
-    # (Where: the console line is what a user reads first.)
-    by_reason: dict[str, list[UseRow]] = {}
-    if untouched:
-        for k, (status, reason) in enumerate(zip(rows.column("status"), rows.column("reason"))):
-            if status == UNTOUCHED:
-                by_reason.setdefault(reason, []).append(rows[k])
-    for reason, n in s["untouched"].items():
-        out.append(f"{UNTOUCHED} ({n}): {reason} [{_places(by_reason[reason], several)}]")
+    out += untouched_lines(rows, s["untouched"], several)
     out += failure_lines([rows[k] for k, status in enumerate(rows.column("status"))
                           if status == "not compensated"], several)
     if s["error_before_um"]:
@@ -81,6 +74,19 @@ def summary_lines(result: FixResult) -> list[str]:
     if several:
         out.append(f"{s['modules_changed']} of {len(result.modules)} modules changed")
     return out
+
+
+def untouched_lines(rows: Rows, untouched: dict, several: bool) -> list[str]:
+    """A line per reason of the untouched rows (untouched: reason -> how
+    many, as summary() counts them), with their places (the console's
+    line is what a user reads first)."""
+    by_reason: dict[str, list[UseRow]] = {}
+    if untouched:
+        for k, (status, reason) in enumerate(zip(rows.column("status"), rows.column("reason"))):
+            if status == UNTOUCHED:
+                by_reason.setdefault(reason, []).append(rows[k])
+    return [f"{UNTOUCHED} ({n}): {reason} [{_places(by_reason[reason], several)}]"
+            for reason, n in untouched.items()]
 
 
 def failure_lines(rows: list[UseRow], several: bool, label: str = "not compensated") -> list[str]:
