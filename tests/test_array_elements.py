@@ -101,3 +101,69 @@ def test_an_element_outside_the_loop_that_fails_fails_alone(tmp_path):
         assert r.exit_code == 1, r.output
         assert "2 of 3 target uses compensated, 1 not compensated" in r.output, r.output
         assert "not compensated: line 7 MoveL pArr{1}: J1 beyond its limit" in r.output
+
+
+AT = "[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+
+
+def _far(loop: bool) -> str:
+    """pArr{1} out of reach (no nominal solution), {2}, {3} fine; read by
+    literal indices, or {2}, {3} by a FOR loop."""
+    moves = ("        FOR i FROM 2 TO 3 DO\n            MoveL pArr{i}, v200, fine, tool0;\n"
+             "        ENDFOR\n" if loop else
+             "        MoveL pArr{2}, v200, fine, tool0;\n        MoveL pArr{3}, v200, fine, tool0;\n")
+    return (f"MODULE Far\n    CONST robtarget pArr{{3}}:=[\n        [[2500,0,400],{AT},\n"
+            f"        [[500,100,400],{AT},\n        [[500,150,400],{AT}];\n    PROC main()\n"
+            f"        MoveL pArr{{1}}, v200, fine, tool0;\n{moves}    ENDPROC\nENDMODULE\n")
+
+
+def test_an_element_with_no_solution_fails_alone(tmp_path):
+    """A use with no nominal solution is not the array's group (whose key
+    it shared): with a loop or without, the other elements are written."""
+    for loop in (False, True):
+        for mode in ("robtarget", "absj"):
+            src = tmp_path / f"far_{loop}_{mode}.mod"
+            src.write_text(_far(loop))
+            r = CliRunner().invoke(main, ["fix", str(src), "--profile",
+                                          str(FIXTURES / "warm.csv"), "--emit", mode,
+                                          "--allow-partial", "-o", str(tmp_path / f"o{loop}{mode}.mod")])
+            assert "2 of 3 target uses compensated, 1 not compensated" in r.output, r.output
+            assert "not compensated: line 7 MoveL pArr{1}: nominal: out of reach" in r.output
+
+
+def test_an_element_outside_the_loop_that_misses_fails_alone(tmp_path, monkeypatch):
+    """Where the written value of an element only a literal index reads
+    would miss (the verification; forced here), it alone fails, and the
+    array's group is written again without it."""
+    from rapidcomp.compensate import fix as F
+    real = F.verify
+
+    def verify(plan, solved, keys, *args, **kwargs):
+        got = real(plan, solved, keys, *args, **kwargs)
+        for u in plan.uses:
+            if u.label == "pArr{1}" and u.key in got:
+                got[u.key] = (50.0, 1.0)
+        return got
+    monkeypatch.setattr(F, "verify", verify)
+    for mode in ("robtarget", "absj"):
+        src = tmp_path / f"miss_{mode}.mod"
+        src.write_text(ARRAY)
+        r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                      "--emit", mode, "--allow-partial",
+                                      "-o", str(tmp_path / f"m_{mode}.mod")])
+        assert "2 of 3 target uses compensated, 1 not compensated" in r.output, r.output
+        assert "line 7 MoveL pArr{1}: the written value would miss by 50.000 um" in r.output
+        out = (tmp_path / f"m_{mode}.mod").read_text()
+        assert "MoveL pArr{1}, v200" in out and ("MoveL pArr_c{i}" in out if mode == "robtarget"
+                                                 else "MoveAbsJ jt_pArr{i}" in out), out
+
+
+def test_a_circle_point_outside_the_loop_keeps_a_group_of_its_own(tmp_path):
+    """A MoveC circle point no loop reads is written as before: a copy,
+    its confdata as written; the arc's end point joins the array."""
+    text = ARRAY.replace("MoveL pArr{1}, v200, fine, tool0;",
+                         "MoveC pArr{1}, pArr{3}, v200, fine, tool0;")
+    said, out = _fix(tmp_path, "arc", text, "robtarget")
+    assert "4 of 4 target uses compensated" in said, said
+    assert "MoveC pArr_1_c, pArr{3}, v200" in out
+    assert re.search(r"pArr_1_c:=\[\[[^]]*\],\[[^]]*\],\[-1,-1,0,1\]", out), out

@@ -137,3 +137,26 @@ ENDMODULE
 """, "--emit", "robtarget")
     # (There pB itself is rewritten: nothing else reads it.)
     assert _values(out) == [re.search(r"CONST robtarget pB:=(.*)$", literal, re.M).group(1)]
+
+
+def test_an_inner_loops_bound_on_the_outer_variable_is_not_fixed(tmp_path):
+    """FOR j FROM 1 TO i inside FOR i: the bound i is the outer loop's
+    variable, not a CONST num i of the module (which made pA{3} go
+    unvisited with i = 2, and was refused as past the array with i = 5):
+    the move is untouched, its index not fixed."""
+    for value in (2, 5):
+        one = "[[500,0,400],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+        text = HEAD + f"""    CONST robtarget pA{{3}}:=[{one},{one},{one}];
+    CONST num i:={value};
+    PROC main()
+        FOR i FROM 1 TO 3 DO
+            FOR j FROM 1 TO i DO
+                MoveL pA{{j}}, v100, fine, tool0;
+            ENDFOR
+        ENDFOR
+    ENDPROC
+ENDMODULE
+"""
+        said, _, _ = _fix(tmp_path, f"nested{value}", text, "--emit", "robtarget",
+                          "--allow-partial")
+        assert "0 of 1 target uses compensated, 0 not compensated, 1 untouched" in said, said

@@ -246,10 +246,19 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         missed = _missed(solved, gs, verified, plan.file_index)
         if not missed:
             break
+        split = False
         for g, (u, um, deg) in missed.items():
-            g.failure = (f"the written value would miss by {um:.3f} um / {deg:.2e} deg: the "
-                         "ideal controller's IK does not land on the compensated joints here",
-                         u.source.element)
+            why = (f"the written value would miss by {um:.3f} um / {deg:.2e} deg: the "
+                   "ideal controller's IK does not land on the compensated joints here",
+                   u.source.element)
+            k = u.source.element
+            if type(g) is P.Group and k in g.outside and not u.source.by_loop:
+                # (An element only literal indices read: it fails alone, the
+                # array's group is written again without it.)
+                P.split_outside(gs, g, k, solved).failure = why
+                split = True
+            else:
+                g.failure = why
         # Where each group that misses wrote its literals alone, its edits
         # are taken back and the rest stays as written and verified
         # (takeback.py); else every group is placed, written and verified
@@ -257,7 +266,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         # (written: the output was read back by re-lexing it; never so in
         # transient mode.)
         taken = (take_back(plan, gs, list(missed), file_edits, texts)
-                 if written is not None else None)
+                 if written is not None and not split else None)
         if taken is not None:
             file_edits, texts = taken
             gone = {u.key for g in missed for u in g.uses}

@@ -211,6 +211,9 @@ class _Frame:
     retries: list = field(default_factory=list)
     gotos: dict = field(default_factory=dict)     # label name -> states of its GOTOs
     inside: State | None = None
+    # The variables of the FOR loops around the statement walked (a loop's
+    # bounds may name them: not fixed then, targets.loop_range).
+    fors: list = field(default_factory=list)
 
     def absorb(self, st: State | None) -> None:
         # Only the flags: where an error handler starts, the position is
@@ -714,15 +717,19 @@ class _Walker:
 
     def for_loop(self, s: A.For, st: State, env: dict, frame: _Frame) -> State | None:
         rt = frame.rt
-        values = self.resolver.loop_range(s, rt.module, rt.node.name)
-        if values is None:
-            return self.loop(s.body, st, env, frame)
-        var = s.var.lower()
-        for v in values:
-            st = self.walk(s.body, st, {**env, var: v}, frame)
-            if st is None:
-                return None
-        return st
+        values = self.resolver.loop_range(s, rt.module, rt.node.name, around=frame.fors)
+        frame.fors.append(s.var)
+        try:
+            if values is None:
+                return self.loop(s.body, st, env, frame)
+            var = s.var.lower()
+            for v in values:
+                st = self.walk(s.body, st, {**env, var: v}, frame)
+                if st is None:
+                    return None
+            return st
+        finally:
+            frame.fors.pop()
 
     def loop(self, body, st: State, env: dict, frame: _Frame) -> State:
         head = st

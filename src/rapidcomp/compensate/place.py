@@ -465,16 +465,26 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
             # literal, so the element is written there where its value is
             # the one the group's uses of it have, or where none of them
             # reads it (pArr{1} before a FOR i FROM 2 ...): not a copy.)
+            # (The FOR-walked uses come first: such a group's first use is
+            # one of them.)
             array = by_key.get(base + (None,))
+            if array is not None and not array.uses[0].source.by_loop:
+                array = None
             seen = None if array is None else array.rows_seen.get(src.element, -1)
+            # (A circle point no loop use reads keeps a group of its own:
+            # written as such, its confdata as written.)
             if seen is not None and (_same(solved, seen, row) if seen >= 0
-                                     else q_keys[row] is not None):
+                                     else q_keys[row] is not None and u.role != "cir"):
                 key = base + (None,)
                 if seen < 0:
                     array.outside = writable(array.outside)
                     array.outside[src.element] = at
             else:
-                key = base + (q_keys[row],)
+                # (A use with no nominal solution is a group with the other
+                # uses of its element that have none, not the array's,
+                # whose key None also is.)
+                key = base + ((q_keys[row] if q_keys[row] is not None
+                               else ("no solution", src.element)),)
         g = by_key.get(key)
         if g is None:
             g = by_key[key] = Group(m, src, u.tool, u.wobj, home, first=at)
@@ -546,24 +556,40 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
 
 def _let_outside_go(gs: list, g: Group, solved: Solved, ok: list, left: list) -> None:
     """An element of FOR-walked array g that only uses by a literal index
-    read (Group.outside), one of which fails, leaves g with those uses: the
-    Group of their own grouping() made before such elements joined the
-    array's (its failure is theirs alone; the loop's elements are
-    written)."""
-    for k, first in g.outside.items():
-        us = [u for u in g.uses if not u.source.by_loop and u.source.element == k]
-        rows = [solved.row[u.key] for u in us]
-        if all(ok[i] and not (left[i] and g.mode == "rob") for i in rows):
-            continue
-        own = Group(g.mode, us[0].source, us[0].tool, us[0].wobj, g.home, uses=us,
-                    first=first, rows_seen={k: rows[0]})
-        keys = {u.key for u in us}
-        own.kept = g.kept & keys
-        if g.why_kept:
-            own.why_kept = {key: why for key, why in g.why_kept.items() if key in keys}
-        g.uses = [u for u in g.uses if u.key not in keys]
-        del g.rows_seen[k]
-        gs.append(own)
+    read (Group.outside), one of which fails, leaves g with those uses
+    (split_outside)."""
+    for k in list(g.outside):
+        rows = [solved.row[u.key] for u in g.uses
+                if not u.source.by_loop and u.source.element == k]
+        if not all(ok[i] and not (left[i] and g.mode == "rob") for i in rows):
+            split_outside(gs, g, k, solved)
+
+
+def split_outside(gs: list, g: Group, k, solved: Solved) -> Group:
+    """The uses of element k of FOR-walked array g that only literal
+    indices read (Group.outside) taken out of g into gs as the Group of
+    their own grouping() made before such elements joined the array's:
+    one of them fails (its solve, the wrist split, its verification), and
+    the failure is theirs alone; the loop's elements are written. That
+    Group."""
+    us = [u for u in g.uses if not u.source.by_loop and u.source.element == k]
+    own = Group(g.mode, us[0].source, us[0].tool, us[0].wobj, g.home, uses=us,
+                first=g.outside[k], rows_seen={k: solved.row[us[0].key]})
+    keys = {u.key for u in us}
+    own.kept = g.kept & keys
+    if g.why_kept:
+        own.why_kept = {key: why for key, why in g.why_kept.items() if key in keys}
+    g.uses = [u for u in g.uses if u.key not in keys]
+    g.rows_seen.pop(k, None)
+    g.outside = {e: at for e, at in g.outside.items() if e != k}
+    if g.elements:
+        # (Past settle: its elements and rows as _elements made them.)
+        g.elements = [e for e in g.elements if e != k]
+        g.rows = {e: r for e, r in g.rows.items() if e != k}
+        own.elements, own.rows = [k], {k: solved.row[us[0].key]}
+        own.local = all(u.module is own.home[1] for u in us)
+    gs.append(own)
+    return own
 
 
 def _one_statement(uses: list[TargetUse], modes: list[str]) -> frozenset:

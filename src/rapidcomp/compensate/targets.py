@@ -2019,13 +2019,17 @@ class Resolver:
                     return d.dims[k - 1]
         return None
 
-    def loop_range(self, loop, module, routine: str, bounded: bool = True) -> range | None:
+    def loop_range(self, loop, module, routine: str, bounded: bool = True,
+                   around=()) -> range | None:
         """The values a FOR loop walks when its bounds are constant (None
         when they are not, or, when bounded, when it walks more than the
-        limit)."""
-        start = self.integer(loop.start, module, routine)
-        stop = self.integer(loop.stop, module, routine)
-        step = 1 if loop.step is None else self.integer(loop.step, module, routine)
+        limit). around: the variables of the FOR loops around it, which its
+        bounds may name (FOR j FROM 1 TO i inside FOR i: not fixed, whatever
+        data named i there is)."""
+        with self._hiding(around):
+            start = self.integer(loop.start, module, routine)
+            stop = self.integer(loop.stop, module, routine)
+            step = 1 if loop.step is None else self.integer(loop.step, module, routine)
         if start is None or stop is None or not step:
             return None
         r = range(start, stop + (1 if step > 0 else -1), step)
@@ -2151,10 +2155,12 @@ class Resolver:
         variable the target expression uses."""
         envs: list[dict[str, int]] = [{}]
         names = loop_names(expr, motion.loops)
-        for lp in motion.loops:
+        for at, lp in enumerate(motion.loops):
             if lp.var is None or lp.var.lower() not in names:
                 continue
-            values = self.loop_range(lp, module, motion.routine, bounded=False)
+            # (motion.loops: the outermost first.)
+            values = self.loop_range(lp, module, motion.routine, bounded=False,
+                                     around=[x.var for x in motion.loops[:at] if x.var])
             if values is None:
                 continue  # the target stays unresolved and says why
             if len(envs) * len(values) > MAX_LOOP_ITERATIONS:
@@ -2189,17 +2195,22 @@ class Resolver:
         with self._in_loops(motion):
             return self._use_in(pf, module, motion, t, kind, label, env, key)
 
-    @contextmanager
     def _in_loops(self, motion):
         """While a move's target is resolved: the variables of its enclosing
         FOR loops, which hide data of the same name (_fixed: `FOR k ...`
         with a CONST num k in the module: the k of Offs(p, 0, 0, k) is the
         loop's); none outside."""
-        self._loop_vars = frozenset(lp.var.lower() for lp in motion.loops if lp.var)
+        return self._hiding(lp.var for lp in motion.loops if lp.var)
+
+    @contextmanager
+    def _hiding(self, names):
+        """FOR loop variables `names` hide data of their names meanwhile
+        (_fixed); as before after."""
+        before, self._loop_vars = self._loop_vars, frozenset(n.lower() for n in names)
         try:
             yield
         finally:
-            self._loop_vars = frozenset()
+            self._loop_vars = before
 
     def _use_in(self, pf, module, motion, t, kind, label, env, key) -> TargetUse:
         line = pf.line(motion.span)
