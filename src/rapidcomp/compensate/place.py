@@ -464,9 +464,8 @@ def grouping(plan: Plan, solved: Solved | Solving, mode: str,
             # (An element of a FOR-walked array: its group holds the array's
             # literal, so the element is written there where its value is
             # the one the group's uses of it have, or where none of them
-            # reads it (pArr{1} before a FOR i FROM 2 ...): not a copy.)
-            # (The FOR-walked uses come first: such a group's first use is
-            # one of them.)
+            # reads it (pArr{1} before a FOR i FROM 2 ...): not a copy. The
+            # FOR-walked uses come first: such a group's first use is one.)
             array = by_key.get(base + (None,))
             if array is not None and not array.uses[0].source.by_loop:
                 array = None
