@@ -101,6 +101,13 @@ def test_an_element_outside_the_loop_that_fails_fails_alone(tmp_path):
         assert r.exit_code == 1, r.output
         assert "2 of 3 target uses compensated, 1 not compensated" in r.output, r.output
         assert "not compensated: line 7 MoveL pArr{1}: J1 beyond its limit" in r.output
+        out = (tmp_path / f"o_{mode}.mod").read_text()
+        if mode == "robtarget":
+            # In place, no copy: the refused element as written, the others
+            # compensated.
+            rows = out.splitlines()[2:5]
+            assert rows[0] == f"        [[500,0,400],{at}," and "_c" not in out, out
+            assert not rows[1].startswith("        [[500,100,400]"), out
 
 
 AT = "[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
@@ -154,8 +161,11 @@ def test_an_element_outside_the_loop_that_misses_fails_alone(tmp_path, monkeypat
         assert "2 of 3 target uses compensated, 1 not compensated" in r.output, r.output
         assert "line 7 MoveL pArr{1}: the written value would miss by 50.000 um" in r.output
         out = (tmp_path / f"m_{mode}.mod").read_text()
-        assert "MoveL pArr{1}, v200" in out and ("MoveL pArr_c{i}" in out if mode == "robtarget"
+        # (The array written in place: the element that failed is left as
+        # written there, which its move reads.)
+        assert "MoveL pArr{1}, v200" in out and ("MoveL pArr{i}" in out if mode == "robtarget"
                                                  else "MoveAbsJ jt_pArr{i}" in out), out
+        assert "_c" not in out and out.splitlines()[2] == f"        {P1},"
 
 
 def test_a_circle_point_outside_the_loop_keeps_a_group_of_its_own(tmp_path):

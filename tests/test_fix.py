@@ -255,7 +255,7 @@ def test_refusals_say_why_and_collisions_are_avoided():
     assert "jt_p1_2" in after and "LOCAL CONST jointtarget jt_p1 " not in after
     for reason in ("pVar is assigned at run time (before.mod:13)",
                    "tool tStat is a stationary tool", "coordinated with a mechanical unit",
-                   "out of reach by", "Offs arguments are not literal numbers",
+                   "out of reach by", "Offs number k is a VAR num: known at run time only",
                    "the target is computed at run time", "\\Corr has no MoveAbsJ equivalent"):
         assert reason in report, reason
     parse_text(after)

@@ -86,10 +86,15 @@ def test_offs_of_const_nums_goes_where_offs_of_their_values_goes(tmp_path):
         # target as written and the new name aside).
         cells = [_cells(row) for row in rows]
         assert cells == [_cells(row) for row in literal_rows], mode
-    assert ("untouched (3): Offs arguments are not literal numbers or CONST nums of a literal "
-            "value [lines 15-17]") in said
-    assert ("untouched (1): RelTool rotation is not a literal number or a CONST num of a "
-            "literal value [line 18]") in said
+    # (Each says which number and why.)
+    for line in ("untouched (1): Offs number nVar is a VAR num: known at run time only [line 15]",
+                 "untouched (1): Offs number nPers is a PERS num: known at run time only "
+                 "[line 16]",
+                 "untouched (1): Offs number nSum is a CONST whose value is not a literal number "
+                 "(rapidcomp reads literal numbers and CONST nums of them) [line 17]",
+                 "untouched (1): RelTool number nVar is a VAR num: known at run time only "
+                 "[line 18]"):
+        assert line in said, said
 
 
 def test_an_offs_of_a_const_defined_through_itself_is_bad_input(tmp_path):
@@ -125,8 +130,8 @@ ENDMODULE
 """
     said, out, _ = _fix(tmp_path, "loops", text, "--emit", "robtarget", "--allow-partial")
     assert "1 of 5 target uses compensated, 0 not compensated, 4 untouched" in said
-    assert ("untouched (3): Offs arguments are not literal numbers or CONST nums of a literal "
-            "value [line 9]") in said
+    assert ("untouched (3): Offs number k is the variable of an enclosing FOR loop: known at "
+            "run time [line 9]") in said
     assert ("untouched (1): index of pA is not a literal or the variable of an enclosing FOR "
             "loop with constant bounds [line 12]") in said
     # (The move outside the loops: Offs(pB, 0, 0, 50).)
@@ -160,3 +165,25 @@ ENDMODULE
         said, _, _ = _fix(tmp_path, f"nested{value}", text, "--emit", "robtarget",
                           "--allow-partial")
         assert "0 of 1 target uses compensated, 0 not compensated, 1 untouched" in said, said
+
+
+def test_an_offs_number_the_task_does_not_declare_is_a_gap_in_the_input(tmp_path):
+    """A name no given module declares, or one another module declares
+    LOCAL (the controller does not load the task), fails the move as a
+    target's name would (exit 1), naming it and where it is LOCAL."""
+    (tmp_path / "task").mkdir()
+    (tmp_path / "task" / "Data.mod").write_text(
+        "MODULE Data\n    LOCAL CONST num nHidden:=25;\nENDMODULE\n")
+    (tmp_path / "task" / "Main.mod").write_text(HEAD.replace("MODULE OffC", "MODULE Main") + """    PROC main()
+        MoveL Offs(pB, 0, 0, nNowhere), v100, fine, tool0;
+        MoveL Offs(pB, 0, 0, -nHidden), v100, fine, tool0;
+    ENDPROC
+ENDMODULE
+""")
+    r = CliRunner().invoke(main, ["check", str(tmp_path / "task"), "--profile",
+                                  str(FIXTURES / "warm.csv")])
+    assert r.exit_code == 1, r.output
+    assert ("Main.mod:4 MoveL Offs(pB, 0, 0, nNowhere): Offs number nNowhere is not declared in "
+            "the given modules") in r.output
+    assert ("Main.mod:5 MoveL Offs(pB, 0, 0, -nHidden): Offs number nHidden is declared LOCAL in "
+            "another module (Data.mod:2)") in r.output

@@ -26,6 +26,7 @@ class CheckResult:
     program: str
     rows: Rows
     notes: tuple[str, ...]
+    modules: int = 1      # the task's: places name their module where it has several
 
     @property
     def failed(self) -> int:
@@ -48,12 +49,13 @@ def _check(task, solver, track, start, base) -> CheckResult:
     gs = groups(plan, solved, "auto", solver.options.wrist_fallback_deg)
     group_of = {u.key: g for g in gs for u in g.uses}
     rows = use_rows(plan, solved, group_of=group_of, statuses=(OK, FAILED))
-    return CheckResult(task.name, rows, tuple(plan.notes()))
+    return CheckResult(task.name, rows, tuple(plan.notes()), len(task.files))
 
 
 def render_text(result: CheckResult) -> str:
     rows = result.rows
-    several = len({r.file for r in rows}) > 1
+    # (As fix says places: with the module's name where the task has several.)
+    several = result.modules > 1
     places = [f"{r.file}:{r.line}" if several else str(r.line) for r in rows]
     w = max([6] + [len(p) for p in places])
     out = [f"{result.program}: predicted error on the warm robot, per target",

@@ -710,19 +710,26 @@ def place(plan: Plan, gs: list[Group]) -> None:
         writable = [g for g in decl_groups if g.failure is None and g.mode != "absj"]
         if not writable:
             continue
-        d = writable[0].decl
-        name = d.name.lower()
-        mine = {(u.key[0], u.source.ref.span.start) for g in decl_groups if g.mode != "absj"
-                for u in g.uses}
-        exclusive = (file_index[id(writable[0].src.home)] < plan.n_written
-                     and len(declared.get(name, ())) == 1
-                     and name not in plan.resolver.shared
-                     and all(g.failure is None for g in decl_groups)
-                     and refs.get(name, set()) - consumed == mine)
         # (The most uses; of as many, one that reads it plainly, not in
         # Offs/RelTool: the declaration keeps the value its name is read
         # for, and the copy is named for the call.)
         writable.sort(key=lambda g: (-len(g.uses), g.src.call is not None))
+        top = writable[0]
+        d = top.decl
+        name = d.name.lower()
+        mine = {(u.key[0], u.source.ref.span.start) for g in decl_groups if g.mode != "absj"
+                for u in g.uses}
+        # A failed group keeps reading the value as written: only elements
+        # of an array that the one written in place leaves as they are
+        # (pGlue{1}, refused, before the loop's pGlue{2..8}).
+        kept = set(top.elements) if top.array else None
+        exclusive = (file_index[id(top.src.home)] < plan.n_written
+                     and len(declared.get(name, ())) == 1
+                     and name not in plan.resolver.shared
+                     and all(g.failure is None or (kept is not None and g.elements
+                                                   and kept.isdisjoint(g.elements))
+                             for g in decl_groups)
+                     and refs.get(name, set()) - consumed == mine)
         for n, g in enumerate(writable):
             g.placement = "in place" if exclusive and n == 0 else "new"
 

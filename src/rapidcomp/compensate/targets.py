@@ -1786,8 +1786,7 @@ class Resolver:
         # (Literal numbers, or CONST nums: fixed before the program runs.)
         xyz = [self.number(v, module, routine) for v in pos[1:]]
         if None in xyz:
-            return Unresolved(f"{call.name} arguments are not literal numbers or CONST nums "
-                              "of a literal value")
+            return self._not_fixed(pf, call, pos[1 + xyz.index(None)], module, routine)
         if isinstance(pos[0], (A.Agg, A.NumAgg)):
             try:
                 record = decode("robtarget", pos[0], f"{call.name} robtarget")
@@ -1811,8 +1810,7 @@ class Resolver:
                 if a.kind == "optval" and a.name.lower() in ("rx", "ry", "rz"):
                     angle = self.number(a.value, module, routine)
                     if angle is None:
-                        return Unresolved("RelTool rotation is not a literal number or a CONST "
-                                          "num of a literal value")
+                        return self._not_fixed(pf, call, a.value, module, routine)
                     angle, = self._floats((angle,))
                     if not abs(angle) <= 1e5:
                         written = (a.value.text if isinstance(a.value, A.Num)
@@ -1837,6 +1835,30 @@ class Resolver:
             return Unresolved("Offs takes no optional arguments")
         return _source(base.record, base.decl, base.home, base.element, base.by_loop, base.ref,
                        call, call, rot, d, base.home_module)
+
+    def _not_fixed(self, pf, call: A.Call, expr, module, routine: str) -> Unresolved:
+        """Why number `expr` of Offs/RelTool `call` is not one fixed before
+        the program runs (number() gave None), naming it: a name no given
+        module declares, or that the controller does not see here (blocked,
+        as a target's name is); else known at run time only (untouched)."""
+        while isinstance(expr, (A.Unary, A.Paren)):
+            expr = expr.operand if isinstance(expr, A.Unary) else expr.expr
+        what = f"{call.name} number {pf.text(expr)}"
+        if not (isinstance(expr, A.Ref) and not expr.selectors):
+            return Unresolved(f"{what} is an expression: rapidcomp reads literal numbers and "
+                              "CONST nums of them; known at run time")
+        if expr.name.lower() in self._loop_vars:
+            return Unresolved(f"{what} is the variable of an enclosing FOR loop: known at run "
+                              "time")
+        d = self.lookup(expr.name, module, routine)
+        if isinstance(d, Unresolved):
+            return d
+        if d is None:
+            return self._not_declared(expr.name, f"{call.name} number ")
+        if d.storage != "CONST" or d.type != "num":
+            return Unresolved(f"{what} is a {d.storage} {d.type}: known at run time only")
+        return Unresolved(f"{what} is a CONST whose value is not a literal number (rapidcomp "
+                          "reads literal numbers and CONST nums of them)")
 
     def _at_state(self, pf, call: A.Call, module, routine: str, env, whole):
         """rcTcJ/rcTcR(cold, dq) of a transient output at thermal state
