@@ -177,3 +177,45 @@ def test_a_circle_point_outside_the_loop_keeps_a_group_of_its_own(tmp_path):
     assert "4 of 4 target uses compensated" in said, said
     assert "MoveC pArr_1_c, pArr{3}, v200" in out
     assert re.search(r"pArr_1_c:=\[\[[^]]*\],\[[^]]*\],\[-1,-1,0,1\]", out), out
+
+
+def test_a_loop_element_refused_with_another_says_which_and_why(tmp_path):
+    """The FOR loop's elements are one array written as one: where one is
+    not compensated (J1 past a limit set between them), the others are
+    refused with it, and their rows say which element, that it is written
+    with them, and its reason."""
+    text = (ARRAY.replace(P1, f"[[500,0,400],{AT}").replace(P2, f"[[500,100,400],{AT}")
+            .replace(P3, f"[[500,150,400],{AT}"))
+    src = tmp_path / "loop.mod"
+    src.write_text(text)
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                  "--limit", "J1=-1:14", "--allow-partial",
+                                  "-o", str(tmp_path / "o.mod")])
+    assert "1 of 3 target uses compensated, 2 not compensated" in r.output, r.output
+    assert ("not compensated: line 9 MoveL pArr{i} [i=2]: pArr{3}, written with it as one "
+            "array, is not compensated: nominal: J1 beyond its limit by") in r.output, r.output
+
+
+def test_an_element_outside_the_loop_is_written_when_the_loops_fail(tmp_path, monkeypatch):
+    """Where the loop's elements are refused (one of them would miss: the
+    verification, forced), the element only a literal index reads is
+    written all the same (its own copy, as before it joined the array)."""
+    from rapidcomp.compensate import fix as F
+    real = F.verify
+
+    def verify(plan, solved, keys, *args, **kwargs):
+        got = real(plan, solved, keys, *args, **kwargs)
+        for u in plan.uses:
+            if u.label == "pArr{i} [i=3]" and u.key in got:
+                got[u.key] = (50.0, 1.0)
+        return got
+    monkeypatch.setattr(F, "verify", verify)
+    for mode in ("robtarget", "absj"):
+        src = tmp_path / f"loopmiss_{mode}.mod"
+        src.write_text(ARRAY)
+        r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                      "--emit", mode, "--allow-partial",
+                                      "-o", str(tmp_path / f"lm_{mode}.mod")])
+        assert "1 of 3 target uses compensated, 2 not compensated" in r.output, r.output
+        assert ("line 9 MoveL pArr{i} [i=2]: pArr{3}, written with it as one array, is not "
+                "compensated: the written value would miss by 50.000 um") in r.output, r.output

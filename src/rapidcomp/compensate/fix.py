@@ -259,6 +259,10 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
                 split = True
             else:
                 g.failure = why
+                if type(g) is P.Group and g.outside:
+                    # (Elements outside the loop are written without it.)
+                    P.free_outside(gs, g, solved)
+                    split = True
         # Where each group that misses wrote its literals alone, its edits
         # are taken back and the rest stays as written and verified
         # (takeback.py); else every group is placed, written and verified

@@ -542,12 +542,14 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
                           if not ok[i] or (left[i] and s.mode == "rob")], plan.file_index)
     for g in [g for g in gs if type(g) is Group and g.outside]:
         _let_outside_go(gs, g, solved, ok, left)
-    for g in gs:
+    for g in list(gs):
         if type(g) is Singles:
             continue
         _elements(g, solved, ok, left)
         if g.failure is None and g.mode == "rob":
             _wrist(g, solved, left, plan, mode)
+        if g.failure is not None:
+            free_outside(gs, g, solved)
         uses = g.uses
         g.local = (uses[0].module is g.home[1] if len(uses) == 1
                    else all(u.module is g.home[1] for u in uses))
@@ -564,13 +566,21 @@ def _let_outside_go(gs: list, g: Group, solved: Solved, ok: list, left: list) ->
             split_outside(gs, g, k, solved)
 
 
+def free_outside(gs: list, g: Group, solved: Solved) -> None:
+    """FOR-walked array g fails (one of the loop's elements): the elements
+    only literal indices read, which joined it, leave it as the Groups of
+    their own they were (split_outside), not failing with it."""
+    for k in list(g.outside):
+        split_outside(gs, g, k, solved)
+
+
 def split_outside(gs: list, g: Group, k, solved: Solved) -> Group:
     """The uses of element k of FOR-walked array g that only literal
     indices read (Group.outside) taken out of g into gs as the Group of
     their own grouping() made before such elements joined the array's:
-    one of them fails (its solve, the wrist split, its verification), and
-    the failure is theirs alone; the loop's elements are written. That
-    Group."""
+    where one of them fails (its solve, the wrist split, its verification)
+    or the loop's elements do, each fails alone, and the others are
+    written. That Group."""
     us = [u for u in g.uses if not u.source.by_loop and u.source.element == k]
     own = Group(g.mode, us[0].source, us[0].tool, us[0].wobj, g.home, uses=us,
                 first=g.outside[k], rows_seen={k: solved.row[us[0].key]})

@@ -347,8 +347,11 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         why = solved.reason(i)
     elif g is not None and g.failure is not None:
         reason, fk = g.failure
+        # (Another element or use of the value written with this one's:
+        # that one is why this one is refused too.)
         why = reason if fk == u.source.element else (
-            f"{element_label(g, fk)} of the same group: {reason}")
+            f"{element_label(g, fk)}, written with it as one "
+            f"{'array' if g.array else 'value'}, is not compensated: {reason}")
     if why is not None:
         why = _hint(why, u, tracked)
         return ((*base, fail_label, rule, None, error[0], error[1], None, None, conf_before,
