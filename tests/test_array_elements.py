@@ -138,29 +138,41 @@ def test_an_element_with_no_solution_fails_alone(tmp_path):
             assert "not compensated: line 7 MoveL pArr{1}: nominal: out of reach" in r.output
 
 
-def test_an_element_outside_the_loop_that_misses_fails_alone(tmp_path, monkeypatch):
-    """Where the written value of an element only a literal index reads
-    would miss (the verification; forced here), it alone fails, and the
-    array's group is written again without it."""
+def _missing(monkeypatch, label: str) -> None:
+    """The verification finds the written value of the use labelled
+    `label` 50 um off (forced: what the ideal controller's IK would say of
+    a value that does not reproduce its joints)."""
     from rapidcomp.compensate import fix as F
     real = F.verify
 
     def verify(plan, solved, keys, *args, **kwargs):
         got = real(plan, solved, keys, *args, **kwargs)
         for u in plan.uses:
-            if u.label == "pArr{1}" and u.key in got:
+            if u.label == label and u.key in got:
                 got[u.key] = (50.0, 1.0)
         return got
     monkeypatch.setattr(F, "verify", verify)
+
+
+def _fix_partial(tmp_path, name: str, text: str, mode: str):
+    """fix --allow-partial of text: (what it said, what it wrote)."""
+    src = tmp_path / f"{name}.mod"
+    src.write_text(text)
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                  "--emit", mode, "--allow-partial",
+                                  "-o", str(tmp_path / f"{name}_out.mod")])
+    return r.output, (tmp_path / f"{name}_out.mod").read_text()
+
+
+def test_an_element_outside_the_loop_that_misses_fails_alone(tmp_path, monkeypatch):
+    """Where the written value of an element only a literal index reads
+    would miss (the verification; forced here), it alone fails, and the
+    array's group is written again without it."""
+    _missing(monkeypatch, "pArr{1}")
     for mode in ("robtarget", "absj"):
-        src = tmp_path / f"miss_{mode}.mod"
-        src.write_text(ARRAY)
-        r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
-                                      "--emit", mode, "--allow-partial",
-                                      "-o", str(tmp_path / f"m_{mode}.mod")])
-        assert "2 of 3 target uses compensated, 1 not compensated" in r.output, r.output
-        assert "line 7 MoveL pArr{1}: the written value would miss by 50.000 um" in r.output
-        out = (tmp_path / f"m_{mode}.mod").read_text()
+        said, out = _fix_partial(tmp_path, f"miss_{mode}", ARRAY, mode)
+        assert "2 of 3 target uses compensated, 1 not compensated" in said, said
+        assert "line 7 MoveL pArr{1}: the written value would miss by 50.000 um" in said
         # (The array written in place: the element that failed is left as
         # written there, which its move reads.)
         assert "MoveL pArr{1}, v200" in out and ("MoveL pArr{i}" in out if mode == "robtarget"
@@ -200,22 +212,10 @@ def test_an_element_outside_the_loop_is_written_when_the_loops_fail(tmp_path, mo
     """Where the loop's elements are refused (one of them would miss: the
     verification, forced), the element only a literal index reads is
     written all the same (its own copy, as before it joined the array)."""
-    from rapidcomp.compensate import fix as F
-    real = F.verify
-
-    def verify(plan, solved, keys, *args, **kwargs):
-        got = real(plan, solved, keys, *args, **kwargs)
-        for u in plan.uses:
-            if u.label == "pArr{i} [i=3]" and u.key in got:
-                got[u.key] = (50.0, 1.0)
-        return got
-    monkeypatch.setattr(F, "verify", verify)
+    _missing(monkeypatch, "pArr{i} [i=3]")
     for mode in ("robtarget", "absj"):
-        src = tmp_path / f"loopmiss_{mode}.mod"
-        src.write_text(ARRAY)
-        r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
-                                      "--emit", mode, "--allow-partial",
-                                      "-o", str(tmp_path / f"lm_{mode}.mod")])
-        assert "1 of 3 target uses compensated, 2 not compensated" in r.output, r.output
+        said, out = _fix_partial(tmp_path, f"loopmiss_{mode}", ARRAY, mode)
+        assert "1 of 3 target uses compensated, 2 not compensated" in said, said
         assert ("line 9 MoveL pArr{i} [i=2]: pArr{3}, written with it as one array, is not "
-                "compensated: the written value would miss by 50.000 um") in r.output, r.output
+                "compensated: the written value would miss by 50.000 um") in said, said
+        assert re.search(r"pArr_1_c:=", out) or "jt_pArr_1:=" in out, out
