@@ -236,15 +236,14 @@ PROGRAM_HELP = ("PROGRAM is a module (.mod, .modx, .sys, .prg), a task folder (e
 def inspect(program: str, as_json: bool) -> None:
     """Show what the parser found in PROGRAM: counts, target data, motions
     (of each of a task's modules, in the order the task lists them)."""
-    from .rapid.inspect import modules_of, render_text, report
+    from .rapid.inspect import alone, modules_of, render_text, report
     try:
         reps = [report(pf) for pf in modules_of(program)]
     except RapidcompError as exc:
         _fail(exc)
     if as_json:
         # (A module alone: its report, as before tasks were taken.)
-        alone = os.path.isfile(program) and not program.lower().endswith(".pgf")
-        doc = reps[0] if alone else {"program": program, "modules": reps}
+        doc = reps[0] if alone(program) else {"program": program, "modules": reps}
         click.echo(json.dumps(doc, indent=2))
     else:
         click.echo("\n".join(render_text(r) for r in reps), nl=False)

@@ -248,21 +248,10 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
             break
         split = False
         for g, (u, um, deg) in missed.items():
-            why = (f"the written value would miss by {um:.3f} um / {deg:.2e} deg: the "
-                   "ideal controller's IK does not land on the compensated joints here",
-                   u.source.element)
-            k = u.source.element
-            if type(g) is P.Group and k in g.outside and not u.source.by_loop:
-                # (An element only literal indices read: it fails alone, the
-                # array's group is written again without it.)
-                P.split_outside(gs, g, k, solved).failure = why
-                split = True
-            else:
-                g.failure = why
-                if type(g) is P.Group and g.outside:
-                    # (Elements outside the loop are written without it.)
-                    P.free_outside(gs, g, solved)
-                    split = True
+            split |= P.fail(gs, g, u, solved, (
+                f"the written value would miss by {um:.3f} um / {deg:.2e} deg: the ideal "
+                "controller's IK does not land on the compensated joints here",
+                u.source.element))
         # Where each group that misses wrote its literals alone, its edits
         # are taken back and the rest stays as written and verified
         # (takeback.py); else every group is placed, written and verified

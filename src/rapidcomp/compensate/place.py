@@ -574,6 +574,24 @@ def free_outside(gs: list, g: Group, solved: Solved) -> None:
         split_outside(gs, g, k, solved)
 
 
+def fail(gs: list, g, u: TargetUse, solved: Solved, why: tuple) -> bool:
+    """Group g (or Singles) fails for use u's sake (its written value
+    would miss: fix's verification): where u is of an element only
+    literal indices read (Group.outside), that element's uses alone, the
+    array's group written again without them; else g, its elements outside
+    the loop leaving it. Whether groups were split (gs changed)."""
+    if type(g) is not Group or not g.outside:
+        g.failure = why
+        return False
+    k = u.source.element
+    if k in g.outside and not u.source.by_loop:
+        split_outside(gs, g, k, solved).failure = why
+    else:
+        g.failure = why
+        free_outside(gs, g, solved)
+    return True
+
+
 def split_outside(gs: list, g: Group, k, solved: Solved) -> Group:
     """The uses of element k of FOR-walked array g that only literal
     indices read (Group.outside) taken out of g into gs as the Group of

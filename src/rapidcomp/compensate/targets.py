@@ -1987,8 +1987,9 @@ class Resolver:
         a CONST), negated or in parentheses (the controller evaluates a
         CONST when it loads the module); None for anything else (a VAR or
         PERS num, an expression: known at run time only)."""
-        return self._fixed(expr, module, routine,
-                           lambda e, m, r: e.value if isinstance(e, A.Num) else None)
+        if type(expr) is A.Num:       # (most: a CAM program's 3e5 Offs numbers)
+            return expr.value
+        return self._fixed(expr, module, routine, _num_value)
 
     def _fixed(self, expr, module, routine: str | None, leaf):
         """What expr comes to before the program runs, through '-',
@@ -2214,6 +2215,8 @@ class Resolver:
                           True)
 
     def _use(self, pf, module, motion, t, kind, label, env, key) -> TargetUse:
+        if not motion.loops:          # (a CAM program's 1e5 moves: no loop hides a name)
+            return self._use_in(pf, module, motion, t, kind, label, env, key)
         with self._in_loops(motion):
             return self._use_in(pf, module, motion, t, kind, label, env, key)
 
@@ -2221,7 +2224,7 @@ class Resolver:
         """While a move's target is resolved: the variables of its enclosing
         FOR loops, which hide data of the same name (_fixed: `FOR k ...`
         with a CONST num k in the module: the k of Offs(p, 0, 0, k) is the
-        loop's); none outside."""
+        loop's); none outside (where _loop_vars is empty already)."""
         return self._hiding(lp.var for lp in motion.loops if lp.var)
 
     @contextmanager
@@ -2355,6 +2358,8 @@ class Resolver:
         an output whose every edit is numbers of existing literals
         (verify.py)."""
         try:
+            if not u.motion.loops:
+                return self._again(u)
             with self._in_loops(u.motion):
                 return self._again(u)
         except Exception:
@@ -2612,6 +2617,11 @@ class Resolver:
                 raise home.source.error(where, f"{what}: confdata {name} is {record.texts[7 + i]}, "
                                         f"expected a quadrant count of a joint angle (within "
                                         f"+-{MAX_QUADRANT}, i.e. +-{90 * MAX_QUADRANT} deg)")
+
+
+def _num_value(expr, module, routine) -> float | None:
+    """Resolver.number()'s leaf: a literal number's value."""
+    return expr.value if isinstance(expr, A.Num) else None
 
 
 def _identity(pose) -> bool:

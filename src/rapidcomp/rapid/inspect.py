@@ -24,6 +24,13 @@ def _value_summary(value) -> dict | None:
     return None
 
 
+def alone(program: str) -> bool:
+    """PROGRAM is one module file (not a task folder, program file or
+    backup): inspect reads it as given, its JSON the module's report."""
+    path = Path(program)
+    return path.is_file() and path.suffix.lower() != ".pgf"
+
+
 def modules_of(program: str) -> Iterator[ParsedFile]:
     """The modules `inspect PROGRAM` reads, parsed one at a time: a module
     file as given; each module of a task folder, program file (.pgf) or
@@ -31,8 +38,7 @@ def modules_of(program: str) -> Iterator[ParsedFile]:
     the user can open."""
     from .parse import parse_file
     from .task import tasks_of
-    path = Path(program)
-    if path.is_file() and path.suffix.lower() != ".pgf":
+    if alone(program):
         yield parse_file(program)
         return
     for source in tasks_of(program, (), motion_only=False):
