@@ -78,14 +78,18 @@ def states(t_min: np.ndarray, tau_min: float, stood=None, tau_cool=None) -> np.n
     if stood is None or not np.any(np.asarray(stood) > 0):
         return 1.0 - np.exp(-t / tau_min)
     S = np.asarray(stood, float)
-    keys = np.unique(np.round(np.column_stack([t + S, t, S]), 9), axis=0)
-    s, last_t, last_S, value = 0.0, 0.0, 0.0, {}
-    for _, tk, Sk in keys:
+    keys, row_key = np.unique(np.round(np.column_stack([t + S, t, S]), 9), axis=0,
+                              return_inverse=True)
+    s, last_t, last_S = 0.0, 0.0, 0.0
+    value = np.empty(len(keys))
+    for k, (_, tk, Sk) in enumerate(keys):
         s *= math.exp(-max(Sk - last_S, 0.0) / tau_cool)
         s = 1.0 - (1.0 - s) * math.exp(-max(tk - last_t, 0.0) / tau_min)
-        value[(round(tk, 9), round(Sk, 9))] = s
+        value[k] = s
         last_t, last_S = tk, Sk
-    return np.array([value[(round(a, 9), round(b, 9))] for a, b in zip(t, S)])
+    # Rows index their key: a fit's golden search calls this ~850 times, and
+    # a dict keyed by each row's rounded pair took 1.4 s of a 2.6 s discover.
+    return value[np.reshape(row_key, -1)]
 
 
 def _poses(q_deg, wall, tool):
