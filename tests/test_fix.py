@@ -224,12 +224,12 @@ def test_diff_of_edits_within_lines_is_the_blocks_diff():
         except OverlappingEdits:
             continue
         cols = EditColumns.of(edits)
-        got = D._changed_in_lines(text, kept, cols, new)
+        got = D._changed_in_lines(text, kept, text.splitlines(), cols, new)
         if got is None:
             general += 1
             continue
         fast += 1
-        assert got == D._changed_blocks(text, kept, cols, new)
+        assert got == D._changed_blocks(text, kept, text.splitlines(), cols, new)
     assert fast > 1000 and general > 100
     # The review's case: text inserted between a CR and an LF splits a
     # line, text removed between a CR and an LF joins two; the line count
@@ -238,7 +238,15 @@ def test_diff_of_edits_within_lines_is_the_blocks_diff():
     new = apply_edits(text, edits)
     kept = text.splitlines(keepends=True)
     assert len(new.splitlines()) == len(kept)
-    assert D._changed_in_lines(text, kept, EditColumns.of(edits), new) is None
+    assert D._changed_in_lines(text, kept, text.splitlines(), EditColumns.of(edits), new) is None
+
+
+def test_a_line_break_to_the_diff_is_one_to_splitlines():
+    """The diff tells an edit that touches a line break by a pattern: the
+    characters str.splitlines (and difflib's lines) end a line at."""
+    from rapidcomp.rewrite.diff import _LINE_BREAK
+    for c in range(0x10000):
+        assert (len(f"a{chr(c)}b".splitlines()) != 1) is bool(_LINE_BREAK.search(chr(c))), c
 
 
 def test_new_names_avoid_every_identifier_case_insensitively():
