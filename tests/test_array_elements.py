@@ -192,20 +192,30 @@ def test_a_circle_point_outside_the_loop_keeps_a_group_of_its_own(tmp_path):
 
 
 def test_a_loop_element_refused_with_another_says_which_and_why(tmp_path):
-    """The FOR loop's elements are one array written as one: where one is
-    not compensated (J1 past a limit set between them), the others are
-    refused with it, and their rows say which element, that it is written
-    with them, and its reason."""
+    """Turned into MoveAbsJ (--emit absj), the FOR loop's elements are one
+    jointtarget array, which needs every element's joints: where one is not
+    compensated (J1 past a limit set between them), the others are refused
+    with it, and their rows say which element, that it is written with
+    them, and its reason. Kept robtarget moves (the default for a MoveL),
+    the others are written and that element stays as written
+    (test_a_loop_element_that_fails_fails_alone)."""
     text = (ARRAY.replace(P1, f"[[500,0,400],{AT}").replace(P2, f"[[500,100,400],{AT}")
             .replace(P3, f"[[500,150,400],{AT}"))
     src = tmp_path / "loop.mod"
     src.write_text(text)
     r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
-                                  "--limit", "J1=-1:14", "--allow-partial",
+                                  "--limit", "J1=-1:14", "--allow-partial", "--emit", "absj",
                                   "-o", str(tmp_path / "o.mod")])
     assert "1 of 3 target uses compensated, 2 not compensated" in r.output, r.output
     assert ("not compensated: line 9 MoveL pArr{i} [i=2]: pArr{3}, written with it as one "
             "array, is not compensated: nominal: J1 beyond its limit by") in r.output, r.output
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                  "--limit", "J1=-1:14", "--allow-partial",
+                                  "-o", str(tmp_path / "o.mod")])
+    assert "2 of 3 target uses compensated, 1 not compensated" in r.output, r.output
+    assert ("not compensated: line 9 MoveL pArr{i} [i=3]: nominal: J1 beyond its limit by"
+            in r.output), r.output
+    assert "written with it" not in r.output
 
 
 def test_an_element_outside_the_loop_is_written_when_the_loops_fail(tmp_path, monkeypatch):
@@ -219,3 +229,86 @@ def test_an_element_outside_the_loop_is_written_when_the_loops_fail(tmp_path, mo
         assert ("line 9 MoveL pArr{i} [i=2]: pArr{3}, written with it as one array, is not "
                 "compensated: the written value would miss by 50.000 um") in said, said
         assert re.search(r"pArr_1_c:=", out) or "jt_pArr_1:=" in out, out
+
+
+# A glue path: four points walked by a FOR loop, the third at the wrist
+# singularity (joints [16,20,10,0,0.004,0]; the others J5 = 40), made by the
+# nominal FK of those joints; cfx 0 (the controller model reaches each on
+# its joints).
+PATH = """MODULE Glue
+    CONST robtarget pArr{4}:=[
+        [[545.708,14.290,441.391],[0.158766,0.195722,0.956428,0.147421],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],
+        [[538.408,90.099,441.391],[0.148095,0.128528,0.967751,0.158136],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],
+        [[556.096,159.458,467.785],[0.495104,-0.120530,0.857615,0.069582],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],
+        [[492.717,235.014,441.391],[0.124646,-0.007408,0.976220,0.177208],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]];
+    PROC main()
+        FOR i FROM 1 TO 4 DO
+            MoveL pArr{i}, v200, fine, tool0;
+        ENDFOR
+    ENDPROC
+ENDMODULE
+"""
+
+
+def test_a_loop_element_that_fails_fails_alone(tmp_path):
+    """Kept robtarget moves, a FOR-walked array whose one element cannot be
+    compensated (the wrist singularity: a robtarget cannot carry the J4/J6
+    split) has the others written in place and that one left as written.
+    Oracle: the controller model (tests/controller.py) runs input and
+    output; the warm robot lands on each compensated point's pose, and the
+    refused point's move commands the joints the input commands."""
+    import numpy as np
+    import pinocchio as pin
+
+    from controller import Controller, fk
+    from rapidcomp.kinematics.profile import deform, read_profile
+    from rapidcomp.kinematics.robot import irb140
+    from rapidcomp.rapid.parse import parse_file
+
+    src, out = tmp_path / "glue.mod", tmp_path / "glue_out.mod"
+    src.write_text(PATH)
+    for mode in ("auto", "robtarget"):
+        r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                      "--emit", mode, "--allow-partial", "-o", str(out)])
+        assert r.exit_code == 1, r.output
+        assert "3 of 4 target uses compensated, 1 not compensated" in r.output, r.output
+        assert ("not compensated: line 9 MoveL pArr{i} [i=3]: at the wrist singularity "
+                "(J5 0.00 deg) the compensation needs a J4/J6 split") in r.output, r.output
+        assert "written with it" not in r.output
+        lines, before = out.read_text().splitlines(), PATH.splitlines()
+        assert lines[4] == before[4] and "_c" not in out.read_text()
+        assert [a == b for a, b in zip(lines, before)] == [True] * 2 + [False] * 2 + [True] \
+            + [False] + [True] * 6
+    nominal = irb140()
+    warm = deform(nominal, read_profile(FIXTURES / "warm.csv"))
+    a = Controller([parse_file(src, "glue.mod")], nominal).run("main")
+    b = Controller([parse_file(out, "glue_out.mod")], nominal).run("main")
+    assert len(a) == len(b) == 4
+    for n, (x, y) in enumerate(zip(a, b)):
+        if n == 2:
+            assert np.array_equal(x.q_deg, y.q_deg)
+            continue
+        got = fk(warm, y.q_deg)
+        assert np.linalg.norm(got.translation - x.pose.translation) * 1000 < 1.0
+        assert np.degrees(np.linalg.norm(pin.log3(x.pose.rotation.T @ got.rotation))) < 1e-4
+    # check says the same of each point.
+    r = CliRunner().invoke(main, ["check", str(src), "--profile", str(FIXTURES / "warm.csv")])
+    assert "3 of 4 target uses compensable, 1 not compensable" in r.output, r.output
+
+
+def test_every_element_failing_fails_the_array_and_a_transient_output_too(tmp_path):
+    """Where every element fails, the array is refused as one (each row its
+    own reason); a transient output's correction array needs every
+    element's correction, so there one element refuses the array still,
+    each row saying which and why."""
+    src = tmp_path / "glue.mod"
+    src.write_text(PATH)
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                  "--transient", "--tau-heat", "30",
+                                  "--allow-partial", "-o", str(tmp_path / "t.mod")])
+    assert "0 of 4 target uses compensated, 4 not compensated" in r.output, r.output
+    assert "pArr{3}, written with it as one array, is not compensated: at the wrist" in r.output
+    src.write_text(PATH.replace("FOR i FROM 1 TO 4", "FOR i FROM 3 TO 3"))
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                  "--allow-partial", "-o", str(tmp_path / "o.mod")])
+    assert "0 of 1 target uses compensated, 1 not compensated" in r.output, r.output

@@ -84,8 +84,8 @@ def _fix(text: str, name: str, solver, mode: str, monkeypatch, singles: bool,
     left: list = []
     real_settle = P.settle
 
-    def settle(gs, *args):
-        real_settle(gs, *args)
+    def settle(gs, *args, **kwargs):
+        real_settle(gs, *args, **kwargs)
         left.append((sum(type(g) is P.Group for g in gs),
                      sum(len(g.uses) for g in gs if type(g) is P.Singles)))
     monkeypatch.setattr(P, "settle", settle)
@@ -218,8 +218,8 @@ def test_a_declaration_in_another_module_is_edited_where_it_is(solver, monkeypat
     def run(singles):
         real_settle, left = P.settle, []
 
-        def settle(gs, *args):
-            real_settle(gs, *args)
+        def settle(gs, *args, **kwargs):
+            real_settle(gs, *args, **kwargs)
             left.append(sum(len(g.uses) for g in gs if type(g) is P.Singles))
         monkeypatch.setattr(P, "settle", settle)
         if not singles:

@@ -527,11 +527,14 @@ def _read_once(plan: Plan) -> frozenset:
                      and name not in shared)
 
 
-def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
+def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str,
+           each: bool = True) -> None:
     """Each group's elements, rows and failure, and whether a new
     declaration of it is LOCAL (groups() past grouping()). An element of
     Singles that fails is taken out of it into gs as the Group of its own
-    it is (gs changes: a Singles left empty goes)."""
+    it is (gs changes: a Singles left empty goes). each: an element of a
+    FOR-walked robtarget array that fails fails alone (_leave_out; not in
+    a transient output, whose correction array needs every element's)."""
     # Whether each row is solved, and needs a J4/J6 split at the wrist
     # singularity (_elements, _wrist: as Python values at once).
     ok = solved.oks()
@@ -548,6 +551,8 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
         _elements(g, solved, ok, left)
         if g.failure is None and g.mode == "rob":
             _wrist(g, solved, left, plan, mode)
+        if g.failure is not None and each and g.array and g.mode == "rob":
+            _leave_out(gs, g, solved, ok, left, plan, mode)
         if g.failure is not None:
             free_outside(gs, g, solved)
         uses = g.uses
@@ -592,16 +597,17 @@ def fail(gs: list, g, u: TargetUse, solved: Solved, why: tuple) -> bool:
     return True
 
 
-def split_outside(gs: list, g: Group, k, solved: Solved) -> Group:
+def split_outside(gs: list, g: Group, k, solved: Solved, every: bool = False) -> Group:
     """The uses of element k of FOR-walked array g that only literal
     indices read (Group.outside) taken out of g into gs as the Group of
     their own grouping() made before such elements joined the array's:
     where one of them fails (its solve, the wrist split, its verification)
     or the loop's elements do, each fails alone, and the others are
-    written. That Group."""
-    us = [u for u in g.uses if not u.source.by_loop and u.source.element == k]
+    written. every: all uses of element k, the loop's too (_leave_out).
+    That Group."""
+    us = [u for u in g.uses if u.source.element == k and (every or not u.source.by_loop)]
     own = Group(g.mode, us[0].source, us[0].tool, us[0].wobj, g.home, uses=us,
-                first=g.outside[k], rows_seen={k: solved.row[us[0].key]})
+                first=g.first if every else g.outside[k], rows_seen={k: solved.row[us[0].key]})
     keys = {u.key for u in us}
     own.kept = g.kept & keys
     if g.why_kept:
@@ -644,6 +650,49 @@ def _same(solved: Solved, a: int, b: int) -> bool:
     return same_joints(solved.nominal.q_deg[a], solved.nominal.q_deg[b])
 
 
+def _leave_out(gs: list, g: Group, solved: Solved, ok: list, left: list, plan: Plan,
+               mode: str) -> None:
+    """FOR-walked robtarget array g failed for one element's sake: each
+    element that fails (a use of it not solved, two uses of it on
+    different configurations, the wrist split) goes into gs as a Group of
+    its own that says why, and g, no longer failed, writes the others; the
+    array keeps those as written, which the moves that read them reach as
+    before (a glue path of 50 points, one of them at the wrist
+    singularity, is 49 points compensated, not none). Where every element
+    fails, g fails as it did."""
+    rows: dict = {}
+    for u in g.uses:
+        rows.setdefault(u.source.element, []).append(solved.row[u.key])
+    bad = {}
+    for k, rs in rows.items():
+        first = rs[0]
+        why = next((_configurations(g, k) for i in rs[1:]
+                    if ok[first] and ok[i] and not _same(solved, first, i)), None)
+        if why is None:
+            why = next((solved.reason(i) for i in rs if not ok[i]), None)
+        if why is None and left[first]:
+            why = _split_needed(g, k, first, solved, plan, mode)
+        if why is not None:
+            bad[k] = why
+    if len(bad) == len(rows):
+        return
+    g.failure = None
+    for k, why in bad.items():
+        split_outside(gs, g, k, solved, every=True).failure = (why, k)
+
+
+def _configurations(g: Group, k) -> str:
+    lines = sorted({x.line for x in g.uses if x.source.element == k})
+    return (f"{element_label(g, k)} is reached on different configurations "
+            f"(lines {', '.join(map(str, lines))}); one array element cannot hold both values")
+
+
+def _split_needed(g: Group, k, i: int, solved: Solved, plan: Plan, mode: str) -> str:
+    return (f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
+            "compensation needs a J4/J6 split a robtarget cannot carry (the controller's IK "
+            "chooses the split itself)" + absj_hint(g, mode, plan, solved))
+
+
 def _elements(g: Group, solved: Solved, ok: list, left: list) -> None:
     """A group's elements and their rows, and its failure: ok[row]
     (solved.ok), left[row] (the J4/J6 split at the wrist singularity)."""
@@ -668,10 +717,7 @@ def _elements(g: Group, solved: Solved, ok: list, left: list) -> None:
             seen[k] = row
             continue
         if g.failure is None and ok[first] and ok[row] and not _same(solved, first, row):
-            lines = sorted({x.line for x in g.uses if x.source.element == k})
-            g.failure = (f"{element_label(g, k)} is reached on different configurations "
-                         f"(lines {', '.join(map(str, lines))}); one array element cannot hold "
-                         "both values", k)
+            g.failure = (_configurations(g, k), k)
     # Any use of the group that fails fails the group (its value is shared).
     bad = next((u for u in g.uses if not ok[solved.row[u.key]]), None)
     if g.failure is None and bad is not None:
@@ -686,10 +732,7 @@ def _wrist(g: Group, solved: Solved, left: list, plan: Plan, mode: str) -> None:
     for k in g.elements:
         i = g.rows[k]
         if left[i]:
-            g.failure = (
-                f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
-                "compensation needs a J4/J6 split a robtarget cannot carry (the "
-                "controller's IK chooses the split itself)" + absj_hint(g, mode, plan, solved), k)
+            g.failure = (_split_needed(g, k, i, solved, plan, mode), k)
             break
 
 
