@@ -59,4 +59,32 @@ def test_inspect_a_task_is_each_of_its_modules_inspected(program, modules):
     assert run(str(tasks / program)) == "\n".join(run(str(tasks / m)) for m in modules)
     doc = json.loads(run(str(tasks / program), "--json"))
     assert doc == {"program": str(tasks / program),
-                   "modules": [json.loads(run(str(tasks / m), "--json")) for m in modules]}
+                   "modules": [json.loads(run(str(tasks / m), "--json")) for m in modules],
+                   "problems": []}
+
+
+def test_inspect_says_what_check_and_fix_refuse_in_a_task(tmp_path):
+    """A folder with a stale copy of a module (or a global name declared in
+    two modules) is listed as it is, exit 0, and a note says what check
+    says of it, file:line, and that check and fix refuse it (a new user's
+    inspect listed it without a word)."""
+    tasks = FIXTURES / "tasks"
+    r = CliRunner().invoke(main, ["inspect", str(tasks / "glue")])
+    assert r.exit_code == 0, r.output
+    c = CliRunner().invoke(main, ["check", str(tasks / "glue"), "--profile",
+                                  str(FIXTURES / "warm.csv")])
+    assert c.exit_code == 2
+    refusal = c.output.strip().splitlines()[0]
+    assert refusal.startswith(str(tasks / "glue" / "old" / "GlueMain.mod") + ":1: module GlueMain")
+    assert r.stdout.splitlines()[-1] == f"note: {refusal}; check and fix refuse this task"
+    doc = json.loads(CliRunner().invoke(main, ["inspect", str(tasks / "glue"), "--json"]).stdout)
+    assert doc["problems"] == [f"{refusal}; check and fix refuse this task"]
+    assert len(doc["modules"]) == 3
+    for name in ("A", "B"):
+        (tmp_path / f"{name}.mod").write_text(
+            f"MODULE {name}\n  CONST num nSpeed:=1;\nENDMODULE\n")
+    r = CliRunner().invoke(main, ["inspect", str(tmp_path)])
+    assert r.exit_code == 0 and r.stdout.splitlines()[-1] == (
+        f"note: {tmp_path / 'B.mod'}:2: nSpeed is declared globally in two modules (also "
+        f"{tmp_path / 'A.mod'}:2): the controller does not load the task (make one LOCAL, or "
+        "give the program file (.pgf) without the other); check and fix refuse this task")

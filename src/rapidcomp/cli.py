@@ -237,16 +237,21 @@ def inspect(program: str, as_json: bool) -> None:
     """Show what the parser found in PROGRAM: counts, target data, motions
     (of each of a task's modules, in the order the task lists them)."""
     from .rapid.inspect import alone, modules_of, render_text, report
+    problems: list = []
     try:
-        reps = [report(pf) for pf in modules_of(program)]
+        reps = [report(pf) for pf in modules_of(program, problems)]
     except RapidcompError as exc:
         _fail(exc)
+    said = [f"{p.format()}; check and fix refuse this task" for p in problems]
     if as_json:
         # (A module alone: its report, as before tasks were taken.)
-        doc = reps[0] if alone(program) else {"program": program, "modules": reps}
+        doc = reps[0] if alone(program) else {"program": program, "modules": reps,
+                                              "problems": said}
         click.echo(json.dumps(doc, indent=2))
     else:
         click.echo("\n".join(render_text(r) for r in reps), nl=False)
+        for line in said:
+            click.echo(f"note: {line}")
 
 
 @main.command(epilog=PROGRAM_HELP)

@@ -6,10 +6,9 @@ Shared by `check` and `fix`; errors are InputError/RapidcompError."""
 from __future__ import annotations
 
 import os
-from pathlib import PurePath
 
 from ..errors import InputError, RapidcompError
-from ..rapid.task import TaskSource, tasks_of
+from ..rapid.task import TaskSource, load_problem, tasks_of
 from .plan import Task
 
 
@@ -57,28 +56,13 @@ def load_state_solvers(profile: str, robot: str | None, force: bool, limits=()) 
 
 def load_task(source: TaskSource, with_modules=()) -> Task:
     """Parse the task's modules (named by their path inside the task) and
-    the --with modules; a module name twice in a task is refused, as the
-    controller refuses to load it."""
+    the --with modules; a task the controller would not load (a module
+    twice, a global name declared twice: load_problem) is refused."""
     from ..rapid.parse import parse_file, with_task_aliases
     files = [_parse(source, rel) for rel in source.modules]
-    seen: dict[str, str] = {}
-    for pf in files:
-        for m in pf.modules:
-            first = seen.setdefault(m.name.lower(), pf.source.display_path)
-            if first != pf.source.display_path:
-                # (A folder `fix` wrote inside the task: a .pgf's output is
-                # PROGRAM_comp beside it.)
-                output = next((part for path in (first, pf.source.display_path)
-                               for part in PurePath(path).parts[:-1]
-                               if part.lower().endswith("_comp")), None)
-                raise InputError(_shown(source, pf.source.display_path),
-                                 f"module {m.name} is also in {first}: a task holds each module "
-                                 "once (the controller refuses to load it twice); give the "
-                                 "program file (.pgf) or a folder without the copy"
-                                 + (f" ({output} is named as `rapidcomp fix` names its output: "
-                                    "move it out of the task's folder)" if output else ""),
-                                 pf.line(m.node.name_span))
-    _one_global_each(source, files)
+    problem = load_problem(source, files)
+    if problem is not None:
+        raise problem
     mine = {os.path.realpath(source.root / rel) for rel in source.modules}
     context = [parse_file(m) for m in with_modules if os.path.realpath(m) not in mine]
     # (An ALIAS of one module types the data of every other.)
@@ -95,33 +79,6 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
                 source.base_moved_by, origin, source.event_routines, source.entry)
 
 
-def _one_global_each(source: TaskSource, files) -> None:
-    """A global name declared in two modules of a task (data, routines;
-    PERS of one type excepted: one shared object) is refused, as the
-    controller refuses to load the task."""
-    seen: dict[str, tuple] = {}
-    for pf in files:
-        for m in pf.modules:
-            found = [(r.node.name, "routine", None, r.node.span, r.node.scope)
-                     for r in m.routines]
-            found += [(d.name, d.storage, d.type, d.node.name_span, d.scope)
-                      for d in m.declarations if d.routine is None]
-            for name, kind, type_, span, scope in found:
-                if (scope or "").upper() == "LOCAL":
-                    continue
-                first = seen.setdefault(name.lower(), (pf, kind, type_, span, m))
-                if first[4] is m:
-                    continue            # (in one module: the parse said it)
-                if kind == first[1] == "PERS" and type_ == first[2]:
-                    continue
-                other = f"{_shown(source, first[0].source.display_path)}:{first[0].line(first[3])}"
-                raise InputError(_shown(source, pf.source.display_path),
-                                 f"{name} is declared globally in two modules (also {other}): "
-                                 "the controller does not load the task (make one LOCAL, or "
-                                 "give the program file (.pgf) without the other)",
-                                 pf.line(span))
-
-
 def _parse(source: TaskSource, rel: str):
     """A module of a task, named by its path inside the task (reports
     carry no absolute paths); a bad module is reported by the path the
@@ -132,12 +89,8 @@ def _parse(source: TaskSource, rel: str):
     except InputError as exc:
         if not source.is_folder:
             raise
-        raise InputError(_shown(source, rel), exc.message, exc.line, exc.col,
+        raise InputError(source.shown(rel), exc.message, exc.line, exc.col,
                          exc.source_line) from None
-
-
-def _shown(source: TaskSource, rel: str) -> str:
-    return str(source.root / rel) if source.is_folder else rel
 
 
 def robot_base(source: TaskSource, given) -> tuple:

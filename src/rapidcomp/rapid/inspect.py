@@ -31,19 +31,28 @@ def alone(program: str) -> bool:
     return path.is_file() and path.suffix.lower() != ".pgf"
 
 
-def modules_of(program: str) -> Iterator[ParsedFile]:
+def modules_of(program: str, problems: list | None = None) -> Iterator[ParsedFile]:
     """The modules `inspect PROGRAM` reads, parsed one at a time: a module
     file as given; each module of a task folder, program file (.pgf) or
     controller backup (each of its tasks, motion or not), named by the path
-    the user can open."""
+    the user can open. problems, when given, receives why the controller
+    would not load a task (task.load_problem: what check and fix refuse),
+    as its InputError, once the task's modules are read."""
     from .parse import parse_file
-    from .task import tasks_of
+    from .task import load_problem, tasks_of
     if alone(program):
         yield parse_file(program)
         return
     for source in tasks_of(program, (), motion_only=False):
+        files = []
         for rel in source.modules:
-            yield parse_file(source.root / rel)
+            pf = parse_file(source.root / rel)
+            if problems is not None and len(source.modules) > 1:
+                files.append(pf)
+            yield pf
+        problem = load_problem(source, files, list(source.modules)) if files else None
+        if problem is not None:
+            problems.append(problem)
 
 
 def report(pf: ParsedFile) -> dict:

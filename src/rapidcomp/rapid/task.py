@@ -21,7 +21,7 @@ import math
 import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
-from pathlib import Path
+from pathlib import Path, PurePath
 
 from ..csvtable import number
 from ..errors import InputError, RapidcompError
@@ -66,6 +66,61 @@ class TaskSource:
     def is_folder(self) -> bool:
         """Written as a folder (with the input's layout), not as one file."""
         return self.kind != "module"
+
+    def shown(self, rel: str) -> str:
+        """How a message names the task's module at rel: the path the user
+        can open."""
+        return str(self.root / rel) if self.is_folder else rel
+
+
+def load_problem(source: TaskSource, files, rels: list[str] | None = None) -> InputError | None:
+    """Why the controller would not load the task these parsed modules
+    (files, ParsedFile) make, the first reason, or None: a module held
+    twice (a copy of it in the task's folder), or a global name declared in
+    two modules (data, routines; PERS of one type excepted: one shared
+    object). rels: each file's path inside the task (default: its display
+    path, as load_task names them). check and fix refuse such a task;
+    inspect says so."""
+    rels = rels if rels is not None else [pf.source.display_path for pf in files]
+    modules: dict[str, str] = {}
+    for pf, rel in zip(files, rels):
+        for m in pf.modules:
+            first = modules.setdefault(m.name.lower(), rel)
+            if first != rel:
+                # (A folder `fix` wrote inside the task: a .pgf's output is
+                # PROGRAM_comp beside it.)
+                output = next((part for path in (first, rel)
+                               for part in PurePath(path).parts[:-1]
+                               if part.lower().endswith("_comp")), None)
+                return InputError(source.shown(rel),
+                                  f"module {m.name} is also in {first}: a task holds each module "
+                                  "once (the controller refuses to load it twice); give the "
+                                  "program file (.pgf) or a folder without the copy"
+                                  + (f" ({output} is named as `rapidcomp fix` names its output: "
+                                     "move it out of the task's folder)" if output else ""),
+                                  pf.line(m.node.name_span))
+    seen: dict[str, tuple] = {}
+    for pf, rel in zip(files, rels):
+        for m in pf.modules:
+            found = [(r.node.name, "routine", None, r.node.span, r.node.scope)
+                     for r in m.routines]
+            found += [(d.name, d.storage, d.type, d.node.name_span, d.scope)
+                      for d in m.declarations if d.routine is None]
+            for name, kind, type_, span, scope in found:
+                if (scope or "").upper() == "LOCAL":
+                    continue
+                first = seen.setdefault(name.lower(), (pf, kind, type_, span, m, rel))
+                if first[4] is m:
+                    continue            # (in one module: the parse said it)
+                if kind == first[1] == "PERS" and type_ == first[2]:
+                    continue
+                other = f"{source.shown(first[5])}:{first[0].line(first[3])}"
+                return InputError(source.shown(rel),
+                                  f"{name} is declared globally in two modules (also {other}): "
+                                  "the controller does not load the task (make one LOCAL, or "
+                                  "give the program file (.pgf) without the other)",
+                                  pf.line(span))
+    return None
 
 
 def is_module(path: Path) -> bool:
