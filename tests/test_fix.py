@@ -676,3 +676,22 @@ def test_what_a_run_writes_over_is_said(tmp_path, monkeypatch):
     assert wrote(cell, "-o", "other/") == "wrote other/, other.md"
     assert sorted(p.name for p in (tmp_path / "other").iterdir()) == ["CellData.mod",
                                                                      "MainModule.mod"]
+
+
+def test_a_module_written_under_a_name_no_controller_loads_is_refused(tmp_path):
+    """-o out for a module (no suffix: a new user's typo for out.mod or
+    out/) is refused, exit 2, nothing written: a file named `out` is not
+    one a FlexPendant offers to load, and which was meant is not guessed.
+    -o out.MOD and -o out/ are written."""
+    prog = FIXTURES / "paper_front.mod"
+    for name in ("out", "out.txt"):
+        r = _run(["fix", str(prog), "--profile", WARM, "-o", str(tmp_path / name)])
+        assert r.exit_code == 2, r.output
+        assert (f"-o {tmp_path / name}: a module is written as a module file: give a name the "
+                "controller loads (.mod, .modx, .sys, .prg), or a folder") in r.output
+        assert list(tmp_path.iterdir()) == []
+    assert _run(["fix", str(prog), "--profile", WARM, "-o", str(tmp_path / "o.MOD")]).exit_code == 0
+    assert _run(["fix", str(prog), "--profile", WARM, "-o", str(tmp_path / "d") + "/"]
+                ).exit_code == 0
+    assert sorted(p.name for p in tmp_path.rglob("*")) == [
+        "d", "o.MOD", "o.md", "paper_front.md", "paper_front.mod"]

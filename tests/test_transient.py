@@ -287,16 +287,16 @@ def test_names_the_support_module_calls_are_the_controllers(tmp_path, extra, arg
     that is the task's data of another type, is refused (exit 2, nothing
     written); a LOCAL one in another module hides nothing."""
     (tmp_path / "extra.mod").write_text("MODULE Extra\n" + extra + "ENDMODULE\n")
+    out = str(tmp_path / "out") + "/"      # (a folder: out/cubes.mod)
     r = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", FIXTURES / "warm.csv", "--with",
-                   tmp_path / "extra.mod", "-o", tmp_path / "out/", "--transient", *args,
-                   cwd=tmp_path)
+                   tmp_path / "extra.mod", "-o", out, "--transient", *args, cwd=tmp_path)
     assert r.returncode == 2 and message in r.stderr, r.stderr
     assert not (tmp_path / "out").exists()
     if extra:
         (tmp_path / "extra.mod").write_text("MODULE Extra\n  LOCAL " + extra.lstrip()
                                             + "ENDMODULE\n")
         r = _rapidcomp("fix", FIXTURES / "cubes.mod", "--profile", FIXTURES / "warm.csv",
-                       "--with", tmp_path / "extra.mod", "-o", tmp_path / "out/", "--transient",
+                       "--with", tmp_path / "extra.mod", "-o", out, "--transient",
                        "--limit", "J5=-120:120", *args, cwd=tmp_path)
         assert r.returncode == 0, r.stderr
 

@@ -436,13 +436,12 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
     from pathlib import Path
 
     from .compensate.job import JobSpec, default_output
-    from .rapid.task import tasks_of
+    from .rapid.task import MODULE_SUFFIXES, is_module, tasks_of
     from .source import not_a_file
     several = len(programs) > 1
     if several and output is None:
         raise RapidcompError("several programs need -o DIR")
-    if several and not os.path.isdir(output) and output.lower().endswith(
-            (".mod", ".modx", ".sys", ".prg")):
+    if several and not os.path.isdir(output) and output.lower().endswith(MODULE_SUFFIXES):
         # (A folder named as a module file is not what was meant.)
         raise RapidcompError(f"-o {output}: several programs are written into a folder, each "
                              "under its own name; give a folder, not a module file name")
@@ -494,6 +493,13 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
             out = str(Path(output) / name)
         else:
             out = output or default_output(program)
+            if not is_module(Path(out)):
+                # (A module file the controller loads has its suffix: `out`
+                # is not a name a FlexPendant offers to load. Not guessed.)
+                raise RapidcompError(
+                    f"-o {output}: a module is written as a module file: give a name the "
+                    f"controller loads ({', '.join(MODULE_SUFFIXES)}), or a folder "
+                    f"(-o {output}/)")
         real_out = os.path.realpath(out)
         for f in folders:
             if real_out == f or real_out.startswith(f + os.sep):
