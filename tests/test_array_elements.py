@@ -296,11 +296,33 @@ def test_a_loop_element_that_fails_fails_alone(tmp_path):
     assert "3 of 4 target uses compensable, 1 not compensable" in r.output, r.output
 
 
+def test_a_loop_element_that_fails_refuses_an_array_written_as_a_copy(tmp_path):
+    """Where the array cannot be written in place (PERS data of a --with
+    module, which is never written), the loop's moves would read a copy,
+    and so would the refused point's: cut off from the PERS that ModPos or
+    another task changes, and renamed where its row says nothing. The
+    array is refused as one, each row saying which element and why (as
+    before elements failed alone), and nothing of it is renamed."""
+    data, rest = PATH.split("    PROC main()")
+    (tmp_path / "data.mod").write_text(data.replace("MODULE Glue", "MODULE GlueData")
+                                       .replace("CONST", "PERS") + "ENDMODULE\n")
+    (tmp_path / "main.mod").write_text("MODULE Glue\n    PROC main()" + rest)
+    r = CliRunner().invoke(main, ["fix", str(tmp_path / "main.mod"), "--profile",
+                                  str(FIXTURES / "warm.csv"), "--with",
+                                  str(tmp_path / "data.mod"), "--allow-partial",
+                                  "-o", str(tmp_path / "o.mod")])
+    assert "0 of 4 target uses compensated, 4 not compensated" in r.output, r.output
+    assert ("not compensated (3): pArr{3}, written with it as one array, is not compensated: at "
+            "the wrist singularity") in r.output, r.output
+    assert (tmp_path / "o.mod").read_text() == (tmp_path / "main.mod").read_text()
+
+
 def test_every_element_failing_fails_the_array_and_a_transient_output_too(tmp_path):
-    """Where every element fails, the array is refused as one (each row its
-    own reason); a transient output's correction array needs every
-    element's correction, so there one element refuses the array still,
-    each row saying which and why."""
+    """Where every element of the loop fails, nothing of the array is
+    written and each row says its own reason (not "pArr{1}, written with
+    it as one array": each is refused for itself); a transient output's
+    correction array needs every element's correction, so there one
+    element refuses the array still, each row saying which and why."""
     src = tmp_path / "glue.mod"
     src.write_text(PATH)
     r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
@@ -308,7 +330,47 @@ def test_every_element_failing_fails_the_array_and_a_transient_output_too(tmp_pa
                                   "--allow-partial", "-o", str(tmp_path / "t.mod")])
     assert "0 of 4 target uses compensated, 4 not compensated" in r.output, r.output
     assert "pArr{3}, written with it as one array, is not compensated: at the wrist" in r.output
+    # (Three points at J5 ~ 0, made by the nominal FK of joints with J5 =
+    # 0.004, 0.003, 0.005 deg, cfx 0; the second read again after the loop.)
+    three = """MODULE C11
+    CONST robtarget pArr{3}:=[[[358.447,427.185,435.045],[0.195115,0.229568,0.856801,0.418473],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],[[322.939,461.208,392.227],[0.227045,0.039526,0.905458,0.356418],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],[[432.261,302.677,444.489],[0.281064,0.266721,0.845971,0.366328],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]];
+    PROC main()
+        FOR i FROM 1 TO 3 DO
+            MoveL pArr{i}, v200, fine, tool0;
+        ENDFOR
+        MoveL pArr{2}, v200, fine, tool0;
+    ENDPROC
+ENDMODULE
+"""
+    src.write_text(three)
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                  "--allow-partial", "-o", str(tmp_path / "o.mod")])
+    assert "0 of 4 target uses compensated, 4 not compensated" in r.output, r.output
+    assert ("not compensated (4): at the wrist singularity (J5 0.00 deg) the compensation needs "
+            "a J4/J6 split a robtarget cannot carry (the controller's IK chooses the split "
+            "itself): a MoveAbsJ can (--emit absj for a MoveL) [lines 5, 7]") in r.output, r.output
+    assert "written with it" not in r.output
+    assert (tmp_path / "o.mod").read_text() == three
     src.write_text(PATH.replace("FOR i FROM 1 TO 4", "FOR i FROM 3 TO 3"))
     r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
                                   "--allow-partial", "-o", str(tmp_path / "o.mod")])
     assert "0 of 1 target uses compensated, 1 not compensated" in r.output, r.output
+
+
+def test_the_refused_elements_reason_names_its_own_moves(tmp_path):
+    """The reason of a refused element (at the wrist singularity: what a
+    MoveAbsJ could do) names its own moves, not the compensated elements'
+    (a review found lines 4 and 8, pArr{1} and pArr{2}, named for pArr{3})."""
+    text = PATH.replace("        FOR i FROM 1 TO 4 DO",
+                        "        MoveL pArr{1}, v200, fine, tool0;\n        FOR i FROM 1 TO 4 DO")
+    text = text.replace("        ENDFOR\n",
+                        "        ENDFOR\n        MoveL ToPoint:=pArr{2}, v200, fine, tool0;\n")
+    src = tmp_path / "h.mod"
+    src.write_text(text)
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                  "--allow-partial", "-o", str(tmp_path / "o.mod")])
+    assert "5 of 6 target uses compensated, 1 not compensated" in r.output, r.output
+    assert r.output.count("not compensated: line 10 MoveL pArr{i} [i=3]: at the wrist "
+                          "singularity") == 1, r.output
+    assert "a MoveAbsJ can (--emit absj for a MoveL)\n" in r.output
+    assert "ToPoint" not in r.output and "lines" not in r.output

@@ -545,6 +545,9 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str,
                           if not ok[i] or (left[i] and s.mode == "rob")], plan.file_index)
     for g in [g for g in gs if type(g) is Group and g.outside]:
         _let_outside_go(gs, g, solved, ok, left)
+    # (FOR-walked robtarget arrays failed for some elements' sake: decided
+    # once every group's failure is known, _leave_out.)
+    arrays = []
     for g in list(gs):
         if type(g) is Singles:
             continue
@@ -552,12 +555,19 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str,
         if g.failure is None and g.mode == "rob":
             _wrist(g, solved, left, plan, mode)
         if g.failure is not None and each and g.array and g.mode == "rob":
-            _leave_out(gs, g, solved, ok, left, plan, mode)
-        if g.failure is not None:
+            arrays.append(g)
+        elif g.failure is not None:
             free_outside(gs, g, solved)
-        uses = g.uses
-        g.local = (uses[0].module is g.home[1] if len(uses) == 1
-                   else all(u.module is g.home[1] for u in uses))
+        _local(g)
+    for g in arrays:
+        if not _leave_out(gs, g, solved, ok, left, plan, mode):
+            free_outside(gs, g, solved)
+
+
+def _local(g: Group) -> None:
+    uses = g.uses
+    g.local = (uses[0].module is g.home[1] if len(uses) == 1
+               else all(u.module is g.home[1] for u in uses))
 
 
 def _let_outside_go(gs: list, g: Group, solved: Solved, ok: list, left: list) -> None:
@@ -597,17 +607,16 @@ def fail(gs: list, g, u: TargetUse, solved: Solved, why: tuple) -> bool:
     return True
 
 
-def split_outside(gs: list, g: Group, k, solved: Solved, every: bool = False) -> Group:
+def split_outside(gs: list, g: Group, k, solved: Solved) -> Group:
     """The uses of element k of FOR-walked array g that only literal
     indices read (Group.outside) taken out of g into gs as the Group of
     their own grouping() made before such elements joined the array's:
     where one of them fails (its solve, the wrist split, its verification)
     or the loop's elements do, each fails alone, and the others are
-    written. every: all uses of element k, the loop's too (_leave_out).
-    That Group."""
-    us = [u for u in g.uses if u.source.element == k and (every or not u.source.by_loop)]
+    written. That Group."""
+    us = [u for u in g.uses if not u.source.by_loop and u.source.element == k]
     own = Group(g.mode, us[0].source, us[0].tool, us[0].wobj, g.home, uses=us,
-                first=g.first if every else g.outside[k], rows_seen={k: solved.row[us[0].key]})
+                first=g.outside[k], rows_seen={k: solved.row[us[0].key]})
     keys = {u.key for u in us}
     own.kept = g.kept & keys
     if g.why_kept:
@@ -651,34 +660,96 @@ def _same(solved: Solved, a: int, b: int) -> bool:
 
 
 def _leave_out(gs: list, g: Group, solved: Solved, ok: list, left: list, plan: Plan,
-               mode: str) -> None:
-    """FOR-walked robtarget array g failed for one element's sake: each
-    element that fails (a use of it not solved, two uses of it on
-    different configurations, the wrist split) goes into gs as a Group of
-    its own that says why, and g, no longer failed, writes the others; the
-    array keeps those as written, which the moves that read them reach as
-    before (a glue path of 50 points, one of them at the wrist
-    singularity, is 49 points compensated, not none). Where every element
-    fails, g fails as it did."""
+               mode: str) -> bool:
+    """FOR-walked robtarget array g failed for some elements' sake. Where
+    g, without them, writes the array in place (_in_place), each element
+    that fails (a use of it not solved, two uses of it on different
+    configurations, the wrist split) goes into gs as a Group of its own that
+    says why, the array keeps it as written, which its moves reach as
+    before, and g, no longer failed, writes the others (a glue path of 50
+    points, one at the wrist singularity: 49 compensated, not none). Where
+    the loop's elements all fail, nothing of the array is written and each
+    says its own reason. Otherwise (g would write a copy, which the refused
+    elements' moves would then read: a PERS element cut off from its data,
+    and a move the report would not say was renamed) g fails as it did.
+    Whether g was split (else the caller fails it as before)."""
     rows: dict = {}
+    loop = set()
     for u in g.uses:
-        rows.setdefault(u.source.element, []).append(solved.row[u.key])
-    bad = {}
-    for k, rs in rows.items():
-        first = rs[0]
-        why = next((_configurations(g, k) for i in rs[1:]
-                    if ok[first] and ok[i] and not _same(solved, first, i)), None)
+        k = u.source.element
+        rows.setdefault(k, []).append(solved.row[u.key])
+        if u.source.by_loop:
+            loop.add(k)
+    bad = [k for k, rs in rows.items()
+           if any(not ok[i] for i in rs) or (left[rs[0]])
+           or any(ok[rs[0]] and ok[i] and not _same(solved, rs[0], i) for i in rs[1:])]
+    every = loop <= set(bad)
+    if not every and not _alone_in_place(gs, g, set(bad), plan):
+        return False
+    g.failure = None
+    for k, own in _split_elements(gs, g, bad, solved).items():
+        rs = rows[k]
+        why = next((_configurations(own, k) for i in rs[1:]
+                    if ok[rs[0]] and ok[i] and not _same(solved, rs[0], i)), None)
         if why is None:
             why = next((solved.reason(i) for i in rs if not ok[i]), None)
-        if why is None and left[first]:
-            why = _split_needed(g, k, first, solved, plan, mode)
-        if why is not None:
-            bad[k] = why
-    if len(bad) == len(rows):
-        return
-    g.failure = None
-    for k, why in bad.items():
-        split_outside(gs, g, k, solved, every=True).failure = (why, k)
+        if why is None:
+            why = _split_needed(own, k, rs[0], solved, plan, mode)
+        own.failure = (why, k)
+    if every:
+        # (What is left: elements only literal indices read, each written
+        # on its own, as where the array fails.)
+        free_outside(gs, g, solved)
+        gs.remove(g)
+    return True
+
+
+def _alone_in_place(gs: list, g: Group, bad: set, plan: Plan) -> bool:
+    """Whether g, its elements `bad` taken out, would write its array in
+    place (place's choice: the most uses of its declaration's writable
+    groups, and _in_place)."""
+    decl_groups = [x for x in gs if type(x) is Group and x.decl is g.decl]
+    n = sum(u.source.element not in bad for u in g.uses)
+    writable = sorted((x for x in decl_groups
+                       if (x is g or x.failure is None) and x.mode != "absj"),
+                      key=lambda x: (-(n if x is g else len(x.uses)), x.src.call is not None))
+    if writable[0] is not g:
+        return False
+    failure, g.failure = g.failure, None
+    try:
+        return _in_place(plan, g, decl_groups, _references(plan, {g.decl.name.lower()}),
+                         _declarations(plan), _consumed(gs), set(g.elements) - bad)
+    finally:
+        g.failure = failure
+
+
+def _split_elements(gs: list, g: Group, ks: list, solved: Solved) -> dict:
+    """The uses of each element of ks taken out of g into gs, the Group of
+    its own each (in one pass over g's uses). {element: that Group}."""
+    ks_set = set(ks)
+    taken: dict = {k: [] for k in ks}
+    rest = []
+    for u in g.uses:
+        (taken[u.source.element] if u.source.element in ks_set else rest).append(u)
+    g.uses = rest
+    g.elements = [e for e in g.elements if e not in ks_set]
+    g.rows = {e: r for e, r in g.rows.items() if e not in ks_set}
+    g.rows_seen = {e: r for e, r in g.rows_seen.items() if e not in ks_set}
+    g.outside = {e: at for e, at in g.outside.items() if e not in ks_set} if g.outside else g.outside
+    out = {}
+    for k in ks:
+        us = taken[k]
+        keys = {u.key for u in us}
+        row = solved.row[us[0].key]
+        own = Group(g.mode, us[0].source, us[0].tool, us[0].wobj, g.home, uses=us,
+                    first=g.first, rows_seen={k: row}, elements=[k], rows={k: row})
+        own.kept = g.kept & keys
+        if g.why_kept:
+            own.why_kept = {key: why for key, why in g.why_kept.items() if key in keys}
+        _local(own)
+        gs.append(own)
+        out[k] = own
+    return out
 
 
 def _configurations(g: Group, k) -> str:
@@ -747,18 +818,9 @@ def place(plan: Plan, gs: list[Group]) -> None:
     which the report says."""
     # Every reference to the names of the declarations groups may write
     # (not those of speed, zone, tool: a CAM program has 1e5 of each).
-    needed = {g.decl.name.lower() for g in gs if g.decl is not None}
-    refs: dict[str, set] = {}
-    for fi, pf in enumerate(plan.files):
-        for m in pf.modules:
-            for name, rs in plan.resolver.usages[id(m)].refs.items():
-                if name in needed:
-                    refs.setdefault(name, set()).update(
-                        (fi, start) for start in reference_starts(rs))
+    refs = _references(plan, {g.decl.name.lower() for g in gs if g.decl is not None})
     declared = _declarations(plan)
-    consumed = {(u.key[0], u.source.ref.span.start)
-                for g in gs if g.mode == "absj" and g.failure is None and g.decl is not None
-                for u in g.uses}
+    consumed = _consumed(gs)
     by_decl: dict[int, list[Group]] = {}
     for g in gs:
         if g.decl is not None:
@@ -776,7 +838,6 @@ def place(plan: Plan, gs: list[Group]) -> None:
             g.placement = "inline"
         elif g.mode == "absj":
             g.placement = "new"
-    file_index = plan.file_index
     for decl_groups in by_decl.values():
         writable = [g for g in decl_groups if g.failure is None and g.mode != "absj"]
         if not writable:
@@ -786,23 +847,52 @@ def place(plan: Plan, gs: list[Group]) -> None:
         # for, and the copy is named for the call.)
         writable.sort(key=lambda g: (-len(g.uses), g.src.call is not None))
         top = writable[0]
-        d = top.decl
-        name = d.name.lower()
-        mine = {(u.key[0], u.source.ref.span.start) for g in decl_groups if g.mode != "absj"
-                for u in g.uses}
-        # A failed group keeps reading the value as written: only elements
-        # of an array that the one written in place leaves as they are
-        # (pGlue{1}, refused, before the loop's pGlue{2..8}).
-        kept = set(top.elements) if top.array else None
-        exclusive = (file_index[id(top.src.home)] < plan.n_written
-                     and len(declared.get(name, ())) == 1
-                     and name not in plan.resolver.shared
-                     and all(g.failure is None or (kept is not None and g.elements
-                                                   and kept.isdisjoint(g.elements))
-                             for g in decl_groups)
-                     and refs.get(name, set()) - consumed == mine)
+        exclusive = _in_place(plan, top, decl_groups, refs, declared, consumed,
+                              set(top.elements) if top.array else None)
         for n, g in enumerate(writable):
             g.placement = "in place" if exclusive and n == 0 else "new"
+
+
+def _references(plan: Plan, needed: set) -> dict[str, set]:
+    """(file index, start) of every reference to each lower-case name of
+    `needed` in the task."""
+    refs: dict[str, set] = {}
+    for fi, pf in enumerate(plan.files):
+        for m in pf.modules:
+            for name, rs in plan.resolver.usages[id(m)].refs.items():
+                if name in needed:
+                    refs.setdefault(name, set()).update(
+                        (fi, start) for start in reference_starts(rs))
+    return refs
+
+
+def _consumed(gs: list) -> set:
+    """The references the moves turned into MoveAbsJ read no more."""
+    return {(u.key[0], u.source.ref.span.start)
+            for g in gs if g.mode == "absj" and g.failure is None and g.decl is not None
+            for u in g.uses}
+
+
+def _in_place(plan: Plan, top: Group, decl_groups: list, refs: dict, declared: dict,
+              consumed: set, kept: set | None) -> bool:
+    """Whether top, of its declaration's writable groups the one of most
+    uses, writes the declaration in place: declared once, in a written
+    module, no other task's; every reference to it read by its groups;
+    none failed, but for groups of elements of an array that top leaves
+    as they are (kept: the elements top writes)."""
+    name = top.decl.name.lower()
+    mine = {(u.key[0], u.source.ref.span.start) for g in decl_groups if g.mode != "absj"
+            for u in g.uses}
+    # A failed group keeps reading the value as written: only elements
+    # of an array that the one written in place leaves as they are
+    # (pGlue{1}, refused, before the loop's pGlue{2..8}).
+    return (plan.file_index[id(top.src.home)] < plan.n_written
+            and len(declared.get(name, ())) == 1
+            and name not in plan.resolver.shared
+            and all(g.failure is None or (kept is not None and g.elements
+                                          and kept.isdisjoint(g.elements))
+                    for g in decl_groups)
+            and refs.get(name, set()) - consumed == mine)
 
 
 def fill_slots(plan: Plan, solver: Solver, gs: list[Group]) -> None:
