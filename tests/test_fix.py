@@ -695,3 +695,30 @@ def test_a_module_written_under_a_name_no_controller_loads_is_refused(tmp_path):
                 ).exit_code == 0
     assert sorted(p.name for p in tmp_path.rglob("*")) == [
         "d", "o.MOD", "o.md", "paper_front.md", "paper_front.mod"]
+
+
+def test_what_keeps_a_move_a_robtarget_move_is_said_once_alike(tmp_path):
+    """A MoveL --emit absj would turn into MoveAbsJ, written with \\Corr and
+    ToPoint:=: its row says both (each argument MoveAbsJ has not, then the
+    name); a MoveJ with ToPoint:=, which check's auto would turn, is said
+    alike by check and fix (one wording, place.kept_robtarget; the rows
+    made their own for these, which check never said)."""
+    target = ("[[400,300,250],[0.707107,0,0.707107,0],[0,0,-1,1],"
+              "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")
+    prog, out = tmp_path / "k.mod", tmp_path / "k_out.mod"
+    prog.write_text(f"MODULE K\n  CONST robtarget pA:={target};\n  PROC main()\n"
+                    "    MoveAbsJ [[0,0,0,0,30,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v100,"
+                    "fine,tool0;\n    MoveL ToPoint:=pA, v100, fine, tool0 \\Corr;\n"
+                    "    MoveJ ToPoint:=pA, v100, fine, tool0;\n  ENDPROC\nENDMODULE\n")
+    name = ("its target is passed by name (ToPoint:=), which rapidcomp does not rewrite as "
+            "MoveAbsJ's ToJointPos:=")
+    r = _run(["fix", str(prog), "--profile", WARM, "--emit", "absj", "-o", str(out),
+              "--json", str(tmp_path / "k.json")])
+    assert r.exit_code == 0, r.output
+    rows = {t["line"]: t for t in json.loads((tmp_path / "k.json").read_text())["targets"]}
+    assert rows[5]["warnings"] == ["kept as MoveL: \\Corr has no MoveAbsJ equivalent; " + name]
+    assert rows[6]["warnings"] == ["kept as MoveJ: " + name]
+    assert "MoveL ToPoint:=pA, v100, fine, tool0 \\Corr;" in out.read_text()
+    r = _run(["check", str(prog), "--profile", WARM, "--json"])
+    rows = {t["line"]: t for t in json.loads(r.output)["targets"]}
+    assert rows[6]["warnings"] == ["kept as MoveJ: " + name] and rows[5]["warnings"] == []

@@ -296,7 +296,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     release()
     at: list | None = [] if cells is not None or jcells is not None else None
     rows = use_rows(plan, solved, group_of=group_of, actions=actions, verified=verified,
-                    mode=mode, written_conf=written_conf, at=at)
+                    written_conf=written_conf, at=at)
     notes = plan_notes + _notes(rows, gs, transient is not None)
     if transient is not None:
         notes += _transient_notes(transient[0], state_errors if any(

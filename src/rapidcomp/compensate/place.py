@@ -273,28 +273,35 @@ def mode_of(u: TargetUse, mode: str, plan: Plan, solved: Solved, row: int,
         kept = kept_robtarget(u, plan, solved, row)
         if kept is None:
             return "absj"
-        if (why is not None and kept is not solved.picks.caution[row]
-                and not plan.may_be_displaced(u)):
+        if why is not None and kept is not solved.picks.caution[row] and kept != DISPLACED:
             # (A caution, or program displacement, is said with its row
             # and its note already.)
             why[u.key] = kept
     return "rob"
 
 
+DISPLACED = ("program displacement may be active here (a MoveAbsJ would ignore it): kept a "
+             "robtarget move")
+
+
 def kept_robtarget(u: TargetUse, plan: Plan, solved: Solved, row: int) -> str | None:
     """Why a MoveJ/MoveL stays a robtarget move whatever --emit asks (None:
     nothing but the mode keeps it)."""
     m = u.motion
-    # (A CAM move's only optional argument is \WObj, which m.optional
-    # leaves out: nothing to look at.)
-    if m.optional and not all(a.name.lower() in ABSJ_OPTIONALS for a in m.optional):
-        odd = next(a.name for a in m.optional if a.name.lower() not in ABSJ_OPTIONALS)
-        return f"MoveAbsJ has no \\{odd}: kept a robtarget move"
-    if names_to_point(m):
-        return "it names ToPoint (MoveAbsJ's is ToJointPos): kept a robtarget move"
+    # What the statement is written with (each of it; asked of its roles
+    # first: a CAM move's only optional argument is \WObj, which
+    # m.optional leaves out).
+    if m.roles.optional or m.roles.to_point:
+        odd = ", ".join("\\" + a.name for a in m.optional
+                        if a.name.lower() not in ABSJ_OPTIONALS)
+        why = [f"{odd} has no MoveAbsJ equivalent"] if odd else []
+        if names_to_point(m):
+            why.append("its target is passed by name (ToPoint:=), which rapidcomp does not "
+                       "rewrite as MoveAbsJ's ToJointPos:=")
+        if why:
+            return "; ".join(why) + ": kept a robtarget move"
     if plan.may_be_displaced(u):
-        return ("program displacement may be active here (a MoveAbsJ would ignore it): kept a "
-                "robtarget move")
+        return DISPLACED
     caution = solved.picks.caution[row]
     if caution is not None:
         return caution

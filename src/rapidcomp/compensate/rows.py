@@ -11,7 +11,7 @@ import numpy as np
 from ..construct import maker
 from ..kinematics.frames import DEG
 from ..kinematics.ik import WARN_TEXT, Warn, warning_texts_of
-from .place import ABSJ_FROM, ABSJ_OPTIONALS, Group, element_label, names_to_point
+from .place import Group, element_label
 from .plan import Plan
 from .solve import Solved
 from .targets import EXTAX_UNUSED, TargetUse
@@ -294,12 +294,12 @@ def displacement_warning(um_per_mm: float, track: bool = False) -> str:
 
 
 def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
-             actions: dict | None = None, verified: dict | None = None, mode: str | None = None,
+             actions: dict | None = None, verified: dict | None = None,
              written_conf: dict | None = None,
              statuses=(COMPENSATED, NOT_COMPENSATED), at: list | None = None) -> Rows:
     """Rows in text order. Without group_of/verified (check): per use, the
     solve's own residual and the confdata of the compensated joints; with
-    them (fix, in `mode`): the written values' residual and confdata
+    them (fix): the written values' residual and confdata
     (written_conf: use key -> the confdata written, absent where no robtarget
     is written). `at`, when given, receives each row's row of `solved`
     (None for a use not solved)."""
@@ -320,7 +320,7 @@ def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
             continue
         if at is not None:
             at.append(solved.row[u.key])
-        row, code = _row(solved, cols, u, base, group_of, actions, verified, mode,
+        row, code = _row(solved, cols, u, base, group_of, actions, verified,
                          written_conf, ok_label, fail_label, tracked)
         out.append(row)
         codes.append(code)
@@ -328,7 +328,7 @@ def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
 
 
 def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, verified,
-         mode, written_conf, ok_label, fail_label, tracked) -> tuple[tuple, int]:
+         written_conf, ok_label, fail_label, tracked) -> tuple[tuple, int]:
     """(the row's fields but its joints, where its joints are: Rows)."""
     i = solved.row[u.key]
     # (The pick's columns read where they are: no Pick made for each row.)
@@ -358,28 +358,14 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
                  None, d_warnings, why), 2 * i if has_q else -1)
     warnings = d_warnings
     if g is not None:
-        said = False                       # (why it stays a robtarget move)
         if g.mode == "absj" and u.motion.spec.name == "MoveL":
             warnings = warnings + _LINEAR
-        elif g.mode == "rob" and mode is not None and (u.motion.roles.optional or
-                                                         u.motion.roles.to_point) \
-                and u.motion.spec.name.lower() in ABSJ_FROM[mode]:
-            # (Neither an optional argument nor ToPoint:=, a CAM program's
-            # 1e5 moves: nothing to say, asked of their roles alone.)
-            extra = ", ".join(["\\" + a.name for a in u.motion.optional
-                               if a.name.lower() not in ABSJ_OPTIONALS])
-            why = [f"{extra} has no MoveAbsJ equivalent"] if extra else []
-            if names_to_point(u.motion):
-                why.append("its target is passed by name (ToPoint:=), which rapidcomp does "
-                           "not rewrite as MoveAbsJ's ToJointPos:=")
-            if why:
-                warnings = warnings + (f"kept as {u.motion.instruction}: " + "; ".join(why),)
-                said = True
         kept = g.why_kept.get(u.key) if g.why_kept else None
-        if kept is not None and not said:
-            # What else keeps a move --emit would turn into MoveAbsJ (PERS
-            # data, external axes of named data): said, not a MoveL left as
-            # it was with no word why.
+        if kept is not None:
+            # What keeps a move --emit would turn into MoveAbsJ (an argument
+            # MoveAbsJ has not, ToPoint:=, PERS data, external axes of named
+            # data; place.kept_robtarget): said, not a MoveL left as it was
+            # with no word why.
             warnings = warnings + (f"kept as {u.motion.instruction}: "
                                    + kept.removesuffix(": kept a robtarget move"),)
         if g.kept and u.key in g.kept:
