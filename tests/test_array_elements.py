@@ -317,19 +317,37 @@ def test_a_loop_element_that_fails_refuses_an_array_written_as_a_copy(tmp_path):
     assert (tmp_path / "o.mod").read_text() == (tmp_path / "main.mod").read_text()
 
 
-def test_every_element_failing_fails_the_array_and_a_transient_output_too(tmp_path):
-    """Where every element of the loop fails, nothing of the array is
-    written and each row says its own reason (not "pArr{1}, written with
-    it as one array": each is refused for itself); a transient output's
-    correction array needs every element's correction, so there one
-    element refuses the array still, each row saying which and why."""
+def test_a_transient_output_gives_the_refused_element_no_correction(tmp_path):
+    """--transient: the loop's moves go to rcTcR(pArr{i}, pArr_dq{i}); the
+    refused point's correction is zero, so at every thermal state its move
+    goes to pArr{3} as written; the others' are theirs (verified at every
+    state as any output). With --emit absj the moves are MoveAbsJ, which
+    carry the split: all four compensated."""
     src = tmp_path / "glue.mod"
     src.write_text(PATH)
     r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
                                   "--transient", "--tau-heat", "30",
                                   "--allow-partial", "-o", str(tmp_path / "t.mod")])
-    assert "0 of 4 target uses compensated, 4 not compensated" in r.output, r.output
-    assert "pArr{3}, written with it as one array, is not compensated: at the wrist" in r.output
+    assert "3 of 4 target uses compensated, 1 not compensated" in r.output, r.output
+    assert "not compensated: line 9 MoveL pArr{i} [i=3]: at the wrist singularity" in r.output
+    out = (tmp_path / "t.mod").read_text()
+    assert "MoveL rcTcR(pArr{i}, pArr_dq{i}), v200, fine, tool0;" in out
+    rows = out.split("pArr_dq{4}:=[")[1].split("];")[0].split("\n")
+    assert [row.strip().rstrip(",") == "[[0,0,0],[0,0,0,0]]" for row in rows[1:]] == [
+        False, False, True, False], rows
+    assert out.split("    LOCAL CONST pose")[0] == PATH.split("    PROC main()")[0]
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                  "--transient", "--tau-heat", "30", "--emit", "absj",
+                                  "--allow-partial", "-o", str(tmp_path / "a.mod")])
+    assert "4 of 4 target uses compensated" in r.output, r.output
+    assert "MoveAbsJ rcTcJ(jt_pArr{i}, jt_pArr_dq{i})" in (tmp_path / "a.mod").read_text()
+
+
+def test_every_element_failing_refuses_each_for_itself(tmp_path):
+    """Where every element of the loop fails, nothing of the array is
+    written and each row says its own reason (not "pArr{1}, written with
+    it as one array": each is refused for itself)."""
+    src = tmp_path / "glue.mod"
     # (Three points at J5 ~ 0, made by the nominal FK of joints with J5 =
     # 0.004, 0.003, 0.005 deg, cfx 0; the second read again after the loop.)
     three = """MODULE C11

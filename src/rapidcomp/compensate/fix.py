@@ -132,7 +132,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     plan_notes = plan.notes()
     solved = solving.finish()
     solving = None
-    P.settle(gs, solved, plan, mode, each=transient is None)
+    P.settle(gs, solved, plan, mode)
     if not any(g.mode == "rob" for g in gs):
         # No robtarget is written (a CAM program entered from main: 1e5
         # MoveAbsJ): the nominal FK of the compensated joints, which a

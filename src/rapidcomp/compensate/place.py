@@ -534,14 +534,14 @@ def _read_once(plan: Plan) -> frozenset:
                      and name not in shared)
 
 
-def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str,
-           each: bool = True) -> None:
+def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
     """Each group's elements, rows and failure, and whether a new
     declaration of it is LOCAL (groups() past grouping()). An element of
     Singles that fails is taken out of it into gs as the Group of its own
-    it is (gs changes: a Singles left empty goes). each: an element of a
-    FOR-walked robtarget array that fails fails alone (_leave_out; not in
-    a transient output, whose correction array needs every element's)."""
+    it is (gs changes: a Singles left empty goes); so is one of a
+    FOR-walked robtarget array where the array can do without it
+    (_leave_out: kept as written; in a transient output, its correction
+    zero)."""
     # Whether each row is solved, and needs a J4/J6 split at the wrist
     # singularity (_elements, _wrist: as Python values at once).
     ok = solved.oks()
@@ -561,7 +561,7 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str,
         _elements(g, solved, ok, left)
         if g.failure is None and g.mode == "rob":
             _wrist(g, solved, left, plan, mode)
-        if g.failure is not None and each and g.array and g.mode == "rob":
+        if g.failure is not None and g.array and g.mode == "rob":
             arrays.append(g)
         elif g.failure is not None:
             free_outside(gs, g, solved)
