@@ -257,14 +257,6 @@ def test_a_loop_element_that_fails_fails_alone(tmp_path):
     Oracle: the controller model (tests/controller.py) runs input and
     output; the warm robot lands on each compensated point's pose, and the
     refused point's move commands the joints the input commands."""
-    import numpy as np
-    import pinocchio as pin
-
-    from controller import Controller, fk
-    from rapidcomp.kinematics.profile import deform, read_profile
-    from rapidcomp.kinematics.robot import irb140
-    from rapidcomp.rapid.parse import parse_file
-
     src, out = tmp_path / "glue.mod", tmp_path / "glue_out.mod"
     src.write_text(PATH)
     for mode in ("auto", "robtarget"):
@@ -279,21 +271,57 @@ def test_a_loop_element_that_fails_fails_alone(tmp_path):
         assert lines[4] == before[4] and "_c" not in out.read_text()
         assert [a == b for a, b in zip(lines, before)] == [True] * 2 + [False] * 2 + [True] \
             + [False] + [True] * 6
-    nominal = irb140()
-    warm = deform(nominal, read_profile(FIXTURES / "warm.csv"))
-    a = Controller([parse_file(src, "glue.mod")], nominal).run("main")
-    b = Controller([parse_file(out, "glue_out.mod")], nominal).run("main")
-    assert len(a) == len(b) == 4
-    for n, (x, y) in enumerate(zip(a, b)):
-        if n == 2:
-            assert np.array_equal(x.q_deg, y.q_deg)
-            continue
-        got = fk(warm, y.q_deg)
-        assert np.linalg.norm(got.translation - x.pose.translation) * 1000 < 1.0
-        assert np.degrees(np.linalg.norm(pin.log3(x.pose.rotation.T @ got.rotation))) < 1e-4
+    _lands(src, out, 4, {2})
     # check says the same of each point.
     r = CliRunner().invoke(main, ["check", str(src), "--profile", str(FIXTURES / "warm.csv")])
     assert "3 of 4 target uses compensable, 1 not compensable" in r.output, r.output
+
+
+def _lands(src, out, n: int, refused: set) -> None:
+    """The controller model (tests/controller.py) runs input and output:
+    each of the n moves but the refused ones (their order) lands the warm
+    robot on its pose; each refused one commands the input's joints."""
+    import numpy as np
+    import pinocchio as pin
+
+    from controller import Controller, fk
+    from rapidcomp.kinematics.profile import deform, read_profile
+    from rapidcomp.kinematics.robot import irb140
+    from rapidcomp.rapid.parse import parse_file
+    nominal = irb140()
+    warm = deform(nominal, read_profile(FIXTURES / "warm.csv"))
+    a = Controller([parse_file(src, src.name)], nominal).run("main")
+    b = Controller([parse_file(out, out.name)], nominal).run("main")
+    assert len(a) == len(b) == n
+    for k, (x, y) in enumerate(zip(a, b)):
+        if k in refused:
+            assert np.array_equal(x.q_deg, y.q_deg)
+            continue
+        got = fk(warm, y.q_deg)
+        assert np.linalg.norm(got.translation - x.pose.translation) * 1000 < 1.0, k
+        assert np.degrees(np.linalg.norm(pin.log3(x.pose.rotation.T @ got.rotation))) < 1e-4
+
+
+def test_an_array_read_by_two_loops_keeps_its_refused_element_where_it_is(tmp_path):
+    """The array read by a second loop through Offs (a copy of its own,
+    pArr_offs_c): the plain loop writes the array in place, its refused
+    point left as written there, and the Offs loop's copy holds every
+    point compensated for it (the point 50 mm above the singular one is
+    not singular). A new user's case: it was 4 of 8, the plain loop
+    refused as one because the Offs loop had more uses."""
+    text = PATH.replace("            MoveL pArr{i}, v200, fine, tool0;\n",
+                        "            MoveL pArr{i}, v200, fine, tool0;\n"
+                        "            MoveL Offs(pArr{i},0,0,50), v200, z5, tool0;\n")
+    src, out = tmp_path / "two.mod", tmp_path / "two_out.mod"
+    src.write_text(text)
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                  "--allow-partial", "-o", str(out)])
+    assert "7 of 8 target uses compensated, 1 not compensated" in r.output, r.output
+    assert "not compensated: line 9 MoveL pArr{i} [i=3]: at the wrist singularity" in r.output
+    written = out.read_text()
+    assert written.splitlines()[4] == text.splitlines()[4]
+    assert "MoveL pArr{i}, v200" in written and "MoveL Offs(pArr_offs_c{i},0,0,50)" in written
+    _lands(src, out, 8, {4})
 
 
 def test_a_loop_element_that_fails_refuses_an_array_written_as_a_copy(tmp_path):

@@ -84,6 +84,9 @@ class Group:
     # order, which the editor keeps (new names and declarations are made in
     # it).
     first: int = 0
+    # Elements of this FOR-walked array refused alone (_leave_out): it must
+    # write the array in place, which keeps them as written for their moves.
+    left_out: bool = False
     # src.decl (asked of every group again and again: a field, not a
     # property).
     decl: Declaration | None = field(init=False)
@@ -694,6 +697,7 @@ def _leave_out(gs: list, g: Group, solved: Solved, ok: list, left: list, plan: P
     if not every and not _alone_in_place(gs, g, set(bad), plan):
         return False
     g.failure = None
+    g.left_out = not every
     for k, own in _split_elements(gs, g, bad, solved).items():
         rs = rows[k]
         why = next((_configurations(own, k) for i in rs[1:]
@@ -712,15 +716,12 @@ def _leave_out(gs: list, g: Group, solved: Solved, ok: list, left: list, plan: P
 
 
 def _alone_in_place(gs: list, g: Group, bad: set, plan: Plan) -> bool:
-    """Whether g, its elements `bad` taken out, would write its array in
-    place (place's choice: the most uses of its declaration's writable
-    groups, and _in_place)."""
+    """Whether g, its elements `bad` taken out, can write its array in
+    place (_in_place), first of its declaration's groups (place puts a
+    group that left elements out first): not where another group of it
+    has left elements out already."""
     decl_groups = [x for x in gs if type(x) is Group and x.decl is g.decl]
-    n = sum(u.source.element not in bad for u in g.uses)
-    writable = sorted((x for x in decl_groups
-                       if (x is g or x.failure is None) and x.mode != "absj"),
-                      key=lambda x: (-(n if x is g else len(x.uses)), x.src.call is not None))
-    if writable[0] is not g:
+    if any(x.left_out for x in decl_groups):
         return False
     failure, g.failure = g.failure, None
     try:
@@ -852,7 +853,9 @@ def place(plan: Plan, gs: list[Group]) -> None:
         # (The most uses; of as many, one that reads it plainly, not in
         # Offs/RelTool: the declaration keeps the value its name is read
         # for, and the copy is named for the call.)
-        writable.sort(key=lambda g: (-len(g.uses), g.src.call is not None))
+        # (An array whose refused elements it keeps as written first:
+        # _leave_out made sure it can write in place.)
+        writable.sort(key=lambda g: (not g.left_out, -len(g.uses), g.src.call is not None))
         top = writable[0]
         exclusive = _in_place(plan, top, decl_groups, refs, declared, consumed,
                               set(top.elements) if top.array else None)
