@@ -420,3 +420,23 @@ def test_the_refused_elements_reason_names_its_own_moves(tmp_path):
                           "singularity") == 1, r.output
     assert "a MoveAbsJ can (--emit absj for a MoveL)\n" in r.output
     assert "ToPoint" not in r.output and "lines" not in r.output
+
+
+def test_a_refused_points_row_does_not_say_it_is_compensated(tmp_path):
+    """The refused point at the wrist singularity: its row's reason says
+    why, and no warning of the solution not written ("the position is
+    compensated exactly ...": a new user read it as compensated); a
+    compensated point at the wrist singularity (MoveAbsJ) keeps it."""
+    import json
+    src = tmp_path / "glue.mod"
+    src.write_text(PATH)
+    for mode, status in (("auto", "not compensated"), ("absj", "compensated")):
+        r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                      "--emit", mode, "--allow-partial", "-o",
+                                      str(tmp_path / f"{mode}.mod"), "--json",
+                                      str(tmp_path / f"{mode}.json")])
+        assert r.exit_code in (0, 1), r.output
+        row = json.loads((tmp_path / f"{mode}.json").read_text())["targets"][2]
+        assert row["status"] == status, row
+        said = any("position is compensated exactly" in w for w in row["warnings"])
+        assert said is (mode == "absj"), row

@@ -121,11 +121,31 @@ def test_cli_json_profile_with_tau_and_fix_transient_takes_it(tmp_path):
     (["--times", "0,10,x", "--tau-heat", "30"], "expected minutes"),
     (["--times", "0,10,20", "--tau-heat", "30", "--thermal-effect", "joint_scale:J2=0.001"],
      "heat does not change a joint scale"),
+    # (A new user's: every row stood 30 min, and discover's cooling tau
+    # came out at its search range's edge.)
+    (["--times", "+30,0,20,40", "--tau-heat", "30"],
+     "--times +30,0,20,40: a stop (+N) follows a measurement round; the first round is the "
+     "cold start"),
 ])
 def test_bad_campaign_options_exit_2(tmp_path, args, message):
     r = _rapidcomp("simulate", "-o", tmp_path / "x.csv", *args, cwd=tmp_path)
     assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
     assert not (tmp_path / "x.csv").exists()
+
+
+def test_a_campaign_with_nothing_thermal_says_so(tmp_path):
+    """--times with no --thermal-effect (the README's stop example as a new
+    user ran it, its profile static): simulated all the same, and a note
+    says nothing in it changes with time; with a thermal effect, no note."""
+    r = _rapidcomp("simulate", "-o", tmp_path / "x.csv", "--times", "0,20,+30,40",
+                   "--tau-heat", "35", "--points", "random:6", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert ("note: --times without --thermal-effect: nothing in this campaign changes with "
+            "time (--effect and --profile are static), its rounds are replicates") in r.stdout
+    r = _rapidcomp("simulate", "-o", tmp_path / "y.csv", "--times", "0,20,+30,40",
+                   "--tau-heat", "35", "--points", "random:6", "--thermal-effect",
+                   "joint_offset:J2=0.01", cwd=tmp_path)
+    assert r.returncode == 0 and "note:" not in r.stdout, r.stdout + r.stderr
 
 
 def test_a_bad_time_is_a_path_line_error(tmp_path):

@@ -597,6 +597,11 @@ def _warmup_campaign(times, thermal_effects, tau_heat, sensors=(), tau_cool=None
             len(set(keys)) != len(keys) or any(b < a for a, b in zip(ts, ts[1:])) or pending:
         raise RapidcompError(f"--times {times}: expected increasing minutes of running from 0 "
                              "to 525600, each stop (+N) followed by a round")
+    if stands and stands[0] > 0:
+        # (The robot starts cold: a stop before the first round cools
+        # nothing, and its minutes would be a cooling discover cannot see.)
+        raise RapidcompError(f"--times {times}: a stop (+N) follows a measurement round; the "
+                             "first round is the cold start")
     if len(ts) < 3:
         raise RapidcompError(f"--times {times}: a warm-up campaign measures at 3 or more times "
                              "(two cannot tell a curve from a line)")

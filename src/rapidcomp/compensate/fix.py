@@ -373,8 +373,10 @@ def _transient_notes(tr, state_errors: dict, cold_moves: int = 0, cold_inline: i
     figures = "; ".join(f"s={s:g}: {um:.3f} um / {deg:.1e} deg"
                         for s, (um, deg) in sorted(state_errors.items()))
     if not state_errors:
-        return [f"transient: no target compensated; {MODULE_FILE} is written all the same "
-                f"(state law: {tr.law})."]
+        # (Whether anything is written is the command's: without
+        # --allow-partial nothing is, and the note must not say otherwise.)
+        return [f"transient: no target compensated; where the output is written "
+                f"(--allow-partial), {MODULE_FILE} is written with it (state law: {tr.law})."]
     other = []
     if cold_moves:
         # (A robtarget's confdata is one for every state: where the warm

@@ -340,7 +340,6 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
     # a tuple of ints already.)
     conf_before = u.conf
     bits = cols.warn_bits[i]
-    d_warnings = _warnings(solved, i, u, warning_texts_of(bits)) if has_q and bits else ()
     g: Group | None = group_of.get(u.key) if group_of is not None else None
     why = None
     if not cols.ok[i]:
@@ -352,6 +351,8 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         why = reason if fk == u.source.element else (
             f"{element_label(g, fk)}, written with it as one "
             f"{'array' if g.array else 'value'}, is not compensated: {reason}")
+    d_warnings = (_warnings(solved, i, u, warning_texts_of(bits), why is not None)
+                  if has_q and bits else ())
     if why is not None:
         why = _hint(why, u, tracked)
         return ((*base, fail_label, rule, None, error[0], error[1], None, None, conf_before,
@@ -404,11 +405,13 @@ def _conf_after(solved: Solved, i: int, u: TargetUse, written_conf):
     return tuple(int(c) for c in solved.conf_after[i])
 
 
-def _warnings(solved: Solved, i: int, u: TargetUse, texts) -> tuple[str, ...]:
+def _warnings(solved: Solved, i: int, u: TargetUse, texts,
+              refused: bool = False) -> tuple[str, ...]:
     """The solver's warnings that matter for this use: not its quadrant
     change (a written confdata that changes is said by the row's confdata
     columns and a note of its own); the orientation left over at the wrist
-    singularity with its amount."""
+    singularity with its amount, but in a row refused (its reason says
+    what it is: a solution not written is not "compensated exactly")."""
     left = WARN_TEXT[Warn.ORIENTATION_LEFT] in texts
     out = []
     for text in texts:
@@ -417,6 +420,8 @@ def _warnings(solved: Solved, i: int, u: TargetUse, texts) -> tuple[str, ...]:
         if left and text == WARN_TEXT[Warn.WRIST_SINGULAR]:
             continue
         if text == WARN_TEXT[Warn.ORIENTATION_LEFT]:
+            if refused:
+                continue
             text = (f"at the wrist singularity (J5 {solved.nominal.q_deg[i][4]:.2f} deg) the "
                     "position is compensated exactly, the orientation only as far as small "
                     "J4/J6 changes allow: "

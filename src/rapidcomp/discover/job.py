@@ -448,4 +448,8 @@ def run_simulate(output: str, points: str = "cube", profile: str | None = None,
     summary = (f"{len(names)} points, effects: {effect_text}; TCP shift by the effects max "
                f"{shift.max() * 1000:.1f} um, RMS {np.sqrt(np.mean(shift ** 2)) * 1000:.1f} um; "
                f"noise {noise:g} mm",)
-    return Outcome(summary + ("",) + tuple(table.splitlines()), (), tuple(files))
+    notes = ()
+    if campaign is not None and not thermal:
+        notes = ("--times without --thermal-effect: nothing in this campaign changes with time "
+                 "(--effect and --profile are static), its rounds are replicates",)
+    return Outcome(summary + ("",) + tuple(table.splitlines()), notes, tuple(files))
