@@ -208,7 +208,9 @@ def test_a_loop_element_refused_with_another_says_which_and_why(tmp_path):
                                   "-o", str(tmp_path / "o.mod")])
     assert "1 of 3 target uses compensated, 2 not compensated" in r.output, r.output
     assert ("not compensated: line 9 MoveL pArr{i} [i=2]: pArr{3}, written with it as one "
-            "array, is not compensated: nominal: J1 beyond its limit by") in r.output, r.output
+            "array (the moves turned into MoveAbsJ read a jointtarget array, which needs every "
+            "element's joints), is not compensated: nominal: J1 beyond its limit by"
+            ) in r.output, r.output
     r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
                                   "--limit", "J1=-1:14", "--allow-partial",
                                   "-o", str(tmp_path / "o.mod")])
@@ -340,8 +342,9 @@ def test_a_loop_element_that_fails_refuses_an_array_written_as_a_copy(tmp_path):
                                   str(tmp_path / "data.mod"), "--allow-partial",
                                   "-o", str(tmp_path / "o.mod")])
     assert "0 of 4 target uses compensated, 4 not compensated" in r.output, r.output
-    assert ("not compensated (3): pArr{3}, written with it as one array, is not compensated: at "
-            "the wrist singularity") in r.output, r.output
+    assert ("not compensated (3): pArr{3}, written with it as one array (pArr is not edited in "
+            "place here: its moves would read a copy, the refused point's too), is not "
+            "compensated: at the wrist singularity") in r.output, r.output
     assert (tmp_path / "o.mod").read_text() == (tmp_path / "main.mod").read_text()
 
 

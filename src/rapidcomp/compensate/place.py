@@ -87,6 +87,9 @@ class Group:
     # Elements of this FOR-walked array refused alone (_leave_out): it must
     # write the array in place, which keeps them as written for their moves.
     left_out: bool = False
+    # Why an element's failure refuses the others (rows: "written with it
+    # as one array<this>"), where it is not plain.
+    one_because: str = ""
     # src.decl (asked of every group again and again: a field, not a
     # property).
     decl: Declaration | None = field(init=False)
@@ -567,10 +570,15 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
         if g.failure is not None and g.array and g.mode == "rob":
             arrays.append(g)
         elif g.failure is not None:
+            if g.array and g.mode == "absj":
+                g.one_because = (" (the moves turned into MoveAbsJ read a jointtarget array, "
+                                 "which needs every element's joints)")
             free_outside(gs, g, solved)
         _local(g)
     for g in arrays:
         if not _leave_out(gs, g, solved, ok, left, plan, mode):
+            g.one_because = (f" ({g.decl.name} is not edited in place here: its moves would "
+                             "read a copy, the refused point's too)")
             free_outside(gs, g, solved)
 
 

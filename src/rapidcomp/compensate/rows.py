@@ -350,7 +350,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         # that one is why this one is refused too.)
         why = reason if fk == u.source.element else (
             f"{element_label(g, fk)}, written with it as one "
-            f"{'array' if g.array else 'value'}, is not compensated: {reason}")
+            f"{'array' if g.array else 'value'}{g.one_because}, is not compensated: {reason}")
     d_warnings = (_warnings(solved, i, u, warning_texts_of(bits), why is not None)
                   if has_q and bits else ())
     if why is not None:
