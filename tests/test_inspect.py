@@ -75,7 +75,9 @@ def test_inspect_says_what_check_and_fix_refuse_in_a_task(tmp_path):
                                   str(FIXTURES / "warm.csv")])
     assert c.exit_code == 2
     refusal = c.output.strip().splitlines()[0]
-    assert refusal.startswith(str(tasks / "glue" / "old" / "GlueMain.mod") + ":1: module GlueMain")
+    assert refusal.startswith(str(tasks / "glue" / "old" / "GlueMain.mod")
+                              + ":1:8: module GlueMain")
+    assert c.output.strip().splitlines()[1:] == ["    MODULE GlueMain", "           ^"]
     assert r.stdout.splitlines()[-1] == f"note: {refusal}; check and fix refuse this task"
     doc = json.loads(CliRunner().invoke(main, ["inspect", str(tasks / "glue"), "--json"]).stdout)
     assert doc["problems"] == [f"{refusal}; check and fix refuse this task"]
@@ -85,6 +87,6 @@ def test_inspect_says_what_check_and_fix_refuse_in_a_task(tmp_path):
             f"MODULE {name}\n  CONST num nSpeed:=1;\nENDMODULE\n")
     r = CliRunner().invoke(main, ["inspect", str(tmp_path)])
     assert r.exit_code == 0 and r.stdout.splitlines()[-1] == (
-        f"note: {tmp_path / 'B.mod'}:2: nSpeed is declared globally in two modules (also "
+        f"note: {tmp_path / 'B.mod'}:2:13: nSpeed is declared globally in two modules (also "
         f"{tmp_path / 'A.mod'}:2): the controller does not load the task (make one LOCAL, or "
         "give the program file (.pgf) without the other); check and fix refuse this task")

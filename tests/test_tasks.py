@@ -4,6 +4,7 @@ from the command line: folders, program files, backups, output layout."""
 from __future__ import annotations
 
 import json
+import re
 import shutil
 
 import pytest
@@ -407,8 +408,10 @@ def test_a_global_name_in_two_modules_of_a_task_is_bad_input(tmp_path, a, b, ref
     r = run("fix", task, "--profile", WARM, "-o", tmp_path / "out")
     if refused:
         assert r.exit_code == 2, r.output
-        assert "B.mod:2: " in r.output and "is declared globally in two modules (also " \
-            in r.output and "A.mod:2)" in r.output, r.output
+        # (file:line:col of the second declaration, its line under it.)
+        assert re.search(r"B\.mod:2:\d+: \S+ is declared globally in two modules \(also ",
+                         r.output) and "A.mod:2)" in r.output, r.output
+        assert r.output.splitlines()[1].strip() == b.splitlines()[0].strip(), r.output
         assert not (tmp_path / "out").exists()
     else:
         assert r.exit_code == 0, r.output

@@ -242,7 +242,9 @@ def inspect(program: str, as_json: bool) -> None:
         reps = [report(pf) for pf in modules_of(program, problems)]
     except RapidcompError as exc:
         _fail(exc)
-    said = [f"{p.format()}; check and fix refuse this task" for p in problems]
+    # (One line each: the place and the message, without the source line
+    # check's refusal shows under it.)
+    said = [f"{p.format().splitlines()[0]}; check and fix refuse this task" for p in problems]
     if as_json:
         # (A module alone: its report, as before tasks were taken.)
         doc = reps[0] if alone(program) else {"program": program, "modules": reps,

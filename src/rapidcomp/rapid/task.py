@@ -82,6 +82,12 @@ def load_problem(source: TaskSource, files, rels: list[str] | None = None) -> In
     path, as load_task names them). check and fix refuse such a task;
     inspect says so."""
     rels = rels if rels is not None else [pf.source.display_path for pf in files]
+
+    def at(pf, rel: str, span, message: str) -> InputError:
+        """The error at span of module pf (at rel in the task): file:line:col
+        and its line, as a parse error names its place."""
+        line, col = pf.source.position(span.start)
+        return InputError(source.shown(rel), message, line, col, pf.source.line_text(line))
     modules: dict[str, str] = {}
     for pf, rel in zip(files, rels):
         for m in pf.modules:
@@ -92,13 +98,12 @@ def load_problem(source: TaskSource, files, rels: list[str] | None = None) -> In
                 output = next((part for path in (first, rel)
                                for part in PurePath(path).parts[:-1]
                                if part.lower().endswith("_comp")), None)
-                return InputError(source.shown(rel),
-                                  f"module {m.name} is also in {first}: a task holds each module "
-                                  "once (the controller refuses to load it twice); give the "
-                                  "program file (.pgf) or a folder without the copy"
-                                  + (f" ({output} is named as `rapidcomp fix` names its output: "
-                                     "move it out of the task's folder)" if output else ""),
-                                  pf.line(m.node.name_span))
+                return at(pf, rel, m.node.name_span,
+                          f"module {m.name} is also in {first}: a task holds each module once "
+                          "(the controller refuses to load it twice); give the program file "
+                          "(.pgf) or a folder without the copy"
+                          + (f" ({output} is named as `rapidcomp fix` names its output: move it "
+                             "out of the task's folder)" if output else ""))
     seen: dict[str, tuple] = {}
     for pf, rel in zip(files, rels):
         for m in pf.modules:
@@ -115,11 +120,10 @@ def load_problem(source: TaskSource, files, rels: list[str] | None = None) -> In
                 if kind == first[1] == "PERS" and type_ == first[2]:
                     continue
                 other = f"{source.shown(first[5])}:{first[0].line(first[3])}"
-                return InputError(source.shown(rel),
-                                  f"{name} is declared globally in two modules (also {other}): "
-                                  "the controller does not load the task (make one LOCAL, or "
-                                  "give the program file (.pgf) without the other)",
-                                  pf.line(span))
+                return at(pf, rel, span,
+                          f"{name} is declared globally in two modules (also {other}): the "
+                          "controller does not load the task (make one LOCAL, or give the "
+                          "program file (.pgf) without the other)")
     return None
 
 
