@@ -345,6 +345,8 @@ def test_a_loop_element_that_fails_refuses_an_array_written_as_a_copy(tmp_path):
     assert ("not compensated (3): pArr{3}, written with it as one array (pArr is not edited in "
             "place here: its moves would read a copy, the refused point's too), is not "
             "compensated: at the wrist singularity") in r.output, r.output
+    # (Which runs of the loop: a new user could not tell which three.)
+    assert "kept a robtarget move [line 4 (i=1, i=2, i=4)]" in r.output, r.output
     assert (tmp_path / "o.mod").read_text() == (tmp_path / "main.mod").read_text()
 
 

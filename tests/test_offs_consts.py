@@ -131,7 +131,7 @@ ENDMODULE
     said, out, _ = _fix(tmp_path, "loops", text, "--emit", "robtarget", "--allow-partial")
     assert "1 of 5 target uses compensated, 0 not compensated, 4 untouched" in said
     assert ("untouched (3): Offs number k is the variable of an enclosing FOR loop: known at "
-            "run time [line 9]") in said
+            "run time [line 9 (k=1, k=2, k=3)]") in said
     assert ("untouched (1): index of pA is not a literal or the variable of an enclosing FOR "
             "loop with constant bounds [line 12]") in said
     # (The move outside the loops: Offs(pB, 0, 0, 50).)

@@ -141,7 +141,23 @@ def _places(rs: list[UseRow], several: bool) -> str:
     for r in rs:
         places.setdefault(r.file, []).append(r.line)
     return "; ".join((f"{f} " if several else "") + ("line " if len(set(lines)) == 1 else "lines ")
-                     + line_ranges(sorted(set(lines))) for f, lines in places.items())
+                     + line_ranges(sorted(set(lines))) + _runs(rs, f, lines)
+                     for f, lines in places.items())
+
+
+def _runs(rs: list[UseRow], file: str, lines: list[int]) -> str:
+    """Which runs of one statement in a loop they are, where that is all
+    they are and they are few (line 9, i=1, i=2, i=4: a new user could not
+    tell which elements of an array were refused with another)."""
+    if len(set(lines)) != 1 or len(lines) > RUNS_SAID:
+        return ""
+    runs = [r.target.rsplit(" [", 1)[1][:-1] for r in rs
+            if r.file == file and r.target.endswith("]") and " [" in r.target]
+    return f" ({', '.join(runs)})" if len(runs) == len(lines) > 1 else ""
+
+
+# Runs of a loop said by their index, at most (more: the report's rows).
+RUNS_SAID = 8
 
 
 # A reason's numbers (a joint's value, a line): reasons alike but for them
