@@ -445,3 +445,52 @@ def test_a_refused_points_row_does_not_say_it_is_compensated(tmp_path):
         assert row["status"] == status, row
         said = any("position is compensated exactly" in w for w in row["warnings"])
         assert said is (mode == "absj"), row
+
+
+def test_an_array_that_cannot_stay_in_place_after_a_retry_is_refused_as_one(tmp_path,
+                                                                           monkeypatch):
+    """The plain loop left its refused point out and writes the array in
+    place; the Offs loop's copy then fails its verification (forced), so
+    the array would be a copy too, which the refused point's move would
+    read: the array is refused as one, nothing renamed (a review: the
+    refused point of a PERS array read a CONST pArr_c{3})."""
+    _missing(monkeypatch, "Offs(pArr{i},0,0,50) [i=1]")
+    text = PATH.replace("CONST robtarget pArr", "PERS robtarget pArr").replace(
+        "            MoveL pArr{i}, v200, fine, tool0;\n",
+        "            MoveL pArr{i}, v200, fine, tool0;\n"
+        "            MoveL Offs(pArr{i},0,0,50), v200, z5, tool0;\n")
+    said, out = _fix_partial(tmp_path, "retry", text, "auto")
+    assert "0 of 8 target uses compensated, 8 not compensated" in said, said
+    assert ("pArr{3}, written with it as one array (pArr is not edited in place here: its moves "
+            "would read a copy, the refused point's too), is not compensated: at the wrist "
+            "singularity") in said, said
+    assert out == text
+
+
+def test_a_transient_cold_copy_takes_the_array_as_one(tmp_path):
+    """--transient: where the cold values must be a copy with the warm
+    robot's confdata (pArr{3}'s J4 quadrant changes), the loop would read
+    the copy, the refused point's move too: the array is refused as one,
+    its rows say so (a review: the refused point of a PERS array read a
+    CONST pArr_cold{2})."""
+    text = """MODULE M2
+    PERS robtarget pArr{3}:=[
+        [[481.677,49.424,456.000],[0.166510,0.056023,0.981060,0.081588],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],
+        [[556.096,159.458,467.785],[0.495104,-0.120530,0.857615,0.069582],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],
+        [[552.606,-48.347,443.998],[0.258573,0.042133,0.965006,-0.011290],[-1,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]];
+    PROC main()
+        FOR i FROM 1 TO 3 DO
+            MoveL pArr{i}, v200, fine, tool0;
+        ENDFOR
+    ENDPROC
+ENDMODULE
+"""
+    src = tmp_path / "m2.mod"
+    src.write_text(text)
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", str(FIXTURES / "warm.csv"),
+                                  "--transient", "--tau-heat", "30", "--allow-partial",
+                                  "-o", str(tmp_path / "o.mod")])
+    assert "0 of 3 target uses compensated, 3 not compensated" in r.output, r.output
+    assert ("pArr{2}, written with it as one array (its cold values are a copy with the warm "
+            "robot's confdata, which the refused point's move would read too)") in r.output
+    assert "cold" not in (tmp_path / "o.mod").read_text()

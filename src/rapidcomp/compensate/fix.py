@@ -164,7 +164,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
                 from .report import json_cells
                 jcells = side.run(json_cells, solved.nominal.q_deg, solved.deformed.q_deg,
                                   solved.err_p, solved.err_r)
-        P.place(plan, gs)
+        P.place(plan, gs, solved)
         P.fill_slots(plan, solver, gs)
         editor = Editor(plan, values, transient is not None)
         # (In the groups' order: new names and declarations are made in it;

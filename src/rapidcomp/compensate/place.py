@@ -84,9 +84,10 @@ class Group:
     # order, which the editor keeps (new names and declarations are made in
     # it).
     first: int = 0
-    # Elements of this FOR-walked array refused alone (_leave_out): it must
-    # write the array in place, which keeps them as written for their moves.
-    left_out: bool = False
+    # Elements of this FOR-walked array refused alone (_leave_out; the
+    # failure of the first, (why, element)): it must write the array in
+    # place, which keeps them as written for their moves.
+    left_out: tuple | None = None
     # Why an element's failure refuses the others (rows: "written with it
     # as one array<this>"), where it is not plain.
     one_because: str = ""
@@ -705,8 +706,8 @@ def _leave_out(gs: list, g: Group, solved: Solved, ok: list, left: list, plan: P
     if not every and not _alone_in_place(gs, g, set(bad), plan):
         return False
     g.failure = None
-    g.left_out = not every
-    for k, own in _split_elements(gs, g, bad, solved).items():
+    owns = _split_elements(gs, g, bad, solved)
+    for k, own in owns.items():
         rs = rows[k]
         why = next((_configurations(own, k) for i in rs[1:]
                     if ok[rs[0]] and ok[i] and not _same(solved, rs[0], i)), None)
@@ -720,6 +721,8 @@ def _leave_out(gs: list, g: Group, solved: Solved, ok: list, left: list, plan: P
         # on its own, as where the array fails.)
         free_outside(gs, g, solved)
         gs.remove(g)
+    else:
+        g.left_out = owns[bad[0]].failure
     return True
 
 
@@ -823,7 +826,7 @@ def _wrist(g: Group, solved: Solved, left: list, plan: Plan, mode: str) -> None:
             break
 
 
-def place(plan: Plan, gs: list[Group]) -> None:
+def place(plan: Plan, gs: list[Group], solved: Solved | None = None) -> None:
     """Inline values are edited inline; MoveAbsJ targets are new
     declarations; a declaration is edited in place by the group (the one
     with most uses) when every reference to it belongs to its groups and
@@ -858,6 +861,16 @@ def place(plan: Plan, gs: list[Group]) -> None:
         writable = [g for g in decl_groups if g.failure is None and g.mode != "absj"]
         if not writable:
             continue
+        kept = next((g for g in writable if g.left_out), None)
+        if kept is not None and not _in_place(plan, kept, decl_groups, refs, declared, consumed,
+                                              set(kept.elements)):
+            # (Another group of the array failed since _leave_out (fix's
+            # verification): the array would be a copy, which the refused
+            # elements' moves would read too. It is refused as one.)
+            refuse_as_one(gs, kept, solved)
+            writable.remove(kept)
+            if not writable:
+                continue
         # (The most uses; of as many, one that reads it plainly, not in
         # Offs/RelTool: the declaration keeps the value its name is read
         # for, and the copy is named for the call.)
@@ -869,6 +882,17 @@ def place(plan: Plan, gs: list[Group]) -> None:
                               set(top.elements) if top.array else None)
         for n, g in enumerate(writable):
             g.placement = "in place" if exclusive and n == 0 else "new"
+
+
+def refuse_as_one(gs: list, g: Group, solved: Solved | None) -> None:
+    """FOR-walked array g, which left elements out (_leave_out), cannot
+    keep them as written after all (a copy, a cold copy): it fails as one,
+    for the first of them; its elements outside the loop leave it."""
+    g.failure, g.left_out = g.left_out, None
+    g.one_because = (f" ({g.decl.name} is not edited in place here: its moves would read a "
+                     "copy, the refused point's too)")
+    if solved is not None:
+        free_outside(gs, g, solved)
 
 
 def _references(plan: Plan, needed: set) -> dict[str, set]:
