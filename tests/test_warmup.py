@@ -300,3 +300,22 @@ def test_a_bad_thermal_effect_is_named_by_its_own_option(tmp_path):
     assert "--thermal-effect joint_offset:J2=nan: joint_offset:J2 takes 1 number(s)" in r.stderr
     assert "--effect joint_offset" not in r.stderr
     assert not (tmp_path / "m.csv").exists()
+
+
+def test_a_pose_beyond_the_limits_is_one_note_for_all_its_rounds():
+    """A pose measured in every round of a campaign, past the model's joint
+    limits, is said once with how many rounds (a new user read seven notes
+    of S21); another pose of the same out-of-limit joint value is its own."""
+    from types import SimpleNamespace
+
+    from rapidcomp.discover.job import _beyond_limits
+    robot = irb140()
+    past = [0.0, 0.0, 0.0, 0.0, robot.upper_deg[4] + 1.0, 0.0]
+    other = [10.0, 0.0, 0.0, 0.0, robot.upper_deg[4] + 1.0, 0.0]
+    data = SimpleNamespace(names=[f"S21_t{t}" for t in (0, 20, 40)] + ["P1_t0", "P2_t0"],
+                           q_deg=np.array([past] * 3 + [other, [0.0] * 6]))
+    j5 = f"J5 {robot.upper_deg[4] + 1.0:g}"
+    assert _beyond_limits(data, robot) == [
+        f"points S21_t0, S21_t20 and 1 more (the same joints): {j5} beyond the model's joint "
+        "limits",
+        f"point P1_t0: {j5} beyond the model's joint limits"]

@@ -312,11 +312,22 @@ def _loadable_profile(nominal, prof, kept: dict, comments, name: str, notes: lis
 
 def _beyond_limits(data, robot) -> list[str]:
     lo, hi = np.asarray(robot.lower_deg), np.asarray(robot.upper_deg)
-    out = []
+    # (A pose measured in every round of a campaign is one note, not one a
+    # round: a new user read seven of S21.)
+    by_joints: dict[tuple, list[str]] = {}
     for name, q in zip(data.names, data.q_deg):
         bad = [f"J{j + 1} {q[j]:g}" for j in range(len(q)) if not lo[j] <= q[j] <= hi[j]]
         if bad:
-            out.append(f"point {name}: {', '.join(bad)} beyond the model's joint limits")
+            by_joints.setdefault((tuple(q.tolist()), ", ".join(bad)), []).append(name)
+    out = []
+    for (_, bad), names in by_joints.items():
+        if len(names) == 1:
+            out.append(f"point {names[0]}: {bad} beyond the model's joint limits")
+        else:
+            shown = ", ".join(names[:2]) + (f" and {len(names) - 2} more" if len(names) > 2
+                                            else "")
+            out.append(f"points {shown} (the same joints): {bad} beyond the model's joint "
+                       "limits")
     if len(out) > 5:
         out = out[:5] + [f"... {len(out) - 5} more points beyond the joint limits"]
     return out
