@@ -1070,9 +1070,8 @@ class Editor:
                 # (Its cold values would be a copy with the warm robot's
                 # confdata, which the moves of the elements it left out as
                 # written would read too: refused as one, for the first.)
-                g.failure, g.left_out = g.left_out, None
-                g.one_because = (" (its cold values are a copy with the warm robot's "
-                                 "confdata, which the refused point's move would read too)")
+                g.refuse_as_one(" (its cold values are a copy with the warm robot's "
+                                "confdata, which the refused point's move would read too)")
                 for u in g.uses:
                     self.actions.pop(u.key, None)
                 return

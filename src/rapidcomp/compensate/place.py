@@ -98,6 +98,13 @@ class Group:
     def __post_init__(self) -> None:
         self.decl = self.src.decl
 
+    def refuse_as_one(self, because: str) -> None:
+        """This array, which left elements out as written (_leave_out),
+        cannot keep them so after all (because: what would move their moves
+        too): it fails as one, for the first of them."""
+        self.failure, self.left_out = self.left_out, None
+        self.one_because = because
+
     @property
     def home_module(self) -> Module:
         return self.home[1]
@@ -578,8 +585,7 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
         _local(g)
     for g in arrays:
         if not _leave_out(gs, g, solved, ok, left, plan, mode):
-            g.one_because = (f" ({g.decl.name} is not edited in place here: its moves would "
-                             "read a copy, the refused point's too)")
+            g.one_because = _copied(g)
             free_outside(gs, g, solved)
 
 
@@ -633,24 +639,7 @@ def split_outside(gs: list, g: Group, k, solved: Solved) -> Group:
     where one of them fails (its solve, the wrist split, its verification)
     or the loop's elements do, each fails alone, and the others are
     written. That Group."""
-    us = [u for u in g.uses if not u.source.by_loop and u.source.element == k]
-    own = Group(g.mode, us[0].source, us[0].tool, us[0].wobj, g.home, uses=us,
-                first=g.outside[k], rows_seen={k: solved.row[us[0].key]})
-    keys = {u.key for u in us}
-    own.kept = g.kept & keys
-    if g.why_kept:
-        own.why_kept = {key: why for key, why in g.why_kept.items() if key in keys}
-    g.uses = [u for u in g.uses if u.key not in keys]
-    g.rows_seen.pop(k, None)
-    g.outside = {e: at for e, at in g.outside.items() if e != k}
-    if g.elements:
-        # (Past settle: its elements and rows as _elements made them.)
-        g.elements = [e for e in g.elements if e != k]
-        g.rows = {e: r for e, r in g.rows.items() if e != k}
-        own.elements, own.rows = [k], {k: solved.row[us[0].key]}
-        own.local = all(u.module is own.home[1] for u in us)
-    gs.append(own)
-    return own
+    return _split_elements(gs, g, [k], solved)[k]
 
 
 def _one_statement(uses: list[TargetUse], modes: list[str]) -> frozenset:
@@ -699,22 +688,29 @@ def _leave_out(gs: list, g: Group, solved: Solved, ok: list, left: list, plan: P
         rows.setdefault(k, []).append(solved.row[u.key])
         if u.source.by_loop:
             loop.add(k)
-    bad = [k for k, rs in rows.items()
-           if any(not ok[i] for i in rs) or (left[rs[0]])
-           or any(ok[rs[0]] and ok[i] and not _same(solved, rs[0], i) for i in rs[1:])]
-    every = loop <= set(bad)
+    # What fails each element, in the order _elements and _wrist say it:
+    # two uses on different configurations, a use not solved (its row),
+    # the wrist split.
+    fails: dict = {}
+    for k, rs in rows.items():
+        first = rs[0]
+        if any(ok[first] and ok[i] and not _same(solved, first, i) for i in rs[1:]):
+            fails[k] = ("configurations", first)
+        elif (i := next((i for i in rs if not ok[i]), None)) is not None:
+            fails[k] = ("solve", i)
+        elif left[first]:
+            fails[k] = ("wrist", first)
+    bad = list(fails)
+    every = loop <= fails.keys()
     if not every and not _alone_in_place(gs, g, set(bad), plan):
         return False
     g.failure = None
     owns = _split_elements(gs, g, bad, solved)
     for k, own in owns.items():
-        rs = rows[k]
-        why = next((_configurations(own, k) for i in rs[1:]
-                    if ok[rs[0]] and ok[i] and not _same(solved, rs[0], i)), None)
-        if why is None:
-            why = next((solved.reason(i) for i in rs if not ok[i]), None)
-        if why is None:
-            why = _split_needed(own, k, rs[0], solved, plan, mode)
+        kind, i = fails[k]
+        why = (_configurations(own, k) if kind == "configurations" else
+               solved.reason(i) if kind == "solve" else
+               _split_needed(own, k, i, solved, plan, mode))
         own.failure = (why, k)
     if every:
         # (What is left: elements only literal indices read, each written
@@ -734,18 +730,18 @@ def _alone_in_place(gs: list, g: Group, bad: set, plan: Plan) -> bool:
     decl_groups = [x for x in gs if type(x) is Group and x.decl is g.decl]
     if any(x.left_out for x in decl_groups):
         return False
-    failure, g.failure = g.failure, None
-    try:
-        return _in_place(plan, g, decl_groups, _references(plan, {g.decl.name.lower()}),
-                         _declarations(plan), _consumed(gs), set(g.elements) - bad)
-    finally:
-        g.failure = failure
+    # (g, failed still, is the one _in_place asks of: its own failure aside.)
+    return _in_place(plan, g, decl_groups, _references(plan, {g.decl.name.lower()}),
+                     _declarations(plan), _consumed(gs), set(g.elements) - bad)
 
 
 def _split_elements(gs: list, g: Group, ks: list, solved: Solved) -> dict:
     """The uses of each element of ks taken out of g into gs, the Group of
-    its own each (in one pass over g's uses). {element: that Group}."""
+    its own each (in one pass over g's uses), first where its first use is
+    among those grouping() walks (an element only literal indices read:
+    Group.outside; one of the loop's, g's). {element: that Group}."""
     ks_set = set(ks)
+    firsts = {k: g.outside.get(k, g.first) for k in ks}
     taken: dict = {k: [] for k in ks}
     rest = []
     for u in g.uses:
@@ -754,14 +750,15 @@ def _split_elements(gs: list, g: Group, ks: list, solved: Solved) -> dict:
     g.elements = [e for e in g.elements if e not in ks_set]
     g.rows = {e: r for e, r in g.rows.items() if e not in ks_set}
     g.rows_seen = {e: r for e, r in g.rows_seen.items() if e not in ks_set}
-    g.outside = {e: at for e, at in g.outside.items() if e not in ks_set} if g.outside else g.outside
+    if g.outside:
+        g.outside = {e: at for e, at in g.outside.items() if e not in ks_set}
     out = {}
     for k in ks:
         us = taken[k]
         keys = {u.key for u in us}
         row = solved.row[us[0].key]
         own = Group(g.mode, us[0].source, us[0].tool, us[0].wobj, g.home, uses=us,
-                    first=g.first, rows_seen={k: row}, elements=[k], rows={k: row})
+                    first=firsts[k], rows_seen={k: row}, elements=[k], rows={k: row})
         own.kept = g.kept & keys
         if g.why_kept:
             own.why_kept = {key: why for key, why in g.why_kept.items() if key in keys}
@@ -888,11 +885,15 @@ def refuse_as_one(gs: list, g: Group, solved: Solved | None) -> None:
     """FOR-walked array g, which left elements out (_leave_out), cannot
     keep them as written after all (a copy, a cold copy): it fails as one,
     for the first of them; its elements outside the loop leave it."""
-    g.failure, g.left_out = g.left_out, None
-    g.one_because = (f" ({g.decl.name} is not edited in place here: its moves would read a "
-                     "copy, the refused point's too)")
+    g.refuse_as_one(_copied(g))
     if solved is not None:
         free_outside(gs, g, solved)
+
+
+def _copied(g: Group) -> str:
+    """Group.one_because of an array that is not edited in place."""
+    return (f" ({g.decl.name} is not edited in place here: its moves would read a copy, the "
+            "refused point's too)")
 
 
 def _references(plan: Plan, needed: set) -> dict[str, set]:
@@ -921,7 +922,8 @@ def _in_place(plan: Plan, top: Group, decl_groups: list, refs: dict, declared: d
     uses, writes the declaration in place: declared once, in a written
     module, no other task's; every reference to it read by its groups;
     none failed, but for groups of elements of an array that top leaves
-    as they are (kept: the elements top writes)."""
+    as they are (kept: the elements top writes); top's own failure aside
+    (_leave_out asks before it clears it)."""
     name = top.decl.name.lower()
     mine = {(u.key[0], u.source.ref.span.start) for g in decl_groups if g.mode != "absj"
             for u in g.uses}
@@ -931,8 +933,8 @@ def _in_place(plan: Plan, top: Group, decl_groups: list, refs: dict, declared: d
     return (plan.file_index[id(top.src.home)] < plan.n_written
             and len(declared.get(name, ())) == 1
             and name not in plan.resolver.shared
-            and all(g.failure is None or (kept is not None and g.elements
-                                          and kept.isdisjoint(g.elements))
+            and all(g is top or g.failure is None
+                    or (kept is not None and g.elements and kept.isdisjoint(g.elements))
                     for g in decl_groups)
             and refs.get(name, set()) - consumed == mine)
 
