@@ -15,7 +15,7 @@ from ..collector import paused
 from ..kinematics.ik import Solver
 from .place import groups
 from .plan import Plan, Task
-from .rows import UNTOUCHED, Rows, summary, use_rows
+from .rows import UNTOUCHED, Rows, limits_note, summary, use_rows
 from .solve import solve
 
 OK, FAILED = "compensable", "not compensable"
@@ -49,7 +49,9 @@ def _check(task, solver, track, start, base) -> CheckResult:
     gs = groups(plan, solved, "auto", solver.options.wrist_fallback_deg)
     group_of = {u.key: g for g in gs for u in g.uses}
     rows = use_rows(plan, solved, group_of=group_of, statuses=(OK, FAILED))
-    return CheckResult(task.name, rows, tuple(plan.notes()), len(task.files))
+    limits = limits_note(rows, solver.nominal_robot)
+    return CheckResult(task.name, rows, tuple(plan.notes()) + ((limits,) if limits else ()),
+                       len(task.files))
 
 
 def render_text(result: CheckResult) -> str:

@@ -35,7 +35,8 @@ from ..rewrite.diff import columns_diff, handed_off, unified_diff
 from . import place as P
 from .edit import Editor, Values
 from .plan import Plan, Task, line_ranges
-from .rows import COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, Rows, summary, use_rows
+from .rows import (COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, Rows, limits_note, summary,
+                   use_rows)
 from .solve import Solving, nominal_ahead
 from .takeback import take_back
 from .targets import IDENTITY_POSE
@@ -298,6 +299,9 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     rows = use_rows(plan, solved, group_of=group_of, actions=actions, verified=verified,
                     written_conf=written_conf, at=at)
     notes = plan_notes + _notes(rows, gs, transient is not None)
+    limits = limits_note(rows, solver.nominal_robot)
+    if limits:
+        notes.append(limits)
     if transient is not None:
         notes += _transient_notes(transient[0], state_errors if any(
             r.status == COMPENSATED for r in rows) else {}, *cold)

@@ -10,7 +10,8 @@ import numpy as np
 
 from ..construct import maker
 from ..kinematics.frames import DEG
-from ..kinematics.ik import WARN_TEXT, Warn, warning_texts_of
+from ..kinematics.ik import (BEYOND_LIMIT, NO_SOLUTION_IN_LIMITS, WARN_TEXT, Warn,
+                              warning_texts_of)
 from .place import Group, element_label
 from .plan import Plan
 from .solve import Solved
@@ -438,6 +439,42 @@ def _hint(reason: str, u: TargetUse, tracked) -> str:
         return (reason + " (its external axes are assumed not to move the robot's base; if "
                 "one is a track, say so with --track)")
     return reason
+
+
+def limits_note(rows: "Rows", robot) -> str | None:
+    """What a program beyond the robot's joint limits as written means (the
+    nominal robot's solution, before any compensation): the limits are not
+    the controller's, which runs only programs within its own (a user's
+    --limit, or the model's own where the controller's differ: the IRB 140's
+    J5 is +-115 or +-120 deg by variant). None where no target is so."""
+    over: dict[int, tuple[int, float]] = {}
+    none = 0
+    for reason in rows.column("reason"):
+        # (A row's own failure only: an array's other elements refused with
+        # it name its reason after their own words.)
+        if reason is None or not reason.startswith("nominal: "):
+            continue
+        m = BEYOND_LIMIT.match(reason, len("nominal: "))
+        if m is not None:
+            k = int(m.group(1)) - 1
+            n, worst = over.get(k, (0, 0.0))
+            over[k] = (n + 1, max(worst, float(m.group(2))))
+        elif reason == f"nominal: {NO_SOLUTION_IN_LIMITS}":
+            none += 1
+    if not over and not none:
+        return None
+    said = []
+    for k in sorted(over):
+        n, worst = over[k]
+        said.append(f"{robot.joint_names[k]} at {n} target{'s' if n != 1 else ''}, by up to "
+                    f"{worst:.4g} deg (its limits {robot.lower_deg[k]:g}..{robot.upper_deg[k]:g}"
+                    f" deg, {robot.limit_source(k)})")
+    if none:
+        said.append(f"no solution within the limits at {none} target{'s' if none != 1 else ''}")
+    return ("the program as written goes beyond the joint limits rapidcomp uses: "
+            + "; ".join(said) + ". The controller runs only programs within its own limits: "
+            "if this one runs, give the controller's with --limit JOINT=LOWER:UPPER (degrees; "
+            "its MOC.cfg gives them as lower_joint_bound/upper_joint_bound, in radians)")
 
 
 def summary(rows, ok_label: str = COMPENSATED, fail_label: str = NOT_COMPENSATED) -> dict:

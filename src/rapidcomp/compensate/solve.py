@@ -31,7 +31,7 @@ import numpy as np
 from .. import side
 from ..kinematics.conf import confdata
 from ..kinematics.frames import DEG
-from ..kinematics.ik import IKBatch, Solver, Status, Warn, reusing
+from ..kinematics.ik import NO_SOLUTION_IN_LIMITS, IKBatch, Solver, Status, Warn, reusing
 from .flow import AFTER, OFF, ON, PROGRAM_START, State
 from .plan import Plan, line_ranges
 from .targets import (IDENTITY_POSE, UNKNOWN_TOOL, UNKNOWN_TOOL_MEANS, TargetUse, flange_stack,
@@ -456,7 +456,7 @@ class _Chooser:
                 k = self.rob_row[i]
                 q = self.solver.closest(self.cands[k][None], prev[None])[0]
         if _has_nan(q):
-            return _fail("nominal: no solution within the joint limits")
+            return _fail(f"nominal: {NO_SOLUTION_IN_LIMITS}")
         return Pick(q, rule, None, "closest", prev, line)
 
     def _unknown_start(self, i: int, flag: str, at_start: bool, why: str | None = None) -> Pick:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextvars
 import dataclasses
 import functools
+import re
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from enum import IntEnum, IntFlag
@@ -106,6 +107,13 @@ class IKResult:
     warnings: tuple[str, ...]
 
 
+# A solution beyond a joint's limit, in words; BEYOND_LIMIT reads them back
+# (the note of a program that goes beyond the limits as written: rows.py).
+LIMIT_REASON = "J{joint} beyond its limit by {by:.4f} deg"
+BEYOND_LIMIT = re.compile(r"J(\d+) beyond its limit by (\d+\.\d+) deg")
+NO_SOLUTION_IN_LIMITS = "no solution within the joint limits"
+
+
 def _near(bits: int) -> str:
     """Where a solve that did not converge was: the singularities near its
     last joints (at the elbow's, the arm stretched out, a pose moves the
@@ -168,7 +176,7 @@ class IKBatch:
             return (f"confdata asks for a J{j + 1} quadrant no solution has "
                     f"(nearest solution {d:.4f} deg outside it)")
         if s == Status.JOINT_LIMIT:
-            return f"J{j + 1} beyond its limit by {d:.4f} deg"
+            return LIMIT_REASON.format(joint=j + 1, by=d)
         if s == Status.NOT_CONVERGED:
             return f"did not converge (residual {d:.3g} mm)" + _near(int(self.warnings[i]))
         if s == Status.JOINT_JUMP:

@@ -388,4 +388,5 @@ def deform(robot: RobotModel, profile: ThermalProfile) -> RobotModel:
         frame.placement = frame.placement * flange.se3()
         model.frames[robot.flange_frame] = frame
     return RobotModel(robot.name + "+thermal", model, robot.flange_frame,
-                      robot.lower_deg, robot.upper_deg, joint_map(robot, profile))
+                      robot.lower_deg, robot.upper_deg, joint_map(robot, profile),
+                      robot.limits_set)

@@ -40,6 +40,9 @@ class RobotModel:
     # Joint-space terms of a deformed model (jointmap.JointMap): commanded ->
     # actual angles. None for a nominal model and plain thermal profiles.
     joint_map: object = None
+    # Where each joint's limits come from, as a note says it: the --limit
+    # option that set them; "" for the model's own.
+    limits_set: tuple[str, ...] = ()
 
     @property
     def nq(self) -> int:
@@ -49,12 +52,19 @@ class RobotModel:
     def joint_names(self) -> tuple[str, ...]:
         return tuple(self.model.names[1:])
 
-    def with_limits(self, lower_deg=None, upper_deg=None) -> "RobotModel":
-        """A copy with other joint limits (sources differ, e.g. J5 +-115 vs +-120)."""
+    def with_limits(self, lower_deg=None, upper_deg=None, set_by=None) -> "RobotModel":
+        """A copy with other joint limits (sources differ, e.g. J5 +-115 vs
+        +-120); set_by: where each joint's come from (limits_set)."""
         return RobotModel(self.name, self.model, self.flange_frame,
                           tuple(lower_deg) if lower_deg is not None else self.lower_deg,
                           tuple(upper_deg) if upper_deg is not None else self.upper_deg,
-                          self.joint_map)
+                          self.joint_map,
+                          tuple(set_by) if set_by is not None else self.limits_set)
+
+    def limit_source(self, k: int) -> str:
+        """Where joint k's limits come from, in words."""
+        given = self.limits_set[k] if k < len(self.limits_set) else ""
+        return given or f"the {self.name} model's own"
 
     def copy_model(self) -> pin.Model:
         return pin.Model(self.model)
@@ -334,4 +344,5 @@ def override_limits(robot: RobotModel, specs) -> RobotModel:
                                  f"(also --limit {given[k]})")
         given[k] = spec
         lower[k], upper[k] = lo, hi
-    return robot.with_limits(lower, upper)
+    set_by = [f"set by --limit {given[k]}" if k in given else "" for k in range(len(lower))]
+    return robot.with_limits(lower, upper, set_by)

@@ -1,0 +1,72 @@
+"""A program that goes beyond the joint limits as written: a program the
+controller runs is within its own limits, so the limits rapidcomp used are
+not the controller's. fix and check say which joint, by how much, what the
+limits were and where they came from (the user's --limit or the model's
+own), and how to give the controller's. The amounts are the jointtargets'
+own numbers less the limits, worked out by hand here."""
+
+from __future__ import annotations
+
+from click.testing import CliRunner
+
+from rapidcomp.cli import main
+
+from conftest import FIXTURES
+
+WARM = str(FIXTURES / "warm.csv")
+# MoveAbsJ to J1 = 30 deg and J5 = 118 deg as written; a MoveL within every
+# limit. (J1 -10..10 by --limit: 20 deg beyond; the IRB 140 model's J5
+# -115..115: 3 deg beyond.)
+PROGRAM = """MODULE Lim
+  CONST jointtarget jFar:=[[30,0,0,0,45,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  CONST jointtarget jBent:=[[0,10,10,0,118,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  CONST jointtarget jNear:=[[0,0,0,0,45,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  PROC main()
+    MoveAbsJ jFar, v100, fine, tool0;
+    MoveAbsJ jBent, v100, fine, tool0;
+    MoveAbsJ jNear, v100, fine, tool0;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def _note(output: str) -> list[str]:
+    return [line for line in output.splitlines() if "goes beyond the joint limits" in line]
+
+
+def test_fix_names_the_joint_the_amount_and_the_limit_option(tmp_path):
+    src = tmp_path / "lim.mod"
+    src.write_text(PROGRAM)
+    out = tmp_path / "out.mod"
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", WARM, "--limit", "J1=-10:10",
+                                  "-o", str(out)])
+    assert r.exit_code == 1, r.output
+    assert not out.exists()
+    note, = _note(r.output)
+    assert "J1 at 1 target, by up to 20 deg (its limits -10..10 deg, set by --limit J1=-10:10)" \
+        in note
+    assert "J5 at 1 target, by up to 3 deg (its limits -115..115 deg, the IRB140 model's own)" \
+        in note
+    assert "give the controller's with --limit JOINT=LOWER:UPPER" in note
+
+
+def test_check_says_the_same(tmp_path):
+    src = tmp_path / "lim.mod"
+    src.write_text(PROGRAM)
+    r = CliRunner().invoke(main, ["check", str(src), "--profile", WARM, "--limit", "J1=-10:10",
+                                  "--limit", "J5=-120:120"])
+    note, = _note(r.output)
+    assert "J1 at 1 target, by up to 20 deg (its limits -10..10 deg, set by --limit " \
+        "J1=-10:10)" in note
+    assert "J5" not in note.split(". The controller")[0]
+
+
+def test_no_note_within_the_limits(tmp_path):
+    src = tmp_path / "lim.mod"
+    src.write_text(PROGRAM)
+    out = tmp_path / "out.mod"
+    r = CliRunner().invoke(main, ["fix", str(src), "--profile", WARM, "--limit", "J5=-120:120",
+                                  "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert _note(r.output) == []
+    assert _note(out.with_suffix(".md").read_text()) == []
