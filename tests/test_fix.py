@@ -306,10 +306,10 @@ def test_cli_unreachable_target_exit_1_writes_nothing_unless_allowed(tmp_path):
     assert "line 20 MoveL pFar: nominal: out of reach by 31.770 mm" in r.output
     assert list(tmp_path.iterdir()) == []
     # (Its first line, which names the output, says it is not written.)
-    assert r.output.startswith(f"before.mod -> {out} (auto; not written)\n"), r.output
+    assert r.output.startswith(f"{prog} -> {out} (auto; not written)\n"), r.output
     r = _run(["fix", str(prog), "--profile", WARM, "-o", str(out), "--allow-partial"])
     assert r.exit_code == 1
-    assert r.output.startswith(f"before.mod -> {out} (auto)\n"), r.output
+    assert r.output.startswith(f"{prog} -> {out} (auto)\n"), r.output
     assert out.read_bytes() == (GOLDEN / "fix" / "refusals" / "after.mod").read_bytes()
     assert "MoveL pFar, v100" in out.read_text()
 

@@ -365,7 +365,9 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
         r = o.result
         if not quiet:
             src = o.spec.source
-            what = r.program if not src.is_folder else f"{src.input} ({r.program})"
+            # (The input as the user named it, as the output is: two inputs of
+            # one name in two folders are told apart.)
+            what = str(src.input) if not src.is_folder else f"{src.input} ({r.program})"
             # (Where nothing will be written, the first line says so too:
             # the reason follows on stderr.)
             held = "; not written" if failed and not allow_partial else ""
