@@ -570,6 +570,10 @@ class Editor:
         # fix._transient_notes).
         self.cold_moves = self.cold_inline = 0
         self.cold_copies: list[str] = []
+        # Transient: the uses whose move reads a new copy (its cold value)
+        # of a PERS declaration, not the PERS itself (their rows say what
+        # that costs: rows._row).
+        self.pers_copies: set = set()
         self._per_module: dict = {}
         # (_to_absj) instruction -> (MoveAbsJ as it, the why of its name's edit, of its
         # target's)
@@ -1160,12 +1164,15 @@ class Editor:
         """Each use's target becomes func(<cold>, <dq>) (with its index).
         literals: each element's correction literal and new cold value's,
         for self.calls."""
+        pers = g.decl is not None and g.decl.storage == "PERS"
         for u in g.uses:
             src = u.source
             ref_text = u.file.text(src.ref)
             cold, dq = names["array"] if g.array else names[src.element]
             index = ref_text[len(src.ref.name):] if g.array else ""
             cold_ref = (cold + index) if cold is not None else ref_text
+            if pers and cold is not None:
+                self.pers_copies.add(u.key)
             target = f"{func}({cold_ref}, {dq}{index})"
             if absj:
                 called = self._to_absj(u, target)

@@ -288,6 +288,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     # hundreds of MB): the edited literals as written, the output parsed
     # again; of the editor the rows read what it did per use only.
     actions, cold = editor.actions, (editor.cold_moves, editor.cold_inline, editor.cold_copies)
+    pers_copies = editor.pers_copies if transient is not None else None
     values = written = converted = calls = out_files = editor = keys = None
     # The rows read the plan's uses and track only: the resolver's caches
     # go before the rows are made (a later use of them fails loudly).
@@ -297,7 +298,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
     release()
     at: list | None = [] if cells is not None or jcells is not None else None
     rows = use_rows(plan, solved, group_of=group_of, actions=actions, verified=verified,
-                    written_conf=written_conf, at=at)
+                    written_conf=written_conf, at=at, pers_copies=pers_copies)
     notes = plan_notes + _notes(rows, gs, transient is not None)
     limits = limits_note(rows, solver.nominal_robot)
     if limits:

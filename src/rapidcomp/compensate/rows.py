@@ -297,13 +297,16 @@ def displacement_warning(um_per_mm: float, track: bool = False) -> str:
 def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
              actions: dict | None = None, verified: dict | None = None,
              written_conf: dict | None = None,
-             statuses=(COMPENSATED, NOT_COMPENSATED), at: list | None = None) -> Rows:
+             statuses=(COMPENSATED, NOT_COMPENSATED), at: list | None = None,
+             pers_copies: set | None = None) -> Rows:
     """Rows in text order. Without group_of/verified (check): per use, the
     solve's own residual and the confdata of the compensated joints; with
     them (fix): the written values' residual and confdata
     (written_conf: use key -> the confdata written, absent where no robtarget
     is written). `at`, when given, receives each row's row of `solved`
-    (None for a use not solved)."""
+    (None for a use not solved). pers_copies (a transient output's): the
+    uses whose move reads a copy of its PERS declaration (else: those of a
+    group placed anew)."""
     ok_label, fail_label = statuses
     tracked = {k for k, _ in plan.track}
     cols = _Columns(solved)
@@ -322,14 +325,14 @@ def use_rows(plan: Plan, solved: Solved, *, group_of: dict | None = None,
         if at is not None:
             at.append(solved.row[u.key])
         row, code = _row(solved, cols, u, base, group_of, actions, verified,
-                         written_conf, ok_label, fail_label, tracked)
+                         written_conf, ok_label, fail_label, tracked, pers_copies)
         out.append(row)
         codes.append(code)
     return Rows(out, codes, cols.joints)
 
 
 def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, verified,
-         written_conf, ok_label, fail_label, tracked) -> tuple[tuple, int]:
+         written_conf, ok_label, fail_label, tracked, pers_copies=None) -> tuple[tuple, int]:
     """(the row's fields but its joints, where its joints are: Rows)."""
     i = solved.row[u.key]
     # (The pick's columns read where they are: no Pick made for each row.)
@@ -374,7 +377,10 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
             warnings = warnings + (f"kept as {u.motion.instruction}: in another iteration of its "
                                    "loop this statement must stay a robtarget move, and one "
                                    "statement cannot be both",)
-        if g.placement == "new" and g.decl is not None and g.decl.storage == "PERS":
+        # (A transient output's moves read a copy where the editor made one,
+        # a cold value with other confdata; placed anew or not: pers_copies.)
+        if (u.key in pers_copies if pers_copies is not None else
+                g.placement == "new" and g.decl is not None and g.decl.storage == "PERS"):
             warnings = warnings + (f"{g.decl.name} is PERS: this move now reads a CONST "
                                    "copy, which changes to it at run time (ModPos, another "
                                    "task) no longer reach",)
