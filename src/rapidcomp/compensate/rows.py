@@ -381,7 +381,8 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         # a cold value with other confdata; placed anew or not: pers_copies.)
         if (u.key in pers_copies if pers_copies is not None else
                 g.placement == "new" and g.decl is not None and g.decl.storage == "PERS"):
-            warnings = warnings + (f"{g.decl.name} is PERS: this move now reads a CONST "
+            # (The use's own declaration: of Singles, g has none.)
+            warnings = warnings + (f"{u.source.decl.name} is PERS: this move now reads a CONST "
                                    "copy, which changes to it at run time (ModPos, another "
                                    "task) no longer reach",)
     warnings = warnings + u.notes
