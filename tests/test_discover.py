@@ -174,7 +174,8 @@ def test_cli_discover_on_the_shipped_example(tmp_path):
     assert doc["outliers"] == []
     assert [list(s) for s in doc["steps"]] == [[
         "effect", "params", "stderr", "rms_before_mm", "rms_after_mm", "alternatives",
-        "thermal"]] * 2
+        "thermal", "determined"]] * 2
+    assert all(s["determined"] for s in doc["steps"])
     assert not any(s["thermal"] for s in doc["steps"])
     # The example hides these two (see the file's first comment line).
     assert [s["effect"] for s in doc["steps"]] == ["link_elongation:J2-J3", "joint_offset:J3"]

@@ -319,3 +319,44 @@ def test_a_pose_beyond_the_limits_is_one_note_for_all_its_rounds():
         f"points S21_t0, S21_t20 and 1 more (the same joints): {j5} beyond the model's joint "
         "limits",
         f"point P1_t0: {j5} beyond the model's joint limits"]
+
+
+def test_a_campaign_that_leaves_an_effect_open_names_no_value(tmp_path):
+    """Three rounds with a stop (0, 60, a 30 min stop, 120) of 12 poses: the
+    heating and cooling time constants and the size of a thermal J2 shift
+    trade off, and the fit's stated error is some 1e5 mm, beyond anything a
+    robot has. discover does not call that explained, says which effect the
+    data leave open and why, and writes no profile of it. A J2 shift over
+    ten rounds of 30 poses is explained, its value within its error of the
+    truth, and written."""
+    path = _campaign(tmp_path, "open.csv", "--tau-heat", "30",
+                     "--thermal-effect", "joint_displacement:J2=0,0,0.05",
+                     points="random:12", times="0,60,+30,120")
+    r = _rapidcomp("discover", path, "--tool", "0,0,150", "--out-profile", "open_prof.csv",
+                   "--json", "open.json", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "open.json").read_text())
+    assert doc["verdict"] == "unexplained"
+    open_steps = [s for s in doc["steps"] if not s["determined"]]
+    assert open_steps and all(s["thermal"] for s in open_steps)
+    # (What "beyond anything a robot has" means: an error above the 5 mm
+    # a joint displacement may have, plausible.py.)
+    assert all(max(map(abs, s["stderr"].values())) > 5 for s in open_steps)
+    verdict = next(line for line in r.stdout.splitlines() if line.startswith("verdict:"))
+    assert "do not determine thermal:joint_displacement" in verdict
+    assert "campaign of 3 rounds" in verdict and "Measure more rounds" in verdict
+    assert "open_prof.csv not written: these data do not determine" in r.stdout
+    assert not (tmp_path / "open_prof.csv").exists()
+
+    path = _campaign(tmp_path, "long.csv", "--tau-heat", "30",
+                     "--thermal-effect", "joint_displacement:J2=0.03,0,0.04")
+    r = _rapidcomp("discover", path, "--tool", "0,0,150", "--out-profile", "long_prof.csv",
+                   "--json", "long.json", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "long.json").read_text())
+    assert doc["verdict"] == "explained"
+    step, = doc["steps"]
+    assert step["determined"] and step["effect"] == "joint_displacement:J2"
+    for axis, truth in (("dx_mm", 0.03), ("dz_mm", 0.04)):
+        assert abs(step["params"][axis] - truth) < 3 * step["stderr"][axis] + 1e-3
+    assert (tmp_path / "long_prof.csv").exists()

@@ -166,6 +166,10 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
         notes.append(f"{Path(out_profile).name} not written: the data and the model are far "
                      "apart (see the verdict); a profile from them would move the robot by what "
                      "the measurement set-up got wrong")
+    elif out_profile and d.undetermined:
+        notes.append(f"{Path(out_profile).name} not written: these data do not determine "
+                     f"{', '.join(eid for eid, _ in d.undetermined)} (see the verdict); a "
+                     "profile of its fitted value would move the robot by a guess")
     elif out_profile and heldout is not None and not heldout.holds:
         notes.append(f"{Path(out_profile).name} not written: the final model does not hold on "
                      f"the held-out poses of {Path(test).name} (see the verdict)")

@@ -24,6 +24,7 @@ def _num(x: float) -> str:
 
 
 def as_json(d: Discovery, test: HeldOut | None = None) -> str:
+    left_open = {eid for eid, _ in d.undetermined}
     doc = {
         "initial_rms_mm": round(d.initial_rms_mm, 9),
         "final_rms_mm": round(d.final_rms_mm, 9),
@@ -37,7 +38,10 @@ def as_json(d: Discovery, test: HeldOut | None = None) -> str:
                    "rms_before_mm": round(s.rms_before_mm, 9),
                    "rms_after_mm": round(s.rms_after_mm, 9),
                    "alternatives": list(s.alternatives),
-                   "thermal": s.effect.thermal} for s in d.steps],
+                   "thermal": s.effect.thermal,
+                   # (Its stated error beyond anything a robot has: the
+                   # data leave its value open; the verdict says so.)
+                   "determined": s.effect.id not in left_open} for s in d.steps],
         "tau_min": (None if d.warmup is None or d.warmup.tau_min is None
                     else float(f"{d.warmup.tau_min:.6g}")),
         "tau_cool_min": (None if d.warmup is None or d.warmup.tau_cool_min is None

@@ -132,6 +132,9 @@ class Discovery:
     far_apart: bool = False             # only values no robot has would explain the data
     warmup: "warmup.Warmup | None" = None  # a warm-up campaign's tau (data with t_min)
     thermal_evidence: dict | None = None    # effect id -> static/thermal and why
+    # Named effects these data do not determine (_undetermined): effect id,
+    # its largest stated error in words.
+    undetermined: tuple[tuple[str, str], ...] = ()
 
     @property
     def initial_rms_mm(self) -> float:
@@ -736,6 +739,7 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
             and any(e.thermal for e in current.effects)):
         steps = _with_time_constants(steps, current, model, data, warm, sigma)
     noise_p = _noise_p(current, sigma, n)
+    undetermined = _undetermined(steps)
     initial = analyse(data.names, data.q_deg, meas, start.residuals, model.robot.joint_names)
     final = analyse(data.names, data.q_deg, meas, current.residuals, model.robot.joint_names)
     found = None
@@ -747,13 +751,31 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     est = (" (the least an instrument has)" if nz.floored else
            " (estimated)" if nz.kind == "estimated" else "")
     verdict, text = _verdict(steps, current, sigma, noise_p, est, blocked,
-                             far_apart, found)
+                             far_apart, found, undetermined,
+                             warm.times if warm is not None and warm.tau_min is not None
+                             else None)
     notes = ((screened.note,) if screened.note else ()) + tuple(far_notes)
     evidence = _thermal_evidence(sel, current, steps) if warm is not None else {}
     return Discovery(len(data), sigma, source, initial, final, start.heldout_rms_mm(),
                      tuple(steps), verdict, text, noise_p, tuple(sel.not_identifiable.items()),
                      current, start, effects, tuple(blocked), nz, screened.outliers, found, notes,
-                     screened.rows, far_apart, warm, evidence)
+                     screened.rows, far_apart, warm, evidence, tuple(undetermined))
+
+
+def _undetermined(steps) -> list[tuple[str, str]]:
+    """The named effects whose stated error alone is beyond anything a real
+    robot has (plausible.py's bounds, the errors read as values): the data
+    fit every value a robot could have as well, and more, so the fitted
+    value is no measurement of the robot (a warm-up campaign of three rounds
+    with a stop: the time constants and an effect's size trade off, and its
+    error comes out at 1e5 mm). Each: effect id, its largest error."""
+    out = []
+    for i, st in enumerate(steps):
+        errors = {k: abs(float(v)) for k, v in st.stderr.items()}
+        if implausible(st.effect, errors, first=(i == 0)) is not None:
+            name, err = max(errors.items(), key=lambda kv: kv[1])
+            out.append((st.effect.id, f"{name} ±{err:.3g}"))
+    return out
 
 
 def _thermal_evidence(sel: _Selector, final: Fit, steps) -> dict[str, str]:
@@ -797,10 +819,29 @@ def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:
 
 
 def _verdict(steps, current: Fit, sigma: float, noise_p: float, est: str,
-             blocked=(), far_apart: bool = False, found: Structure | None = None):
-    """est: what the noise's figure is, said after it (" (estimated)")."""
+             blocked=(), far_apart: bool = False, found: Structure | None = None,
+             undetermined=(), rounds: int | None = None):
+    """est: what the noise's figure is, said after it (" (estimated)").
+    undetermined: _undetermined's; rounds: a warm-up campaign's times."""
     s_um = sigma * 1000
     at_noise = noise_p >= 1 - NOISE_QUANTILE
+    if at_noise and undetermined and not far_apart:
+        # (Evidence over claims: a model whose size the data leave open
+        # explains nothing about the robot.)
+        names = ", ".join(s.effect.id for s in steps)
+        ids = ", ".join(eid for eid, _ in undetermined)
+        errs = "; ".join(err if len(undetermined) == 1 else f"{eid}: {err}"
+                         for eid, err in undetermined)
+        thermal = any(eid.startswith(THERMAL_PREFIX) for eid, _ in undetermined)
+        why = (f" (a warm-up campaign of {rounds} rounds: the warm-up's time constants and "
+               "the effect's size trade off)" if thermal and rounds is not None else "")
+        more = ("more rounds, more often at the start of the warm-up" if thermal
+                else "more poses, spread over the workspace")
+        return "unexplained", (
+            f"With {names} added, the residuals (RMS {current.rms_mm * 1000:.1f} um) are "
+            f"consistent with measurement noise of {s_um:.1f} um per axis{est}, but these data "
+            f"do not determine {ids}: the stated error ({errs}) is beyond anything a real robot "
+            f"has, so every value a robot could have fits as well{why}. Measure {more}.")
     if at_noise and found is not None:
         named = (f"With {', '.join(s.effect.id for s in steps)} added, the" if steps
                  else "The")
