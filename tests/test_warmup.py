@@ -333,7 +333,7 @@ def test_a_campaign_that_leaves_an_effect_open_names_no_value(tmp_path):
                      "--thermal-effect", "joint_displacement:J2=0,0,0.05",
                      points="random:12", times="0,60,+30,120")
     r = _rapidcomp("discover", path, "--tool", "0,0,150", "--out-profile", "open_prof.csv",
-                   "--json", "open.json", cwd=tmp_path)
+                   "--json", "open.json", "--report", "open.md", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     doc = json.loads((tmp_path / "open.json").read_text())
     assert doc["verdict"] == "unexplained"
@@ -346,6 +346,13 @@ def test_a_campaign_that_leaves_an_effect_open_names_no_value(tmp_path):
     assert "do not determine thermal:joint_displacement" in verdict
     assert "campaign of 3 rounds" in verdict and "Measure more rounds" in verdict
     assert "open_prof.csv not written: these data do not determine" in r.stdout
+    # The report's final model states the same errors as the JSON and the
+    # summary (the time constants' uncertainty in them).
+    table = (tmp_path / "open.md").read_text().split("## Final model")[1].split("##")[0]
+    for s in open_steps:
+        for k, err in s["stderr"].items():
+            row = next(line for line in table.splitlines() if f"| {k} |" in line)
+            assert float(row.split("|")[-2]) == pytest.approx(err, rel=0.01)
     assert not (tmp_path / "open_prof.csv").exists()
 
     path = _campaign(tmp_path, "long.csv", "--tau-heat", "30",

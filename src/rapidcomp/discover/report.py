@@ -127,9 +127,14 @@ def markdown(d: Discovery, meta: dict, plot_note: str | None = None,
         out += ["## Final model", "", "| effect | parameter | value | stderr |",
                 "|---|---|---:|---:|"]
         errors = d.final_fit.stderr(d.sigma_mm)
+        # (The steps' errors where they have them, as the summary and the
+        # JSON state them: a warm-up's hold its time constants' uncertainty
+        # too, which the final fit's own leave out.)
+        stated = {s.effect.id: s.stderr for s in d.steps}
         for e, v, s in zip(d.final_fit.effects, d.final_fit.values, errors):
-            for name, val, err in zip(e.params, e.user(v).values(), e.user(s).values()):
-                out.append(f"| {e.id} | {name} | {_num(val)} | {_num(err)} |")
+            errs = stated.get(e.id, e.user(s))
+            for name, val in zip(e.params, e.user(v).values()):
+                out.append(f"| {e.id} | {name} | {_num(val)} | {_num(errs[name])} |")
         out.append("")
     out += ["## Before fitting", ""] + _analysis(d.initial, "Residuals: measured - simulated")
     for i, s in enumerate(d.steps, 1):
