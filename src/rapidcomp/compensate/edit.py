@@ -157,11 +157,6 @@ class Values:
             int)).all(axis=1)
         return d, dq, conf, kept
 
-    def prepared_dq(self, s: Singles, n: int) -> bool:
-        """prepare() made element n's correction and its literal."""
-        got = self._values.get(("pose dq", id(s), n))
-        return got is not None and len(got) == 3
-
     def conf_kept(self, g: Group, k) -> bool:
         """Transient: pose_dq(g, k)'s confdata is the written one."""
         key = ("pose dq", id(g), k)
@@ -173,6 +168,15 @@ class Values:
                 return np.array_equal(conf, self.source(g, k).record.conf)
         stacks, j = got[:2]
         return bool(stacks[3][j])
+
+    def kept_pose_literal(self, s: Singles, n: int) -> str | None:
+        """Transient: the literal of element n's correction where prepare()
+        made it and its confdata is the written one (conf_kept), as
+        pose_literal gives it: one look-up for 1e5 targets; else None."""
+        got = self._values.get(("pose dq", id(s), n))
+        if got is None or len(got) != 3 or not got[0][3][got[1]]:
+            return None
+        return got[2]
 
     def pose_literal(self, g: Group, k) -> str:
         """Transient: the literal of pose_dq(g, k)'s correction."""
@@ -855,26 +859,40 @@ class Editor:
         given module (Singles.single's home: that module), of each name and
         value of `named` (name, value, name, value, ...), in that order:
         next to it, LOCAL unless another module's move reads it. Returns
-        the index of the file they go in."""
+        the index of the file they go in. (RobotStudio's way, 1e5 declared
+        targets each getting its own: spans read as the ints they are, no
+        anchor's search where the declaration ends its line.)"""
         src = u.source
         decl, module = src.decl, src.home_module
         fi = self.plan.file_index[id(src.home)]
         text = self.plan.files[fi].source.text
-        span = decl.span
-        end = span.end
+        node = decl.node
+        span = node.span
+        start, end = span >> 32, span & 0xFFFFFFFF
         c = text[end:end + 1]
         if c == "\n" or c == "\r" or not c:
             # (The declaration ends its line, as RobotStudio writes every one
             # of 1e5: the place _anchor_of finds, at the end of that line,
             # without its search for declarations that follow on it.)
-            anchor = (fi, end, "\r\n" if text.startswith("\r\n", end) else c or "\n",
-                      _indent(text, span.start), decl.routine is not None)
+            nl = "\r\n" if text.startswith("\r\n", end) else c or "\n"
+            indent, in_routine = _indent(text, start), decl.routine is not None
         else:
-            anchor = self._anchor_of((fi, module), decl, module)
-        local, assign = u.module is module, self._assign(fi, decl, module, module)
+            fi, end, nl, indent, in_routine = self._anchor_of((fi, module), decl, module)
+        # ':=' spaced as in the declaration (_assign's of its own node).
+        init = node.init.span >> 32
+        assign = ((" " if text[start:init].rstrip("\t ")[:-2].endswith(" ") else "") + ":="
+                  + (" " if text[init - 1] == " " else ""))
+        scope = "" if in_routine or u.module is not module else "LOCAL "
+        # (As _declare puts them at the anchor.)
+        key = (fi, end)
+        texts = self.inserts.get(key)
+        if texts is None:
+            texts = self.inserts[key] = []
         for at in range(0, len(named), 2):
-            self._declare(anchor, local, assign, type_name, named[at], "", named[at + 1])
-        return anchor[0]
+            texts.append(f"{scope}CONST {type_name} {named[at]}{assign}{named[at + 1]};")
+        self.insert_nl[key] = nl
+        self.insert_indent[key] = indent
+        return fi
 
     def _apply_one_by_one(self, s: Singles, ns) -> None:
         """apply() of elements ns of s, each as the Group of its one use
@@ -928,16 +946,16 @@ class Editor:
                     calls[u.key] = (u, cold_lit, None, dq_lit, FUNC_J, src.expr.span, called,
                                     cold_lit)
             return
-        prepared = vals.prepared_dq
+        kept_literal = vals.kept_pose_literal
         why = self._said(f"target -> {FUNC_R}")
         inline = self._said(f"inline robtarget -> {FUNC_R}(written, correction)")
         for n in ns:
-            if not prepared(s, n) or not vals.conf_kept(s, n):
+            literal = kept_literal(s, n)
+            if literal is None:
                 self._apply_one_by_one(s, (n,))
                 continue
             u = s.uses[n]
             src = u.source
-            literal = vals.pose_literal(s, n)
             ref_text = u.file.text(src.ref)
             if s.declared:
                 # (As _declare_transient names and declares it: no cold copy.)
