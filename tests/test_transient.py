@@ -547,6 +547,7 @@ def test_a_target_read_once_that_the_transient_writer_refuses_is_its_own_group(t
     from rapidcomp.compensate import edit
     from rapidcomp.compensate import place as P
     real, kept = edit.Editor._apply_transient, edit.Values.conf_kept
+    kept_literal = edit.Values.kept_pose_literal
 
     def refusing(self, g):
         if [u.line for u in g.uses] == [106]:          # MoveL pS3, v200, fine, tool0;
@@ -559,8 +560,13 @@ def test_a_target_read_once_that_the_transient_writer_refuses_is_its_own_group(t
         # Group's, where the writer refuses it.)
         lines = [g.uses[k].line] if type(g) is P.Singles else [u.line for u in g.uses]
         return False if lines == [106] else kept(self, g, k)
+
+    def no_literal(self, s, n):
+        # (The Singles' way of asking the same.)
+        return None if s.uses[n].line == 106 else kept_literal(self, s, n)
     monkeypatch.setattr(edit.Editor, "_apply_transient", refusing)
     monkeypatch.setattr(edit.Values, "conf_kept", not_kept)
+    monkeypatch.setattr(edit.Values, "kept_pose_literal", no_literal)
     out = tmp_path / "o.mod"
     r = CliRunner().invoke(main, ["fix", str(FIXTURES / "cubes.mod"), "--profile",
                                   str(FIXTURES / "warm.csv"), "--transient", "--tau-heat", "45",
