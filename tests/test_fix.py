@@ -335,6 +335,29 @@ def test_cli_refuses_to_overwrite_the_input(tmp_path):
     assert prog.read_bytes() == (FIXTURES / "paper_front.mod").read_bytes()
 
 
+def test_cli_two_programs_of_one_name_into_one_folder_are_named(tmp_path, monkeypatch):
+    """a/p.mod and b/p.mod into -o out/: both would write out/p.mod. The
+    message names that file and both programs (not the report, which
+    clashes too), and nothing is written; the first line of check and
+    fix names each input as given."""
+    monkeypatch.chdir(tmp_path)
+    for d in ("a", "b"):
+        (tmp_path / d).mkdir()
+        (tmp_path / d / "p.mod").write_bytes((FIXTURES / "paper_front.mod").read_bytes())
+    r = _run(["fix", "a/p.mod", "b/p.mod", "--profile", WARM, "-o", "out/"])
+    assert r.exit_code == 2
+    assert ("out/p.mod: would be both the module of a/p.mod and the module of b/p.mod"
+            in r.output), r.output
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+    r = _run(["fix", "a/p.mod", "--profile", WARM, "--json", "x.md", "-o", "x.mod"])
+    assert r.exit_code == 2 and "x.md: would be both the report of a/p.mod and the JSON" \
+        in r.output
+    r = _run(["check", "b/p.mod", "--profile", WARM])
+    assert r.output.startswith("b/p.mod: predicted error on the warm robot"), r.output
+    r = _run(["fix", "b/p.mod", "--profile", WARM, "-o", "y.mod"])
+    assert r.output.startswith("b/p.mod -> y.mod (auto)"), r.output
+
+
 @pytest.mark.parametrize("cpus", [1, 2])
 def test_cli_several_modules_into_a_directory(tmp_path, monkeypatch, cpus):
     """Several modules: a pool of two workers, or where the process may use

@@ -47,7 +47,8 @@ def test_fix_names_the_joint_the_amount_and_the_limit_option(tmp_path):
         in note
     assert "J5 at 1 target, by up to 3 deg (its limits -115..115 deg, the IRB140 model's own)" \
         in note
-    assert "give the controller's with --limit JOINT=LOWER:UPPER" in note
+    assert ("if this one runs, --limit J1=-10:10 is narrower than the controller's: give the "
+            "controller's own limits with --limit JOINT=LOWER:UPPER") in note
 
 
 def test_check_says_the_same(tmp_path):
@@ -70,3 +71,47 @@ def test_no_note_within_the_limits(tmp_path):
     assert r.exit_code == 0, r.output
     assert _note(r.output) == []
     assert _note(out.with_suffix(".md").read_text()) == []
+
+
+def test_a_target_beyond_two_limits_names_both(tmp_path):
+    """J1 = 30 (20 deg beyond --limit J1=-10:10) and J5 = 118 (3 deg beyond
+    the model's 115) in one jointtarget: its row and the note name both,
+    the worse first, each with its amount and its limits' source."""
+    src = tmp_path / "both.mod"
+    src.write_text(PROGRAM.replace("[[30,0,0,0,45,0]", "[[30,0,0,0,118,0]"))
+    r = CliRunner().invoke(main, ["check", str(src), "--profile", WARM, "--limit", "J1=-10:10"])
+    assert "MoveAbsJ jFar: nominal: J1 beyond its limit by 20.0000 deg, J5 by 3.0000 deg" \
+        in r.output, r.output
+    note, = _note(r.output)
+    assert "J1 at 1 target, by up to 20 deg" in note
+    # (jFar and jBent both beyond J5.)
+    assert "J5 at 2 targets, by up to 3 deg (its limits -115..115 deg, the IRB140 model's own)" \
+        in note
+
+
+def test_a_limit_only_the_compensation_crosses(tmp_path):
+    """A J2 limit the paper's points reach within as written but their
+    compensated joints cross: refused (the robot cannot go there), and the
+    note says it is the compensation that needs it, not the program."""
+    r = CliRunner().invoke(main, ["check", str(FIXTURES / "cubes.mod"), "--profile", WARM,
+                                  "--limit", "J2=-90:68.197", "--limit", "J5=-120:120"])
+    refused = [line for line in r.output.splitlines()
+               if line.startswith("  not compensable:") and "J2 beyond its limit by" in line]
+    assert refused and not any("nominal:" in line for line in refused)
+    assert _note(r.output) == []
+    note = next(line for line in r.output.splitlines()
+                if "the compensation needs joints beyond their limits" in line)
+    assert (f"J2 at {len(refused)} target{'s' if len(refused) != 1 else ''}, by up to"
+            in note)
+    assert "(its limits -90..68.197 deg, set by --limit J2=-90:68.197)" in note
+
+
+def test_a_urdf_robots_limits_are_its_files(tmp_path):
+    src = tmp_path / "lim.mod"
+    src.write_text(PROGRAM)
+    r = CliRunner().invoke(main, ["check", str(src), "--profile", WARM, "--robot",
+                                  str(FIXTURES / "robots" / "irb140.urdf")])
+    note, = _note(r.output)
+    assert "J5 at 1 target, by up to 3 deg (its limits -115..115 deg, the <limit> of " \
+        "irb140.urdf)" in note
+    assert "narrower" not in note

@@ -291,7 +291,11 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, ba
         doc = docs[0] if len(docs) == 1 else {"program": program, "tasks": docs}
         click.echo(json.dumps(doc, indent=2))
     else:
-        click.echo("\n".join(render_text(r) for r in results), nl=False)
+        # (The input as the user named it, as fix's first line names it;
+        # the JSON keeps the program's name: no path of this machine.)
+        click.echo("\n".join(render_text(replace(
+            r, program=str(s.input) if not s.is_folder else f"{s.input} ({r.program})"))
+            for r, s in zip(results, sources)), nl=False)
     sys.exit(EXIT_PARTIAL if any(r.failed for r in results) else EXIT_OK)
 
 
@@ -476,7 +480,8 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
             if t.kind in ("folder", "backup"):
                 folders.append(os.path.realpath(t.root))
     specs = []
-    seen: set[str] = set()
+    # An output's real path -> (the input it is written for, what it is).
+    seen: dict[str, tuple[str, str]] = {}
     for program, ts in groups:
         src = ts[0]
         name = Path(program.rstrip("/\\")).name
@@ -520,15 +525,22 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
                 rep = out + (f".{t.task}" if len(ts) > 1 else "") + ".md"
             else:
                 rep = str(Path(out).with_suffix(".md"))
-            paths = [rep, json_path] + ([str(Path(out) / m) for m in t.modules]
-                                        if t.is_folder else [out])
-            for path in paths:
+            # (The program's own file first: a clash names it, not its report.)
+            paths = ([(str(Path(out) / m), "a module") for m in t.modules] if t.is_folder
+                     else [(out, "the module")]) + [(rep, "the report"), (json_path, "the JSON")]
+            for path, what in paths:
                 if path is None:
                     continue
                 real = os.path.realpath(path)
-                if real in seen or real in inputs:
-                    raise RapidcompError(f"{path}: would overwrite an input or another output")
-                seen.add(real)
+                if real in inputs:
+                    raise RapidcompError(f"{path}: would overwrite an input")
+                if real in seen:
+                    first, first_what = seen[real]
+                    raise RapidcompError(
+                        f"{path}: would be both {first_what} of {first} and {what} of {program}"
+                        + (": give each program its own -o, or -o DIR/ with programs of "
+                           "different names" if first != program else ": give it another name"))
+                seen[real] = (program, what)
             # (A report too: a file in the input folder is read back as part
             # of the task, or copied with it, next time.)
             for path in (rep, json_path):

@@ -10,8 +10,8 @@ import numpy as np
 
 from ..construct import maker
 from ..kinematics.frames import DEG
-from ..kinematics.ik import (BEYOND_LIMIT, NO_SOLUTION_IN_LIMITS, WARN_TEXT, Warn,
-                              warning_texts_of)
+from ..kinematics.ik import (BEYOND_LIMIT, MORE_BEYOND, NO_SOLUTION_IN_LIMITS, WARN_TEXT,
+                              Warn, warning_texts_of)
 from .place import Group, element_label
 from .plan import Plan
 from .solve import Solved
@@ -449,39 +449,60 @@ def _hint(reason: str, u: TargetUse, tracked) -> str:
 
 
 def limits_note(rows: "Rows", robot) -> str | None:
-    """What a program beyond the robot's joint limits as written means (the
-    nominal robot's solution, before any compensation): the limits are not
-    the controller's, which runs only programs within its own (a user's
-    --limit, or the model's own where the controller's differ: the IRB 140's
-    J5 is +-115 or +-120 deg by variant). None where no target is so."""
-    over: dict[int, tuple[int, float]] = {}
+    """What joint-limit refusals mean, said once with where the limits come
+    from. As written (the nominal robot's solution, before any
+    compensation): the limits are not the controller's, which runs only
+    programs within its own (a user's --limit narrower than them, or the
+    model's own where the controller's differ: the IRB 140's J5 is +-115 or
+    +-120 deg by variant). After compensation: the warm robot needs a joint
+    beyond the limit, which the robot cannot do, unless the controller's
+    limits are wider. None where no target is refused so."""
+    over: dict[str, dict[int, tuple[int, float]]] = {"nominal": {}, "compensated": {}}
     none = 0
     for reason in rows.column("reason"):
         # (A row's own failure only: an array's other elements refused with
         # it name its reason after their own words.)
-        if reason is None or not reason.startswith("nominal: "):
+        if reason is None:
             continue
-        m = BEYOND_LIMIT.match(reason, len("nominal: "))
+        nominal = reason.startswith("nominal: ")
+        m = BEYOND_LIMIT.match(reason, len("nominal: ") if nominal else 0)
         if m is not None:
-            k = int(m.group(1)) - 1
-            n, worst = over.get(k, (0, 0.0))
-            over[k] = (n + 1, max(worst, float(m.group(2))))
+            seen = over["nominal" if nominal else "compensated"]
+            for joint, by in ((m.group(1), m.group(2)), *MORE_BEYOND.findall(m.group(3))):
+                n, worst = seen.get(int(joint) - 1, (0, 0.0))
+                seen[int(joint) - 1] = (n + 1, max(worst, float(by)))
         elif reason == f"nominal: {NO_SOLUTION_IN_LIMITS}":
             none += 1
-    if not over and not none:
+    if not any(over.values()) and not none:
         return None
+
+    def joints(seen: dict) -> list[str]:
+        return [f"{robot.joint_names[k]} at {n} target{'s' if n != 1 else ''}, by up to "
+                f"{worst:.4g} deg (its limits {robot.lower_deg[k]:g}..{robot.upper_deg[k]:g} "
+                f"deg, {robot.limit_source(k)})" for k, (n, worst) in sorted(seen.items())]
     said = []
-    for k in sorted(over):
-        n, worst = over[k]
-        said.append(f"{robot.joint_names[k]} at {n} target{'s' if n != 1 else ''}, by up to "
-                    f"{worst:.4g} deg (its limits {robot.lower_deg[k]:g}..{robot.upper_deg[k]:g}"
-                    f" deg, {robot.limit_source(k)})")
-    if none:
-        said.append(f"no solution within the limits at {none} target{'s' if none != 1 else ''}")
-    return ("the program as written goes beyond the joint limits rapidcomp uses: "
-            + "; ".join(said) + ". The controller runs only programs within its own limits: "
-            "if this one runs, give the controller's with --limit JOINT=LOWER:UPPER (degrees; "
-            "its MOC.cfg gives them as lower_joint_bound/upper_joint_bound, in radians)")
+    if over["nominal"] or none:
+        # (The --limit options among the limits crossed.)
+        given = sorted({robot.limit_source(k) for k in over["nominal"]
+                        if robot.limit_source(k).startswith("set by --limit ")})
+        said.append(
+            "the program as written goes beyond the joint limits rapidcomp uses: "
+            + "; ".join(joints(over["nominal"]) + ([
+                f"no solution within the limits at {none} target{'s' if none != 1 else ''}"]
+                if none else []))
+            + ". The controller runs only programs within its own limits: if this one runs, "
+            + (f"{' and '.join(g.removeprefix('set by ') for g in given)} "
+               f"{'is' if len(given) == 1 else 'are'} narrower than the controller's: "
+               if given else "")
+            + "give the controller's own limits with --limit JOINT=LOWER:UPPER (degrees; its "
+            "MOC.cfg gives them as lower_joint_bound/upper_joint_bound, in radians)")
+    if over["compensated"]:
+        said.append(
+            "the compensation needs joints beyond their limits: "
+            + "; ".join(joints(over["compensated"]))
+            + ". The warm robot reaches those targets only there: refused; if the "
+            "controller's limits are wider, give them with --limit JOINT=LOWER:UPPER")
+    return " ".join(x + "." for x in said)
 
 
 def summary(rows, ok_label: str = COMPENSATED, fail_label: str = NOT_COMPENSATED) -> dict:

@@ -891,7 +891,7 @@ def _seed_of(solver: Solver, q_nom: np.ndarray, rob: list, R_rob, p_rob, failed:
     status[failed] = Status.NO_CONFIGURATION
     nominal = IKBatch(np.where(np.isnan(q_nom), np.nan, seed.q_deg), status, seed.detail,
                       seed.detail_joint, seed.conf, seed.residual_mm, seed.residual_rad,
-                      seed.iterations, seed.warnings)
+                      seed.iterations, seed.warnings, beyond_deg=seed.beyond_deg)
     return R, p, seed, nominal
 
 

@@ -752,8 +752,7 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
            " (estimated)" if nz.kind == "estimated" else "")
     verdict, text = _verdict(steps, current, sigma, noise_p, est, blocked,
                              far_apart, found, undetermined,
-                             warm.times if warm is not None and warm.tau_min is not None
-                             else None)
+                             warm if warm is not None and warm.tau_min is not None else None)
     notes = ((screened.note,) if screened.note else ()) + tuple(far_notes)
     evidence = _thermal_evidence(sel, current, steps) if warm is not None else {}
     return Discovery(len(data), sigma, source, initial, final, start.heldout_rms_mm(),
@@ -820,9 +819,9 @@ def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:
 
 def _verdict(steps, current: Fit, sigma: float, noise_p: float, est: str,
              blocked=(), far_apart: bool = False, found: Structure | None = None,
-             undetermined=(), rounds: int | None = None):
+             undetermined=(), warm=None):
     """est: what the noise's figure is, said after it (" (estimated)").
-    undetermined: _undetermined's; rounds: a warm-up campaign's times."""
+    undetermined: _undetermined's; warm: a warm-up campaign's Warmup."""
     s_um = sigma * 1000
     at_noise = noise_p >= 1 - NOISE_QUANTILE
     if at_noise and undetermined and not far_apart:
@@ -832,16 +831,20 @@ def _verdict(steps, current: Fit, sigma: float, noise_p: float, est: str,
         ids = ", ".join(eid for eid, _ in undetermined)
         errs = "; ".join(err if len(undetermined) == 1 else f"{eid}: {err}"
                          for eid, err in undetermined)
-        thermal = any(eid.startswith(THERMAL_PREFIX) for eid, _ in undetermined)
-        why = (f" (a warm-up campaign of {rounds} rounds: the warm-up's time constants and "
-               "the effect's size trade off)" if thermal and rounds is not None else "")
-        more = ("more rounds, more often at the start of the warm-up" if thermal
-                else "more poses, spread over the workspace")
+        thermal = warm is not None and any(eid.startswith(THERMAL_PREFIX)
+                                           for eid, _ in undetermined)
+        why = (f": over the {warm.times} times of this warm-up campaign the warm-up's time "
+               "constants and the effect's size trade off" if thermal else "")
+        # (What the warm-up line advises where tau is poorly known; else more
+        # of what the fit lacks.)
+        more = (" and ".join(warm.advice) if thermal and warm.advice else
+                "measure more rounds" if thermal
+                else "measure more poses, spread over the workspace")
         return "unexplained", (
             f"With {names} added, the residuals (RMS {current.rms_mm * 1000:.1f} um) are "
             f"consistent with measurement noise of {s_um:.1f} um per axis{est}, but these data "
             f"do not determine {ids}: the stated error ({errs}) is beyond anything a real robot "
-            f"has, so every value a robot could have fits as well{why}. Measure {more}.")
+            f"has{why}. {more[0].upper()}{more[1:]}.")
     if at_noise and found is not None:
         named = (f"With {', '.join(s.effect.id for s in steps)} added, the" if steps
                  else "The")

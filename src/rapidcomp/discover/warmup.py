@@ -58,6 +58,9 @@ class Warmup:
     sensors: tuple[Sensor, ...] = ()
     state_from: str | None = None  # a temperature column that explains better than time
     tau_cool_min: float | None = None   # campaigns with stops (stood_min)
+    # What to measure where tau is poorly known ("measure longer", "measure
+    # more often at the start"), as the text says it.
+    advice: tuple[str, ...] = ()
 
     def states(self, t_min, temperatures=(), stood=None) -> np.ndarray:
         """Each row's thermal state: s(t), or from the temperature column
@@ -227,11 +230,14 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
     if tau_cool is not None:
         text += (f"; cooling time constant {tau_cool:.1f} min (from the stops, cumulative "
                  f"{float(np.max(stood)):g} min)")
+    advice = []
     if open_end or tau > 3 * span[1]:
+        advice.append("measure longer")
         text += ("; the campaign ends long before the robot is warm: tau is poorly known, "
                  "measure longer")
     first = np.diff(np.unique(np.round(t, 9)))
     if low <= grid[1] or (first.size and tau < first.min()):
+        advice.append("measure more often at the start")
         text += ("; the robot warms up faster than the campaign measures (tau below its "
                  "shortest interval, or at the shortest tau searched, 1 min: are the times in "
                  "minutes?): tau is poorly known, measure more often at the start")
@@ -245,7 +251,7 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
     if state_from is not None:
         text += f"; the thermal state comes from {state_from}, which the points follow better"
     return Warmup(len(groups), times, float(tau), low, high, p, sigma_mm or estimated, dof,
-                  text, sensors, state_from, tau_cool)
+                  text, sensors, state_from, tau_cool, tuple(advice))
 
 
 def _crossing(f, outside: float, inside: float, iterations: int = 40) -> float:

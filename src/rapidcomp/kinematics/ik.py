@@ -110,7 +110,11 @@ class IKResult:
 # A solution beyond a joint's limit, in words; BEYOND_LIMIT reads them back
 # (the note of a program that goes beyond the limits as written: rows.py).
 LIMIT_REASON = "J{joint} beyond its limit by {by:.4f} deg"
-BEYOND_LIMIT = re.compile(r"J(\d+) beyond its limit by (\d+\.\d+) deg")
+MORE_LIMIT_REASON = ", J{joint} by {by:.4f} deg"
+BEYOND_LIMIT = re.compile(r"J(\d+) beyond its limit by (\d+\.\d+) deg((?:, J\d+ by \d+\.\d+ deg)*)")
+MORE_BEYOND = re.compile(r", J(\d+) by (\d+\.\d+) deg")
+# A joint further than this beyond its limit is beyond it (deg).
+LIMIT_SLACK_DEG = 1e-9
 NO_SOLUTION_IN_LIMITS = "no solution within the joint limits"
 
 
@@ -148,6 +152,10 @@ class IKBatch:
     # (N,) the bound on a joint's change from its seed (deg: the solver's
     # max_joint_change_deg), where the rows are a deformed robot's
     jump_bound_deg: np.ndarray | None = None
+    # (N, 6) how far each joint of a JOINT_LIMIT row lies beyond its limit,
+    # deg (0 within it): its reason names every such joint, not the worst
+    # alone
+    beyond_deg: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.status)
@@ -176,7 +184,15 @@ class IKBatch:
             return (f"confdata asks for a J{j + 1} quadrant no solution has "
                     f"(nearest solution {d:.4f} deg outside it)")
         if s == Status.JOINT_LIMIT:
-            return LIMIT_REASON.format(joint=j + 1, by=d)
+            text = LIMIT_REASON.format(joint=j + 1, by=d)
+            if self.beyond_deg is not None:
+                # (The others beyond theirs, after the worst: one limit at a
+                # time would be a user's round trip each.)
+                over = self.beyond_deg[i]
+                text += "".join(MORE_LIMIT_REASON.format(joint=k + 1, by=float(over[k]))
+                                for k in np.argsort(-over, kind="stable").tolist()
+                                if k != j and over[k] > LIMIT_SLACK_DEG)
+            return text
         if s == Status.NOT_CONVERGED:
             return f"did not converge (residual {d:.3g} mm)" + _near(int(self.warnings[i]))
         if s == Status.JOINT_JUMP:
@@ -358,16 +374,18 @@ class Solver:
             out |= quadrant_miss(q_deg[:, col], conf[:, cf]) > self.options.quadrant_tol_deg
         return out
 
-    def _mark_limits(self, q_deg, status, detail, djoint) -> None:
+    def _mark_limits(self, q_deg, status, detail, djoint) -> np.ndarray:
         """Mark rows still OK whose joints lie beyond a limit (in place),
-        with the amount and the joint."""
+        with the amount and the joint (the worst); returns how far each
+        joint of those rows lies beyond (IKBatch.beyond_deg)."""
         over_all = np.maximum(self.lower - q_deg, q_deg - self.upper)  # > 0 beyond a limit
         j = np.argmax(over_all, axis=1)
         over = over_all[np.arange(len(q_deg)), j]
-        lim = (over > 1e-9) & (status == Status.OK)
+        lim = (over > LIMIT_SLACK_DEG) & (status == Status.OK)
         status[lim] = Status.JOINT_LIMIT
         detail[lim] = over[lim]
         djoint[lim] = j[lim]
+        return np.where(lim[:, None] & (over_all > LIMIT_SLACK_DEG), over_all, 0.0)
 
     # ------------------------------------------------------------ nominal
     @_chunked
@@ -428,7 +446,7 @@ class Solver:
             detail[fail] = miss[fail]
             djoint[fail] = col
         qd = self._uncounted_turns(qd)
-        self._mark_limits(qd, status, detail, djoint)
+        beyond = self._mark_limits(qd, status, detail, djoint)
         # Joint-limit failures keep their angles (the report shows them).
         has_q = (status == Status.OK) | (status == Status.JOINT_LIMIT)
         q_out = np.where(has_q[:, None], qd, np.nan)
@@ -438,7 +456,7 @@ class Solver:
         res_rad = np.where(has_q, err_rad, np.nan)
         warnings = np.where(has_q, warnings, 0)
         return IKBatch(q_out, status, detail, djoint, conf_out, res_mm, res_rad,
-                       np.zeros(N, dtype=int), warnings), br
+                       np.zeros(N, dtype=int), warnings, beyond_deg=beyond), br
 
     @_chunked
     def nominal_pose_and_wrist(self, q: np.ndarray):
@@ -561,10 +579,10 @@ class Solver:
                              int(Warn.CFX_AT_SINGULARITY), 0)
         quad = self._outside_quadrants(qd, seed.conf)
         warnings |= np.where(ok & quad, int(Warn.QUADRANT_CHANGED), 0)
-        self._mark_limits(qd, status, detail, djoint)
+        beyond = self._mark_limits(qd, status, detail, djoint)
         q_out = np.where(active[:, None], qd, np.nan)
         return IKBatch(q_out, status, detail, djoint, conf, res_mm, res_rad, iters,
-                       warnings, change, np.full(N, float(opt.max_joint_change_deg)))
+                       warnings, change, np.full(N, float(opt.max_joint_change_deg)), beyond)
 
     def _wrist_fallback(self, R, p, q, q_ref, seed: IKBatch, active, res_mm, res_rad, tcp):
         """Rows near J5 = 0 that the full solve left unconverged or moved
@@ -769,10 +787,11 @@ class Solver:
         status = np.zeros(N, dtype=int)
         detail = np.zeros(N)
         djoint = np.full(N, -1)
-        self._mark_limits(q_deg, status, detail, djoint)
+        beyond = self._mark_limits(q_deg, status, detail, djoint)
         seed = IKBatch(q_deg.copy(), status, detail, djoint,
                        confdata(q, ps[:, 4], self.geometry.phi), np.zeros(N), np.zeros(N),
-                       np.zeros(N, dtype=int), self._singularity_warnings(q, ps[:, 4]))
+                       np.zeros(N, dtype=int), self._singularity_warnings(q, ps[:, 4]),
+                       beyond_deg=beyond)
         return R, p, seed
 
     def compensate(self, R: np.ndarray, p: np.ndarray, conf: np.ndarray):

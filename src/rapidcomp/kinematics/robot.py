@@ -301,7 +301,8 @@ def load_urdf(path: str | Path, flange: str | None = None) -> RobotModel:
                          _element_line(path, name, True) or _element_line(path, name))
     lower = tuple(float(x) / DEG for x in model.lowerPositionLimit)
     upper = tuple(float(x) / DEG for x in model.upperPositionLimit)
-    return RobotModel(model.name or path.stem, model, fid, lower, upper)
+    return RobotModel(model.name or path.stem, model, fid, lower, upper,
+                      limits_set=(f"the <limit> of {path.name}",) * len(lower))
 
 
 def checked_limits(robot: RobotModel, shown: str) -> RobotModel:
@@ -344,5 +345,6 @@ def override_limits(robot: RobotModel, specs) -> RobotModel:
                                  f"(also --limit {given[k]})")
         given[k] = spec
         lower[k], upper[k] = lo, hi
-    set_by = [f"set by --limit {given[k]}" if k in given else "" for k in range(len(lower))]
+    set_by = [f"set by --limit {given[k]}" if k in given else
+              robot.limits_set[k] if k < len(robot.limits_set) else "" for k in range(len(lower))]
     return robot.with_limits(lower, upper, set_by)
