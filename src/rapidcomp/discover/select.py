@@ -45,6 +45,9 @@ from .stats import chi2_ppf, chi2_sf
 ALPHA = 0.001
 STRONG_BIC = 10.0
 NOISE_QUANTILE = 0.99
+# A fit whose leave-one-point-out RMS is within this factor of its own RMS
+# predicts the points it was not fitted to as well as those it was.
+HELD_LIKE_FITTED = 1.1
 EQUIVALENT_QUANTILE = 0.99
 # An implausible fit leaving less than this share of what the best
 # plausible one leaves (100x better) means the model and the data are far
@@ -377,7 +380,7 @@ class _Selector:
         harmonic of some joint would soak up whatever the catalogue misses."""
         strong = [s for s in scored if s.strong]
         while strong and strong[0].effect.kind == "cyclic" and \
-                not self._cyclic_evident(current, strong[0].effect):
+                not self._cyclic_evident(current, strong[0]):
             strong = strong[1:]
         if not strong:
             return None
@@ -385,7 +388,21 @@ class _Selector:
                  and (s.effect.kind != "cyclic" or s is strong[0])]
         return min(equal, key=lambda s: (s.fit.nparams, s.fit.rss, s.order))
 
-    def _cyclic_evident(self, current: Fit, e: Effect) -> bool:
+    def _cyclic_evident(self, current: Fit, s: _Scored) -> bool:
+        """Whether the step's best candidate, a cyclic error, is evidently
+        one: what is left is a function of its joint's angle more than of
+        any other's (noise.structure: it needs 3 x 17 points), or it alone
+        leaves nothing but noise, on the points it was fitted to and on
+        each left out (a harmonic that soaks up what the catalogue misses
+        leaves more than noise, or leaves it only where it was fitted)."""
+        e = s.effect
+        if s.fit is not None and s.fit.success:
+            n = self.meas.size
+            held = s.candidate.heldout_mm
+            # (The held-out residuals as the fit's: within a tenth of them.)
+            if (_noise_p(s.fit, self.sigma, n) >= 1 - NOISE_QUANTILE
+                    and held <= HELD_LIKE_FITTED * s.fit.rms_mm):
+                return True
         names = self.model.robot.joint_names
         if id(current) not in self._structure:
             offsets = tuple(x for x in self.effects if x.kind == "joint_offset")
