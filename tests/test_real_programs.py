@@ -299,7 +299,8 @@ def test_backup_task_selection(tmp_path):
     assert r.returncode == 2 and "--task T_ROB9" in r.stderr and "T_ROB1" in r.stderr
     r = rapidcomp("check", TASKS / "backup_irbt", "--profile", FIXTURES / "warm.csv",
                   "--task", "TASK1", "--track", "a:x")
-    assert r.stdout.startswith("T_ROB1: predicted error")
+    # (The backup as given, and the task chosen in it.)
+    assert r.stdout.startswith(f"{TASKS / 'backup_irbt'} (T_ROB1): predicted error")
 
 
 def test_the_readme_task_commands_run_as_written(tmp_path):
