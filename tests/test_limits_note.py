@@ -115,3 +115,25 @@ def test_a_urdf_robots_limits_are_its_files(tmp_path):
     assert "J5 at 1 target, by up to 3 deg (its limits -115..115 deg, the <limit> of " \
         "irb140.urdf)" in note
     assert "narrower" not in note
+
+
+def test_out_of_reach_with_supervision_off_is_not_a_limit(tmp_path):
+    """A target 2 m from the base (the IRB 140 reaches 0.81 m) after
+    ConfL\\Off, where the controller takes the solution closest to the
+    robot: no branch has any solution, so it is out of reach, as with
+    supervision on, and no note blames the joint limits."""
+    src = tmp_path / "reach.mod"
+    src.write_text("""MODULE reach
+  CONST robtarget pFar:=[[2000,0,500],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  CONST robtarget pNear:=[[500,0,500],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  PROC main()
+    MoveJ pNear,v100,fine,tool0;
+    ConfL\\Off;
+    MoveL pFar,v100,fine,tool0;
+  ENDPROC
+ENDMODULE
+""")
+    r = CliRunner().invoke(main, ["check", str(src), "--profile", WARM])
+    assert "line 7 MoveL pFar: nominal: out of reach by" in r.output, r.output
+    assert "limit" not in r.output.split("line 7 MoveL pFar:")[1].splitlines()[0]
+    assert _note(r.output) == []

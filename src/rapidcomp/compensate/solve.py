@@ -456,6 +456,13 @@ class _Chooser:
                 k = self.rob_row[i]
                 q = self.solver.closest(self.cands[k][None], prev[None])[0]
         if _has_nan(q):
+            # (No branch with a solution at all is out of reach, as the
+            # configuration's batch says with its distance: not a matter of
+            # the limits.)
+            k = self.rob_row[i]
+            if np.isnan(self.cands[k]).any(axis=1).all() and \
+                    self.by_conf.status[k] == Status.UNREACHABLE:
+                return _fail(f"nominal: {self.by_conf.reason(k)}")
             return _fail(f"nominal: {NO_SOLUTION_IN_LIMITS}")
         return Pick(q, rule, None, "closest", prev, line)
 
