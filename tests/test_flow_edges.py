@@ -858,6 +858,20 @@ def test_a_target_in_a_record_is_left_as_written_not_refused():
                                    ("not compensated", "st1.speed is a num, not a target")]
 
 
+def test_a_target_in_an_array_of_records_is_left_as_written_not_refused():
+    """As a record's: an element of an array of records (`sts{2}.app`, a
+    public RobotStudio program's `Welds1{1}.position`), left as written;
+    a component that is no target is still refused."""
+    record = ("    RECORD station\n        robtarget app;\n        num speed;\n    ENDRECORD\n"
+              f"    CONST station sts{{2}}:=[[{P1},100],[{P1},50]];\n")
+    rows = _statuses("        MoveJ sts{2}.app, v500, fine, tool0;\n"
+                     "        MoveJ sts{1}.speed, v500, fine, tool0;\n", record)
+    assert list(rows.values()) == [
+        ("untouched", "the target is a component of sts, a station: rapidcomp compensates "
+                      "robtarget and jointtarget data, not components of other data; left as "
+                      "written"), ("not compensated", "sts{1}.speed is a num, not a target")]
+
+
 def test_the_displacement_warning_names_the_offset_where_a_track_carries_the_robot():
     """With a track, EOffsSet displaces the robot too: the row's warning
     names both kinds of displacement; without one, program displacement."""

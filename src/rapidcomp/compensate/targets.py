@@ -1442,9 +1442,12 @@ class Resolver:
                                 if any(name in us.refs for us in theirs.values()))
 
     def _component_type(self, type_: str, selectors) -> str | None:
-        """The type of data of type_ reached by these selectors, each a
-        component of a record some given module defines; None otherwise."""
-        if not selectors or not all(isinstance(x, A.Component) for x in selectors):
+        """The type of data of type_ reached by these selectors: components
+        of a record some given module defines, and indices (an element of an
+        array of records, `Welds{1}.position`, has the record's type); None
+        otherwise, or with no component."""
+        if not selectors or not all(isinstance(x, (A.Component, A.Index)) for x in selectors) \
+                or not any(isinstance(x, A.Component) for x in selectors):
             return None
         records = self._records
         if records is None:
@@ -1452,6 +1455,8 @@ class Resolver:
                 r.name.lower(): {name.lower(): t.lower() for t, name in r.components}
                 for pf in self.files for m in pf.modules for r in m.records}
         for x in selectors:
+            if isinstance(x, A.Index):
+                continue
             type_ = records.get(type_, {}).get(x.name.lower())
             if type_ is None:
                 return None
