@@ -303,6 +303,42 @@ def test_backup_task_selection(tmp_path):
     assert r.stdout.startswith(f"{TASKS / 'backup_irbt'} (T_ROB1): predicted error")
 
 
+def test_a_backup_of_another_robot_is_not_taken_as_an_irb_140(tmp_path):
+    """A backup whose MOC.cfg names its robot (-use_robot_type): an IRB 140
+    (ROB1_140_0.81_6) is the built-in model's; an IRB 1200 is refused
+    (exit 2, nothing written: its program compensated with the IRB 140's
+    kinematics would move the robot by the difference) unless --force, and
+    a URDF given is taken as that robot, each said in a note."""
+    import shutil
+    backup = tmp_path / "backup_irbt"
+    shutil.copytree(TASKS / "backup_irbt", backup)
+    moc = backup / "SYSPAR" / "MOC.cfg"
+    base = moc.read_text()
+
+    def robot(kind):
+        moc.write_text(base + f'\nROBOT:\n\n      -name "ROB_1" -use_robot_type "{kind}"\n')
+    common = ["--profile", FIXTURES / "warm.csv", "--track", "a:x"]
+    robot("ROB1_140_0.81_6")
+    r = rapidcomp("check", backup, *common)
+    assert "-use_robot_type" not in r.stdout
+    robot("ROB1_1200_0.9_5_TypeB")
+    out = tmp_path / "out"
+    r = rapidcomp("fix", backup, *common, "-o", out, check=False)
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert ("backup_irbt/SYSPAR/MOC.cfg: the robot is ROB1_1200_0.9_5_TypeB (-use_robot_type), "
+            "not an IRB 140") in r.stderr
+    assert not out.exists()
+    r = rapidcomp("check", backup, *common, check=False)
+    assert r.returncode == 2 and "--robot ARM.urdf" in r.stderr
+    r = rapidcomp("check", backup, *common, "--force", check=False)
+    assert ("note: backup_irbt/SYSPAR/MOC.cfg names the robot ROB1_1200_0.9_5_TypeB, not an IRB "
+            "140: taken as one (--force)") in r.stdout
+    r = rapidcomp("check", backup, *common, "--robot", FIXTURES / "robots" / "irb140.urdf",
+                  check=False)
+    assert ("note: backup_irbt/SYSPAR/MOC.cfg names the robot ROB1_1200_0.9_5_TypeB "
+            "(-use_robot_type): --robot irb140.urdf is taken as its model") in r.stdout
+
+
 def test_the_readme_task_commands_run_as_written(tmp_path):
     """The three commands of the README's 'Whole tasks' section, on a copy
     of fixtures/ (default outputs beside the inputs)."""

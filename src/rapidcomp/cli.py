@@ -201,7 +201,7 @@ def _model_options(f):
                      help="Of a controller backup, only this motion task (repeatable; default: "
                           "every motion task)."),
         click.option("--robot", default=None, help="irb140 (default) or a URDF file."),
-        click.option("--force", is_flag=True, help="Accept profile values beyond 5 mm / 1 deg."),
+        click.option("--force", is_flag=True, help="Accept profile values beyond 5 mm / 1 deg, and a backup of another robot than the IRB 140 model."),
         click.option("--limit", "limits", multiple=True, metavar="JOINT=LO:HI",
                      help="Override a joint limit in degrees, e.g. J5=-120:120 (repeatable)."),
         click.option("--track", "track", multiple=True, metavar="AXIS:[-]x|y|z",
@@ -270,7 +270,7 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, ba
 
     from .compensate.check import check as run_check
     from .compensate.check import render_text
-    from .compensate.load import load_solver, load_task, robot_base
+    from .compensate.load import load_solver, load_task, robot_base, robot_of_backup
     from .compensate.targets import parse_track
     from .rapid.task import tasks_of
     try:
@@ -280,9 +280,11 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, ba
                 raise RapidcompError(f"{m}: no such file")
         solver = load_solver(profile, robot, force, limits)
         tracked = parse_track(track)
+        said = [robot_of_backup(s, robot, force) for s in sources]
         results = [run_check(load_task(s, with_modules), solver, tracked, start,
                              robot_base(s, base)[0]) for s in sources]
-        results = [replace(r, notes=s.notes + r.notes) for r, s in zip(results, sources)]
+        results = [replace(r, notes=s.notes + ((x,) if x else ()) + r.notes)
+                   for r, s, x in zip(results, sources, said)]
     except RapidcompError as exc:
         _fail(exc)
     if as_json:

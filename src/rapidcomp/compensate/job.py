@@ -29,7 +29,7 @@ from ..progress import Progress
 from ..rapid.task import TaskSource
 from . import report
 from .fix import FixResult, fix
-from .load import load_solver, load_state_solvers, load_task, robot_base
+from .load import load_solver, load_state_solvers, load_task, robot_base, robot_of_backup
 
 
 @dataclass(frozen=True)
@@ -162,6 +162,7 @@ def _run_helped(spec: JobSpec, src: TaskSource, progress: Progress) -> JobOutcom
     from .targets import parse_track
     progress.stage("parsing")
     task = load_task(src, spec.with_modules)
+    robot_note = robot_of_backup(src, spec.robot, spec.force)
     solver = load_solver(spec.profile, spec.robot, spec.force, spec.limits)
     progress.stage("compensating")
     names = {} if src.is_folder else {src.modules[0]: Path(spec.output).name}
@@ -178,8 +179,9 @@ def _run_helped(spec: JobSpec, src: TaskSource, progress: Progress) -> JobOutcom
                                                         spec.limits))
     result = fix(task, solver, spec.mode, track=parse_track(spec.track), output_names=names,
                  start=spec.start, base=base, transient=transient, json=bool(spec.json))
-    if src.notes:
-        result = replace(result, notes=src.notes + result.notes)
+    if src.notes or robot_note:
+        result = replace(result, notes=src.notes + ((robot_note,) if robot_note else ())
+                         + result.notes)
     progress.stage("writing")
     meta = {
         "output": Path(spec.output).name + ("/" if src.is_folder else ""),

@@ -6,6 +6,7 @@ Shared by `check` and `fix`; errors are InputError/RapidcompError."""
 from __future__ import annotations
 
 import os
+import re
 
 from ..errors import InputError, RapidcompError
 from ..rapid.task import TaskSource, load_problem, tasks_of
@@ -91,6 +92,35 @@ def _parse(source: TaskSource, rel: str):
             raise
         raise InputError(source.shown(rel), exc.message, exc.line, exc.col,
                          exc.source_line) from None
+
+
+# An IRB 140's robot type in a backup's MOC.cfg: ROB1_140_0.81_6, 140T...
+# (a whole field of the name: not the 1400 or 1410).
+IRB140_TYPE = re.compile(r"(?:^|_)140T?(?:_|$)", re.IGNORECASE)
+
+
+def robot_of_backup(source: TaskSource, robot: str | None, force: bool) -> str | None:
+    """A backup names its robot (MOC.cfg ROBOT -use_robot_type). The
+    built-in model is the IRB 140: a backup of another robot is refused,
+    its program compensated with another arm's kinematics would move the
+    robot by the difference, unless --force (then a note says so); a URDF
+    (--robot) is taken as the robot named, which a note says. None where
+    nothing is to be said."""
+    kind = source.robot_type
+    if kind is None:
+        return None
+    # (The backup by its name: the note goes into the report.)
+    where = f"{source.input.name}/SYSPAR/MOC.cfg"
+    if robot is not None and robot.lower() != "irb140":
+        return (f"{where} names the robot {kind} (-use_robot_type): --robot "
+                f"{os.path.basename(robot)} is taken as its model")
+    if IRB140_TYPE.search(kind):
+        return None
+    if not force:
+        raise InputError(where, f"the robot is {kind} (-use_robot_type), not an IRB 140, "
+                         "rapidcomp's built-in model: give this robot's model with --robot "
+                         "ARM.urdf (--force takes it as an IRB 140)")
+    return f"{where} names the robot {kind}, not an IRB 140: taken as one (--force)"
 
 
 def robot_base(source: TaskSource, given) -> tuple:

@@ -54,6 +54,9 @@ class TaskSource:
     # -base_frame_coordinated or -base_frame_moved_by, a track): robtargets
     # need --track.
     base_moved_by: str | None = None
+    # The robot a backup names for this task (MOC.cfg ROBOT -use_robot_type,
+    # e.g. ROB1_140_0.81_6), None when it names none or cannot tell which.
+    robot_type: str | None = None
     # The routines SYSPAR/SYS.cfg runs at events (CAB_EXEC_HOOKS, the
     # Controller topic's Event Routine: POWER_ON, START, STOP, RESTART...)
     # in this task, lower case.
@@ -296,7 +299,7 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
                if e.get("entry")}
     out = []
     for n, t in enumerate(tasks):
-        frame, problem, mover = frames.get(t.task.upper(), (None, None, None))
+        frame, problem, mover, kind = frames.get(t.task.upper(), (None, None, None, None))
         # (An event routine without -Task, or with -AllTask or
         # -AllMotionTask, may be any motion task's: taken as this one's too.)
         mine = tuple(sorted({e["routine"].lower() for e in events if e.get("routine")
@@ -305,7 +308,7 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
                                   or e["task"].upper() == t.task.upper())}))
         out.append(replace(t, notes=tuple(skipped) if n == 0 else (), base=frame,
                            base_problem=problem, base_moved_by=mover, event_routines=mine,
-                           entry=entries.get(t.task.upper(), "main")))
+                           entry=entries.get(t.task.upper(), "main"), robot_type=kind))
     return out
 
 
@@ -446,10 +449,11 @@ def _base_frames(text: str | None, shown: str, groups_of: dict[str, str | None],
     -base_frame_orient_u0..u3 (quaternion w, x, y, z) place it. Task name
     (upper case) -> (frame: ((x, y, z) mm, (q1..q4)) or None for the world
     frame; the reason it cannot be told (several robots, no link to one) or
-    None; the unit that moves the base or None). Values no robot cell has
-    are bad input."""
+    None; the unit that moves the base or None; the robot's type,
+    -use_robot_type, or None). Values no robot cell has are bad input."""
     robots = {}
     movers = {}
+    kinds = {}
     where = f"{shown}/SYSPAR/MOC.cfg"
     for inst in _cfg_instances(text, "ROBOT", where):
         if inst.get("name") is None:
@@ -478,22 +482,26 @@ def _base_frames(text: str | None, shown: str, groups_of: dict[str, str | None],
         # systems do.
         movers[inst["name"].lower()] = (inst.get("base_frame_coordinated")
                                         or inst.get("base_frame_moved_by"))
+        kinds[inst["name"].lower()] = inst.get("use_robot_type") or None
     out: dict = {}
     for task, group in groups_of.items():
         robot = robot_of.get(group or "")
         if robot not in robots and len(robots) == 1:
             robot = next(iter(robots))
         mover = movers.get(robot)
+        # (One type for every robot where nothing says which is the task's.)
+        kind = kinds.get(robot) if robot in robots else (
+            next(iter(set(kinds.values()))) if len(set(kinds.values())) == 1 else None)
         if robot in robots:
-            out[task] = (robots[robot], None, mover)
+            out[task] = (robots[robot], None, mover, kind)
         elif len(set(robots.values())) <= 1:
             mover = next((m for m in movers.values() if m), None)
-            out[task] = (next(iter(robots.values()), None), None, mover)
+            out[task] = (next(iter(robots.values()), None), None, mover, kind)
         else:
             out[task] = (None, f"{where}: several robots with different base frames and nothing "
                                f"links task {task} to one (SYS.cfg CAB_TASKS "
                                "-UseMechanicalUnitGroup, MECHANICAL_UNIT_GROUP -Robot); say "
                                "where this task's "
                                "robot stands with --base X,Y,Z,Q1,Q2,Q3,Q4",
-                         next((m for m in movers.values() if m), None))
+                         next((m for m in movers.values() if m), None), kind)
     return out
