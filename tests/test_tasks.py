@@ -479,3 +479,45 @@ def test_a_target_local_to_another_module_is_said_so(tmp_path):
                         "modules (give the whole task: its folder, program file or backup, or "
                         "the declaring module with --with)")
     assert not (tmp_path / "out").exists()
+
+
+def test_an_encrypted_module_of_a_task_is_taken_as_not_given(tmp_path):
+    """A task folder with an encrypted library (the controller loads it,
+    rapidcomp cannot read it): not refused. Its module is taken as not
+    given: a move whose tool only it can declare is left as written and
+    says so, the flow is unknown after a call of its routine, the other
+    moves are compensated, a note says what the unread module means, and
+    the output holds it byte for byte. A module given alone that is
+    encrypted stays bad input; inspect lists the folder's others."""
+    cell = tmp_path / "cell"
+    cell.mkdir()
+    lib = (FIXTURES / "invalid" / "encrypted.mod").read_bytes()
+    (cell / "Lib.mod").write_bytes(lib)
+    (cell / "Main.mod").write_text(
+        "MODULE Main\n"
+        "  CONST robtarget pA:=[[500,0,400],[0,0,1,0],[0,-1,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+        "  CONST robtarget pB:=[[500,100,400],[0,0,1,0],[0,-1,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+        "  PROC main()\n"
+        "    MoveL pA, v100, fine, tool0;\n"
+        "    MoveL pB, v100, fine, tLib;\n"
+        "    LibRoutine;\n"
+        "    MoveL pA, v100, fine, tool0;\n"
+        "  ENDPROC\n"
+        "ENDMODULE\n")
+    out = tmp_path / "out"
+    r = run("fix", str(cell), "--profile", WARM, "-o", str(out))
+    assert r.exit_code == 0, r.output
+    assert "2 of 3 target uses compensated, 0 not compensated, 1 untouched" in r.output
+    assert ("untouched (1): tool tLib is not declared in the modules rapidcomp can read (it may "
+            "be in Lib.mod, which is encrypted); left as written [line 6]") in r.output
+    assert "note: Lib.mod is encrypted: rapidcomp cannot read it and takes it as a module not " \
+        "given" in r.output
+    assert "LibRoutine (Main.mod:7)" in r.output
+    assert (out / "Lib.mod").read_bytes() == lib
+    assert "MoveL pB, v100, fine, tLib;" in (out / "Main.mod").read_text()
+    r = run("fix", str(cell / "Lib.mod"), "--profile", WARM)
+    assert r.exit_code == 2 and "binary or encrypted module" in r.output
+    r = run("inspect", str(cell))
+    assert r.exit_code == 0 and "MODULE Main" in r.output
+    assert "Lib.mod:2:6: binary or encrypted module" in r.output
+    assert "not read; check and fix take it as a module not given" in r.output

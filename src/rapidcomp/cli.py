@@ -238,13 +238,16 @@ def inspect(program: str, as_json: bool) -> None:
     (of each of a task's modules, in the order the task lists them)."""
     from .rapid.inspect import alone, modules_of, render_text, report
     problems: list = []
+    unread: list = []
     try:
-        reps = [report(pf) for pf in modules_of(program, problems)]
+        reps = [report(pf) for pf in modules_of(program, problems, unread)]
     except RapidcompError as exc:
         _fail(exc)
     # (One line each: the place and the message, without the source line
     # check's refusal shows under it.)
     said = [f"{p.format().splitlines()[0]}; check and fix refuse this task" for p in problems]
+    said += [f"{p.format().splitlines()[0]}: not read; check and fix take it as a module not "
+             "given" for p in unread]
     if as_json:
         # (A module alone: its report, as before tasks were taken.)
         doc = reps[0] if alone(program) else {"program": program, "modules": reps,

@@ -104,9 +104,9 @@ def decode_bytes(data: bytes, display_path: str) -> SourceText:
     if bad is not None:
         line = data.count(b"\n", 0, bad) + 1
         col = bad - (data.rfind(b"\n", 0, bad) + 1) + 1
-        raise InputError(display_path,
-                         f"binary or encrypted module (byte 0x{data[bad]:02x} at offset {bad}); "
-                         "expected RAPID source text", line, col)
+        raise EncryptedModule(display_path,
+                              f"binary or encrypted module (byte 0x{data[bad]:02x} at offset "
+                              f"{bad}); expected RAPID source text", line, col)
     for encoding in ("utf-8", "cp1252", "latin-1"):
         try:
             text = data.decode(encoding)
@@ -116,6 +116,12 @@ def decode_bytes(data: bytes, display_path: str) -> SourceText:
         if text.encode(encoding) == data:
             return SourceText.from_text(text, display_path, encoding)
     raise InputError(display_path, "cannot decode as UTF-8, cp1252 or latin-1")
+
+
+class EncryptedModule(InputError):
+    """A module that is no RAPID text: encrypted (the controller loads it,
+    no one reads it) or binary. A task's is taken as a module not given
+    (compensate/load.py); one given alone is bad input."""
 
 
 def not_a_file(path: str | Path, shown: str | None = None) -> None:

@@ -9,6 +9,7 @@ import os
 import re
 
 from ..errors import InputError, RapidcompError
+from ..source import EncryptedModule
 from ..rapid.task import TaskSource, load_problem, tasks_of
 from .plan import Task
 
@@ -60,7 +61,12 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
     the --with modules; a task the controller would not load (a module
     twice, a global name declared twice: load_problem) is refused."""
     from ..rapid.parse import parse_file, with_task_aliases
-    files = [_parse(source, rel) for rel in source.modules]
+    # (An encrypted module of a task, which the controller loads and no
+    # one reads, is taken as a module not given: its data, routines and
+    # writes unknown; the output holds it as it is.)
+    unreadable: list[str] = []
+    files = [f for f in (_parse(source, rel, unreadable) for rel in source.modules)
+             if f is not None]
     problem = load_problem(source, files)
     if problem is not None:
         raise problem
@@ -74,19 +80,27 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
         # PERS data are shared between tasks: the other tasks' writes count.
         for other in tasks_of(source.input, motion_only=False):
             if other.task != source.task:
-                observers += [_parse(other, rel) for rel in other.modules]
+                observers += [f for f in (_parse(other, rel, unreadable) for rel in other.modules)
+                              if f is not None]
     origin = source.input.parent.name if source.kind == "pgf" else source.input.name
     return Task(source.task or source.name, tuple(files), tuple(context), tuple(observers),
-                source.base_moved_by, origin, source.event_routines, source.entry)
+                source.base_moved_by, origin, source.event_routines, source.entry,
+                tuple(unreadable))
 
 
-def _parse(source: TaskSource, rel: str):
+def _parse(source: TaskSource, rel: str, unreadable: list | None = None):
     """A module of a task, named by its path inside the task (reports
     carry no absolute paths); a bad module is reported by the path the
-    user can open."""
+    user can open. An encrypted module of a folder, program or backup is
+    None, its path added to `unreadable`."""
     from ..rapid.parse import parse_file
     try:
         return parse_file(source.root / rel, rel)
+    except EncryptedModule:
+        if not source.is_folder or unreadable is None:
+            raise
+        unreadable.append(rel if source.task is None else f"{source.task}/{rel}")
+        return None
     except InputError as exc:
         if not source.is_folder:
             raise

@@ -37,6 +37,9 @@ class Task:
     event_routines: tuple[str, ...] = ()
     # The routine the program starts at (a backup's SYS.cfg -Entry).
     entry: str = "main"
+    # Modules of the task that cannot be read (encrypted): taken as not
+    # given, their paths in the task (a backup's with their task's name).
+    unreadable: tuple[str, ...] = ()
 
     @property
     def all_files(self) -> list[ParsedFile]:
@@ -54,7 +57,8 @@ class Plan:
         self.n_written = len(task.files)
         self.resolver = Resolver(self.files, track=track, base=base,
                                  observers=task.observers, moved_by=task.base_moved_by,
-                                 events=task.event_routines, entry=task.entry)
+                                 events=task.event_routines, entry=task.entry,
+                                 unreadable=task.unreadable)
         self.track = tuple(track)
         self.uses: list[TargetUse] = []
         for fi, pf in enumerate(task.files):
@@ -176,6 +180,17 @@ class Plan:
 
     def notes(self) -> list[str]:
         out = list(self.flow.notes)
+        if self.task.unreadable:
+            many = len(self.task.unreadable) > 1
+            they, them, their = ("they", "them", "their") if many else ("it", "it", "its")
+            out.append(f"{', '.join(self.task.unreadable)} {'are' if many else 'is'} encrypted: "
+                       f"rapidcomp cannot read {them} and takes {them} as "
+                       f"{'modules' if many else 'a module'} not given: names only {they} "
+                       f"declare{'' if many else 's'} are not resolved (the moves that need "
+                       f"them left as written), the state after a call of {their} routines is "
+                       f"not known, and an assignment in {them} to a target this output "
+                       "compensates would replace its compensated value at run time; written "
+                       "to the output as it was")
         # Tools and work objects a routine assigns (resolver._sites): said
         # once, with where.
         taken = sorted({key.split("@")[0] for u in self.uses if u.reason is None

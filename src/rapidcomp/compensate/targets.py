@@ -696,7 +696,7 @@ class Resolver:
                  usages: dict | None = None, writes: bool = True, track=(), base=None,
                  observers=(), moved_by: str | None = None, written: Written | None = None,
                  like: "Resolver | None" = None, states: tuple[float, ...] = (),
-                 events: tuple[str, ...] = (), entry: str = "main"):
+                 events: tuple[str, ...] = (), entry: str = "main", unreadable=()):
         """like: a resolver of these very files (the plan's, for verify.py):
         its tables of the files' declarations are taken, not made again.
         states: the thermal states a transient output is read at, each in
@@ -704,8 +704,11 @@ class Resolver:
         evaluated there as the controller does (_at_state). events: the
         routines the controller runs at events (a backup's SYS.cfg), lower
         case; entry: the routine the program starts at (main unless a
-        backup's SYS.cfg names another)."""
+        backup's SYS.cfg names another); unreadable: the task's modules
+        that cannot be read (encrypted), where a name no given module
+        declares may be."""
         self.float32 = float32
+        self.unreadable = tuple(unreadable)
         self.events = frozenset(events)
         self.entry = entry
         self.states = tuple(states)
@@ -925,6 +928,11 @@ class Resolver:
             return Unresolved(f"{what}{name} is declared LOCAL in another module ({where}), "
                               "which alone sees it: the controller does not load this task (a "
                               "reference error)", True)
+        if self.unreadable:
+            # (Not a gap the user can fill: the module is there, unread.)
+            return Unresolved(f"{what}{name} is not declared in the modules rapidcomp can read "
+                              f"(it may be in {', '.join(self.unreadable)}, which is encrypted); "
+                              "left as written")
         return Unresolved(f"{what}{name} is not declared in the given modules ({MISSING_HINT})",
                           True)
 

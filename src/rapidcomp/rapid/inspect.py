@@ -31,13 +31,18 @@ def alone(program: str) -> bool:
     return path.is_file() and path.suffix.lower() != ".pgf"
 
 
-def modules_of(program: str, problems: list | None = None) -> Iterator[ParsedFile]:
+def modules_of(program: str, problems: list | None = None,
+               unread: list | None = None) -> Iterator[ParsedFile]:
     """The modules `inspect PROGRAM` reads, parsed one at a time: a module
     file as given; each module of a task folder, program file (.pgf) or
     controller backup (each of its tasks, motion or not), named by the path
     the user can open. problems, when given, receives why the controller
     would not load a task (task.load_problem: what check and fix refuse),
-    as its InputError, once the task's modules are read."""
+    as its InputError, once the task's modules are read. unread, when
+    given, receives the EncryptedModule error of each of a task's modules
+    that cannot be read (check and fix take it as a module not given);
+    without it that is bad input."""
+    from ..source import EncryptedModule
     from .parse import parse_file
     from .task import load_problem, tasks_of
     if alone(program):
@@ -46,7 +51,13 @@ def modules_of(program: str, problems: list | None = None) -> Iterator[ParsedFil
     for source in tasks_of(program, (), motion_only=False):
         files = []
         for rel in source.modules:
-            pf = parse_file(source.root / rel)
+            try:
+                pf = parse_file(source.root / rel)
+            except EncryptedModule as exc:
+                if unread is None:
+                    raise
+                unread.append(exc)
+                continue
             if problems is not None and len(source.modules) > 1:
                 files.append(pf)
             yield pf
