@@ -1035,3 +1035,23 @@ def test_what_resolving_an_assigned_tool_noted_is_said_for_every_move():
     assert [r.line for r in rows] == [5, 6, 7]
     assert all(any("quaternion norm 0.9" in w for w in r.warnings) for r in rows), [
         r.warnings for r in rows]
+
+
+def test_data_assigned_at_run_time_names_each_assignment():
+    """A work object whose frame the routine assigns a value known at run
+    time only before each of three moves (a public example's
+    `box.oframe := my_pose`): each move's reason names every assignment by
+    its line, in text order, not one of them (which was the last, after the
+    first two moves)."""
+    rows = _statuses("""        wBox.oframe := myPose;
+        MoveJ p1, v500, fine, tool0\\WObj:=wBox;
+        wBox.oframe := myPose;
+        MoveJ p1, v500, fine, tool0\\WObj:=wBox;
+        wBox.oframe := myPose;
+        MoveJ p1, v500, fine, tool0\\WObj:=wBox;
+""", "    PERS wobjdata wBox:=[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];\n"
+         "    VAR pose myPose;\n")
+    reasons = {line: why for line, (status, why) in rows.items() if status == "untouched"}
+    assert sorted(reasons) == [9, 11, 13], rows
+    assert all("wBox is assigned at run time (" in why and ":8, 10, 12)" in why
+               for why in reasons.values()), reasons

@@ -1440,7 +1440,7 @@ class Resolver:
         # other tasks that never write it change nothing.)
         literal = {name: assigns for name, assigns in self.writes.literal.items()
                    if not (name in pers and name in other.by_name)}
-        self.writes = Writes(by_name, self.writes.anything, literal)
+        self.writes = Writes(by_name, self.writes.anything, literal, self.writes.assigned)
         if other.anything is not None and pers:
             pf, span, what = other.anything
             self.pers_anything = (f"may be changed at run time by {what} with a name computed at "

@@ -33,6 +33,8 @@ WRITING_BUILTINS = {
     "gettrapdata": (0,), "readerrdata": (1, 2, 3), "readrawbytes": (1,), "packrawbytes": (1,),
     "copyrawbytes": (2,), "clearrawbytes": (0,),
 }
+# Assignments a reason names by line, at most.
+MAX_LINES = 5
 # (Those that change the value it has, rather than fill it.)
 _CHANGING = frozenset(("add", "incr", "decr", "clear", "bitset", "bitclear", "clearrawbytes"))
 
@@ -47,6 +49,9 @@ class Writes:
     # changes nothing, or its frame before the moves that use it:
     # rdkTool.tframe := [...]).
     literal: dict = field(default_factory=dict)
+    # Every assignment of a name in its first file (Spans, in text order):
+    # why() names each line, not one of them.
+    assigned: dict = field(default_factory=dict)
 
     def why(self, name: str, literal_ok: bool = False) -> str | None:
         """Why data of this name may change at run time, or None
@@ -57,7 +62,12 @@ class Writes:
             hit = None
         if hit is not None:
             pf, span, how = hit
-            return f"{name} is {how} at run time ({pf.source.display_path}:{pf.line(span)})"
+            spans = self.assigned.get(name.lower()) if how == "assigned" else None
+            lines = (sorted({pf.line(s) for s in spans}) if spans and spans[0] == span
+                     else [pf.line(span)])
+            shown = ", ".join(map(str, lines[:MAX_LINES])) + (", ..." if len(lines) > MAX_LINES
+                                                              else "")
+            return f"{name} is {how} at run time ({pf.source.display_path}:{shown})"
         if self.anything is not None:
             pf, span, what = self.anything
             return (f"{name} may be changed at run time by {what} with a name computed at run "
@@ -73,6 +83,7 @@ def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
             for r in m.routines:
                 routines.add(m, r, r.node)
     by_name: dict = {}
+    assigned: dict = {}
     anything = None
     literal: dict = {}
     other: set = set()          # names written other than by a whole literal
@@ -87,7 +98,11 @@ def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
             if us is None:
                 continue
             for name, spans in us.writes.items():
-                by_name.setdefault(name, (pf, spans[0], "assigned"))
+                # (The first in the text: the one a reader meets first.)
+                spans = sorted(spans)
+                if name not in by_name:
+                    by_name[name] = (pf, spans[0], "assigned")
+                    assigned[name] = spans
                 whole = [a for a in (*us.assigns.get(name, ()), *us.parts.get(name, ()))
                          if type(a.value) in (A.Agg, A.NumAgg)]
                 if len(whole) == len(spans):
@@ -123,7 +138,8 @@ def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
                     _args_written(written, pf, call.args, None,
                                   f"passed to {kind}{call.name}, which no given module "
                                   "declares (it may change it)")
-    return Writes(by_name, anything, {n: v for n, v in literal.items() if n not in other})
+    return Writes(by_name, anything, {n: v for n, v in literal.items() if n not in other},
+                  assigned)
 
 
 def _args_written(written, pf, args, params, how: str) -> None:
