@@ -350,6 +350,10 @@ def test_a_campaign_that_leaves_an_effect_open_names_no_value(tmp_path):
     assert "measure more often at the start" in tau_line
     assert verdict.endswith("Measure more often at the start.")
     assert "open_prof.csv not written: these data do not determine" in r.stdout
+    # (The report and the JSON say the console's notes too.)
+    assert any(n.startswith("open_prof.csv not written") for n in doc["notes"])
+    assert "- open_prof.csv not written: these data do not determine" in \
+        (tmp_path / "open.md").read_text()
     # The report's final model states the same errors as the JSON and the
     # summary (the time constants' uncertainty in them).
     table = (tmp_path / "open.md").read_text().split("## Final model")[1].split("##")[0]

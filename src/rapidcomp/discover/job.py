@@ -158,10 +158,6 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
         else:
             plot_note = plot.MISSING
             notes.append(plot.MISSING)
-    if report_path:
-        files.append((report_path, utf8(report.markdown(d, meta, plot_note, heldout))))
-    if json_path:
-        files.append((json_path, utf8(report.as_json(d, heldout))))
     if out_profile and d.far_apart:
         notes.append(f"{Path(out_profile).name} not written: the data and the model are far "
                      "apart (see the verdict); a profile from them would move the robot by what "
@@ -249,6 +245,13 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                              "it")
             text = _loadable_profile(nominal, base, kept, marked, Path(out_profile).name, notes)
             files.append((out_profile, utf8(text)))
+    # (Made last: they say the notes the console says, the profile's
+    # among them.)
+    if report_path:
+        files.append((report_path, utf8(report.markdown(d, meta, plot_note, heldout,
+                                                        tuple(notes)))))
+    if json_path:
+        files.append((json_path, utf8(report.as_json(d, heldout, tuple(notes)))))
     return Outcome(tuple(report.summary_lines(d, heldout)), tuple(notes), tuple(files), d)
 
 

@@ -23,7 +23,7 @@ def _num(x: float) -> str:
     return f"{x:.4g}"
 
 
-def as_json(d: Discovery, test: HeldOut | None = None) -> str:
+def as_json(d: Discovery, test: HeldOut | None = None, notes: tuple[str, ...] = ()) -> str:
     left_open = {eid for eid, _ in d.undetermined}
     doc = {
         "initial_rms_mm": round(d.initial_rms_mm, 9),
@@ -46,6 +46,8 @@ def as_json(d: Discovery, test: HeldOut | None = None) -> str:
                     else float(f"{d.warmup.tau_min:.6g}")),
         "tau_cool_min": (None if d.warmup is None or d.warmup.tau_cool_min is None
                          else float(f"{d.warmup.tau_cool_min:.6g}")),
+        "verdict_text": d.verdict_text,
+        "notes": list(notes),
     }
     if test is not None:
         doc.update({"test_points": test.points, "test_rms_mm": round(test.rms_mm, 9),
@@ -101,7 +103,8 @@ def _analysis(a: Analysis, title: str) -> list[str]:
 
 
 def markdown(d: Discovery, meta: dict, plot_note: str | None = None,
-             test: HeldOut | None = None) -> str:
+             test: HeldOut | None = None, notes: tuple[str, ...] = ()) -> str:
+    """notes: the command's notes, as the console says them."""
     out = ["# rapidcomp discover", ""]
     out += [f"- {k}: {v}" for k, v in meta.items()]
     left = f" ({len(d.outliers)} more left out as gross errors)" if d.outliers else ""
@@ -111,6 +114,10 @@ def markdown(d: Discovery, meta: dict, plot_note: str | None = None,
             f"RMS of the 3-D residuals: {_um(d.initial_rms_mm)} um before, "
             f"{_um(d.final_rms_mm)} um after "
             f"({len(d.steps)} effect{'s' if len(d.steps) != 1 else ''} named).", ""]
+    # (The plot's note is said where the plot would be.)
+    said = [n for n in notes if n != plot_note]
+    if said:
+        out += ["## Notes", ""] + [f"- {n}" for n in said] + [""]
     if test is not None:
         out += _held_out(test)
     if d.warmup is not None:
