@@ -168,7 +168,8 @@ def test_cli_discover_on_the_shipped_example(tmp_path):
     assert r.returncode == 0, r.stderr
     doc = json.loads((tmp_path / "r.json").read_text())
     assert list(doc) == ["initial_rms_mm", "final_rms_mm", "verdict", "sigma_mm", "sigma_source",
-                         "outliers", "steps", "tau_min", "tau_cool_min", "verdict_text", "notes"]
+                         "outliers", "steps", "tau_min", "tau_cool_min", "tau_cool_interval_min",
+                         "verdict_text", "notes"]
     assert doc["verdict_text"].startswith("With link_elongation:J2-J3")
     assert doc["tau_min"] is None and doc["tau_cool_min"] is None
     assert doc["sigma_mm"] == 0.005 and doc["sigma_source"] == "given (--sigma)"

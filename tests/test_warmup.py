@@ -221,6 +221,10 @@ def test_a_campaign_with_a_stop_gives_both_time_constants(tmp_path):
     doc = json.loads((tmp_path / "d.json").read_text())
     assert doc["tau_min"] == pytest.approx(35, rel=0.15)
     assert doc["tau_cool_min"] == pytest.approx(70, rel=0.15)
+    # (Its interval holds the truth, and is no wider than the stop tells.)
+    low, high = doc["tau_cool_interval_min"]
+    assert low <= 70 <= high and high < 3 * low
+    assert "measure longer stops" not in r.stdout
     true = {"joint_displacement:J2": {"dx_mm": 0.03, "dy_mm": 0.0, "dz_mm": 0.04},
             "joint_offset:J3": {"offset_deg": 0.01}}
     assert {s["effect"] for s in doc["steps"]} == set(true)
@@ -348,7 +352,10 @@ def test_a_campaign_that_leaves_an_effect_open_names_no_value(tmp_path):
     # (What to measure: as the warm-up line advises, its tau poorly known.)
     tau_line = next(line for line in r.stdout.splitlines() if line.startswith("warm-up time"))
     assert "measure more often at the start" in tau_line
-    assert verdict.endswith("Measure more often at the start.")
+    # (The cooling time constant of one 30 min stop: its interval open.)
+    assert "the stops tell the cooling time constant poorly: measure longer stops" in tau_line
+    assert verdict.endswith("Measure longer stops and measure more often at the start.")
+    assert doc["tau_cool_interval_min"][1] is None
     assert "open_prof.csv not written: these data do not determine" in r.stdout
     # (The report and the JSON say the console's notes too.)
     assert any(n.startswith("open_prof.csv not written") for n in doc["notes"])

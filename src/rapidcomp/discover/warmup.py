@@ -28,6 +28,9 @@ TAU_RANGE_MIN = (1.0, 10_000.0)
 GRID = 240
 ALPHA = 0.001
 INTERVAL = 0.95
+# A cooling time constant whose interval spans more than this factor is
+# poorly told by the campaign's stops.
+COOL_WIDE = 3.0
 # Fewer distinct times than this cannot tell a curve from a line.
 MIN_TIMES = 3
 
@@ -59,8 +62,10 @@ class Warmup:
     state_from: str | None = None  # a temperature column that explains better than time
     tau_cool_min: float | None = None   # campaigns with stops (stood_min)
     # What to measure where tau is poorly known ("measure longer", "measure
-    # more often at the start"), as the text says it.
+    # more often at the start", "measure longer stops"), as the text says.
     advice: tuple[str, ...] = ()
+    # tau_cool's INTERVAL interval (low, high, open above), tau held.
+    cool_interval: tuple | None = None
 
     def states(self, t_min, temperatures=(), stood=None) -> np.ndarray:
         """Each row's thermal state: s(t), or from the temperature column
@@ -207,30 +212,27 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
     # quantile of the best.
     limit = best + chi2_ppf(INTERVAL, 1) * sigma ** 2
 
-    def f(x):
-        return _rss(groups, t, xyz, x, stood, tau_cool) - limit
-
-    # The interval's ends: where the profile crosses the limit, found on
-    # the grid and refined by bisection (log scale) between grid points.
-    k = int(np.searchsorted(grid, tau))
-    lo_i = k - 1
-    while lo_i >= 0 and rss[lo_i] <= limit:
-        lo_i -= 1
-    hi_i = k
-    while hi_i < GRID and rss[hi_i] <= limit:
-        hi_i += 1
-    low = _crossing(f, grid[lo_i], min(tau, grid[lo_i + 1])) if lo_i >= 0 else float(grid[0])
-    high = _crossing(f, grid[hi_i], max(tau, grid[hi_i - 1])) if hi_i < GRID \
-        else float(grid[-1])
-    open_end = hi_i >= GRID - 1
+    low, high, open_end = _interval(
+        grid, rss, tau, limit, lambda x: _rss(groups, t, xyz, x, stood, tau_cool) - limit)
     text = (f"warm-up time constant tau = {tau:.1f} min ({INTERVAL:.0%} interval "
             f"{low:.1f}-{'beyond ' if open_end else ''}{high:.1f} min), from {len(groups)} poses "
             f"measured at {times} times ({span[0]:g}-{span[1]:g} min); change over time: "
             f"chi-square p = {p:.3g}")
-    if tau_cool is not None:
-        text += (f"; cooling time constant {tau_cool:.1f} min (from the stops, cumulative "
-                 f"{float(np.max(stood)):g} min)")
     advice = []
+    cool = None
+    if tau_cool is not None:
+        # (Its interval as tau's, tau held at its best: how well the stops
+        # tell it.)
+        rss_cool = np.array([_rss(groups, t, xyz, tau, stood, x) for x in grid])
+        cool = _interval(grid, rss_cool, tau_cool, limit,
+                         lambda x: _rss(groups, t, xyz, tau, stood, x) - limit)
+        c_low, c_high, c_open = cool
+        text += (f"; cooling time constant {tau_cool:.1f} min ({INTERVAL:.0%} interval "
+                 f"{c_low:.1f}-{'beyond ' if c_open else ''}{c_high:.1f} min, from the stops, "
+                 f"cumulative {float(np.max(stood)):g} min)")
+        if c_open or c_high > COOL_WIDE * c_low:
+            advice.append("measure longer stops")
+            text += "; the stops tell the cooling time constant poorly: measure longer stops"
     if open_end or tau > 3 * span[1]:
         advice.append("measure longer")
         text += ("; the campaign ends long before the robot is warm: tau is poorly known, "
@@ -251,7 +253,25 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
     if state_from is not None:
         text += f"; the thermal state comes from {state_from}, which the points follow better"
     return Warmup(len(groups), times, float(tau), low, high, p, sigma_mm or estimated, dof,
-                  text, sensors, state_from, tau_cool, tuple(advice))
+                  text, sensors, state_from, tau_cool, tuple(advice), cool)
+
+
+def _interval(grid, rss, best: float, limit: float, f) -> tuple[float, float, bool]:
+    """(low, high, open above) of the time constants whose fit, on the
+    grid's RSS, is within `limit`: where the profile crosses it, found on
+    the grid and refined by bisection (log scale, f: RSS - limit) between
+    grid points."""
+    k = int(np.searchsorted(grid, best))
+    lo_i = k - 1
+    while lo_i >= 0 and rss[lo_i] <= limit:
+        lo_i -= 1
+    hi_i = k
+    while hi_i < GRID and rss[hi_i] <= limit:
+        hi_i += 1
+    low = _crossing(f, grid[lo_i], min(best, grid[lo_i + 1])) if lo_i >= 0 else float(grid[0])
+    high = _crossing(f, grid[hi_i], max(best, grid[hi_i - 1])) if hi_i < GRID \
+        else float(grid[-1])
+    return low, high, hi_i >= GRID - 1
 
 
 def _crossing(f, outside: float, inside: float, iterations: int = 40) -> float:
