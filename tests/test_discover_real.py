@@ -295,6 +295,10 @@ def test_a_cyclic_gear_error_on_few_poses_is_named():
         got, err = d.steps[0].params, d.steps[0].stderr
         assert abs(got["a_deg"] - 0.01) < 3 * err["a_deg"] + 1e-4
         assert abs(got["b_deg"]) < 3 * err["b_deg"] + 1e-4
+        # (Estimated, the noise holds the cyclic error: the verdict says
+        # the residuals are far below it and asks for --sigma.)
+        assert ("give the measuring system's noise with --sigma" in d.verdict_text) == \
+            (sigma is None), d.verdict_text
 
 
 def test_a_cyclic_error_over_part_of_a_turn_is_not_guessed():

@@ -887,10 +887,18 @@ def _verdict(steps, current: Fit, sigma: float, noise_p: float, est: str,
                          f"(chi-square p = {noise_p:.3g}): nothing to name.")
     if at_noise:
         names = ", ".join(s.effect.id for s in steps)
+        cyclic = [s.effect.id for s in steps if s.effect.kind == "cyclic"]
+        # (The noise estimate is the catalogue's fit without cyclic effects:
+        # a cyclic error named is in it, and the residuals far below it.)
+        inflated = ("" if not cyclic or "estimated" not in est or noise_p < 1 - 1e-3 else
+                    f" The noise estimate holds what {', '.join(cyclic)} explains (it comes "
+                    "from the fit of the catalogue without cyclic effects), so the residuals "
+                    "are far below it: give the measuring system's noise with --sigma to test "
+                    "them against it.")
         return "explained", (f"With {names} added, the residuals (RMS "
                              f"{current.rms_mm * 1000:.1f} um) are consistent with measurement "
                              f"noise of {s_um:.1f} um per axis{est} (chi-square p = "
-                             f"{noise_p:.3g}).")
+                             f"{noise_p:.3g}).{inflated}")
     refused = ("" if not blocked else
                f" Fits that would need values no real robot has were not taken ({'; '.join(blocked)}).")
     if found is not None:
