@@ -59,3 +59,6 @@ def test_the_pers_warning_is_on_the_rows_whose_move_reads_a_copy(tmp_path):
     assert all(w == (not pers) for w, pers in warned.values()), warned
     # The loop's three and the Offs of pArr read copies; pB's two read pB.
     assert [w for w, _ in warned.values()] == [True, True, True, True, False, False], warned
+    # (The console says it once: which PERS data, how many moves.)
+    assert ("note: 4 moves now read a CONST copy of PERS data (pArr): a change to it at run "
+            "time (ModPos, another task) no longer reaches those moves") in r.output

@@ -551,6 +551,22 @@ def _notes(rows: Rows, gs: list[P.Group], transient: bool = False) -> list[str]:
             "it at another value: Offs/RelTool of it, another tool or configuration; or it is "
             "not edited in place: data of a --with module, PERS another task shares, a name "
             "read outside moves), the use reads a copy; the report's rows name it")
+    # PERS targets some moves now read through a CONST copy (rows._row's
+    # warning): said once here too, the ModPos it costs being the user's
+    # business before the robot's.
+    pers: dict[str, int] = {}
+    for warnings in rows.column("warnings"):
+        for w in warnings:
+            if " is PERS: this move now reads a CONST copy" in w:
+                name = w.split(" is PERS:", 1)[0]
+                pers[name] = pers.get(name, 0) + 1
+    if pers:
+        n = sum(pers.values())
+        notes.append(f"{n} move{'s' if n != 1 else ''} now read{'' if n != 1 else 's'} a CONST "
+                     f"copy of PERS data ({', '.join(sorted(pers))}): a change to "
+                     f"{'them' if len(pers) > 1 else 'it'} at run time (ModPos, another task) "
+                     f"no longer reaches {'those moves' if n != 1 else 'the move'}; the "
+                     "report's rows say which")
     for g in gs:
         if g.slots:
             name = g.names.get("array", "the new jointtarget array")
