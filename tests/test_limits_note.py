@@ -137,3 +137,20 @@ ENDMODULE
     assert "line 7 MoveL pFar: nominal: out of reach by" in r.output, r.output
     assert "limit" not in r.output.split("line 7 MoveL pFar:")[1].splitlines()[0]
     assert _note(r.output) == []
+
+
+def test_a_limit_inside_a_reason_with_two_cases_counts(tmp_path):
+    """pS21 of the paper's side cube (J5 = 116.9 deg, beyond the model's
+    115) after `IF nX = 1 ConfL\\Off;`: its reason gives both cases of the
+    supervision, and the J5 limit inside it is in the note."""
+    text = (FIXTURES / "cubes.mod").read_text()
+    text = text.replace("    PROC main()", "    VAR num nX:=0;\n    PROC main()", 1)
+    text = text.replace("        MoveL pS21,", "        IF nX = 1 ConfL\\Off;\n        MoveL pS21,", 1)
+    src = tmp_path / "cubes2.mod"
+    src.write_text(text)
+    r = CliRunner().invoke(main, ["check", str(src), "--profile", WARM])
+    row = next(line for line in r.output.splitlines()
+               if line.startswith("  not compensable:") and "pS21" in line)
+    assert "ConfL may be on or off here" in row and "J5 beyond its limit by 1.9134 deg" in row
+    note, = _note(r.output)
+    assert "J5 at 1 target, by up to 1.913 deg" in note

@@ -325,18 +325,38 @@ def test_a_backup_of_another_robot_is_not_taken_as_an_irb_140(tmp_path):
     out = tmp_path / "out"
     r = rapidcomp("fix", backup, *common, "-o", out, check=False)
     assert r.returncode == 2, r.stdout + r.stderr
-    assert ("backup_irbt/SYSPAR/MOC.cfg: the robot is ROB1_1200_0.9_5_TypeB (-use_robot_type), "
-            "not an IRB 140") in r.stderr
+    assert ("backup_irbt/SYSPAR/MOC.cfg: it names the robot ROB1_1200_0.9_5_TypeB "
+            "(-use_robot_type), not an IRB 140") in r.stderr
     assert not out.exists()
     r = rapidcomp("check", backup, *common, check=False)
     assert r.returncode == 2 and "--robot ARM.urdf" in r.stderr
     r = rapidcomp("check", backup, *common, "--force", check=False)
-    assert ("note: backup_irbt/SYSPAR/MOC.cfg names the robot ROB1_1200_0.9_5_TypeB, not an IRB "
-            "140: taken as one (--force)") in r.stdout
+    assert ("note: backup_irbt/SYSPAR/MOC.cfg names the robot ROB1_1200_0.9_5_TypeB "
+            "(-use_robot_type), not an IRB 140: taken as an IRB 140 (--force)") in r.stdout
     r = rapidcomp("check", backup, *common, "--robot", FIXTURES / "robots" / "irb140.urdf",
                   check=False)
     assert ("note: backup_irbt/SYSPAR/MOC.cfg names the robot ROB1_1200_0.9_5_TypeB "
             "(-use_robot_type): --robot irb140.urdf is taken as its model") in r.stdout
+    # Two robots, nothing linking the task to one: an IRB 140 and an IRB
+    # 1200 are refused, two IRB 140 variants are not.
+    moc.write_text(base + '\nROBOT:\n\n      -name "ROB_1" -use_robot_type "ROB1_140_0.81_6"\n'
+                   '\n      -name "ROB_2" -use_robot_type "ROB2_1200_0.9_5"\n')
+    r = rapidcomp("check", backup, *common, check=False)
+    assert r.returncode == 2 and ("the robots ROB1_140_0.81_6, ROB2_1200_0.9_5 (-use_robot_type) "
+                                  "and nothing links task T_ROB1 to one of them") in r.stderr
+    moc.write_text(base + '\nROBOT:\n\n      -name "ROB_1" -use_robot_type "ROB1_140_0.81_6"\n'
+                   '\n      -name "ROB_2" -use_robot_type "ROB2_140T_0.81_6"\n')
+    assert rapidcomp("check", backup, *common).returncode == 0
+
+
+@pytest.mark.parametrize("kind, irb140", [
+    ("ROB1_140_0.81_6", True), ("ROB1_140T_0.81_6", True), ("ROB2_140F_0.81_6", True),
+    ("IRB 140CW", True), ("ROB1_1400_1.44_5", False), ("ROB1_1410_1.44_5", False),
+    ("ROB1_6700_2.6_140", False), ("ROB_R_14000_05_05_TYPEA", False), ("GantryXYZ", False)])
+def test_the_irb_140s_robot_types(kind, irb140):
+    """Its model field, not a 140 elsewhere in the type (a payload)."""
+    from rapidcomp.compensate.load import is_irb140
+    assert is_irb140(kind) is irb140
 
 
 def test_the_readme_task_commands_run_as_written(tmp_path):

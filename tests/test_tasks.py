@@ -521,3 +521,33 @@ def test_an_encrypted_module_of_a_task_is_taken_as_not_given(tmp_path):
     assert r.exit_code == 0 and "MODULE Main" in r.output
     assert "Lib.mod:2:6: binary or encrypted module" in r.output
     assert "not read; check and fix take it as a module not given" in r.output
+    # A MoveJ with a PERS tool the encrypted module may change stays a
+    # robtarget move under --emit absj (which follows the change); one with
+    # a CONST tool becomes MoveAbsJ.
+    (cell / "Main.mod").write_text(
+        "MODULE Main\n"
+        "  PERS tooldata tGrip:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,50],[1,0,0,0],0,0,0]];\n"
+        "  CONST tooldata tFix:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,50],[1,0,0,0],0,0,0]];\n"
+        "  CONST robtarget pA:=[[500,0,400],[0,0,1,0],[0,-1,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+        "  CONST robtarget pB:=[[500,100,400],[0,0,1,0],[0,-1,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+        "  PROC main()\n    MoveJ pA, v100, fine, tGrip;\n    MoveJ pB, v100, fine, tFix;\n"
+        "  ENDPROC\nENDMODULE\n")
+    out2 = tmp_path / "out2"
+    r = run("fix", str(cell), "--profile", WARM, "--emit", "absj", "-o", str(out2))
+    assert r.exit_code == 0, r.output
+    written = (out2 / "Main.mod").read_text()
+    assert "    MoveJ pA, v100, fine, tGrip;" in written
+    assert "    MoveAbsJ jt_pB, v100, fine, tFix;" in written
+    assert ("kept as MoveJ: its tool tGrip is PERS data Lib.mod, which is encrypted, may change"
+            in (tmp_path / "out2.md").read_text())
+    # Every module encrypted: nothing to compensate, bad input.
+    only = tmp_path / "only"
+    only.mkdir()
+    (only / "Lib.mod").write_bytes(lib)
+    r = run("check", str(only), "--profile", WARM)
+    assert r.exit_code == 2 and "every module of this task is encrypted" in r.output
+    # A text module with a stray control byte is a text to mend, not an
+    # encrypted one to pass over: bad input, as before.
+    (cell / "Main.mod").write_text((cell / "Main.mod").read_text() + "\x1a")
+    r = run("check", str(cell), "--profile", WARM)
+    assert r.exit_code == 2 and "Main.mod:11:1: binary or encrypted module" in r.output

@@ -543,8 +543,8 @@ def _fix_specs(programs, profile, output, emit, report, no_report, json_path, wi
                     first, first_what = seen[real]
                     raise RapidcompError(
                         f"{path}: would be both {first_what} of {first} and {what} of {program}"
-                        + (": give each program its own -o, or -o DIR/ with programs of "
-                           "different names" if first != program else ": give it another name"))
+                        + (": run them one at a time, each with its own -o"
+                           if first != program else ": give it another name"))
                 seen[real] = (program, what)
             # (A report too: a file in the input folder is read back as part
             # of the task, or copied with it, next time.)

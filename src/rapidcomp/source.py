@@ -19,6 +19,10 @@ from .errors import InputError
 
 # Bytes that never occur in a RAPID text module. Encrypted or binary modules
 # are full of them; a cp1252 fallback would otherwise "decode" garbage.
+# A module with this many control bytes, and this share of its first 64 KB,
+# is binary (encrypted); fewer are stray bytes in a text.
+BINARY_MIN = 8
+BINARY_SHARE = 0.01
 _BINARY_BYTES = set(range(0, 9)) | {11, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23,
                                       24, 25, 26, 27, 28, 29, 30, 31, 127}
 
@@ -100,13 +104,19 @@ def decode_bytes(data: bytes, display_path: str) -> SourceText:
                 raise InputError(display_path, f"invalid {encoding.upper()} text at byte "
                                  f"{exc.start}") from None
             return SourceText.from_text(text, display_path, encoding)
-    bad = next((i for i, b in enumerate(data[:65536]) if b in _BINARY_BYTES), None)
+    head = data[:65536]
+    bad = next((i for i, b in enumerate(head) if b in _BINARY_BYTES), None)
     if bad is not None:
         line = data.count(b"\n", 0, bad) + 1
         col = bad - (data.rfind(b"\n", 0, bad) + 1) + 1
-        raise EncryptedModule(display_path,
-                              f"binary or encrypted module (byte 0x{data[bad]:02x} at offset "
-                              f"{bad}); expected RAPID source text", line, col)
+        message = (f"binary or encrypted module (byte 0x{data[bad]:02x} at offset {bad}); "
+                   "expected RAPID source text")
+        # (Encrypted or binary: control bytes throughout, as ciphertext has
+        # them (a real one: 11 %); a text with a stray one, a Ctrl-Z at its
+        # end, is a text file to mend, not a module to pass over.)
+        many = sum(b in _BINARY_BYTES for b in head)
+        raise (EncryptedModule if many >= max(BINARY_MIN, BINARY_SHARE * len(head))
+               else InputError)(display_path, message, line, col)
     for encoding in ("utf-8", "cp1252", "latin-1"):
         try:
             text = data.decode(encoding)

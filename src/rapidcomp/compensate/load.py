@@ -67,6 +67,9 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
     unreadable: list[str] = []
     files = [f for f in (_parse(source, rel, unreadable) for rel in source.modules)
              if f is not None]
+    if not files:
+        raise InputError(str(source.input), "every module of this task is encrypted (or "
+                         "binary): nothing rapidcomp can read to compensate")
     problem = load_problem(source, files)
     if problem is not None:
         raise problem
@@ -76,16 +79,19 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
     both = with_task_aliases(files + context)
     files, context = both[:len(files)], both[len(files):]
     observers = []
+    others: list[str] = []
     if source.kind == "backup":
         # PERS data are shared between tasks: the other tasks' writes count.
         for other in tasks_of(source.input, motion_only=False):
             if other.task != source.task:
-                observers += [f for f in (_parse(other, rel, unreadable) for rel in other.modules)
+                # (Another task's encrypted module declares nothing this
+                # task sees; its writes to shared PERS data are unknown.)
+                observers += [f for f in (_parse(other, rel, others) for rel in other.modules)
                               if f is not None]
     origin = source.input.parent.name if source.kind == "pgf" else source.input.name
     return Task(source.task or source.name, tuple(files), tuple(context), tuple(observers),
                 source.base_moved_by, origin, source.event_routines, source.entry,
-                tuple(unreadable))
+                tuple(unreadable), tuple(others))
 
 
 def _parse(source: TaskSource, rel: str, unreadable: list | None = None):
@@ -99,7 +105,8 @@ def _parse(source: TaskSource, rel: str, unreadable: list | None = None):
     except EncryptedModule:
         if not source.is_folder or unreadable is None:
             raise
-        unreadable.append(rel if source.task is None else f"{source.task}/{rel}")
+        # (Its path inside the task, a backup's from the backup's folder.)
+        unreadable.append(rel)
         return None
     except InputError as exc:
         if not source.is_folder:
@@ -108,33 +115,49 @@ def _parse(source: TaskSource, rel: str, unreadable: list | None = None):
                          exc.source_line) from None
 
 
-# An IRB 140's robot type in a backup's MOC.cfg: ROB1_140_0.81_6, 140T...
-# (a whole field of the name: not the 1400 or 1410).
-IRB140_TYPE = re.compile(r"(?:^|_)140T?(?:_|$)", re.IGNORECASE)
+# The model field of a backup's robot type (MOC.cfg -use_robot_type):
+# ROB1_140_0.81_6, ROB2_1200_0.9_5_TypeB, ROB_R_14000_05_05_TYPEA; or an
+# IRB number in another spelling.
+_MODEL = re.compile(r"ROB\w*?_(\d+[A-Z]*)(?:_|$)", re.IGNORECASE)
+_IRB = re.compile(r"IRB[\s_]*(\d+[A-Z]*)", re.IGNORECASE)
+# The IRB 140 and its variants (140T, 140F foundry, 140CW, 140W).
+_IRB140 = re.compile(r"140[A-Z]*", re.IGNORECASE)
+
+
+def is_irb140(kind: str) -> bool:
+    """Whether a robot type names the IRB 140 (its model field, not a
+    number elsewhere in it: ROB1_6700_2.6_140 is an IRB 6700)."""
+    m = _MODEL.match(kind) or _IRB.search(kind)
+    return m is not None and _IRB140.fullmatch(m.group(1)) is not None
 
 
 def robot_of_backup(source: TaskSource, robot: str | None, force: bool) -> str | None:
     """A backup names its robot (MOC.cfg ROBOT -use_robot_type). The
     built-in model is the IRB 140: a backup of another robot is refused,
     its program compensated with another arm's kinematics would move the
-    robot by the difference, unless --force (then a note says so); a URDF
-    (--robot) is taken as the robot named, which a note says. None where
-    nothing is to be said."""
+    robot by the difference, unless --force (then a note says so); so is
+    one of several robots of which nothing says which is the task's,
+    unless each is an IRB 140. A URDF (--robot) is taken as the robot
+    named, which a note says. None where nothing is to be said."""
     kind = source.robot_type
     if kind is None:
         return None
+    kinds = kind if type(kind) is tuple else (kind,)
     # (The backup by its name: the note goes into the report.)
     where = f"{source.input.name}/SYSPAR/MOC.cfg"
+    which = (f"the robot {kinds[0]} (-use_robot_type)" if len(kinds) == 1 else
+             f"the robots {', '.join(kinds)} (-use_robot_type) and nothing links task "
+             f"{source.task} to one of them (SYS.cfg -UseMechanicalUnitGroup)")
     if robot is not None and robot.lower() != "irb140":
-        return (f"{where} names the robot {kind} (-use_robot_type): --robot "
-                f"{os.path.basename(robot)} is taken as its model")
-    if IRB140_TYPE.search(kind):
+        return f"{where} names {which}: --robot {os.path.basename(robot)} is taken as its model"
+    if all(is_irb140(k) for k in kinds):
         return None
+    what = "not an IRB 140" if len(kinds) == 1 else "not every one an IRB 140"
     if not force:
-        raise InputError(where, f"the robot is {kind} (-use_robot_type), not an IRB 140, "
-                         "rapidcomp's built-in model: give this robot's model with --robot "
-                         "ARM.urdf (--force takes it as an IRB 140)")
-    return f"{where} names the robot {kind}, not an IRB 140: taken as one (--force)"
+        raise InputError(where, f"it names {which}, {what}, rapidcomp's built-in model: give "
+                         "this robot's model with --robot ARM.urdf; --force takes it as an "
+                         "IRB 140")
+    return f"{where} names {which}, {what}: taken as an IRB 140 (--force)"
 
 
 def robot_base(source: TaskSource, given) -> tuple:

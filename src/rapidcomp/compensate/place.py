@@ -326,6 +326,19 @@ def kept_robtarget(u: TargetUse, plan: Plan, solved: Solved, row: int) -> str | 
     if axes is not None:
         return (f"its external axes are the data {axes} (a MoveAbsJ would write their "
                 "value, not follow the name): kept a robtarget move")
+    if plan.task.unreadable:
+        # (A module no one reads may change the tool or work object it
+        # sees at run time, as a readable one that does leaves the move
+        # untouched: the robtarget move follows that, a MoveAbsJ would not.)
+        for what, ref in (("tool", m.tool), ("work object", m.wobj)):
+            if type(ref) is not A.Ref:
+                continue
+            d = plan.resolver.lookup(ref.name, u.module, m.routine)
+            if (type(d) is Declaration and d.storage in ("PERS", "VAR") and d.routine is None
+                    and d.scope != "LOCAL"):
+                return (f"its {what} {ref.name} is {d.storage} data "
+                        f"{', '.join(plan.task.unreadable)}, which is encrypted, may change "
+                        "(a MoveAbsJ would not follow): kept a robtarget move")
     return None
 
 

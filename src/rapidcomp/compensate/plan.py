@@ -40,6 +40,9 @@ class Task:
     # Modules of the task that cannot be read (encrypted): taken as not
     # given, their paths in the task (a backup's with their task's name).
     unreadable: tuple[str, ...] = ()
+    # Another task's modules that cannot be read (a backup's): their writes
+    # to shared PERS data are unknown.
+    others_unreadable: tuple[str, ...] = ()
 
     @property
     def all_files(self) -> list[ParsedFile]:
@@ -191,6 +194,13 @@ class Plan:
                        f"not known, and an assignment in {them} to a target this output "
                        "compensates would replace its compensated value at run time; written "
                        "to the output as it was")
+        if self.task.others_unreadable:
+            many = len(self.task.others_unreadable) > 1
+            out.append(f"{', '.join(self.task.others_unreadable)}, of another task, "
+                       f"{'are' if many else 'is'} encrypted: a write of "
+                       f"{'theirs' if many else 'its'} to PERS data this task shares is not "
+                       "known (an assignment to a target this output compensates would "
+                       "replace its compensated value at run time)")
         # Tools and work objects a routine assigns (resolver._sites): said
         # once, with where.
         taken = sorted({key.split("@")[0] for u in self.uses if u.reason is None

@@ -353,7 +353,7 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         # (Another element or use of the value written with this one's:
         # that one is why this one is refused too.)
         why = reason if fk == u.source.element else (
-            f"{element_label(g, fk)}, written with it as one "
+            f"{element_label(g, fk)}{WITH_IT}"
             f"{'array' if g.array else 'value'}{g.one_because}, is not compensated: {reason}")
     d_warnings = (_warnings(solved, i, u, warning_texts_of(bits), why is not None)
                   if has_q and bits else ())
@@ -448,6 +448,10 @@ def _hint(reason: str, u: TargetUse, tracked) -> str:
     return reason
 
 
+# How a row refused with another element of its value says so (_row).
+WITH_IT = ", written with it as one "
+
+
 def limits_note(rows: "Rows", robot) -> str | None:
     """What joint-limit refusals mean, said once with where the limits come
     from. As written (the nominal robot's solution, before any
@@ -462,17 +466,21 @@ def limits_note(rows: "Rows", robot) -> str | None:
     for reason in rows.column("reason"):
         # (A row's own failure only: an array's other elements refused with
         # it name its reason after their own words.)
-        if reason is None:
+        if reason is None or WITH_IT in reason:
             continue
-        nominal = reason.startswith("nominal: ")
-        m = BEYOND_LIMIT.match(reason, len("nominal: ") if nominal else 0)
-        if m is not None:
-            seen = over["nominal" if nominal else "compensated"]
+        # (Anywhere in the reason: "ConfL may be on or off here: on, ...
+        # (nominal: J5 beyond ...); off, ..." names one for each.)
+        mine: dict = {}
+        for m in BEYOND_LIMIT.finditer(reason):
+            kind = ("nominal" if reason.endswith("nominal: ", 0, m.start())
+                    else "compensated")
             for joint, by in ((m.group(1), m.group(2)), *MORE_BEYOND.findall(m.group(3))):
-                n, worst = seen.get(int(joint) - 1, (0, 0.0))
-                seen[int(joint) - 1] = (n + 1, max(worst, float(by)))
-        elif reason == f"nominal: {NO_SOLUTION_IN_LIMITS}":
-            none += 1
+                key = (kind, int(joint) - 1)
+                mine[key] = max(mine.get(key, 0.0), float(by))
+        for (kind, k), by in mine.items():
+            n, worst = over[kind].get(k, (0, 0.0))
+            over[kind][k] = (n + 1, max(worst, by))
+        none += f"nominal: {NO_SOLUTION_IN_LIMITS}" in reason
     if not any(over.values()) and not none:
         return None
 
@@ -498,7 +506,7 @@ def limits_note(rows: "Rows", robot) -> str | None:
             "MOC.cfg gives them as lower_joint_bound/upper_joint_bound, in radians)")
     if over["compensated"]:
         said.append(
-            "the compensation needs joints beyond their limits: "
+            ("the" if not said else "The") + " compensation needs joints beyond their limits: "
             + "; ".join(joints(over["compensated"]))
             + ". The warm robot reaches those targets only there: refused; if the "
             "controller's limits are wider, give them with --limit JOINT=LOWER:UPPER")

@@ -158,6 +158,7 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
         else:
             plot_note = plot.MISSING
             notes.append(plot.MISSING)
+    profile_file = None
     if out_profile and d.far_apart:
         notes.append(f"{Path(out_profile).name} not written: the data and the model are far "
                      "apart (see the verdict); a profile from them would move the robot by what "
@@ -249,14 +250,16 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                              "effects are static (geometry); marked so, fix --transient refuses "
                              "it")
             text = _loadable_profile(nominal, base, kept, marked, Path(out_profile).name, notes)
-            files.append((out_profile, utf8(text)))
-    # (Made last: they say the notes the console says, the profile's
-    # among them.)
+            profile_file = (out_profile, utf8(text))
+    # (Made once the profile is decided: they say the notes the console
+    # says, the profile's among them; written before it, as always.)
     if report_path:
         files.append((report_path, utf8(report.markdown(d, meta, plot_note, heldout,
                                                         tuple(notes)))))
     if json_path:
         files.append((json_path, utf8(report.as_json(d, heldout, tuple(notes)))))
+    if profile_file is not None:
+        files.append(profile_file)
     return Outcome(tuple(report.summary_lines(d, heldout)), tuple(notes), tuple(files), d)
 
 

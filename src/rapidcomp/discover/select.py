@@ -230,8 +230,13 @@ def _cancelling(f: Fit, e: Effect) -> str | None:
 class _Selector:
     """One discover run: the data, the noise, and the fits it makes."""
 
-    def __init__(self, model: ParamModel, meas: np.ndarray, effects, sigma: float):
+    def __init__(self, model: ParamModel, meas: np.ndarray, effects, sigma: float,
+                 noise_known: bool = True):
+        """noise_known: sigma is given or measured (replicates, a warm-up's
+        scatter), not estimated from the catalogue's fit, which holds
+        whatever it misses."""
         self.model, self.meas, self.effects, self.sigma = model, meas, tuple(effects), sigma
+        self.noise_known = noise_known
         self.n = meas.size
         self.not_identifiable: dict[str, str] = {}
         # A cyclic error's own evidence rule: over less than (nearly) a
@@ -393,10 +398,14 @@ class _Selector:
         one: what is left is a function of its joint's angle more than of
         any other's (noise.structure: it needs 3 x 17 points), or it alone
         leaves nothing but noise, on the points it was fitted to and on
-        each left out (a harmonic that soaks up what the catalogue misses
-        leaves more than noise, or leaves it only where it was fitted)."""
+        each left out, where the noise is known (a harmonic that soaks up
+        what the catalogue misses leaves more than noise, or leaves it only
+        where it was fitted)."""
         e = s.effect
-        if s.fit is not None and s.fit.success:
+        # (Against a noise estimated from the catalogue's fit, which holds
+        # what the catalogue misses, "nothing but noise" says nothing: a
+        # 6-cycle error would pass as a 2-cycle one.)
+        if self.noise_known and s.fit is not None and s.fit.success:
             n = self.meas.size
             held = s.candidate.heldout_mm
             # (The held-out residuals as the fit's: within a tenth of them.)
@@ -709,7 +718,7 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
     else:
         nz = noise(sigma_mm, data.q_deg, meas, screened.full, model.tool, repeats=warm is None)
     sigma, source = nz.sigma_mm, nz.source
-    sel = _Selector(model, meas, effects, sigma)
+    sel = _Selector(model, meas, effects, sigma, nz.kind != "estimated")
     start = sel.fit(())
     current = start
     swapped: dict[str, list[str]] = {}

@@ -55,8 +55,9 @@ class TaskSource:
     # need --track.
     base_moved_by: str | None = None
     # The robot a backup names for this task (MOC.cfg ROBOT -use_robot_type,
-    # e.g. ROB1_140_0.81_6), None when it names none or cannot tell which.
-    robot_type: str | None = None
+    # e.g. ROB1_140_0.81_6); a tuple of every type named where nothing
+    # links the task to one robot; None when it names none.
+    robot_type: str | tuple | None = None
     # The routines SYSPAR/SYS.cfg runs at events (CAB_EXEC_HOOKS, the
     # Controller topic's Event Routine: POWER_ON, START, STOP, RESTART...)
     # in this task, lower case.
@@ -489,9 +490,12 @@ def _base_frames(text: str | None, shown: str, groups_of: dict[str, str | None],
         if robot not in robots and len(robots) == 1:
             robot = next(iter(robots))
         mover = movers.get(robot)
-        # (One type for every robot where nothing says which is the task's.)
+        # (Where nothing says which robot is the task's: every type named,
+        # one or several.)
         kind = kinds.get(robot) if robot in robots else (
-            next(iter(set(kinds.values()))) if len(set(kinds.values())) == 1 else None)
+            tuple(sorted({k for k in kinds.values() if k})) or None)
+        if type(kind) is tuple and len(kind) == 1:
+            kind = kind[0]
         if robot in robots:
             out[task] = (robots[robot], None, mover, kind)
         elif len(set(robots.values())) <= 1:
