@@ -34,12 +34,17 @@ def _note(output: str) -> list[str]:
     return [line for line in output.splitlines() if "goes beyond the joint limits" in line]
 
 
-def test_fix_names_the_joint_the_amount_and_the_limit_option(tmp_path):
+def _run(tmp_path, command: str, *args: str, program: str = PROGRAM):
+    """`rapidcomp COMMAND program ARGS` (fix: -o out.mod) and the output's path."""
     src = tmp_path / "lim.mod"
-    src.write_text(PROGRAM)
+    src.write_text(program)
     out = tmp_path / "out.mod"
-    r = CliRunner().invoke(main, ["fix", str(src), "--profile", WARM, "--limit", "J1=-10:10",
-                                  "-o", str(out)])
+    more = ["-o", str(out)] if command == "fix" else []
+    return CliRunner().invoke(main, [command, str(src), "--profile", WARM, *args, *more]), out
+
+
+def test_fix_names_the_joint_the_amount_and_the_limit_option(tmp_path):
+    r, out = _run(tmp_path, "fix", "--limit", "J1=-10:10")
     assert r.exit_code == 1, r.output
     assert not out.exists()
     note, = _note(r.output)
@@ -52,10 +57,7 @@ def test_fix_names_the_joint_the_amount_and_the_limit_option(tmp_path):
 
 
 def test_check_says_the_same(tmp_path):
-    src = tmp_path / "lim.mod"
-    src.write_text(PROGRAM)
-    r = CliRunner().invoke(main, ["check", str(src), "--profile", WARM, "--limit", "J1=-10:10",
-                                  "--limit", "J5=-120:120"])
+    r, _ = _run(tmp_path, "check", "--limit", "J1=-10:10", "--limit", "J5=-120:120")
     note, = _note(r.output)
     assert "J1 at 1 target, by up to 20 deg (its limits -10..10 deg, set by --limit " \
         "J1=-10:10)" in note
@@ -63,11 +65,7 @@ def test_check_says_the_same(tmp_path):
 
 
 def test_no_note_within_the_limits(tmp_path):
-    src = tmp_path / "lim.mod"
-    src.write_text(PROGRAM)
-    out = tmp_path / "out.mod"
-    r = CliRunner().invoke(main, ["fix", str(src), "--profile", WARM, "--limit", "J5=-120:120",
-                                  "-o", str(out)])
+    r, out = _run(tmp_path, "fix", "--limit", "J5=-120:120")
     assert r.exit_code == 0, r.output
     assert _note(r.output) == []
     assert _note(out.with_suffix(".md").read_text()) == []
@@ -77,9 +75,8 @@ def test_a_target_beyond_two_limits_names_both(tmp_path):
     """J1 = 30 (20 deg beyond --limit J1=-10:10) and J5 = 118 (3 deg beyond
     the model's 115) in one jointtarget: its row and the note name both,
     the worse first, each with its amount and its limits' source."""
-    src = tmp_path / "both.mod"
-    src.write_text(PROGRAM.replace("[[30,0,0,0,45,0]", "[[30,0,0,0,118,0]"))
-    r = CliRunner().invoke(main, ["check", str(src), "--profile", WARM, "--limit", "J1=-10:10"])
+    r, _ = _run(tmp_path, "check", "--limit", "J1=-10:10",
+                program=PROGRAM.replace("[[30,0,0,0,45,0]", "[[30,0,0,0,118,0]"))
     assert "MoveAbsJ jFar: nominal: J1 beyond its limit by 20.0000 deg, J5 by 3.0000 deg" \
         in r.output, r.output
     note, = _note(r.output)
@@ -107,10 +104,7 @@ def test_a_limit_only_the_compensation_crosses(tmp_path):
 
 
 def test_a_urdf_robots_limits_are_its_files(tmp_path):
-    src = tmp_path / "lim.mod"
-    src.write_text(PROGRAM)
-    r = CliRunner().invoke(main, ["check", str(src), "--profile", WARM, "--robot",
-                                  str(FIXTURES / "robots" / "irb140.urdf")])
+    r, _ = _run(tmp_path, "check", "--robot", str(FIXTURES / "robots" / "irb140.urdf"))
     note, = _note(r.output)
     assert "J5 at 1 target, by up to 3 deg (its limits -115..115 deg, the <limit> of " \
         "irb140.urdf)" in note
