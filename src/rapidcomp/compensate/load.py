@@ -9,8 +9,8 @@ import os
 import re
 
 from ..errors import InputError, RapidcompError
-from ..source import EncryptedModule
 from ..rapid.task import TaskSource, load_problem, tasks_of
+from ..source import EncryptedModule
 from .plan import Task
 
 

@@ -38,7 +38,7 @@ class Task:
     # The routine the program starts at (a backup's SYS.cfg -Entry).
     entry: str = "main"
     # Modules of the task that cannot be read (encrypted): taken as not
-    # given, their paths in the task (a backup's with their task's name).
+    # given; their paths in the task (a backup's from its folder).
     unreadable: tuple[str, ...] = ()
     # Another task's modules that cannot be read (a backup's): their writes
     # to shared PERS data are unknown.
@@ -193,7 +193,7 @@ class Plan:
                        f"them left as written), the state after a call of {their} routines is "
                        f"not known, and an assignment in {them} to a target this output "
                        "compensates would replace its compensated value at run time; written "
-                       "to the output as it was")
+                       f"to the output as {'they were' if many else 'it was'}")
         if self.task.others_unreadable:
             many = len(self.task.others_unreadable) > 1
             out.append(f"{', '.join(self.task.others_unreadable)}, of another task, "

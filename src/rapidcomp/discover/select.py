@@ -790,9 +790,9 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
 def _undetermined(steps) -> list[tuple[str, str]]:
     """The named effects whose stated error alone is beyond anything a real
     robot has (plausible.py's bounds, the errors read as values): the data
-    fit every value a robot could have as well, and more, so the fitted
-    value is no measurement of the robot (a warm-up campaign of three rounds
-    with a stop: the time constants and an effect's size trade off, and its
+    do not bound the value within what a robot may have, so the fitted value
+    is no measurement of the robot (a warm-up campaign of three rounds with
+    a stop: the time constants and an effect's size trade off, and its
     error comes out at 1e5 mm). Each: effect id, its largest error."""
     out = []
     for i, st in enumerate(steps):
