@@ -209,9 +209,11 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                         f"tau_heat_min: {d.warmup.tau_min:.4g}"]
                 if d.warmup.tau_cool_min is not None:
                     out.append(f"tau_cool_min: {d.warmup.tau_cool_min:.4g}")
-                    low, high, above = d.warmup.cool_interval
-                    out.append(f"cooling time constant, 95% interval: {low:.4g}-"
-                               f"{'beyond ' if above else ''}{high:.4g} min"
+                    low, high, below, above = d.warmup.cool_interval
+                    out.append("cooling time constant, 95% interval: "
+                               + (f"up to {high:.4g}" if below else f"{low:.4g}-")
+                               + ("" if below else f"{'beyond ' if above else ''}{high:.4g}")
+                               + " min"
                                + (" (poorly told by the stops: measure longer ones)"
                                   if "measure longer stops" in d.warmup.advice else ""))
                 for x in d.warmup.sensors:

@@ -47,8 +47,9 @@ def as_json(d: Discovery, test: HeldOut | None = None, notes: tuple[str, ...] = 
         "tau_cool_min": (None if d.warmup is None or d.warmup.tau_cool_min is None
                          else float(f"{d.warmup.tau_cool_min:.6g}")),
         "tau_cool_interval_min": (None if d.warmup is None or d.warmup.cool_interval is None
-                                  else [float(f"{d.warmup.cool_interval[0]:.6g}"),
-                                        None if d.warmup.cool_interval[2]
+                                  else [None if d.warmup.cool_interval[2]
+                                        else float(f"{d.warmup.cool_interval[0]:.6g}"),
+                                        None if d.warmup.cool_interval[3]
                                         else float(f"{d.warmup.cool_interval[1]:.6g}")]),
         "verdict_text": d.verdict_text,
         "notes": list(notes),

@@ -64,7 +64,8 @@ class Warmup:
     # What to measure where tau is poorly known ("measure longer", "measure
     # more often at the start", "measure longer stops"), as the text says.
     advice: tuple[str, ...] = ()
-    # tau_cool's INTERVAL interval (low, high, open above), tau held.
+    # tau_cool's INTERVAL interval (low, high, open below, open above), tau
+    # held.
     cool_interval: tuple | None = None
 
     def states(self, t_min, temperatures=(), stood=None) -> np.ndarray:
@@ -212,10 +213,10 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
     # quantile of the best.
     limit = best + chi2_ppf(INTERVAL, 1) * sigma ** 2
 
-    low, high, open_end = _interval(
+    low, high, low_open, open_end = _interval(
         grid, rss, tau, limit, lambda x: _rss(groups, t, xyz, x, stood, tau_cool) - limit)
     text = (f"warm-up time constant tau = {tau:.1f} min ({INTERVAL:.0%} interval "
-            f"{low:.1f}-{'beyond ' if open_end else ''}{high:.1f} min), from {len(groups)} poses "
+            f"{_shown(low, high, low_open, open_end)}), from {len(groups)} poses "
             f"measured at {times} times ({span[0]:g}-{span[1]:g} min); change over time: "
             f"chi-square p = {p:.3g}")
     advice = []
@@ -226,11 +227,10 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
         rss_cool = np.array([_rss(groups, t, xyz, tau, stood, x) for x in grid])
         cool = _interval(grid, rss_cool, tau_cool, limit,
                          lambda x: _rss(groups, t, xyz, tau, stood, x) - limit)
-        c_low, c_high, c_open = cool
+        c_low, c_high, c_below, c_open = cool
         text += (f"; cooling time constant {tau_cool:.1f} min ({INTERVAL:.0%} interval "
-                 f"{c_low:.1f}-{'beyond ' if c_open else ''}{c_high:.1f} min, from the stops, "
-                 f"cumulative {float(np.max(stood)):g} min)")
-        if c_open or c_high > COOL_WIDE * c_low:
+                 f"{_shown(*cool)}, from the stops, cumulative {float(np.max(stood)):g} min)")
+        if c_below or c_open or c_high > COOL_WIDE * c_low:
             advice.append("measure longer stops")
             text += "; the stops tell the cooling time constant poorly: measure longer stops"
     if open_end or tau > 3 * span[1]:
@@ -256,11 +256,19 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
                   text, sensors, state_from, tau_cool, tuple(advice), cool)
 
 
-def _interval(grid, rss, best: float, limit: float, f) -> tuple[float, float, bool]:
-    """(low, high, open above) of the time constants whose fit, on the
-    grid's RSS, is within `limit`: where the profile crosses it, found on
-    the grid and refined by bisection (log scale, f: RSS - limit) between
-    grid points."""
+def _shown(low: float, high: float, below: bool, above: bool) -> str:
+    """An interval in words, an end at the search's edge said as open."""
+    if below and above:
+        return f"any time constant searched, {low:g}-{high:g} min"
+    return (f"up to {high:.1f} min" if below else
+            f"{low:.1f}-{'beyond ' if above else ''}{high:.1f} min")
+
+
+def _interval(grid, rss, best: float, limit: float, f) -> tuple[float, float, bool, bool]:
+    """(low, high, open below, open above) of the time constants whose fit,
+    on the grid's RSS, is within `limit`: where the profile crosses it,
+    found on the grid and refined by bisection (log scale, f: RSS - limit)
+    between grid points; an end at the grid's edge is open."""
     k = int(np.searchsorted(grid, best))
     lo_i = k - 1
     while lo_i >= 0 and rss[lo_i] <= limit:
@@ -271,7 +279,7 @@ def _interval(grid, rss, best: float, limit: float, f) -> tuple[float, float, bo
     low = _crossing(f, grid[lo_i], min(best, grid[lo_i + 1])) if lo_i >= 0 else float(grid[0])
     high = _crossing(f, grid[hi_i], max(best, grid[hi_i - 1])) if hi_i < GRID \
         else float(grid[-1])
-    return low, high, hi_i >= GRID - 1
+    return low, high, lo_i < 0, hi_i >= GRID - 1
 
 
 def _crossing(f, outside: float, inside: float, iterations: int = 40) -> float:
