@@ -259,6 +259,12 @@ def inspect(program: str, as_json: bool) -> None:
             click.echo(f"note: {line}")
 
 
+def _as_given(source, program: str) -> str:
+    """An input as the user named it (two of one name in two folders told
+    apart), a folder's with the program or task in it."""
+    return str(source.input) if not source.is_folder else f"{source.input} ({program})"
+
+
 @main.command(epilog=PROGRAM_HELP)
 @click.argument("program", type=click.Path())
 @_model_options
@@ -296,11 +302,10 @@ def check(program, profile, with_modules, tasks, robot, force, limits, track, ba
         doc = docs[0] if len(docs) == 1 else {"program": program, "tasks": docs}
         click.echo(json.dumps(doc, indent=2))
     else:
-        # (The input as the user named it, as fix's first line names it;
-        # the JSON keeps the program's name: no path of this machine.)
-        click.echo("\n".join(render_text(replace(
-            r, program=str(s.input) if not s.is_folder else f"{s.input} ({r.program})"))
-            for r, s in zip(results, sources)), nl=False)
+        # (As fix's first line names it; the JSON keeps the program's name:
+        # no path of this machine.)
+        click.echo("\n".join(render_text(replace(r, program=_as_given(s, r.program)))
+                              for r, s in zip(results, sources)), nl=False)
     sys.exit(EXIT_PARTIAL if any(r.failed for r in results) else EXIT_OK)
 
 
@@ -374,9 +379,7 @@ def fix(programs, profile, output, emit, report, no_report, json_path, with_modu
         r = o.result
         if not quiet:
             src = o.spec.source
-            # (The input as the user named it, as the output is: two inputs of
-            # one name in two folders are told apart.)
-            what = str(src.input) if not src.is_folder else f"{src.input} ({r.program})"
+            what = _as_given(src, r.program)
             # (Where nothing will be written, the first line says so too:
             # the reason follows on stderr.)
             held = "; not written" if failed and not allow_partial else ""

@@ -860,14 +860,13 @@ class Editor:
         value of `named` (name, value, name, value, ...), in that order:
         next to it, LOCAL unless another module's move reads it. Returns
         the index of the file they go in. (RobotStudio's way, 1e5 declared
-        targets each getting its own: spans read as the ints they are, no
-        anchor's search where the declaration ends its line.)"""
+        targets each getting its own: no anchor's search where the
+        declaration ends its line.)"""
         src = u.source
         decl, module = src.decl, src.home_module
         fi = self.plan.file_index[id(src.home)]
         text = self.plan.files[fi].source.text
-        node = decl.node
-        span = node.span
+        span = decl.node.span
         start, end = span >> 32, span & 0xFFFFFFFF
         c = text[end:end + 1]
         if c == "\n" or c == "\r" or not c:
@@ -875,24 +874,13 @@ class Editor:
             # of 1e5: the place _anchor_of finds, at the end of that line,
             # without its search for declarations that follow on it.)
             nl = "\r\n" if text.startswith("\r\n", end) else c or "\n"
-            indent, in_routine = _indent(text, start), decl.routine is not None
+            anchor = (fi, end, nl, _indent(text, start), decl.routine is not None)
         else:
-            fi, end, nl, indent, in_routine = self._anchor_of((fi, module), decl, module)
-        # ':=' spaced as in the declaration (_assign's of its own node).
-        init = node.init.span >> 32
-        assign = ((" " if text[start:init].rstrip("\t ")[:-2].endswith(" ") else "") + ":="
-                  + (" " if text[init - 1] == " " else ""))
-        scope = "" if in_routine or u.module is not module else "LOCAL "
-        # (As _declare puts them at the anchor.)
-        key = (fi, end)
-        texts = self.inserts.get(key)
-        if texts is None:
-            texts = self.inserts[key] = []
+            anchor = self._anchor_of((fi, module), decl, module)
+        local, assign = u.module is module, self._assign(fi, decl, module, module)
         for at in range(0, len(named), 2):
-            texts.append(f"{scope}CONST {type_name} {named[at]}{assign}{named[at + 1]};")
-        self.insert_nl[key] = nl
-        self.insert_indent[key] = indent
-        return fi
+            self._declare(anchor, local, assign, type_name, named[at], "", named[at + 1])
+        return anchor[0]
 
     def _apply_one_by_one(self, s: Singles, ns) -> None:
         """apply() of elements ns of s, each as the Group of its one use

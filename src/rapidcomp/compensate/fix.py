@@ -35,8 +35,8 @@ from ..rewrite.diff import columns_diff, handed_off, unified_diff
 from . import place as P
 from .edit import Editor, Values
 from .plan import Plan, Task, line_ranges
-from .rows import (COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, Rows, limits_note, summary,
-                   use_rows)
+from .rows import (COMPENSATED, LINEAR_WARNING, NOT_COMPENSATED, PERS_COPY, Rows, limits_note,
+                   summary, use_rows)
 from .solve import Solving, nominal_ahead
 from .takeback import take_back
 from .targets import IDENTITY_POSE
@@ -557,8 +557,8 @@ def _notes(rows: Rows, gs: list[P.Group], transient: bool = False) -> list[str]:
     pers: dict[str, int] = {}
     for warnings in rows.column("warnings"):
         for w in warnings:
-            if " is PERS: this move now reads a CONST copy" in w:
-                name = w.split(" is PERS:", 1)[0]
+            if PERS_COPY in w:
+                name = w.split(PERS_COPY, 1)[0]
                 pers[name] = pers.get(name, 0) + 1
     if pers:
         n = sum(pers.values())

@@ -382,9 +382,8 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         if (u.key in pers_copies if pers_copies is not None else
                 g.placement == "new" and g.decl is not None and g.decl.storage == "PERS"):
             # (The use's own declaration: of Singles, g has none.)
-            warnings = warnings + (f"{u.source.decl.name} is PERS: this move now reads a CONST "
-                                   "copy, which changes to it at run time (ModPos, another "
-                                   "task) no longer reach",)
+            warnings = warnings + (f"{u.source.decl.name}{PERS_COPY}, which changes to it at "
+                                   "run time (ModPos, another task) no longer reach",)
     warnings = warnings + u.notes
     if caution is not None:
         warnings = warnings + (caution,)
@@ -448,6 +447,9 @@ def _hint(reason: str, u: TargetUse, tracked) -> str:
     return reason
 
 
+# How a row's warning says its move reads a CONST copy of its PERS target,
+# after the target's name (_row; fix's note counts them).
+PERS_COPY = " is PERS: this move now reads a CONST copy"
 # How a row refused with another element of its value says so (_row).
 WITH_IT = ", written with it as one "
 

@@ -15,7 +15,7 @@ from ..errors import InputError, RapidcompError
 from ..kinematics.gravity import Payload
 from ..progress import Progress
 from ..kinematics.profile import ThermalProfile, format_profile, parse_profile, read_profile
-from . import plot, report
+from . import plot, report, warmup
 from .stats import chi2_ppf
 from .effects import THERMAL_KINDS, catalogue, to_profile
 from .heldout import held_out
@@ -209,13 +209,10 @@ def run_discover(measured: str, profile: str | None = None, robot: str | None = 
                         f"tau_heat_min: {d.warmup.tau_min:.4g}"]
                 if d.warmup.tau_cool_min is not None:
                     out.append(f"tau_cool_min: {d.warmup.tau_cool_min:.4g}")
-                    low, high, below, above = d.warmup.cool_interval
                     out.append("cooling time constant, 95% interval: "
-                               + (f"up to {high:.4g}" if below else f"{low:.4g}-")
-                               + ("" if below else f"{'beyond ' if above else ''}{high:.4g}")
-                               + " min"
+                               + warmup.interval_text(*d.warmup.cool_interval, fmt=".4g")
                                + (" (poorly told by the stops: measure longer ones)"
-                                  if "measure longer stops" in d.warmup.advice else ""))
+                                  if warmup.LONGER_STOPS in d.warmup.advice else ""))
                 for x in d.warmup.sensors:
                     if x.chi_vs_time > chi2_ppf(0.99, 1):
                         continue     # the points follow it worse than time

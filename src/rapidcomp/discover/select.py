@@ -778,7 +778,8 @@ def discover(model: ParamModel, data: Measurements, effects: tuple[Effect, ...],
            " (estimated)" if nz.kind == "estimated" else "")
     verdict, text = _verdict(steps, current, sigma, noise_p, est, blocked,
                              far_apart, found, undetermined,
-                             warm if warm is not None and warm.tau_min is not None else None)
+                             warm if warm is not None and warm.tau_min is not None else None,
+                             nz.kind == "estimated" and not nz.floored)
     notes = ((screened.note,) if screened.note else ()) + tuple(far_notes)
     evidence = _thermal_evidence(sel, current, steps) if warm is not None else {}
     return Discovery(len(data), sigma, source, initial, final, start.heldout_rms_mm(),
@@ -845,9 +846,10 @@ def _equivalent(a: Fit, b: Fit, sigma: float) -> bool:
 
 def _verdict(steps, current: Fit, sigma: float, noise_p: float, est: str,
              blocked=(), far_apart: bool = False, found: Structure | None = None,
-             undetermined=(), warm=None):
+             undetermined=(), warm=None, estimated: bool = False):
     """est: what the noise's figure is, said after it (" (estimated)").
-    undetermined: _undetermined's; warm: a warm-up campaign's Warmup."""
+    undetermined: _undetermined's; warm: a warm-up campaign's Warmup;
+    estimated: the noise is the catalogue fit's estimate (est says so)."""
     s_um = sigma * 1000
     at_noise = noise_p >= 1 - NOISE_QUANTILE
     if at_noise and undetermined and not far_apart:
@@ -899,7 +901,7 @@ def _verdict(steps, current: Fit, sigma: float, noise_p: float, est: str,
         cyclic = [s.effect.id for s in steps if s.effect.kind == "cyclic"]
         # (The noise estimate is the catalogue's fit without cyclic effects:
         # a cyclic error named is in it, and the residuals far below it.)
-        inflated = ("" if not cyclic or "estimated" not in est or noise_p < 1 - 1e-3 else
+        inflated = ("" if not cyclic or not estimated or noise_p < 1 - 1e-3 else
                     f" The noise estimate holds what {', '.join(cyclic)} explains (it comes "
                     "from the fit of the catalogue without cyclic effects), so the residuals "
                     "are far below it: give the measuring system's noise with --sigma to test "

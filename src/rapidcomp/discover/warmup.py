@@ -31,6 +31,8 @@ INTERVAL = 0.95
 # A cooling time constant whose interval spans more than this factor is
 # poorly told by the campaign's stops.
 COOL_WIDE = 3.0
+# Its advice then (Warmup.advice; the profile's comment says it too).
+LONGER_STOPS = "measure longer stops"
 # Fewer distinct times than this cannot tell a curve from a line.
 MIN_TIMES = 3
 
@@ -216,7 +218,7 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
     low, high, low_open, open_end = _interval(
         grid, rss, tau, limit, lambda x: _rss(groups, t, xyz, x, stood, tau_cool) - limit)
     text = (f"warm-up time constant tau = {tau:.1f} min ({INTERVAL:.0%} interval "
-            f"{_shown(low, high, low_open, open_end)}), from {len(groups)} poses "
+            f"{interval_text(low, high, low_open, open_end)}), from {len(groups)} poses "
             f"measured at {times} times ({span[0]:g}-{span[1]:g} min); change over time: "
             f"chi-square p = {p:.3g}")
     advice = []
@@ -229,9 +231,9 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
                          lambda x: _rss(groups, t, xyz, tau, stood, x) - limit)
         c_low, c_high, c_below, c_open = cool
         text += (f"; cooling time constant {tau_cool:.1f} min ({INTERVAL:.0%} interval "
-                 f"{_shown(*cool)}, from the stops, cumulative {float(np.max(stood)):g} min)")
+                 f"{interval_text(*cool)}, from the stops, cumulative {float(np.max(stood)):g} min)")
         if c_below or c_open or c_high > COOL_WIDE * c_low:
-            advice.append("measure longer stops")
+            advice.append(LONGER_STOPS)
             text += "; the stops tell the cooling time constant poorly: measure longer stops"
     if open_end or tau > 3 * span[1]:
         advice.append("measure longer")
@@ -256,12 +258,12 @@ def estimate(q_deg, xyz_mm, t_min, tool=None, sigma_mm: float | None = None,
                   text, sensors, state_from, tau_cool, tuple(advice), cool)
 
 
-def _shown(low: float, high: float, below: bool, above: bool) -> str:
+def interval_text(low: float, high: float, below: bool, above: bool, fmt: str = ".1f") -> str:
     """An interval in words, an end at the search's edge said as open."""
     if below and above:
         return f"any time constant searched, {low:g}-{high:g} min"
-    return (f"up to {high:.1f} min" if below else
-            f"{low:.1f}-{'beyond ' if above else ''}{high:.1f} min")
+    return (f"up to {high:{fmt}} min" if below else
+            f"{low:{fmt}}-{'beyond ' if above else ''}{high:{fmt}} min")
 
 
 def _interval(grid, rss, best: float, limit: float, f) -> tuple[float, float, bool, bool]:

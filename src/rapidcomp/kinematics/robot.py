@@ -41,7 +41,7 @@ class RobotModel:
     # actual angles. None for a nominal model and plain thermal profiles.
     joint_map: object = None
     # Where each joint's limits come from, as a note says it: the --limit
-    # option that set them; "" for the model's own.
+    # option that set them, a URDF's <limit>; "" for the built-in model's.
     limits_set: tuple[str, ...] = ()
 
     @property
