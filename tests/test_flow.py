@@ -6,7 +6,10 @@ across routine calls; supervision is on at program start)."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from rapidcomp.compensate.check import check
@@ -601,6 +604,58 @@ ENDMODULE""")
     rows = rows_of(t, "auto")
     assert rows[4].status == "not compensated" and "J4/J6 split" in rows[4].reason
     assert rows[5].status == "compensated" and rows[5].action.startswith("MoveJ -> MoveAbsJ")
+
+
+def test_near_but_past_the_wrist_singularity_a_robtarget_carries_the_split():
+    """J5 at 1.22 deg (a public IRB 140 program's MoveL): within the wrist
+    fallback's 5 deg (J4/J6 swing 0.9 deg, the orientation partly left
+    over) but past the 0.5 deg singularity margin, where the written pose
+    decides the split (its IK gives the compensated joints back): the
+    robtarget is rewritten, not refused as one at J5 = 0 is. Oracle: the
+    written pose is Pinocchio's FK of the row's compensated joints on the
+    nominal model (within the written digits); J4 and J6 moved apart."""
+    t = task(f"""MODULE A
+    CONST robtarget pA:=[[167.304,-324.006,124.992],[0,0,1,0],[-1,0,-1,0],{EXT}];
+    CONST jointtarget jStart:=[[-62,50,30,0,10,-62],{EXT}];
+    PROC main()
+        ConfL\\On;
+        MoveAbsJ jStart,v100,fine,tool0;
+        MoveL pA,v100,fine,tool0;
+    ENDPROC
+ENDMODULE""")
+    result = fix(t, SOLVER, "robtarget")
+    row = next(r for r in result.rows if r.instruction == "MoveL")
+    assert row.status == "compensated", row.reason
+    assert abs(row.nominal_deg[4] - 1.22) < 0.01
+    q = np.asarray(row.compensated_deg)
+    assert q[3] < -0.5 and q[5] - row.nominal_deg[5] > 0.5       # (the split)
+    assert any("0.0085 deg left over" in w for w in row.warnings)
+    written = re.search(r"pA:=\[\[([^\]]*)\],\[([^\]]*)\]", result.modules[0].text)
+    pos = np.array(written.group(1).split(","), float)
+    quat = np.array(written.group(2).split(","), float)
+    data = ROBOT.model.createData()
+    pin.framesForwardKinematics(ROBOT.model, data, q * np.pi / 180)
+    M = data.oMf[ROBOT.flange_frame]
+    assert np.abs(M.translation - pos).max() < 1e-3   # (mm)
+    w = pin.Quaternion(M.rotation)
+    assert min(np.abs(quat - [w.w, w.x, w.y, w.z]).max(),
+               np.abs(quat + [w.w, w.x, w.y, w.z]).max()) < 1e-6
+
+
+def test_a_jointtargets_row_says_nothing_of_a_cfx_change():
+    """A MoveAbsJ to J5 ~ 0 (a public cell's home, its joints as written):
+    the compensation turns J5 past 0, which a robtarget's cfx would say; a
+    jointtarget has no confdata, so its row does not warn of one."""
+    t = task(f"""MODULE A
+    PROC main()
+        MoveAbsJ [[6.47345E-07,-0.00132846,-0.000315338,-0.000474194,-0.00141919,0.00235598],
+                  {EXT}], v100, fine, tool0;
+        MoveAbsJ [[30,20,10,0,-0.0014,0],{EXT}], v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    rows = fix(t, SOLVER, "auto").rows
+    assert [r.status for r in rows] == ["compensated"] * 2
+    assert not [w for r in rows for w in r.warnings if "cfx" in w]
 
 
 def test_a_wrist_singular_move_kept_a_robtarget_move_says_why_not_which_option():

@@ -551,3 +551,36 @@ def test_an_encrypted_module_of_a_task_is_taken_as_not_given(tmp_path):
     (cell / "Main.mod").write_text((cell / "Main.mod").read_text() + "\x1a")
     r = run("check", str(cell), "--profile", WARM)
     assert r.exit_code == 2 and "Main.mod:11:1: binary or encrypted module" in r.output
+
+
+def test_a_backup_task_is_the_modules_backinfo_lists(tmp_path):
+    """A restore loads the modules BACKINFO/backinfo.txt lists for a task
+    (`PROGMOD\\Main.mod @ `, '\\' or '/', any case, attributes after '@'):
+    a module file of the folder it does not list (a copy someone left
+    there, declaring MODULE Track again: two modules of one name, refused,
+    were it read) is not read, and one it lists that the backup lacks is
+    read without; each said in a note. Without a list (a task line and no
+    module lines) every module file is read."""
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    prog = bk / "RAPID" / "TASK1" / "PROGMOD"
+    shutil.copy(prog / "Track.mod", prog / "Track_old.mod")
+    info = bk / "BACKINFO" / "backinfo.txt"
+    text = info.read_text()
+    info.write_text(text.replace("SYSMOD/user.sys\nPROGMOD/Track.mod\n",
+                                 "SYSMOD\\user.sys @ \nPROGMOD\\TRACK.MOD @ \n"
+                                 "SYSMOD\\LINKEDM.sys @ HIDDEN\n"))
+    (b,) = tasks_of(bk)
+    assert b.modules == ("RAPID/TASK1/PROGMOD/Track.mod", "RAPID/TASK1/SYSMOD/user.sys")
+    assert b.notes[1:] == (
+        "RAPID/TASK1/PROGMOD/Track_old.mod is not among task T_ROB1's modules that "
+        "BACKINFO/backinfo.txt lists (a restore does not load it): not read",
+        "RAPID/TASK1/SYSMOD/LINKEDM.sys, which BACKINFO/backinfo.txt lists among task "
+        "T_ROB1's modules, is not in the backup: read without it")
+    r = run("check", bk, "--profile", WARM)
+    assert r.exit_code in (0, 1) and "Track_old.mod is not among" in r.output, r.output
+    info.write_text(text.replace("SYSMOD/user.sys\nPROGMOD/Track.mod\n", ""))
+    r = run("check", bk, "--profile", WARM)
+    assert r.exit_code == 2 and "module Track is also in" in r.output, r.output
+    assert ("refuses to load it twice); take the copy out of the backup, or list the task's "
+            "modules in its BACKINFO/backinfo.txt as the controller wrote it") in r.output

@@ -154,10 +154,28 @@ def robot_of_backup(source: TaskSource, robot: str | None, force: bool) -> str |
         return None
     what = "not an IRB 140" if len(kinds) == 1 else "not every one an IRB 140"
     if not force:
-        raise InputError(where, f"it names {which}, {what}, rapidcomp's built-in model: give "
+        # (The error names the file as the input was given and the line of
+        # the first robot type that is not an IRB 140's, as a module's
+        # error names its place.)
+        cfg = source.input / "SYSPAR" / "MOC.cfg"
+        line, text = _line_naming(cfg, next(k for k in kinds if not is_irb140(k)))
+        raise InputError(str(cfg), f"it names {which}, {what}, rapidcomp's built-in model: give "
                          "this robot's model with --robot ARM.urdf; --force takes it as an "
-                         "IRB 140")
+                         "IRB 140", line, None, text)
     return f"{where} names {which}, {what}: taken as an IRB 140 (--force)"
+
+
+def _line_naming(path, word: str) -> tuple:
+    """(line number, its text) of the first line of a configuration file
+    that names `word` (a robot type), or (None, None)."""
+    try:
+        with open(path, encoding="latin-1") as f:
+            for n, line in enumerate(f, 1):
+                if word in line:
+                    return n, line
+    except OSError:
+        pass
+    return None, None
 
 
 def robot_base(source: TaskSource, given) -> tuple:

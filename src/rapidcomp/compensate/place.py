@@ -38,7 +38,13 @@ ABSJ_OPTIONALS = frozenset({"conc", "id", "v", "t", "z", "inpos", "wobj", "tload
 TO_ABSJ = frozenset({"movej", "movel"})
 # Which instructions each mode turns into MoveAbsJ.
 ABSJ_FROM = {"auto": frozenset({"movej"}), "absj": TO_ABSJ, "robtarget": frozenset()}
-_LEFT = int(Warn.ORIENTATION_LEFT)   # (plain bits: an IntFlag's & costs ~3 us per group)
+# A J4/J6 split a robtarget cannot carry: the wrist fallback's (the
+# orientation partly left over) where J5 is within the singularity margin,
+# where the controller's IK, not the written pose, decides the split. Past
+# the margin the pose decides it (its IK gives the compensated joints back;
+# the output's verification checks the written numbers do).
+# (Plain bits: an IntFlag's & costs ~3 us per group.)
+_LEFT = int(Warn.ORIENTATION_LEFT | Warn.WRIST_SINGULAR)
 
 
 # A group's names or slots before any is written (writable() gives a dict
@@ -572,7 +578,7 @@ def settle(gs: list[Group], solved: Solved, plan: Plan, mode: str) -> None:
     # Whether each row is solved, and needs a J4/J6 split at the wrist
     # singularity (_elements, _wrist: as Python values at once).
     ok = solved.oks()
-    left = ((solved.deformed.warnings.astype(np.int64) & _LEFT) != 0).tolist()
+    left = ((solved.deformed.warnings.astype(np.int64) & _LEFT) == _LEFT).tolist()
     # A single that fails is a Group of its own, which says why.
     for s in [g for g in gs if type(g) is Singles]:
         split_off(gs, s, [n for n, i in enumerate(s.rows)

@@ -16,6 +16,7 @@ from itertools import islice
 
 import numpy as np
 
+from ..rapid.ast import NAME_PATTERN
 from .fix import FixResult
 from .plan import line_ranges
 from .rows import BASE_FIELDS, FIELDS, UNTOUCHED, Rows, UseRow, number_columns
@@ -162,7 +163,7 @@ RUNS_SAID = 8
 
 # A reason's numbers (a joint's value, a line): reasons alike but for them
 # are said in one line. (Not digits of a word: J1 and J5, pS21 are names.)
-_NUMBERS = re.compile(r"(?<![A-Za-z_\d.])[+-]?\d+(?:\.\d+)?(?![A-Za-z_\d])")
+_NUMBERS = re.compile(r"(?<![\w.])[+-]?\d+(?:\.\d+)?(?!\w)")
 
 
 def _alike(reason: str | None, target: str) -> str:
@@ -180,8 +181,8 @@ def _alike(reason: str | None, target: str) -> str:
 
 
 # A name in a target's text (p10, pPath_3, Offs); in a reason, a whole one.
-_NAME = re.compile(r"(?<![\w.])[A-Za-z][A-Za-z0-9_]*")
-_WHOLE_NAME = re.compile(r"(?<![\w.])[A-Za-z][A-Za-z0-9_]*(?![\w])")
+_NAME = re.compile(rf"(?<![\w.]){NAME_PATTERN}")
+_WHOLE_NAME = re.compile(rf"(?<![\w.]){NAME_PATTERN}(?![\w])")
 
 
 def _cell(text: str) -> str:

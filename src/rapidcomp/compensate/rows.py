@@ -416,14 +416,17 @@ def _warnings(solved: Solved, i: int, u: TargetUse, texts,
               refused: bool = False) -> tuple[str, ...]:
     """The solver's warnings that matter for this use: not its quadrant
     change (a written confdata that changes is said by the row's confdata
-    columns and a note of its own); the orientation left over at the wrist
-    singularity with its amount, but in a row refused (its reason says
-    what it is: a solution not written is not "compensated exactly")."""
+    columns and a note of its own), nor a jointtarget's cfx change; the
+    orientation left over at the wrist singularity with its amount, but in
+    a row refused (its reason says what it is: a solution not written is
+    not "compensated exactly")."""
     left = WARN_TEXT[Warn.ORIENTATION_LEFT] in texts
     out = []
     for text in texts:
         if text == WARN_TEXT[Warn.QUADRANT_CHANGED]:
             continue
+        if u.kind == "jointtarget" and text == WARN_TEXT[Warn.CFX_AT_SINGULARITY]:
+            continue          # (a jointtarget has no confdata: its cfx is nobody's)
         if left and text == WARN_TEXT[Warn.WRIST_SINGULAR]:
             continue
         if text == WARN_TEXT[Warn.ORIENTATION_LEFT]:

@@ -87,6 +87,12 @@ class Agg:
     span: Span
 
 
+# A name as the grammar's NAME reads it: its letters ISO 8859-1's (a to z,
+# A to Z and the accented letters, not the multiplication and division
+# signs), then those, digits and '_'.
+_LETTER = "A-Za-z\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff"
+NAME_PATTERN = f"[{_LETTER}][{_LETTER}0-9_]*"
+
 # (The grammar's _N: a number's digits split one way only, so a pattern
 # that fails after many numbers is not tried again at every split.)
 NUMBER_RE = re.compile(r"[+-]?(?:[0-9]{1,200}(?:\.[0-9]*)?|\.[0-9]+)"

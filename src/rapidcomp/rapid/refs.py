@@ -201,11 +201,16 @@ def reference_starts(starts: "int | array") -> "tuple[int] | array":
 
 
 def _search_writes(node: A.ProcCall, spec, writes: dict) -> None:
-    """A search instruction writes the robtarget it names as its result."""
+    for name, span in searched(node, spec):
+        writes.setdefault(name, []).append(span)
+
+
+def searched(node: A.ProcCall, spec) -> list:
+    """(lower-case name, its argument's span) of the robtarget a search
+    instruction names as its result: it writes it."""
     positional = [a for a in node.args if a.kind in ("pos", "named")]
-    for role, arg in zip(spec.roles, positional):
-        if role == "search" and isinstance(arg.value, A.Ref):
-            writes.setdefault(arg.value.name.lower(), []).append(arg.span)
+    return [(arg.value.name.lower(), arg.span) for role, arg in zip(spec.roles, positional)
+            if role == "search" and isinstance(arg.value, A.Ref)]
 
 
 def calls_in(expr):

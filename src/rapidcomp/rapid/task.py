@@ -102,10 +102,13 @@ def load_problem(source: TaskSource, files, rels: list[str] | None = None) -> In
                 output = next((part for path in (first, rel)
                                for part in PurePath(path).parts[:-1]
                                if part.lower().endswith("_comp")), None)
+                advice = ("take the copy out of the backup, or list the task's modules in "
+                          "its BACKINFO/backinfo.txt as the controller wrote it"
+                          if source.kind == "backup" else
+                          "give the program file (.pgf) or a folder without the copy")
                 return at(pf, rel, m.node.name_span,
                           f"module {m.name} is also in {first}: a task holds each module once "
-                          "(the controller refuses to load it twice); give the program file "
-                          "(.pgf) or a folder without the copy"
+                          f"(the controller refuses to load it twice); {advice}"
                           + (f" ({output} is named as `rapidcomp fix` names its output: move it "
                              "out of the task's folder)" if output else ""))
     seen: dict[str, tuple] = {}
@@ -255,14 +258,18 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
             f"{shown}: BACKINFO/backinfo.txt {why}, so the task folders "
             f"({', '.join(d.name for d in folders)}) cannot be matched to the motion "
             f"tasks SYSPAR/SYS.cfg names ({', '.join(sorted(motion))}); copy it from the backup")
+    listed = _backinfo_modules(root, shown)
     tasks, skipped, other = [], [], []
     for d in folders:
         name = names.get(d.name.upper(), d.name)
         mods = _modules_below(d, f"{shown}/RAPID/{d.name}")
+        said: list = []
+        if d.name.upper() in listed:
+            mods, said = _as_listed(mods, listed[d.name.upper()], f"RAPID/{d.name}", name)
         rel = [f"RAPID/{d.name}/{m}" for m in mods]
         if not rel:
             continue
-        task = TaskSource(name, "backup", root, root, tuple(rel), name)
+        task = TaskSource(name, "backup", root, root, tuple(rel), name, notes=tuple(said))
         if motion is not None and name.upper() not in motion:
             skipped.append(f"task {name} (RAPID/{d.name}) is not a motion task "
                            "(SYSPAR/SYS.cfg): not compensated")
@@ -307,7 +314,7 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
                              and (e.get("task") is None or "alltask" in e
                                   or "allmotiontask" in e
                                   or e["task"].upper() == t.task.upper())}))
-        out.append(replace(t, notes=tuple(skipped) if n == 0 else (), base=frame,
+        out.append(replace(t, notes=(tuple(skipped) if n == 0 else ()) + t.notes, base=frame,
                            base_problem=problem, base_moved_by=mover, event_routines=mine,
                            entry=entries.get(t.task.upper(), "main"), robot_type=kind))
     return out
@@ -358,6 +365,51 @@ def _read_cfg(path: Path, shown: str) -> str | None:
         raise InputError(_shown_cfg(path, shown), "not a controller configuration file: "
                          f"expected a first line such as {path.stem.upper()}:CFG_1.0:6:0::", 1)
     return text
+
+
+def _backinfo_modules(root: Path, shown: str) -> dict[str, list[str]]:
+    """TASKn folder -> the module files backinfo.txt lists for its task
+    (below RAPID/TASKn, '/' between folders), the modules a restore loads
+    into it: the lines after `>>TASK1: (...)` up to the next `>>`, each
+    `PROGMOD/Module1.mod @ ` (or with '\\'; attributes after the '@', or
+    none)."""
+    text = _read_text(root / "BACKINFO" / "backinfo.txt", shown) or ""
+    out: dict = {}
+    for m in _TASK_LINE.finditer(text):
+        start, end = text.find("\n", m.end()), text.find("\n>>", m.end())
+        lines = (text[start + 1:end if end >= 0 else len(text)].splitlines() if start >= 0
+                 else [])
+        mods = [x for x in (line.split("@", 1)[0].strip().replace("\\", "/")
+                            for line in lines) if x]
+        if mods:              # (no list: every module file of its folder)
+            out[m.group(1).upper()] = mods
+    return out
+
+
+def _as_listed(found: list[str], listed: list[str], folder: str,
+               task: str) -> tuple[list[str], list[str]]:
+    """The module files of a backup's task folder a restore loads (those
+    backinfo.txt lists, matched without regard to case as the controller's
+    file system does), and notes on those it lists but the backup does not
+    hold and those it holds but does not list."""
+    want = {x.lower() for x in listed}
+    have = {f.lower() for f in found}
+    kept = [f for f in found if f.lower() in want]
+    notes = []
+    extra = [f for f in found if f.lower() not in want]
+    if extra:
+        notes.append(f"{', '.join(f'{folder}/{f}' for f in extra)} "
+                     f"{'are' if len(extra) > 1 else 'is'} not among task {task}'s modules "
+                     "that BACKINFO/backinfo.txt lists (a restore does not load "
+                     f"{'them' if len(extra) > 1 else 'it'}): not read")
+    missing = [x for x in listed if x.lower() not in have]
+    if missing:
+        notes.append(f"{', '.join(f'{folder}/{x}' for x in missing)}, which "
+                     "BACKINFO/backinfo.txt lists among task "
+                     f"{task}'s modules, {'are' if len(missing) > 1 else 'is'} not in the "
+                     "backup: read without "
+                     f"{'them' if len(missing) > 1 else 'it'}")
+    return kept, notes
 
 
 def _backinfo_names(root: Path, shown: str) -> dict[str, str]:

@@ -4,10 +4,13 @@ A target whose data is changed at run time is not a static value: the
 compensation of its literal would be wrong the moment it changes. Data is
 changed by an assignment, a search instruction's result, a built-in
 instruction or function that fills an argument (GetDataVal, StrToVal, ...),
-an argument passed to an INOUT/VAR/PERS parameter of a given routine, any
-argument of a routine no given module declares or of a late-bound call
-(they may change it), SetDataVal by name, and, with a name computed at run
-time, SetDataVal/SetAllDataVal may change anything.
+an argument passed to an INOUT/VAR/PERS parameter of a given routine that
+the routine may write (assigns, fills, or passes on to a parameter that
+may be written; a routine only reading it, as a tool passed to a PERS
+tooldata parameter for its moves, changes nothing), any argument of a
+routine no given module declares or of a late-bound call (they may change
+it), SetDataVal by name, and, with a name computed at run time,
+SetDataVal/SetAllDataVal may change anything.
 """
 
 from __future__ import annotations
@@ -16,8 +19,8 @@ from dataclasses import dataclass, field
 
 from . import ast as A
 from .model import ParsedFile, RoutineTable
-from .motions import BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS
-from .refs import Usage
+from .motions import BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS, motion_spec
+from .refs import Usage, nodes, searched
 
 # Built-in instructions and functions that write an argument: name -> the
 # positions among the required arguments it writes (RAPID Instructions and
@@ -82,6 +85,7 @@ def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
         for m in pf.modules:
             for r in m.routines:
                 routines.add(m, r, r.node)
+    changed = _params_written(files, routines)
     by_name: dict = {}
     assigned: dict = {}
     anything = None
@@ -110,39 +114,23 @@ def task_writes(files: list[ParsedFile], usages: dict) -> Writes:
                 else:
                     other.add(name)
             for call in us.calls:
-                if isinstance(call, A.LateCall):
-                    _args_written(written, pf, call.args, None, "passed to a late-bound call")
-                    continue
-                name = call.name.lower()
-                if name in ("setdataval", "setalldataval"):
-                    first = next((a for a in call.args if a.kind == "pos"), None)
-                    if name == "setdataval" and first is not None and isinstance(
-                            first.value, A.Str):
-                        written(first.value.value.lower(), pf, call.span, "set by SetDataVal")
-                    elif anything is None:
+                got = _call_writes(call, m, routines, changed)
+                if got is None:
+                    if anything is None:
                         anything = (pf, call.span, call.name)
                     continue
-                node = routines.find(m, name)
-                if node is not None:
-                    _args_written(written, pf, call.args, node.params,
-                                  f"passed to {node.name}, which may change it")
-                elif name in WRITING_BUILTINS:
-                    positional = [a for a in call.args if a.kind in ("pos", "named")]
-                    for k in WRITING_BUILTINS[name]:
-                        if k < len(positional) and isinstance(positional[k].value, A.Ref):
-                            written(positional[k].value.name.lower(), pf, positional[k].span,
-                                    f"{'changed' if name in _CHANGING else 'filled'} by "
-                                    f"{call.name}")
-                elif name not in BUILTIN_INSTRUCTIONS and name not in BUILTIN_FUNCTIONS:
-                    kind = "function " if isinstance(call, A.Call) else ""
-                    _args_written(written, pf, call.args, None,
-                                  f"passed to {kind}{call.name}, which no given module "
-                                  "declares (it may change it)")
+                for span, name, how in got:
+                    written(name, pf, span, how)
     return Writes(by_name, anything, {n: v for n, v in literal.items() if n not in other},
                   assigned)
 
 
-def _args_written(written, pf, args, params, how: str) -> None:
+def _passed_written(args, params, changed):
+    """(argument, the lower-case name it passes) of each argument naming
+    data (a Ref) passed where it may be changed: to a parameter of
+    `params` among `changed` (lower-case names: those the routine may
+    write), or anywhere where params is None (a routine not given, a
+    late-bound call)."""
     required = [p for p in params if not p.optional] if params is not None else None
     k = 0
     for a in args:
@@ -154,11 +142,93 @@ def _args_written(written, pf, args, params, how: str) -> None:
             is_written = True
         elif a.kind == "pos":
             p = required[k] if k < len(required) else None
-            is_written = p is not None and p.access in ("INOUT", "VAR", "PERS")
+            is_written = p is not None and p.name.lower() in changed
         else:
             p = next((p for p in params if p.name.lower() == (a.name or "").lower()), None)
-            is_written = p is not None and p.access in ("INOUT", "VAR", "PERS")
+            is_written = p is not None and p.name.lower() in changed
         if a.kind == "pos":
             k += 1
         if is_written:
-            written(a.value.name.lower(), pf, a.span, how)
+            yield a, a.value.name.lower()
+
+
+_WRITABLE = frozenset(("INOUT", "VAR", "PERS"))
+
+
+def _params_written(files: list[ParsedFile], routines: RoutineTable) -> dict:
+    """id(routine node) -> the lower-case names of its INOUT/VAR/PERS
+    parameters its body may write: assigned (whole or a component), a
+    search's result, filled by a built-in (WRITING_BUILTINS), set by
+    SetDataVal (any, with a name computed at run time), passed to a
+    routine no given module declares or a late-bound call, or passed on
+    to a given routine's parameter that may be written (to a fixed point:
+    a routine calling itself writes what some path of it writes). Only
+    routines with such parameters are walked (a CAM program's path has
+    none)."""
+    found: list = []          # (node, its module, its writable parameters, calls in it)
+    out: dict = {}
+    for pf in files:
+        for m in pf.modules:
+            for r in m.routines:
+                node = r.node
+                mine = frozenset(p.name.lower() for p in node.params if p.access in _WRITABLE)
+                if not mine or id(node) in out:
+                    continue
+                direct: set = set()
+                calls = []
+                for n in nodes((node.decls, node.body, node.handlers)):
+                    t = type(n)
+                    if t is A.Assign:
+                        direct.add(n.target.name.lower())
+                    elif t is A.ProcCall or t is A.Call or t is A.LateCall:
+                        spec = motion_spec(n.name) if t is A.ProcCall else None
+                        if spec is None:
+                            calls.append(n)
+                        elif "search" in spec.roles:
+                            direct.update(name for name, _ in searched(n, spec))
+                out[id(node)] = frozenset(direct & mine)
+                found.append((node, m, mine, calls))
+    while True:
+        grew = False
+        for node, m, mine, calls in found:
+            have = out[id(node)]
+            now = set(have)
+            for call in calls:
+                got = _call_writes(call, m, routines, out)
+                now.update(mine if got is None else mine.intersection(n for _, n, _ in got))
+            if len(now) > len(have):
+                out[id(node)] = frozenset(now)
+                grew = True
+        if not grew:
+            return out
+
+
+def _call_writes(call, m, routines: RoutineTable, changed: dict) -> list | None:
+    """What a call (in module m) may write among its arguments: (span,
+    lower-case name, how) of each, with `changed` for the given routines'
+    parameters (_params_written); None: any data (SetDataVal, SetAllDataVal
+    with a name computed at run time)."""
+    if isinstance(call, A.LateCall):
+        return [(a.span, n, "passed to a late-bound call")
+                for a, n in _passed_written(call.args, None, ())]
+    name = call.name.lower()
+    if name in ("setdataval", "setalldataval"):
+        first = next((a for a in call.args if a.kind == "pos"), None)
+        if name == "setdataval" and first is not None and isinstance(first.value, A.Str):
+            return [(call.span, first.value.value.lower(), "set by SetDataVal")]
+        return None
+    node = routines.find(m, name)
+    if node is not None:
+        return [(a.span, n, f"passed to {node.name}, which may change it")
+                for a, n in _passed_written(call.args, node.params, changed.get(id(node), ()))]
+    if name in WRITING_BUILTINS:
+        positional = [a for a in call.args if a.kind in ("pos", "named")]
+        how = f"{'changed' if name in _CHANGING else 'filled'} by {call.name}"
+        return [(positional[k].span, positional[k].value.name.lower(), how)
+                for k in WRITING_BUILTINS[name]
+                if k < len(positional) and isinstance(positional[k].value, A.Ref)]
+    if name not in BUILTIN_INSTRUCTIONS and name not in BUILTIN_FUNCTIONS:
+        kind = "function " if isinstance(call, A.Call) else ""
+        how = f"passed to {kind}{call.name}, which no given module declares (it may change it)"
+        return [(a.span, n, how) for a, n in _passed_written(call.args, None, ())]
+    return []

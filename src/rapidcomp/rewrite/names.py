@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import re
 
+from ..rapid.ast import NAME_PATTERN
+
 MAX_LEN = 32
-_WORD = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+_WORD = re.compile(NAME_PATTERN)
 
 
 def words(text: str) -> frozenset[str]:
