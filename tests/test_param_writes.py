@@ -59,6 +59,7 @@ def test_a_tool_only_read_by_the_routine_is_static():
     "tl.tframe.trans.z := 5;",                         # (a component)
     "tl := [TRUE,[[0,0,90],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];",
     "GetSysData tl;",                                  # (a built-in fills it)
+    "RMQGetMsgData msg, tl;",                          # (another task's message fills it)
     "Vendor tl;",                                      # (a routine not given)
     "%\"Dyn\"% tl;",                                   # (a late-bound call)
     "SetDataVal \"x\"+\"y\", n;",                      # (any data, by a computed name)
@@ -66,6 +67,7 @@ def test_a_tool_only_read_by_the_routine_is_static():
 ])
 def test_a_routine_that_may_write_it_changes_it(body):
     helpers = f"""    PROC Go(robtarget pt, PERS tooldata tl)
+        VAR rmqmessage msg;
         {body}
         MoveL pt, v100, fine, tl;
     ENDPROC

@@ -30,6 +30,8 @@ WRITING_BUILTINS = {
     "getdataval": (1,), "readanybin": (1,), "unpackrawbytes": (2,), "getsysdata": (0,),
     "mtooltcpcalib": (4,), "stooltcpcalib": (3,), "mtoolrotcalib": (2,), "stoolrotcalib": (3,),
     "strtoval": (1,), "getnextsym": (0, 1), "testandset": (0,),
+    # (A message's data, of any type, from another task: RMQGetMsgData msg, pTarget.)
+    "rmqgetmsgdata": (1,),
     # (Their INOUT argument: Add extj.eax_a, 100; Incr n; TPReadNum x, "...".)
     "add": (0,), "incr": (0,), "decr": (0,), "clear": (0,), "bitset": (0,), "bitclear": (0,),
     "tpreadnum": (0,), "tpreaddnum": (0,), "tpreadfk": (0,), "readcfgdata": (2,),
