@@ -656,6 +656,20 @@ ENDMODULE""")
     rows = fix(t, SOLVER, "auto").rows
     assert [r.status for r in rows] == ["compensated"] * 2
     assert not [w for r in rows for w in r.warnings if "cfx" in w]
+    # A robtarget there (a review's): turned into MoveAbsJ (a MoveJ in
+    # either mode), no confdata is written, and no cfx said.
+    home = "[[501.0038,289.2547,467.7907],[0.482973133,-0.224142287,0.836510403,0.129412261]"
+    t = task(f"""MODULE A
+    CONST robtarget pH:={home},[0,-1,-1,1],{EXT}];
+    PROC main()
+        ConfJ\\On;
+        MoveJ pH, v100, fine, tool0;
+    ENDPROC
+ENDMODULE""")
+    for mode in ("absj", "auto"):
+        (row,) = fix(t, SOLVER, mode).rows
+        assert row.status == "compensated" and row.action.startswith("MoveJ -> MoveAbsJ")
+        assert not [w for w in row.warnings if "cfx" in w], (mode, row.warnings)
 
 
 def test_a_wrist_singular_move_kept_a_robtarget_move_says_why_not_which_option():

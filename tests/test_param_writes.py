@@ -60,6 +60,7 @@ def test_a_tool_only_read_by_the_routine_is_static():
     "tl := [TRUE,[[0,0,90],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];",
     "GetSysData tl;",                                  # (a built-in fills it)
     "RMQGetMsgData msg, tl;",                          # (another task's message fills it)
+    "SiGetCyclic dev, tl, 64;",                        # (a subscription updates it)
     "Vendor tl;",                                      # (a routine not given)
     "%\"Dyn\"% tl;",                                   # (a late-bound call)
     "SetDataVal \"x\"+\"y\", n;",                      # (any data, by a computed name)
@@ -116,3 +117,14 @@ def test_a_search_result_parameter_is_written():
         SearchL \\Stop, di1, found, Offs(p1,0,0,-50), v50, tPen;
     ENDPROC"""
     assert _reason(helpers, "Find p1;", "PERS").startswith("p1 is passed to Find, which may change it")
+
+
+def test_a_named_required_argument_holds_its_place():
+    """`Recal pt:=p1, tPen;`: pt is named, tPen the second required
+    argument, which Recal writes (named, pt used to shift the positions: tPen
+    was read as pt's, the robot then 150 mm off)."""
+    helpers = """    PROC Recal(robtarget pt, PERS tooldata tl)
+        tl.tframe.trans.z := 250;
+    ENDPROC"""
+    assert _reason(helpers, "Recal pt:=p1, tPen;").startswith(
+        "tPen is passed to Recal, which may change it")

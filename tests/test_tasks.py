@@ -584,3 +584,19 @@ def test_a_backup_task_is_the_modules_backinfo_lists(tmp_path):
     assert r.exit_code == 2 and "module Track is also in" in r.output, r.output
     assert ("refuses to load it twice); take the copy out of the backup, or list the task's "
             "modules in its BACKINFO/backinfo.txt as the controller wrote it") in r.output
+
+
+def test_a_backinfo_list_of_none_of_the_backups_modules_is_bad_input(tmp_path):
+    """backinfo.txt lists modules of which the task's folder holds none (a
+    list from another backup, a review's): a restore would load none; said,
+    exit 2, not a task silently gone."""
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    info = bk / "BACKINFO" / "backinfo.txt"
+    info.write_text(info.read_text().replace("SYSMOD/user.sys\nPROGMOD/Track.mod\n",
+                                             "PROGMOD/Track_v2.mod @ \nSYSMOD/user_old.sys @\n"))
+    r = run("check", bk, "--profile", WARM)
+    assert r.exit_code == 2, r.output
+    assert ("BACKINFO/backinfo.txt lists PROGMOD/Track_v2.mod, SYSMOD/user_old.sys as task "
+            "T_ROB1's modules, and RAPID/TASK1 holds none of them (PROGMOD/Track.mod, "
+            "SYSMOD/user.sys)") in r.output

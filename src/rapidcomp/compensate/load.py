@@ -165,13 +165,15 @@ def robot_of_backup(source: TaskSource, robot: str | None, force: bool) -> str |
     return f"{where} names {which}, {what}: taken as an IRB 140 (--force)"
 
 
-def _line_naming(path, word: str) -> tuple:
+def _line_naming(path, kind: str) -> tuple:
     """(line number, its text) of the first line of a configuration file
-    that names `word` (a robot type), or (None, None)."""
+    that gives `kind` as a -use_robot_type (not a comment), or (None,
+    None)."""
     try:
         with open(path, encoding="latin-1") as f:
             for n, line in enumerate(f, 1):
-                if word in line:
+                if (not line.lstrip().startswith("#") and "-use_robot_type" in line
+                        and kind in line.split("-use_robot_type", 1)[1]):
                     return n, line
     except OSError:
         pass

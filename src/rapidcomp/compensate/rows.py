@@ -355,7 +355,9 @@ def _row(solved: Solved, cols: _Columns, u: TargetUse, base, group_of, actions, 
         why = reason if fk == u.source.element else (
             f"{element_label(g, fk)}{WITH_IT}"
             f"{'array' if g.array else 'value'}{g.one_because}, is not compensated: {reason}")
-    d_warnings = (_warnings(solved, i, u, warning_texts_of(bits), why is not None)
+    # (Written as a jointtarget: a MoveAbsJ's, or a move turned into one.)
+    joints = u.kind == "jointtarget" or (g is not None and g.mode == "absj")
+    d_warnings = (_warnings(solved, i, joints, warning_texts_of(bits), why is not None)
                   if has_q and bits else ())
     if why is not None:
         why = _hint(why, u, tracked)
@@ -412,11 +414,12 @@ def _conf_after(solved: Solved, i: int, u: TargetUse, written_conf):
     return tuple(int(c) for c in solved.conf_after[i])
 
 
-def _warnings(solved: Solved, i: int, u: TargetUse, texts,
+def _warnings(solved: Solved, i: int, joints: bool, texts,
               refused: bool = False) -> tuple[str, ...]:
     """The solver's warnings that matter for this use: not its quadrant
     change (a written confdata that changes is said by the row's confdata
-    columns and a note of its own), nor a jointtarget's cfx change; the
+    columns and a note of its own), nor a cfx change where a jointtarget
+    is written (joints: it has no confdata); the
     orientation left over at the wrist singularity with its amount, but in
     a row refused (its reason says what it is: a solution not written is
     not "compensated exactly")."""
@@ -425,8 +428,8 @@ def _warnings(solved: Solved, i: int, u: TargetUse, texts,
     for text in texts:
         if text == WARN_TEXT[Warn.QUADRANT_CHANGED]:
             continue
-        if u.kind == "jointtarget" and text == WARN_TEXT[Warn.CFX_AT_SINGULARITY]:
-            continue          # (a jointtarget has no confdata: its cfx is nobody's)
+        if joints and text == WARN_TEXT[Warn.CFX_AT_SINGULARITY]:
+            continue
         if left and text == WARN_TEXT[Warn.WRIST_SINGULAR]:
             continue
         if text == WARN_TEXT[Warn.ORIENTATION_LEFT]:

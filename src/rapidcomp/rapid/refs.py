@@ -201,6 +201,7 @@ def reference_starts(starts: "int | array") -> "tuple[int] | array":
 
 
 def _search_writes(node: A.ProcCall, spec, writes: dict) -> None:
+    """A search instruction writes the robtarget it names as its result."""
     for name, span in searched(node, spec):
         writes.setdefault(name, []).append(span)
 

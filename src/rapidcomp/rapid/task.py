@@ -246,7 +246,7 @@ _TASK_LINE = re.compile(r"^>>(TASK\d+):\s*\(([^,)]*)", re.MULTILINE)
 def _backup(root: Path, shown: str, wanted: tuple[str, ...],
             motion_only: bool = True) -> list[TaskSource]:
     folders = sorted(d for d in (root / "RAPID").iterdir() if d.is_dir())
-    names = _backinfo_names(root, shown)
+    names, listed = _backinfo(root, shown)
     sys_cfg = _read_cfg(root / "SYSPAR" / "SYS.cfg", shown)
     motion = _motion_tasks(sys_cfg, shown)
     if motion and not names and not any(d.name.upper() in motion for d in folders):
@@ -258,14 +258,14 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
             f"{shown}: BACKINFO/backinfo.txt {why}, so the task folders "
             f"({', '.join(d.name for d in folders)}) cannot be matched to the motion "
             f"tasks SYSPAR/SYS.cfg names ({', '.join(sorted(motion))}); copy it from the backup")
-    listed = _backinfo_modules(root, shown)
     tasks, skipped, other = [], [], []
     for d in folders:
         name = names.get(d.name.upper(), d.name)
         mods = _modules_below(d, f"{shown}/RAPID/{d.name}")
         said: list = []
         if d.name.upper() in listed:
-            mods, said = _as_listed(mods, listed[d.name.upper()], f"RAPID/{d.name}", name)
+            mods, said = _as_listed(mods, listed[d.name.upper()], f"RAPID/{d.name}", name,
+                                    shown)
         rel = [f"RAPID/{d.name}/{m}" for m in mods]
         if not rel:
             continue
@@ -367,34 +367,44 @@ def _read_cfg(path: Path, shown: str) -> str | None:
     return text
 
 
-def _backinfo_modules(root: Path, shown: str) -> dict[str, list[str]]:
-    """TASKn folder -> the module files backinfo.txt lists for its task
-    (below RAPID/TASKn, '/' between folders), the modules a restore loads
-    into it: the lines after `>>TASK1: (...)` up to the next `>>`, each
-    `PROGMOD/Module1.mod @ ` (or with '\\'; attributes after the '@', or
-    none)."""
+def _backinfo(root: Path, shown: str) -> tuple[dict[str, str], dict[str, list[str]]]:
+    """From BACKINFO/backinfo.txt: TASKn folder -> task name (`>>TASK1:
+    (T_ROB1,...)` lines), and TASKn folder -> the module files it lists for
+    the task (below RAPID/TASKn, '/' between folders), the modules a
+    restore loads into it: the lines after the task's up to the next `>>`,
+    each `PROGMOD/Module1.mod @ ` (or with '\\'; attributes after the '@',
+    or none); a task with no such line is not in the second."""
     text = _read_text(root / "BACKINFO" / "backinfo.txt", shown) or ""
-    out: dict = {}
+    names: dict = {}
+    listed: dict = {}
     for m in _TASK_LINE.finditer(text):
+        names[m.group(1).upper()] = m.group(2).strip() or m.group(1)
         start, end = text.find("\n", m.end()), text.find("\n>>", m.end())
         lines = (text[start + 1:end if end >= 0 else len(text)].splitlines() if start >= 0
                  else [])
         mods = [x for x in (line.split("@", 1)[0].strip().replace("\\", "/")
                             for line in lines) if x]
-        if mods:              # (no list: every module file of its folder)
-            out[m.group(1).upper()] = mods
-    return out
+        if mods:
+            listed[m.group(1).upper()] = mods
+    return names, listed
 
 
-def _as_listed(found: list[str], listed: list[str], folder: str,
-               task: str) -> tuple[list[str], list[str]]:
+def _as_listed(found: list[str], listed: list[str], folder: str, task: str,
+               shown: str) -> tuple[list[str], list[str]]:
     """The module files of a backup's task folder a restore loads (those
     backinfo.txt lists, matched without regard to case as the controller's
     file system does), and notes on those it lists but the backup does not
-    hold and those it holds but does not list."""
+    hold and those it holds but does not list. Where it holds none that
+    are listed, the list is not this backup's: bad input."""
     want = {x.lower() for x in listed}
     have = {f.lower() for f in found}
     kept = [f for f in found if f.lower() in want]
+    if found and not kept:
+        raise RapidcompError(
+            f"{shown}: BACKINFO/backinfo.txt lists {', '.join(listed)} as task {task}'s "
+            f"modules, and {folder} holds none of them ({', '.join(found)}): the list is not "
+            "this backup's, and a restore would load none of them; copy backinfo.txt from the "
+            "backup")
     notes = []
     extra = [f for f in found if f.lower() not in want]
     if extra:
@@ -410,13 +420,6 @@ def _as_listed(found: list[str], listed: list[str], folder: str,
                      "backup: read without "
                      f"{'them' if len(missing) > 1 else 'it'}")
     return kept, notes
-
-
-def _backinfo_names(root: Path, shown: str) -> dict[str, str]:
-    """TASKn folder -> task name, from `>>TASK1: (T_ROB1,...)` lines."""
-    text = _read_text(root / "BACKINFO" / "backinfo.txt", shown) or ""
-    return {m.group(1).upper(): m.group(2).strip() or m.group(1)
-            for m in _TASK_LINE.finditer(text)}
 
 
 def _cfg_instances(text: str | None, type_name: str,

@@ -28,10 +28,12 @@ from .refs import Usage, nodes, searched
 # current one; the calibrations fill a tool.
 WRITING_BUILTINS = {
     "getdataval": (1,), "readanybin": (1,), "unpackrawbytes": (2,), "getsysdata": (0,),
-    "mtooltcpcalib": (4,), "stooltcpcalib": (3,), "mtoolrotcalib": (2,), "stoolrotcalib": (3,),
+    "mtooltcpcalib": (4,), "stooltcpcalib": (4,), "mtoolrotcalib": (2,), "stoolrotcalib": (3,),
     "strtoval": (1,), "getnextsym": (0, 1), "testandset": (0,),
-    # (A message's data, of any type, from another task: RMQGetMsgData msg, pTarget.)
-    "rmqgetmsgdata": (1,),
+    # (Data of any type: a message's from another task, RMQGetMsgData msg,
+    # pTarget; a subscription's, updated while the program runs,
+    # SiGetCyclic device, pTarget, 64.)
+    "rmqgetmsgdata": (1,), "sigetcyclic": (1,),
     # (Their INOUT argument: Add extj.eax_a, 100; Incr n; TPReadNum x, "...".)
     "add": (0,), "incr": (0,), "decr": (0,), "clear": (0,), "bitset": (0,), "bitclear": (0,),
     "tpreadnum": (0,), "tpreaddnum": (0,), "tpreadfk": (0,), "readcfgdata": (2,),
@@ -136,22 +138,21 @@ def _passed_written(args, params, changed):
     required = [p for p in params if not p.optional] if params is not None else None
     k = 0
     for a in args:
-        if a.value is None or not isinstance(a.value, A.Ref):
-            if a.kind == "pos":
-                k += 1
-            continue
-        if params is None:
-            is_written = True
-        elif a.kind == "pos":
-            p = required[k] if k < len(required) else None
-            is_written = p is not None and p.name.lower() in changed
-        else:
-            p = next((p for p in params if p.name.lower() == (a.name or "").lower()), None)
-            is_written = p is not None and p.name.lower() in changed
-        if a.kind == "pos":
-            k += 1
-        if is_written:
-            yield a, a.value.name.lower()
+        # (A required argument, positional or named (pt:=p1), holds its
+        # place among the required ones; an optional one (\T:=x) none.)
+        place = a.kind in ("pos", "named")
+        if a.value is not None and isinstance(a.value, A.Ref):
+            if params is None:
+                is_written = True
+            elif a.kind == "pos":
+                p = required[k] if k < len(required) else None
+                is_written = p is not None and p.name.lower() in changed
+            else:
+                p = next((p for p in params if p.name.lower() == (a.name or "").lower()), None)
+                is_written = p is not None and p.name.lower() in changed
+            if is_written:
+                yield a, a.value.name.lower()
+        k += place
 
 
 _WRITABLE = frozenset(("INOUT", "VAR", "PERS"))
