@@ -203,7 +203,7 @@ def _fix(task, solver, mode, timings, track, output_names, start, base,
         # (The new declarations are in the edits now, as texts of their own:
         # 1e5 MoveL turned into MoveAbsJ, ~18 MB of them twice.)
         editor.edits = editor.field_lists = None
-        editor.inserts = editor.insert_nl = editor.insert_indent = None
+        editor.inserts = None
         # (And the names taken: every word of the input and every new name,
         # 2e5 of them where each of 1e5 declared targets gets two, ~25 MB.)
         editor.names = None
