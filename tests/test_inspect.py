@@ -60,7 +60,7 @@ def test_inspect_a_task_is_each_of_its_modules_inspected(program, modules):
     doc = json.loads(run(str(tasks / program), "--json"))
     assert doc == {"program": str(tasks / program),
                    "modules": [json.loads(run(str(tasks / m), "--json")) for m in modules],
-                   "problems": []}
+                   "notes": [], "problems": []}
 
 
 def test_inspect_says_what_check_and_fix_refuse_in_a_task(tmp_path):

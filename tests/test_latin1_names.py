@@ -61,8 +61,9 @@ def test_other_characters_in_a_name_are_refused_where_they_stand(name, bad):
     text = f"MODULE m\n  PROC p()\n    {name} := 1;\n  ENDPROC\nENDMODULE\n"
     with pytest.raises(InputError) as err:
         parse_text(text, "m.mod")
+    # (With its code point: the Kelvin sign looks like a K.)
     assert str(err.value).startswith(f"m.mod:3:{5 + name.index(bad)}: unexpected character "
-                                     f"{bad!r}")
+                                     f"{bad!r} (U+{ord(bad):04X}): not part of RAPID")
 
 
 def test_a_move_naming_one_is_lexed_token_by_token():

@@ -579,6 +579,18 @@ def test_a_backup_task_is_the_modules_backinfo_lists(tmp_path):
         "T_ROB1's modules, is not in the backup: read without it")
     r = run("check", bk, "--profile", WARM)
     assert r.exit_code in (0, 1) and "Track_old.mod is not among" in r.output, r.output
+    # (inspect reads the task as check and fix do, and says so.)
+    r = run("inspect", bk)
+    assert r.exit_code == 0 and "MODULE Track\n" in r.output and r.output.count("MODULE ") == 3
+    assert "note: RAPID/TASK1/PROGMOD/Track_old.mod is not among" in r.output
+    assert "note: RAPID/TASK1/SYSMOD/LINKEDM.sys, which" in r.output
+    # (Saved as UTF-8, a list naming an accented module names its file.)
+    (prog / "Prüfung.mod").write_text("MODULE Pruefung\nENDMODULE\n")
+    info.write_bytes(info.read_text().replace("PROGMOD\\TRACK.MOD @ \n",
+                                              "PROGMOD\\TRACK.MOD @ \nPROGMOD\\Prüfung.mod @ \n")
+                     .encode("utf-8"))
+    (b,) = tasks_of(bk)
+    assert "RAPID/TASK1/PROGMOD/Prüfung.mod" in b.modules
     info.write_text(text.replace("SYSMOD/user.sys\nPROGMOD/Track.mod\n", ""))
     r = run("check", bk, "--profile", WARM)
     assert r.exit_code == 2 and "module Track is also in" in r.output, r.output
@@ -598,5 +610,5 @@ def test_a_backinfo_list_of_none_of_the_backups_modules_is_bad_input(tmp_path):
     r = run("check", bk, "--profile", WARM)
     assert r.exit_code == 2, r.output
     assert ("BACKINFO/backinfo.txt lists PROGMOD/Track_v2.mod, SYSMOD/user_old.sys as task "
-            "T_ROB1's modules, and RAPID/TASK1 holds none of them (PROGMOD/Track.mod, "
+            "T_ROB1's modules, none of which RAPID/TASK1 holds (it holds PROGMOD/Track.mod, "
             "SYSMOD/user.sys)") in r.output

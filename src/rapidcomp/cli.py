@@ -239,8 +239,9 @@ def inspect(program: str, as_json: bool) -> None:
     from .rapid.inspect import alone, modules_of, render_text, report
     problems: list = []
     unread: list = []
+    notes: list = []
     try:
-        reps = [report(pf) for pf in modules_of(program, problems, unread)]
+        reps = [report(pf) for pf in modules_of(program, problems, unread, notes)]
     except RapidcompError as exc:
         _fail(exc)
     # (One line each: the place and the message, without the source line
@@ -251,11 +252,11 @@ def inspect(program: str, as_json: bool) -> None:
     if as_json:
         # (A module alone: its report, as before tasks were taken.)
         doc = reps[0] if alone(program) else {"program": program, "modules": reps,
-                                              "problems": said}
+                                              "notes": notes, "problems": said}
         click.echo(json.dumps(doc, indent=2))
     else:
         click.echo("\n".join(render_text(r) for r in reps), nl=False)
-        for line in said:
+        for line in notes + said:
             click.echo(f"note: {line}")
 
 

@@ -32,7 +32,7 @@ def alone(program: str) -> bool:
 
 
 def modules_of(program: str, problems: list | None = None,
-               unread: list | None = None) -> Iterator[ParsedFile]:
+               unread: list | None = None, notes: list | None = None) -> Iterator[ParsedFile]:
     """The modules `inspect PROGRAM` reads, parsed one at a time: a module
     file as given; each module of a task folder, program file (.pgf) or
     controller backup (each of its tasks, motion or not), named by the path
@@ -41,7 +41,8 @@ def modules_of(program: str, problems: list | None = None,
     as its InputError, once the task's modules are read. unread, when
     given, receives the EncryptedModule error of each of a task's modules
     that cannot be read (check and fix take it as a module not given);
-    without it that is bad input."""
+    without it that is bad input. notes, when given, receives what a task
+    says of the modules it takes (a backup's list of them)."""
     from ..source import EncryptedModule
     from .parse import parse_file
     from .task import load_problem, tasks_of
@@ -49,6 +50,8 @@ def modules_of(program: str, problems: list | None = None,
         yield parse_file(program)
         return
     for source in tasks_of(program, (), motion_only=False):
+        if notes is not None:
+            notes.extend(source.notes)
         files = []
         for rel in source.modules:
             try:

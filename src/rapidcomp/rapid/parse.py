@@ -54,7 +54,8 @@ def parse_source(source: SourceText) -> ParsedFile:
                     raise source.error(exc.pos, "a string not closed on its line: expected a "
                                        "closing '\"' before the end of the line") from None
                 raise source.error(exc.pos,
-                                   f"unexpected character {ch!r}: not part of RAPID") from None
+                                   f"unexpected character {_shown_char(ch)}: not part of "
+                                   "RAPID") from None
             except ParseFailure as exc:
                 raise _syntax_error(source, exc) from None
             except NumberOutOfRange as exc:
@@ -79,6 +80,12 @@ def parse_source(source: SourceText) -> ParsedFile:
                                "TEST): more than rapidcomp follows") from None
     return ParsedFile(source, header.value if header else None, modules,
                       known.words if known is not None else None)
+
+
+def _shown_char(ch: str) -> str:
+    """A character as a message shows it: beyond ASCII with its code point
+    too (the Kelvin sign looks like a K, a no-break space like a blank)."""
+    return repr(ch) if ch.isascii() else f"{ch!r} (U+{ord(ch):04X})"
 
 
 # ---------------------------------------------------------------- model building

@@ -271,10 +271,10 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
             continue
         task = TaskSource(name, "backup", root, root, tuple(rel), name, notes=tuple(said))
         if motion is not None and name.upper() not in motion:
-            skipped.append(f"task {name} (RAPID/{d.name}) is not a motion task "
-                           "(SYSPAR/SYS.cfg): not compensated")
             other.append(task)
             if motion_only:
+                skipped.append(f"task {name} (RAPID/{d.name}) is not a motion task "
+                               "(SYSPAR/SYS.cfg): not compensated")
                 continue
         tasks.append(task)
     if wanted:
@@ -374,7 +374,14 @@ def _backinfo(root: Path, shown: str) -> tuple[dict[str, str], dict[str, list[st
     restore loads into it: the lines after the task's up to the next `>>`,
     each `PROGMOD/Module1.mod @ ` (or with '\\'; attributes after the '@',
     or none); a task with no such line is not in the second."""
-    text = _read_text(root / "BACKINFO" / "backinfo.txt", shown) or ""
+    raw = _read_bytes(root / "BACKINFO" / "backinfo.txt", shown) or b""
+    # (As a module is read: UTF-8 where it is, else the controller's
+    # Latin-1. A list of an accented module's name saved as UTF-8 names it
+    # as its file system does.)
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
     names: dict = {}
     listed: dict = {}
     for m in _TASK_LINE.finditer(text):
@@ -402,9 +409,9 @@ def _as_listed(found: list[str], listed: list[str], folder: str, task: str,
     if found and not kept:
         raise RapidcompError(
             f"{shown}: BACKINFO/backinfo.txt lists {', '.join(listed)} as task {task}'s "
-            f"modules, and {folder} holds none of them ({', '.join(found)}): the list is not "
-            "this backup's, and a restore would load none of them; copy backinfo.txt from the "
-            "backup")
+            f"modules, none of which {folder} holds (it holds {', '.join(found)}): the list is "
+            "not this backup's, and a restore would load none of them; give the backinfo.txt "
+            "the controller wrote with these modules")
     notes = []
     extra = [f for f in found if f.lower() not in want]
     if extra:
