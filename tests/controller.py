@@ -241,9 +241,9 @@ class Controller:
         if not s.target.selectors:
             self.assigned[name] = decode(d.type, s.value)
             return
+        if s.target.selectors[0].name.lower() == "tload":
+            return                          # (a tool's load, or a part of it, moves no target)
         (part,) = s.target.selectors
-        if part.name.lower() == "tload":
-            return                          # (a tool's load moves no target)
         assert part.name.lower() in FRAMES[type(d.value)], f"not modelled: {part.name}"
         old = self.assigned.get(name, d.value)
         self.assigned[name] = replace(old, **{part.name.lower(): decode("pose", s.value)})

@@ -128,3 +128,27 @@ def test_a_named_required_argument_holds_its_place():
     ENDPROC"""
     assert _reason(helpers, "Recal pt:=p1, tPen;").startswith(
         "tPen is passed to Recal, which may change it")
+
+
+@pytest.mark.parametrize("stmt, changed", [
+    ("tPen.tload.mass := 2;", False),
+    ("tPen.tload := [2,[0,0,50],[1,0,0,0],0,0,0];", False),
+    ("TPReadNum tPen.tload.mass, \"mass?\";", False),
+    ("Go p1, tPen;", False),                    # (Go sets its parameter's load)
+    ("tPen.tframe.trans.z := 120;", True),
+    ("tPen.robhold := FALSE;", True),           # (a stationary tool then)
+    ("TPReadNum tPen.tframe.trans.z, \"z?\";", True),
+])
+def test_a_tools_load_written_changes_no_pose(stmt, changed):
+    """A program that sets its tool's load (after a grip: tool.tload.mass
+    := ...; in public tool changers and servers) changes none of the frames
+    the compensation reads: the tool's moves are compensated; its frame or
+    robhold written, they are not."""
+    helpers = """    PROC Go(robtarget pt, PERS tooldata tl)
+        tl.tload.mass := 1;
+        TPReadNum tl.tload.cog.z, "cog?";
+    ENDPROC"""
+    reason = _reason(helpers, stmt)
+    assert (reason is not None) == changed, reason
+    if changed:
+        assert reason.startswith("tPen is ")

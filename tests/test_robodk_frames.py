@@ -141,7 +141,7 @@ WHOLE_T1 = f"    rdkTool := [TRUE,{pose_text(TOOLS['T1'])},[2,[0,0,15],[1,0,0,0]
 
 
 @pytest.mark.parametrize("case", ["before the first", "after a whole value later",
-                                  "in a block", "a component of the load",
+                                  "in a block",
                                   "a call between the frame's assignments",
                                   "a call later in the move's loop",
                                   "a call in the error handler"])
@@ -156,10 +156,6 @@ def test_a_move_whose_frame_is_not_known_is_left_as_written(case, tmp_path):
                                        WHOLE_T1, move("MoveL", 2, "T1", "U1")]),
         "in a block": (["    IF TRUE THEN", tframe("T1"), "    ENDIF", uframe("U1"),
                         move("MoveL", 1, "T1", "U1"), move("MoveL", 2, "T1", "U1")]),
-        # (A component of the load, assigned by a nested name: not followed.)
-        "a component of the load": ([tframe("T1"), uframe("U1"), "    rdkTool.tload.mass := 3;",
-                                     move("MoveL", 1, "T1", "U1"),
-                                     move("MoveL", 2, "T1", "U1")]),
         # A call that may run the routine again (no given module declares
         # UserProc) after the first assignment the frame is made of: between
         # two of them; later in the loop, before the move's next round; in
@@ -195,6 +191,27 @@ def test_a_move_whose_frame_is_not_known_is_left_as_written(case, tmp_path):
     assert m is not None, r.stdout
     named = [int(x) for x in m.group(1).split(", ")]
     assert named and set(named) <= set(writes), r.stdout
+
+
+def test_a_component_of_the_load_is_no_frame(tmp_path):
+    """rdkTool.tload.mass assigned between the frames and the moves (was:
+    not followed, both moves left as written): a tool's load is no frame,
+    the moves are compensated with the frames assigned before them (the
+    output's poses those the joints Q give through them)."""
+    body = [tframe("T1"), uframe("U1"), "    rdkTool.tload.mass := 3;",
+            move("MoveL", 1, "T1", "U1"), move("MoveL", 2, "T1", "U1")]
+    src = tmp_path / "MOD_Prog1.mod"
+    src.write_text(program(body))
+    out = tmp_path / "out.mod"
+    r = rapidcomp("fix", src, "--profile", "fixtures/warm.csv", "-o", out, "--emit", "robtarget")
+    assert "2 of 2 target uses compensated" in r.stdout, r.stdout
+    before, after = src.read_text().splitlines(), out.read_text().splitlines()
+    assert [a for a, b in zip(before, after) if a != b] == body[-2:]
+    rows = evaluate([parse_file(src, src.name)], [parse_file(out, src.name)], entry="Prog1")
+    for (x, _, _, _), q in zip(rows, Q[1:3]):
+        want = fk(NOMINAL, q)
+        got = x.pose if x.pose is not None else fk(NOMINAL, x.q_deg)
+        assert np.linalg.norm(got.translation - want.translation) < 1e-2
 
 
 def test_a_declared_frame_is_said_where_it_is_declared(tmp_path):

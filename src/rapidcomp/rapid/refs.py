@@ -122,6 +122,8 @@ def usage(module: A.ModuleNode) -> Usage:
         elif t is A.Arg:      # (the next commonest: its value comes as a node of its own)
             continue
         elif t is A.Assign:
+            if load_only(node.target):
+                continue
             writes.setdefault(node.target.name.lower(), []).append(node.span)
             selectors = node.target.selectors
             if not selectors:
@@ -198,6 +200,17 @@ def _refer(refs: dict, name: str, start: int) -> None:
 def reference_starts(starts: "int | array") -> "tuple[int] | array":
     """Where the references of a name of Usage.refs start."""
     return (starts,) if type(starts) is int else starts
+
+
+def load_only(ref: A.Ref) -> bool:
+    """Whether writing `ref` writes a tool's load alone (tool1.tload.mass,
+    tools{2}.tload): no part of the frames rapidcomp reads (a program that
+    sets its tool's load after a grip changes no pose). Only tooldata has
+    a tload."""
+    for sel in ref.selectors:
+        if type(sel) is A.Component:
+            return sel.name.lower() == "tload"
+    return False
 
 
 def _search_writes(node: A.ProcCall, spec, writes: dict) -> None:

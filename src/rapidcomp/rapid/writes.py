@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from . import ast as A
 from .model import ParsedFile, RoutineTable
 from .motions import BUILTIN_FUNCTIONS, BUILTIN_INSTRUCTIONS, motion_spec
-from .refs import Usage, nodes, searched
+from .refs import Usage, load_only, nodes, searched
 
 # Built-in instructions and functions that write an argument: name -> the
 # positions among the required arguments it writes (RAPID Instructions and
@@ -150,7 +150,7 @@ def _passed_written(args, params, changed):
             else:
                 p = next((p for p in params if p.name.lower() == (a.name or "").lower()), None)
                 is_written = p is not None and p.name.lower() in changed
-            if is_written:
+            if is_written and not load_only(a.value):
                 yield a, a.value.name.lower()
         k += place
 
@@ -182,7 +182,8 @@ def _params_written(files: list[ParsedFile], routines: RoutineTable) -> dict:
                 for n in nodes((node.decls, node.body, node.handlers)):
                     t = type(n)
                     if t is A.Assign:
-                        direct.add(n.target.name.lower())
+                        if not load_only(n.target):
+                            direct.add(n.target.name.lower())
                     elif t is A.ProcCall or t is A.Call or t is A.LateCall:
                         spec = motion_spec(n.name) if t is A.ProcCall else None
                         if spec is None:
@@ -229,7 +230,8 @@ def _call_writes(call, m, routines: RoutineTable, changed: dict) -> list | None:
         how = f"{'changed' if name in _CHANGING else 'filled'} by {call.name}"
         return [(positional[k].span, positional[k].value.name.lower(), how)
                 for k in WRITING_BUILTINS[name]
-                if k < len(positional) and isinstance(positional[k].value, A.Ref)]
+                if k < len(positional) and isinstance(positional[k].value, A.Ref)
+                and not load_only(positional[k].value)]
     if name not in BUILTIN_INSTRUCTIONS and name not in BUILTIN_FUNCTIONS:
         kind = "function " if isinstance(call, A.Call) else ""
         how = f"passed to {kind}{call.name}, which no given module declares (it may change it)"
