@@ -332,12 +332,6 @@ def _read_bytes(path: Path, shown: str | None = None) -> bytes | None:
         raise InputError(_shown_cfg(path, shown), f"cannot read: {exc.strerror or exc}") from None
 
 
-def _read_text(path: Path, shown: str | None = None) -> str | None:
-    """A backup file's text (the controller's Latin-1), as _read_bytes."""
-    raw = _read_bytes(path, shown)
-    return None if raw is None else raw.decode("latin-1")
-
-
 def _shown_cfg(path: Path, shown: str | None) -> str:
     return f"{shown}/{path.parent.name}/{path.name}" if shown else str(path)
 
