@@ -612,3 +612,20 @@ def test_a_backinfo_list_of_none_of_the_backups_modules_is_bad_input(tmp_path):
     assert ("BACKINFO/backinfo.txt lists PROGMOD/Track_v2.mod, SYSMOD/user_old.sys as task "
             "T_ROB1's modules, none of which RAPID/TASK1 holds (it holds PROGMOD/Track.mod, "
             "SYSMOD/user.sys)") in r.output
+
+
+def test_a_name_declared_only_in_an_unlisted_module_says_where_it_may_be(tmp_path):
+    """The tool is declared in SYSMOD/user.sys, which backinfo.txt does not
+    list (a new user's): not read, as a restore does not load it; the rows
+    name it as where the tool may be, not 'give the whole task' (the
+    backup was given whole)."""
+    bk = tmp_path / "bk"
+    shutil.copytree(TASKS / "backup_irbt", bk)
+    info = bk / "BACKINFO" / "backinfo.txt"
+    info.write_text(info.read_text().replace("SYSMOD/user.sys\n", ""))
+    r = run("check", bk, "--profile", WARM, "--track", "a:x")
+    assert r.exit_code == 1, r.output
+    assert ("not compensable: tool tProbe is not declared in the modules the backup's "
+            "BACKINFO/backinfo.txt lists (it may be in RAPID/TASK1/SYSMOD/user.sys, which it "
+            "does not list, so a restore does not load it either") in r.output, r.output
+    assert "give the whole task" not in r.output

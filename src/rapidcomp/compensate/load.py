@@ -91,7 +91,7 @@ def load_task(source: TaskSource, with_modules=()) -> Task:
     origin = source.input.parent.name if source.kind == "pgf" else source.input.name
     return Task(source.task or source.name, tuple(files), tuple(context), tuple(observers),
                 source.base_moved_by, origin, source.event_routines, source.entry,
-                tuple(unreadable), tuple(others))
+                tuple(unreadable), tuple(others), source.unlisted)
 
 
 def _parse(source: TaskSource, rel: str, unreadable: list | None = None):

@@ -43,6 +43,8 @@ class Task:
     # Another task's modules that cannot be read (a backup's): their writes
     # to shared PERS data are unknown.
     others_unreadable: tuple[str, ...] = ()
+    # A backup's module files its backinfo.txt does not list (not read).
+    unlisted: tuple[str, ...] = ()
 
     @property
     def all_files(self) -> list[ParsedFile]:
@@ -61,7 +63,7 @@ class Plan:
         self.resolver = Resolver(self.files, track=track, base=base,
                                  observers=task.observers, moved_by=task.base_moved_by,
                                  events=task.event_routines, entry=task.entry,
-                                 unreadable=task.unreadable)
+                                 unreadable=task.unreadable, unlisted=task.unlisted)
         self.track = tuple(track)
         self.uses: list[TargetUse] = []
         for fi, pf in enumerate(task.files):

@@ -696,7 +696,8 @@ class Resolver:
                  usages: dict | None = None, writes: bool = True, track=(), base=None,
                  observers=(), moved_by: str | None = None, written: Written | None = None,
                  like: "Resolver | None" = None, states: tuple[float, ...] = (),
-                 events: tuple[str, ...] = (), entry: str = "main", unreadable=()):
+                 events: tuple[str, ...] = (), entry: str = "main", unreadable=(),
+                 unlisted=()):
         """like: a resolver of these very files (the plan's, for verify.py):
         its tables of the files' declarations are taken, not made again.
         states: the thermal states a transient output is read at, each in
@@ -706,9 +707,12 @@ class Resolver:
         case; entry: the routine the program starts at (main unless a
         backup's SYS.cfg names another); unreadable: the task's modules
         that cannot be read (encrypted), where a name no given module
-        declares may be."""
+        declares may be; unlisted: a backup's module files its backinfo.txt
+        does not list (not read: a restore does not load them), where such
+        a name may be too."""
         self.float32 = float32
         self.unreadable = tuple(unreadable)
+        self.unlisted = tuple(unlisted)
         self.events = frozenset(events)
         self.entry = entry
         self.states = tuple(states)
@@ -933,6 +937,14 @@ class Resolver:
             return Unresolved(f"{what}{name} is not declared in the modules rapidcomp can read "
                               f"(it may be in {', '.join(self.unreadable)}, which is encrypted); "
                               "left as written")
+        if self.unlisted:
+            # (The controller, restoring the backup, does not declare it
+            # either: the program as the backup lists it does not load.)
+            return Unresolved(f"{what}{name} is not declared in the modules the backup's "
+                              "BACKINFO/backinfo.txt lists (it may be in "
+                              f"{', '.join(self.unlisted)}, which it does not list, so a "
+                              "restore does not load it either: list it there, or give the "
+                              "declaring module with --with)", True)
         return Unresolved(f"{what}{name} is not declared in the given modules ({MISSING_HINT})",
                           True)
 

@@ -1486,7 +1486,8 @@ def _resolver(plan: Plan, out_files: dict, written: Written | None,
     # tool or work object a routine assigns is taken where the plan took it.
     res = Resolver(files, float32=True, usages=plan.resolver.usages, writes=False,
                    track=plan.track, base=plan.resolver.base, written=written,
-                   like=plan.resolver, states=states, unreadable=plan.resolver.unreadable)
+                   like=plan.resolver, states=states, unreadable=plan.resolver.unreadable,
+                   unlisted=plan.resolver.unlisted)
     res.site_names = frozenset(plan.resolver.site_map())
     return res
 

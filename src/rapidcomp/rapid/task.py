@@ -65,6 +65,9 @@ class TaskSource:
     # The routine the task's program starts at (SYS.cfg CAB_TASKS -Entry),
     # as written there.
     entry: str = "main"
+    # A backup's module files of the task's folder that its backinfo.txt
+    # does not list (a restore does not load them): not read.
+    unlisted: tuple[str, ...] = ()
 
     @property
     def is_folder(self) -> bool:
@@ -262,14 +265,15 @@ def _backup(root: Path, shown: str, wanted: tuple[str, ...],
     for d in folders:
         name = names.get(d.name.upper(), d.name)
         mods = _modules_below(d, f"{shown}/RAPID/{d.name}")
-        said: list = []
+        said, extra = [], []
         if d.name.upper() in listed:
-            mods, said = _as_listed(mods, listed[d.name.upper()], f"RAPID/{d.name}", name,
-                                    shown)
+            mods, said, extra = _as_listed(mods, listed[d.name.upper()], f"RAPID/{d.name}",
+                                           name, shown)
         rel = [f"RAPID/{d.name}/{m}" for m in mods]
         if not rel:
             continue
-        task = TaskSource(name, "backup", root, root, tuple(rel), name, notes=tuple(said))
+        task = TaskSource(name, "backup", root, root, tuple(rel), name, notes=tuple(said),
+                          unlisted=tuple(f"RAPID/{d.name}/{m}" for m in extra))
         if motion is not None and name.upper() not in motion:
             other.append(task)
             if motion_only:
@@ -391,12 +395,12 @@ def _backinfo(root: Path, shown: str) -> tuple[dict[str, str], dict[str, list[st
 
 
 def _as_listed(found: list[str], listed: list[str], folder: str, task: str,
-               shown: str) -> tuple[list[str], list[str]]:
+               shown: str) -> tuple[list[str], list[str], list[str]]:
     """The module files of a backup's task folder a restore loads (those
     backinfo.txt lists, matched without regard to case as the controller's
-    file system does), and notes on those it lists but the backup does not
-    hold and those it holds but does not list. Where it holds none that
-    are listed, the list is not this backup's: bad input."""
+    file system does), notes on those it lists but the backup does not
+    hold and those it holds but does not list, and those. Where it holds
+    none that are listed, the list is not this backup's: bad input."""
     want = {x.lower() for x in listed}
     have = {f.lower() for f in found}
     kept = [f for f in found if f.lower() in want]
@@ -420,7 +424,7 @@ def _as_listed(found: list[str], listed: list[str], folder: str, task: str,
                      f"{task}'s modules, {'are' if len(missing) > 1 else 'is'} not in the "
                      "backup: read without "
                      f"{'them' if len(missing) > 1 else 'it'}")
-    return kept, notes
+    return kept, notes, extra
 
 
 def _cfg_instances(text: str | None, type_name: str,
