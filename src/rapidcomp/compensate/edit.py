@@ -870,15 +870,15 @@ class Editor:
         decl, module = src.decl, src.home_module
         fi = self.plan.file_index[id(src.home)]
         text = self.plan.files[fi].source.text
-        span = decl.node.span
-        start, end = span >> 32, span & 0xFFFFFFFF
+        span = decl.span
+        end = span.end
         c = text[end:end + 1]
         if c == "\n" or c == "\r" or not c:
             # (The declaration ends its line, as RobotStudio writes every one
             # of 1e5: the place _anchor_of finds, at the end of that line,
             # without its search for declarations that follow on it.)
             nl = "\r\n" if text.startswith("\r\n", end) else c or "\n"
-            anchor = (fi, end, nl, _indent(text, start), decl.routine is not None)
+            anchor = (fi, end, nl, _indent(text, span.start), decl.routine is not None)
         else:
             anchor = self._anchor_of((fi, module), decl, module)
         local, assign = u.module is module, self._assign(fi, decl, module, module)

@@ -141,7 +141,7 @@ def _passed_written(args, params, changed):
         # (A required argument, positional or named (pt:=p1), holds its
         # place among the required ones; an optional one (\T:=x) none.)
         place = a.kind in ("pos", "named")
-        if a.value is not None and isinstance(a.value, A.Ref):
+        if isinstance(a.value, A.Ref):
             if params is None:
                 is_written = True
             elif a.kind == "pos":
